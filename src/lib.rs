@@ -1,0 +1,17 @@
+//! skg-solve: the motion of mechanical systems with velocity constraints, walls and
+//! friction from the critical point of the discretized Schwinger–Keldysh–Galley action.
+//!
+//! Data flows one way through the modules:
+//! `scenario` (TOML) → `model` (symbolic expressions and exact derivatives, `expr`)
+//! → `action` (SBP-discretized action on the time grid, `sbp`) → `ipopt` (the square
+//! system ∇S = 0) → `solve` (driver, initial guess, post-processing) → `output`.
+pub mod action;
+pub mod convergence;
+pub mod expr;
+pub mod ipopt;
+pub mod model;
+pub mod ode;
+pub mod output;
+pub mod sbp;
+pub mod scenario;
+pub mod solve;

@@ -1,0 +1,240 @@
+//! Command-line interface of skg-solve.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand};
+
+use skg_solve::output;
+use skg_solve::sbp::OperatorKind;
+use skg_solve::scenario::{Formulation, HessianMode, Overrides, Scene, SceneFile};
+use skg_solve::solve;
+
+/// Exit code of a solve that ran but did not converge.
+const EXIT_NOT_CONVERGED: u8 = 3;
+
+#[derive(Parser)]
+#[command(
+    name = "skg-solve",
+    version,
+    about = "Motion of mechanical systems with velocity constraints, walls and friction \
+             from the critical point of the discretized Schwinger–Keldysh–Galley action",
+    long_about = "Solves a mechanical scene written in TOML: the classical Schwinger–Keldysh–Galley \
+action of the scene is discretized in time with summation-by-parts operators and its critical point \
+— the whole trajectory at once — is found by Ipopt with exact sparse derivatives.\n\n\
+Writes DIR/trajectory.csv (t, each coordinate and its velocity Dq, each multiplier, the energy, each \
+constraint residual, each wall gap) and DIR/summary.json (status, iterations, timings, sizes, \
+residuals). Exit status: 0 converged, 1 error in the input or while writing, 3 solve did not converge \
+(the summary is still written, marked \"converged\": false).",
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    solve: SolveArgs,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Time solves of one scene over a ladder of node counts and print a table
+    /// (wall time split into setup, initial guess, evaluations and Ipopt).
+    Bench(BenchArgs),
+}
+
+#[derive(Args, Clone)]
+struct SceneArgs {
+    /// Set a scene parameter, e.g. `--set sigma=1/200` (repeatable; value: number or expression).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+    /// Override the SBP operator: SBP121, SBP242 (alias SBP424), SBP363.
+    #[arg(long, value_name = "NAME")]
+    operator: Option<OperatorKind>,
+    /// Formulation: `reduced` (physical limit, half the unknowns; default) or `full`
+    /// (the paper's doubled unknowns).
+    #[arg(long, value_name = "KIND")]
+    formulation: Option<Formulation>,
+    /// Hessian given to Ipopt: `zero` (default; the Newton step of a square system does
+    /// not depend on it) or `exact` (reduced formulation only).
+    #[arg(long, value_enum, value_name = "MODE")]
+    hessian: Option<HessianArg>,
+    /// Maximum number of Ipopt iterations.
+    #[arg(long, value_name = "N")]
+    max_iter: Option<u32>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum HessianArg {
+    Zero,
+    Exact,
+}
+
+#[derive(Args)]
+struct SolveArgs {
+    /// Scene file (TOML), e.g. scenarios/rolling_disk.toml.
+    #[arg(required = true, value_name = "SCENARIO.toml")]
+    scenario: Option<PathBuf>,
+    /// Output directory [default: out/<scene file name without .toml>].
+    #[arg(short, long, value_name = "DIR")]
+    output: Option<PathBuf>,
+    /// Number of time nodes N (overrides the scene's time.nodes).
+    #[arg(long, value_name = "N")]
+    nodes: Option<usize>,
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Print only errors.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    /// Scene file (TOML).
+    #[arg(value_name = "SCENARIO.toml")]
+    scenario: PathBuf,
+    /// Comma-separated node counts.
+    #[arg(long, value_delimiter = ',', default_value = "256,512,1024,2048,4096,8192,16384")]
+    nodes: Vec<usize>,
+    /// Repetitions per node count (the fastest is reported).
+    #[arg(long, default_value_t = 3)]
+    repeat: usize,
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+impl SceneArgs {
+    fn overrides(&self, nodes: Option<usize>) -> Result<Overrides> {
+        let set = self
+            .set
+            .iter()
+            .map(|s| Overrides::parse_assignment(s))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Overrides {
+            set,
+            nodes,
+            operator: self.operator,
+            formulation: self.formulation,
+            hessian: self.hessian.map(|h| match h {
+                HessianArg::Zero => HessianMode::Zero,
+                HessianArg::Exact => HessianMode::Exact,
+            }),
+            max_iter: self.max_iter,
+        })
+    }
+}
+
+fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
+    Ok(SceneFile::load(path)?.resolve(ov)?)
+}
+
+fn run_solve(args: SolveArgs) -> Result<ExitCode> {
+    let path = args.scenario.expect("clap requires the scenario");
+    let ov = args.scene.overrides(args.nodes)?;
+    let scene = load(&path, &ov)?;
+    let dir = args.output.unwrap_or_else(|| {
+        let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from("out").join(stem)
+    });
+    let mut outcome = solve::solve_scene(&scene)?;
+    let (csv, json) = output::write_outcome(&dir, &mut outcome, &scene.coordinates, &scene.constraints, &scene.walls.iter().map(|w| w.name.clone()).collect::<Vec<_>>())
+        .context("writing the results")?;
+    for w in &outcome.warnings {
+        eprintln!("warning: {w}");
+    }
+    let t = &outcome.timings;
+    let total = t.setup_s + t.initial_guess_s + t.ipopt_total_s + t.postprocess_s + t.output_s;
+    if outcome.converged {
+        if !args.quiet {
+            let d = &outcome.diagnostics;
+            println!(
+                "{}: converged in {} Ipopt iterations ({}), {} {} N={} {}, {:.3} s",
+                outcome.scene,
+                outcome.iterations,
+                outcome.status_text,
+                outcome.settings.operator,
+                outcome.settings.formulation,
+                outcome.settings.nodes,
+                if scene.constraints.is_empty() { String::new() } else { format!("max |g| interior {:.1e}", d.max_constraint_interior) },
+                total
+            );
+            println!("  residual {:.1e}, energy drift {:.3e} (last two nodes excluded)", d.max_residual, d.energy_drift);
+            println!("  wrote {}", csv.display());
+            println!("  wrote {}", json.display());
+        }
+        Ok(ExitCode::SUCCESS)
+    } else {
+        eprintln!(
+            "error: {}: the solve did not converge: {} ({} iterations, residual {:.3e}); summary in {}",
+            outcome.scene,
+            outcome.status_text,
+            outcome.iterations,
+            outcome.diagnostics.max_residual,
+            json.display()
+        );
+        Ok(ExitCode::from(EXIT_NOT_CONVERGED))
+    }
+}
+
+fn run_bench(args: BenchArgs) -> Result<ExitCode> {
+    let bar = indicatif::ProgressBar::new((args.nodes.len() * args.repeat) as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} solves, {elapsed} elapsed, ETA {eta} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut rows = Vec::new();
+    for &n in &args.nodes {
+        let ov = args.scene.overrides(Some(n))?;
+        let scene = load(&args.scenario, &ov)?;
+        let mut best: Option<(f64, solve::Outcome)> = None;
+        for _ in 0..args.repeat.max(1) {
+            bar.set_message(format!("N={n}"));
+            let start = Instant::now();
+            let outcome = solve::solve_scene(&scene)?;
+            let wall = start.elapsed().as_secs_f64();
+            bar.inc(1);
+            if best.as_ref().is_none_or(|(w, _)| wall < *w) {
+                best = Some((wall, outcome));
+            }
+        }
+        let (wall, o) = best.expect("at least one repetition");
+        rows.push((n, wall, o));
+    }
+    bar.finish_and_clear();
+    println!("| N | variables | Jacobian nnz | iterations | converged | setup s | guess s | eval s | Ipopt internal s | total s |");
+    println!("|---:|---:|---:|---:|:---:|---:|---:|---:|---:|---:|");
+    for (n, wall, o) in &rows {
+        let t = &o.timings;
+        println!(
+            "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            n,
+            o.sizes.variables,
+            o.sizes.jacobian_nonzeros,
+            o.iterations,
+            if o.converged { "yes" } else { "no" },
+            t.setup_s,
+            t.initial_guess_s,
+            t.evaluation_s,
+            t.ipopt_internal_s,
+            wall
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Bench(b)) => run_bench(b),
+        None => run_solve(cli.solve),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
