@@ -1,0 +1,84 @@
+//! The rolling-spinning disk against its closed form (DESIGN §4), with the numbers of
+//! the independent CasADi + Ipopt implementation of the same discretization (DESIGN §2.4).
+
+mod common;
+
+use skg_solve::convergence::fit_order;
+use skg_solve::scenario::{Formulation, Overrides};
+
+const K: f64 = 9.8 * 0.5 / 1.5; // g sin α / (1 + I_S / (M R²))
+
+fn exact(t: f64) -> Vec<f64> {
+    vec![
+        5.0 * t.sin() + K * t.sin().powi(2) / 2.0,
+        5.0 * (1.0 - t.cos()) + K * (t / 2.0 - (2.0 * t).sin() / 4.0),
+        5.0 * t + K * (1.0 - t.cos()),
+        t,
+    ]
+}
+
+/// Max error of x, y, θ, last two nodes excluded (as the reference numbers are measured).
+fn disk_error(n: usize, op: &str) -> f64 {
+    let o = common::solve("rolling_disk", &common::grid(n, op));
+    common::max_error(&o, &[0, 1, 2], 2, exact)
+}
+
+#[test]
+fn paper_grid_matches_closed_form_and_constraints_hold() {
+    let o = common::solve("rolling_disk", &Overrides::default());
+    assert_eq!(o.settings.nodes, 64);
+    assert_eq!(o.settings.operator, "SBP242");
+    let err = common::max_error(&o, &[0, 1, 2], 2, exact);
+    // Independent implementation: 0.0152 at N = 64.
+    assert!((err - 0.0152).abs() < 0.0152 * 0.05, "max error {err}");
+    // φ = t exactly solves φ'' = 0 with φ(0)=0, φ'(0)=1: exact to round-off on SBP242.
+    assert!(common::max_error(&o, &[3], 0, exact) < 1e-10);
+    let d = &o.diagnostics;
+    assert!(d.max_constraint_interior < 1e-10, "g at interior nodes {:e}", d.max_constraint_interior);
+    assert!(o.iterations <= 8, "{} Ipopt iterations", o.iterations);
+    // Energy (kinetic − M g x sin α) is conserved to the discretization error: compare
+    // with the position error scale (energy ~ 25 J, positions ~ 10 m).
+    assert!(d.energy_drift < 0.05, "energy drift {}", d.energy_drift);
+}
+
+#[test]
+fn sbp242_error_and_order_match_the_independent_implementation() {
+    let ns = [32, 64, 128];
+    let reference = [0.109, 0.0152, 0.00199];
+    let errors: Vec<f64> = ns.iter().map(|&n| disk_error(n, "SBP242")).collect();
+    for ((n, e), r) in ns.iter().zip(&errors).zip(reference) {
+        assert!((e - r).abs() < 0.05 * r, "N={n}: error {e}, independent implementation {r}");
+    }
+    let h: Vec<f64> = ns.iter().map(|&n| 1.0 / (n as f64 - 1.0)).collect();
+    let fit = fit_order(&h, &errors, 1e-12).unwrap();
+    assert!((fit.order - 2.9).abs() < 0.2, "order {}", fit.order);
+}
+
+#[test]
+fn sbp121_error_and_order_match_the_independent_implementation() {
+    let ns = [64, 128, 256];
+    let reference = [0.083, 0.022, 0.0057];
+    let errors: Vec<f64> = ns.iter().map(|&n| disk_error(n, "SBP121")).collect();
+    for ((n, e), r) in ns.iter().zip(&errors).zip(reference) {
+        assert!((e - r).abs() < 0.05 * r, "N={n}: error {e}, independent implementation {r}");
+    }
+    let h: Vec<f64> = ns.iter().map(|&n| 1.0 / (n as f64 - 1.0)).collect();
+    let fit = fit_order(&h, &errors, 1e-12).unwrap();
+    assert!((fit.order - 1.9).abs() < 0.15, "order {}", fit.order);
+}
+
+#[test]
+fn sbp363_converges_faster_than_sbp242() {
+    let e242 = disk_error(128, "SBP242");
+    let e363 = disk_error(128, "SBP363");
+    assert!(e363 < e242, "SBP363 {e363} vs SBP242 {e242}");
+}
+
+#[test]
+fn full_and_reduced_formulations_agree() {
+    let r = common::solve("rolling_disk", &Overrides { formulation: Some(Formulation::Reduced), ..Default::default() });
+    let f = common::solve("rolling_disk", &Overrides { formulation: Some(Formulation::Full), ..Default::default() });
+    let diff = r.trajectory.q.iter().flatten().zip(f.trajectory.q.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(diff < 1e-9, "max |q_reduced - q_full| = {diff:e}");
+    assert!(f.diagnostics.max_minus_variable.unwrap() < 1e-9);
+}
