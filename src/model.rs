@@ -146,6 +146,8 @@ pub struct Model {
     pub coordinates: Vec<String>,
     pub constraints: Vec<String>,
     pub walls: Vec<String>,
+    /// (strength A, width σ) of each wall: its potential is A·Φ(h/σ).
+    wall_potential: Vec<(f64, f64)>,
     /// s itself (for tests and diagnostics).
     pub density: Tape,
     /// ∂s/∂u_a for the minus-type a (w, dw, μ), in local order: the residual density.
@@ -174,7 +176,11 @@ pub struct Workspace {
 /// Physical quantities at one state (q, v).
 #[derive(Debug, Clone)]
 pub struct Physical {
+    /// v·∂L/∂v − L.
     pub energy: f64,
+    /// Σ_j A_j Φ(h_j/σ_j), Φ the standard normal distribution function: the potential
+    /// of the walls' normal forces F_N = −A δ_σ(h) ∇h (friction is not conservative).
+    pub wall_energy: f64,
     /// Constraint values g^a.
     pub g: Vec<f64>,
     /// Wall gaps h_j (≤ 0 on the allowed side).
@@ -446,6 +452,7 @@ impl Model {
             coordinates: scene.coordinates.clone(),
             constraints: scene.constraints.clone(),
             walls: scene.walls.iter().map(|w| w.name.clone()).collect(),
+            wall_potential: scene.walls.iter().map(|w| (w.strength, w.width)).collect(),
             density,
             minus_gradient,
             gradient,
@@ -487,10 +494,18 @@ impl Model {
         let pl = self.phys_layout;
         let out = &mut ws.out[..pl.len()];
         self.phys.eval(&ws.u, &mut ws.scratch, out);
+        let h = out[pl.h()..pl.h() + pl.walls].to_vec();
+        let wall_energy = self
+            .wall_potential
+            .iter()
+            .zip(&h)
+            .map(|(&(a, sigma), &h)| 0.5 * a * libm::erfc(-h / (sigma * std::f64::consts::SQRT_2)))
+            .sum();
         Physical {
             energy: out[pl.energy()],
+            wall_energy,
             g: out[pl.g()..pl.g() + n].to_vec(),
-            h: out[pl.h()..pl.h() + pl.walls].to_vec(),
+            h,
             force: out[pl.force()..pl.force() + d].to_vec(),
             p: out[pl.p()..pl.p() + d].to_vec(),
             kinetic: DMatrix::from_row_slice(d, d, &out[pl.w()..pl.w() + d * d]),

@@ -57,6 +57,9 @@ pub fn trajectory_header(coordinates: &[String], constraints: &[String], walls: 
         h.push(format!("lambda_{c}"));
     }
     h.push("energy".into());
+    if !walls.is_empty() {
+        h.push("wall_energy".into());
+    }
     for c in constraints {
         h.push(format!("residual_{c}"));
     }
@@ -77,6 +80,9 @@ pub fn trajectory_rows(tr: &Trajectory) -> Vec<Vec<f64>> {
             }
             row.extend(&tr.lambda[k]);
             row.push(tr.energy[k]);
+            if !tr.h[k].is_empty() {
+                row.push(tr.wall_energy[k]);
+            }
             row.extend(&tr.g[k]);
             row.extend(&tr.h[k]);
             row

@@ -46,6 +46,9 @@ pub struct Trajectory {
     pub lambda: Vec<Vec<f64>>,
     /// v·∂L/∂v − L (without the walls' potential, nonzero only in contact).
     pub energy: Vec<f64>,
+    /// The walls' potential Σ A Φ(h/σ); `energy + wall_energy` is conserved when no
+    /// friction or other non-conservative force acts.
+    pub wall_energy: Vec<f64>,
     /// Constraint residuals g^a at each node.
     pub g: Vec<Vec<f64>>,
     /// Wall gaps h_j at each node (≤ 0 on the allowed side).
@@ -88,7 +91,10 @@ pub struct Diagnostics {
     /// max |g^a| over interior nodes, and at the last node (not enforced there).
     pub max_constraint_interior: f64,
     pub constraint_last_node: f64,
-    /// max |E_k − E_1| over nodes 1..N−2 (the last two excluded) and over all nodes.
+    /// max |E_k − E_1| of the total energy E = energy + wall_energy over nodes 1..N−2
+    /// (the last two excluded: their equations are the boundary closure) and over all
+    /// nodes. Conserved up to the discretization error unless friction or other
+    /// non-conservative forces act.
     pub energy_drift: f64,
     pub energy_drift_all: f64,
     /// Largest wall gap h (positive = penetration), per wall.
@@ -383,8 +389,8 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
     };
 
     let t_post = Instant::now();
-    let trajectory = trajectory(action, &times, &z);
-    let diagnostics = diagnose(action, &trajectory, &z, solution.max_constraint_violation, formulation, ts_q.as_deref());
+    let (trajectory, max_eom) = evaluate(action, &times, &z);
+    let diagnostics = diagnose(action, &trajectory, max_eom, &z, solution.max_constraint_violation, formulation, ts_q.as_deref());
     let postprocess_s = t_post.elapsed().as_secs_f64();
 
     let converged = solution.status.is_success() && diagnostics.max_residual <= 1e-8;
@@ -449,6 +455,12 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
 
 /// Coordinates, velocities, multipliers and physical quantities at every node.
 pub fn trajectory(action: &Action, times: &[f64], z: &[f64]) -> Trajectory {
+    evaluate(action, times, z).0
+}
+
+/// The trajectory and the largest equation-of-motion residual
+/// |f + F − Dp − Gᵀλ| over interior nodes (force units).
+fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
     let lay = &action.layout;
     let (d, n, nodes) = (lay.d, lay.n, lay.nodes);
     let model = &action.model;
@@ -461,26 +473,33 @@ pub fn trajectory(action: &Action, times: &[f64], z: &[f64]) -> Trajectory {
     let p: Vec<Vec<f64>> = phys.iter().map(|ph| ph.p.clone()).collect();
     let dp = apply_d(&action.op, &p);
     let mut lambda = vec![vec![0.0; n]; nodes];
+    let mut max_eom = 0.0_f64;
     for k in 0..nodes {
         if k == 0 || k + 1 == nodes {
             if n > 0 {
                 lambda[k] = end_multipliers(&phys[k], &dp[k]);
             }
-        } else {
-            for a in 0..n {
-                lambda[k][a] = z[lay.lp[k * n + a] as usize];
-            }
+            continue;
+        }
+        for a in 0..n {
+            lambda[k][a] = z[lay.lp[k * n + a] as usize];
+        }
+        for i in 0..d {
+            let gl: f64 = (0..n).map(|a| lambda[k][a] * phys[k].gv[(a, i)]).sum();
+            max_eom = max_eom.max((phys[k].force[i] - dp[k][i] - gl).abs());
         }
     }
-    Trajectory {
+    let tr = Trajectory {
         t: times.to_vec(),
         energy: phys.iter().map(|ph| ph.energy).collect(),
+        wall_energy: phys.iter().map(|ph| ph.wall_energy).collect(),
         g: phys.iter().map(|ph| ph.g.clone()).collect(),
         h: phys.iter().map(|ph| ph.h.clone()).collect(),
         q,
         v,
         lambda,
-    }
+    };
+    (tr, max_eom)
 }
 
 /// D applied to each component of a node-major series.
@@ -517,6 +536,7 @@ fn end_multipliers(ph: &crate::model::Physical, dp: &[f64]) -> Vec<f64> {
 fn diagnose(
     action: &Action,
     tr: &Trajectory,
+    max_eom_residual: f64,
     z: &[f64],
     max_residual: f64,
     formulation: Formulation,
@@ -524,30 +544,12 @@ fn diagnose(
 ) -> Diagnostics {
     let lay = &action.layout;
     let nodes = lay.nodes;
-    let (d, n) = (lay.d, lay.n);
-    let model = &action.model;
-    let mut ws = model.workspace();
-    // Equation-of-motion residual at interior nodes.
-    let phys: Vec<_> = (0..nodes).map(|k| model.physical(&tr.q[k], &tr.v[k], &mut ws)).collect();
-    let p: Vec<Vec<f64>> = phys.iter().map(|ph| ph.p.clone()).collect();
-    let dp = apply_d(&action.op, &p);
-    let mut max_eom = 0.0_f64;
-    for k in 1..nodes - 1 {
-        for i in 0..d {
-            let mut r = phys[k].force[i] - dp[k][i];
-            for a in 0..n {
-                r -= tr.lambda[k][a] * phys[k].gv[(a, i)];
-            }
-            max_eom = max_eom.max(r.abs());
-        }
-    }
     let max_abs = |rows: &[Vec<f64>]| rows.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
     let max_constraint_interior = if nodes > 2 { max_abs(&tr.g[1..nodes - 1]) } else { 0.0 };
     let constraint_last_node = max_abs(&tr.g[nodes - 1..]);
-    let e0 = tr.energy[0];
-    let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - e0).abs()));
-    let walls = model.walls.len();
-    let max_wall_gap = (0..walls)
+    let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
+    let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - total[0]).abs()));
+    let max_wall_gap = (0..action.model.walls.len())
         .map(|j| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max))
         .collect();
     let distance_from_time_stepping = ts_q.map(|qs| {
@@ -561,11 +563,11 @@ fn diagnose(
     });
     Diagnostics {
         max_residual,
-        max_eom_residual: max_eom,
+        max_eom_residual,
         max_constraint_interior,
         constraint_last_node,
-        energy_drift: drift(&tr.energy[..nodes.saturating_sub(2).max(1)]),
-        energy_drift_all: drift(&tr.energy),
+        energy_drift: drift(&total[..nodes.saturating_sub(2).max(1)]),
+        energy_drift_all: drift(&total),
         max_wall_gap,
         distance_from_time_stepping,
         max_minus_variable,

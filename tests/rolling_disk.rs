@@ -4,7 +4,7 @@
 mod common;
 
 use skg_solve::convergence::fit_order;
-use skg_solve::scenario::{Formulation, Overrides};
+use skg_solve::scenario::Overrides;
 
 const K: f64 = 9.8 * 0.5 / 1.5; // g sin α / (1 + I_S / (M R²))
 
@@ -72,13 +72,4 @@ fn sbp363_converges_faster_than_sbp242() {
     let e242 = disk_error(128, "SBP242");
     let e363 = disk_error(128, "SBP363");
     assert!(e363 < e242, "SBP363 {e363} vs SBP242 {e242}");
-}
-
-#[test]
-fn full_and_reduced_formulations_agree() {
-    let r = common::solve("rolling_disk", &Overrides { formulation: Some(Formulation::Reduced), ..Default::default() });
-    let f = common::solve("rolling_disk", &Overrides { formulation: Some(Formulation::Full), ..Default::default() });
-    let diff = r.trajectory.q.iter().flatten().zip(f.trajectory.q.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-    assert!(diff < 1e-9, "max |q_reduced - q_full| = {diff:e}");
-    assert!(f.diagnostics.max_minus_variable.unwrap() < 1e-9);
 }
