@@ -114,6 +114,11 @@ impl GlobalLayout {
         self.n_p + self.n_m
     }
 
+    /// Never true for a built layout (it always has node values); for API symmetry.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
     pub fn is_plus(&self, z: u32) -> bool {
         (z as usize) < self.n_p
     }

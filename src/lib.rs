@@ -5,6 +5,10 @@
 //! `scenario` (TOML) → `model` (symbolic expressions and exact derivatives, `expr`)
 //! → `action` (SBP-discretized action on the time grid, `sbp`) → `ipopt` (the square
 //! system ∇S = 0) → `solve` (driver, initial guess, post-processing) → `output`.
+// Numerical kernels index several arrays by the same node/coordinate index; the
+// index loops say that more plainly than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 pub mod action;
 pub mod convergence;
 pub mod expr;

@@ -133,11 +133,15 @@ fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
 fn run_solve(args: SolveArgs) -> Result<ExitCode> {
     let path = args.scenario.expect("clap requires the scenario");
     let ov = args.scene.overrides(args.nodes)?;
-    let scene = load(&path, &ov)?;
+    let mut scene = load(&path, &ov)?;
     let dir = args.output.unwrap_or_else(|| {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
+    if let Some(log) = &scene.solver.log_file {
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        scene.solver.log_file = Some(dir.join(log));
+    }
     let mut outcome = solve::solve_scene(&scene)?;
     let (csv, json) = output::write_outcome(&dir, &mut outcome, &scene.coordinates, &scene.constraints, &scene.walls.iter().map(|w| w.name.clone()).collect::<Vec<_>>())
         .context("writing the results")?;
@@ -195,7 +199,7 @@ fn run_bench(args: BenchArgs) -> Result<ExitCode> {
             let outcome = solve::solve_scene(&scene)?;
             let wall = start.elapsed().as_secs_f64();
             bar.inc(1);
-            if best.as_ref().is_none_or(|(w, _)| wall < *w) {
+            if best.as_ref().map_or(true, |(w, _)| wall < *w) {
                 best = Some((wall, outcome));
             }
         }

@@ -52,8 +52,14 @@ impl LocalKind {
 }
 
 impl LocalLayout {
+    /// Number of local variables u = [q, v, λ, w, dw, μ].
     pub fn len(&self) -> usize {
         4 * self.d + 2 * self.n
+    }
+
+    /// True only for a scene without coordinates (rejected by validation).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
     }
     pub fn q(&self, i: usize) -> usize {
         i
@@ -554,7 +560,7 @@ impl Model {
         let sym = (&ph.kinetic + ph.kinetic.transpose()) * 0.5;
         let eig = sym.symmetric_eigenvalues();
         let min = eig.iter().cloned().fold(f64::INFINITY, f64::min);
-        if !(min > 0.0) {
+        if min.is_nan() || min <= 0.0 {
             return Err(SceneError::Invalid {
                 location,
                 message: format!(
@@ -566,7 +572,7 @@ impl Model {
         let vmax = scene.initial_v.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
         let tol = 1e-9 * vmax * vmax;
         for (a, val) in ph.g.iter().enumerate() {
-            if !(val.abs() <= tol) {
+            if val.is_nan() || val.abs() > tol {
                 return Err(SceneError::Invalid {
                     location: scene.file.origin.locate_in(&scene.file.constraints[a].expression, None),
                     message: format!(

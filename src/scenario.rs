@@ -8,7 +8,7 @@
 //! constraints, forces, walls) are parsed later by [`crate::model`], which reports
 //! errors through [`SceneError::Expression`] with the position in the file.
 //!
-//! The format is documented key by key in `docs/scene-format.md`.
+//! The format is documented key by key in the README ("The scene file, key by key").
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -36,7 +36,7 @@ pub enum SceneError {
     Expression {
         location: String,
         key: String,
-        error: ParseError,
+        error: Box<ParseError>,
         caret: String,
     },
     #[error("{location}: {message}")]
@@ -183,6 +183,19 @@ pub struct SolverSpec {
     pub hessian: Option<HessianMode>,
     /// Ipopt log file, relative to the output directory.
     pub log_file: Option<String>,
+    /// Further Ipopt options passed through verbatim, e.g. `mumps_pivot_order = 0`.
+    #[serde(default)]
+    pub ipopt: IndexMap<String, IpoptValue>,
+}
+
+/// The value of a pass-through Ipopt option: integer, number or string, as Ipopt's
+/// option has that type.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum IpoptValue {
+    Int(i32),
+    Num(f64),
+    Str(String),
 }
 
 /// The TOML document as written.
@@ -279,7 +292,10 @@ pub struct SolverSettings {
     pub print_level: i32,
     pub linear_solver: Option<String>,
     pub hessian: HessianMode,
-    pub log_file: Option<String>,
+    /// Ipopt's log file; the scene gives it relative to the output directory and the
+    /// caller of the solve joins it to that directory.
+    pub log_file: Option<PathBuf>,
+    pub ipopt: IndexMap<String, IpoptValue>,
 }
 
 /// A wall, resolved to numbers (its `h` expression is parsed by the model).
@@ -362,7 +378,7 @@ impl SceneFile {
         SceneError::Expression {
             location: self.origin.locate_in(v, Some(error.position)),
             key: key.to_string(),
-            error,
+            error: Box::new(error),
             caret,
         }
     }
@@ -546,7 +562,8 @@ impl SceneFile {
             print_level: s.print_level.unwrap_or(0),
             linear_solver: s.linear_solver.clone(),
             hessian,
-            log_file: s.log_file.clone(),
+            log_file: s.log_file.as_ref().map(PathBuf::from),
+            ipopt: s.ipopt.clone(),
         };
         Ok(Scene {
             name: self.scene.name.clone(),

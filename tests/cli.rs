@@ -160,3 +160,20 @@ fn bad_override_and_operator_names() {
     assert_eq!(o.status.code(), Some(1));
     assert!(text(&o).contains("cannot read scene file missing.toml"), "{}", text(&o));
 }
+
+#[test]
+fn ipopt_log_file_and_pass_through_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "rolling_disk", &[("[discretization]", "[solver]\nlog_file = \"ipopt.log\"\n[solver.ipopt]\nmumps_pivtol = 1e-4\nprint_user_options = \"yes\"\n\n[discretization]")]);
+    let o = skg(&[&s, "-o", "res"], dir.path());
+    assert!(o.status.success(), "{}", text(&o));
+    let log = std::fs::read_to_string(dir.path().join("res/ipopt.log")).unwrap();
+    assert!(log.contains("iter") && log.contains("EXIT: Optimal Solution Found"), "{log}");
+    assert!(log.contains("mumps_pivtol") && log.contains("0.0001"), "pass-through option not in the log's option list");
+    // An option Ipopt does not know is an error that names it, not a panic.
+    let s = variant(dir.path(), "free_fall", &[("[time]", "[solver.ipopt]\nno_such_option = 3\n\n[time]")]);
+    let o = skg(&[&s, "-o", "res2"], dir.path());
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("no_such_option") && !t.contains("panicked"), "{t}");
+}
