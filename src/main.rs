@@ -24,8 +24,8 @@ const EXIT_NOT_CONVERGED: u8 = 3;
     long_about = "Solves a mechanical scene written in TOML: the classical Schwinger–Keldysh–Galley \
 action of the scene is discretized in time with summation-by-parts operators and its critical point \
 — the whole trajectory at once — is found by Ipopt with exact sparse derivatives.\n\n\
-Writes DIR/trajectory.csv (t, each coordinate and its velocity Dq, each multiplier, the energy, each \
-constraint residual, each wall gap) and DIR/summary.json (status, iterations, timings, sizes, \
+Writes DIR/trajectory.csv (t, each coordinate and its velocity Dq, each multiplier, the energy, the \
+walls' potential energy, each constraint residual, each wall gap) and DIR/summary.json (status, iterations, timings, sizes, \
 residuals). Exit status: 0 converged, 1 error in the input or while writing, 3 solve did not converge \
 (the summary is still written, marked \"converged\": false).",
     args_conflicts_with_subcommands = true,
