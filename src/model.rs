@@ -521,6 +521,11 @@ impl Model {
         }
     }
 
+    /// The Gaussian width σ of wall `j`.
+    pub fn wall_width(&self, j: usize) -> f64 {
+        self.wall_potential[j].1
+    }
+
     /// Accelerations and multipliers of the Lagrange–d'Alembert equations at (q, v):
     /// the index-reduced system
     /// `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v; −(∂g/∂q) v]`.

@@ -102,6 +102,12 @@ pub struct Diagnostics {
     /// max over nodes and coordinates of |q − q_time-stepping|: a large value hints at a
     /// spurious critical point or a too coarse grid.
     pub distance_from_time_stepping: Option<f64>,
+    /// Contact episodes per wall (maximal runs of nodes with h > −3σ) in the solution
+    /// and in the time-stepping solution on the same nodes. A difference means an extra
+    /// or a missing bounce: a spurious critical point (DESIGN §9) or a too coarse grid;
+    /// the solve then adds a warning.
+    pub contact_episodes: Vec<usize>,
+    pub contact_episodes_time_stepping: Option<Vec<usize>>,
     /// max |q-|, |λ-| of the full formulation's solution (0 in the physical limit).
     pub max_minus_variable: Option<f64>,
 }
@@ -409,6 +415,17 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
     let postprocess_s = t_post.elapsed().as_secs_f64();
 
     let converged = solution.status.is_success() && diagnostics.max_residual <= 1e-8;
+    if let Some(ts) = &diagnostics.contact_episodes_time_stepping {
+        for (j, (a, b)) in diagnostics.contact_episodes.iter().zip(ts).enumerate() {
+            if a != b {
+                warnings.push(format!(
+                    "wall `{}`: the solution has {a} contact episode(s), time stepping of the same scene has {b}: \
+                     possibly a spurious critical point or a grid too coarse for the wall width (refine N)",
+                    action.model.walls[j]
+                ));
+            }
+        }
+    }
     if solution.status.is_success() && !converged {
         warnings.push(format!(
             "Ipopt reported success but the unscaled residual is {:.3e} (> 1e-8): not counted as converged",
@@ -564,9 +581,17 @@ fn diagnose(
     let constraint_last_node = max_abs(&tr.g[nodes - 1..]);
     let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
     let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - total[0]).abs()));
-    let max_wall_gap = (0..action.model.walls.len())
+    let model = &action.model;
+    let max_wall_gap = (0..model.walls.len())
         .map(|j| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max))
         .collect();
+    let episodes = contact_episodes(model, &tr.h);
+    let contact_episodes_time_stepping = ts_q.map(|qs| {
+        let mut ws = model.workspace();
+        let rest = vec![0.0; lay.d]; // h depends on q only (validated)
+        let h: Vec<Vec<f64>> = qs.iter().map(|q| model.physical(q, &rest, &mut ws).h).collect();
+        contact_episodes(model, &h)
+    });
     let distance_from_time_stepping = ts_q.map(|qs| {
         qs.iter()
             .zip(&tr.q)
@@ -585,6 +610,27 @@ fn diagnose(
         energy_drift_all: drift(&total),
         max_wall_gap,
         distance_from_time_stepping,
+        contact_episodes: episodes,
+        contact_episodes_time_stepping,
         max_minus_variable,
     }
+}
+
+/// Number of contact episodes (maximal runs of nodes with h > −3σ) per wall.
+fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> Vec<usize> {
+    (0..model.walls.len())
+        .map(|j| {
+            let sigma = model.wall_width(j);
+            let mut count = 0;
+            let mut inside = false;
+            for hk in h {
+                let now = hk[j] > -3.0 * sigma;
+                if now && !inside {
+                    count += 1;
+                }
+                inside = now;
+            }
+            count
+        })
+        .collect()
 }

@@ -131,3 +131,20 @@ fn incline_with_friction_slides_with_newtons_acceleration() {
 fn frictionless_incline_slides_with_g_sin_alpha() {
     check_incline("incline_frictionless", 0.0);
 }
+
+/// DESIGN §9: wall scenes have spurious discrete critical points. On a grid far too
+/// coarse for σ = 1/110 (N = 48: Δt ≈ 0.011 s, about the duration of a contact) Ipopt
+/// converges to a trajectory with one bounce where the physics has two; the solve
+/// must say so instead of returning it silently. At the paper's N = 256 it must not.
+#[test]
+fn a_spurious_solution_with_a_missing_bounce_is_flagged() {
+    let scene = common::load("tumbler", &Overrides { nodes: Some(48), ..Default::default() });
+    let o = skg_solve::solve::solve_scene(&scene).unwrap();
+    let d = &o.diagnostics;
+    assert_eq!(d.contact_episodes_time_stepping.as_deref(), Some(&[2][..]));
+    assert_ne!(d.contact_episodes, vec![2], "N=48 unexpectedly found both bounces");
+    assert!(o.warnings.iter().any(|w| w.contains("contact episode") && w.contains("spurious")), "{:?}", o.warnings);
+    let good = common::solve("tumbler", &Overrides::default());
+    assert_eq!(good.diagnostics.contact_episodes, vec![2]);
+    assert!(good.warnings.is_empty(), "{:?}", good.warnings);
+}
