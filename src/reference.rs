@@ -25,6 +25,11 @@
 //! constraints), and sustained contact (an impact with vanishing normal speed, i.e. a
 //! particle coming to rest on a wall; the Zeno sequence of bounces is detected).
 
+
+// `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// `SceneError` (wrapped in `ReferenceError`) is large; it is the crate-wide error type.
+#![allow(clippy::result_large_err)]
 use std::path::Path;
 
 use crate::expr::{ExprId, Graph, Symbol};
