@@ -331,3 +331,67 @@ fn reference_command_samples_a_given_grid() {
     assert_eq!(o.status.code(), Some(1));
     assert!(text(&o).contains("nope.toml"));
 }
+
+#[test]
+fn hard_wall_sliding_from_rest_follows_newton() {
+    // δ = 0: the mass starts on the plane at rest and slides with the uniform
+    // acceleration g (sin α − μ cos α) along (cos α, sin α), downwards (DESIGN §5).
+    let alpha = std::f64::consts::PI / 6.0;
+    for (name, mu) in [("incline_friction", 0.4), ("incline_frictionless", 0.0)] {
+        let ov = Overrides {
+            set: vec![("delta".into(), "0".into())],
+            ..Default::default()
+        };
+        let scene = common::load(name, &ov);
+        let (times, _) = solve::grid(&scene);
+        let r = reference::hard_wall(&scene, &times, &ReferenceOptions::default()).unwrap();
+        assert!(r.impacts.is_empty(), "{name}: {:?}", r.impacts);
+        assert_eq!(r.contacts.len(), 1);
+        assert_eq!((r.contacts[0].t_start, r.contacts[0].t_end), (0.0, None));
+        let a = G * (alpha.sin() - mu * alpha.cos());
+        let tr = &r.trajectory;
+        for (k, &t) in tr.t.iter().enumerate() {
+            let s = -0.5 * a * t * t;
+            assert!((tr.q[k][0] - (alpha.cos() + s * alpha.cos())).abs() < 1e-10, "{name} t = {t}");
+            assert!((tr.q[k][1] - (alpha.sin() + s * alpha.sin())).abs() < 1e-10, "{name} t = {t}");
+            assert!(tr.h[k][0].abs() < 1e-10);
+        }
+    }
+}
+
+#[test]
+fn hard_wall_slide_inside_drum_lifts_off_where_the_normal_force_vanishes() {
+    // Start at the bottom of the drum (on the wall) with v0² = 3.5 g R: sliding along
+    // the circle, N = m v²/R + m g cos θ vanishes at cos θ = (2gR − v0²)/(3gR) = −1/2,
+    // i.e. at height y = 1/2, with v² = g R / 2; then free flight and elastic impacts.
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = std::fs::read_to_string(common::scenario("tumbler")).unwrap();
+    let v0 = (3.5 * G).sqrt();
+    for (from, to) in [
+        ("initial = -0.5\nvelocity = 0", format!("initial = 0\nvelocity = {v0:?}")),
+        ("initial = -0.75\nvelocity = 0", "initial = -1\nvelocity = 0".to_string()),
+        ("end = 0.5", "end = 1.5".to_string()),
+    ] {
+        assert!(text.contains(from), "{from}");
+        text = text.replacen(from, &to, 1);
+    }
+    let path = dir.path().join("slide.toml");
+    std::fs::write(&path, text).unwrap();
+    let scene = skg_solve::scenario::SceneFile::load(&path).unwrap().resolve(&Overrides::default()).unwrap();
+    let (times, _) = solve::grid(&scene);
+    let r = reference::hard_wall(&scene, &times, &ReferenceOptions::default()).unwrap();
+    assert!(!r.contacts.is_empty());
+    let c = &r.contacts[0];
+    assert_eq!(c.t_start, 0.0);
+    let t_off = c.t_end.expect("lifts off");
+    // State at lift-off from a fresh run sampled there.
+    let r2 = reference::hard_wall(&scene, &[0.0, t_off], &ReferenceOptions::default()).unwrap();
+    let (q, v) = (&r2.trajectory.q[1], &r2.trajectory.v[1]);
+    assert!((q[1] - 0.5).abs() < 1e-9, "lift-off height {}", q[1]);
+    assert!((v[0] * v[0] + v[1] * v[1] - G / 2.0).abs() < 1e-8);
+    assert!(!r.impacts.is_empty(), "free flight ends on the wall");
+    // No friction: energy is conserved through sliding, flight and impacts.
+    let e = &r.trajectory.energy;
+    assert!(e.iter().all(|x| (x - e[0]).abs() < 1e-9), "energy drift");
+    assert!(r.trajectory.h.iter().all(|h| h[0] < 1e-9));
+}
