@@ -10,12 +10,14 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod action;
+pub mod check;
 pub mod convergence;
 pub mod expr;
 pub mod ipopt;
 pub mod model;
 pub mod ode;
 pub mod output;
+pub mod reference;
 pub mod sbp;
 pub mod scenario;
 pub mod solve;

@@ -29,8 +29,12 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::R
         _ => PathBuf::from("."),
     };
     std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".skg-tmp-")
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".skg-tmp-");
+    // Like any new file (0666 minus the umask), not tempfile's private 0600.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder
         .tempfile_in(&dir)
         .map_err(io_err(path))?;
     {
