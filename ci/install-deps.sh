@@ -3,14 +3,21 @@
 #   coinor-libipopt-dev  Ipopt (linked by build.rs through pkg-config)
 #   libclang-dev         libclang, used by bindgen in build.rs
 #   pkg-config           finds Ipopt
-# and checks that a Rust toolchain (cargo) is present.
+#   gcc, libc6-dev       the linker Rust uses
+# and, when no cargo is found, installs a Rust toolchain with rustup (minimal profile)
+# into ~/.cargo (callers then `source ~/.cargo/env`).
 #
 # Idempotent and quiet when everything is already installed: apt-get runs (once
 # `apt-get update`, then one `apt-get install`) only for missing packages. Uses sudo
 # only when not root.
 set -euo pipefail
 
-packages=(coinor-libipopt-dev libclang-dev pkg-config)
+packages=(coinor-libipopt-dev libclang-dev pkg-config gcc libc6-dev)
+need_rust=false
+if ! command -v cargo >/dev/null 2>&1 && [[ ! -x "$HOME/.cargo/bin/cargo" ]]; then
+    need_rust=true
+    packages+=(curl ca-certificates)
+fi
 
 missing=()
 for pkg in "${packages[@]}"; do
@@ -46,11 +53,7 @@ if ! pkg-config --exists ipopt; then
     exit 1
 fi
 
-if ! command -v cargo >/dev/null 2>&1; then
-    echo "install-deps: cargo (Rust) was not found on PATH." >&2
-    echo "Install Rust with rustup (https://rustup.rs):" >&2
-    echo "    curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y" >&2
-    echo "then run: source \"\$HOME/.cargo/env\"   (or add ~/.cargo/bin to PATH)" >&2
-    echo "or, on Debian, install the packaged toolchain: apt-get install cargo rustc (needs Rust >= 1.80)" >&2
-    exit 1
+if $need_rust; then
+    echo "install-deps: no cargo found; installing Rust with rustup into ~/.cargo"
+    curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y --profile minimal --no-modify-path >/dev/null
 fi
