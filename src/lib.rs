@@ -15,3 +15,5 @@ pub mod output;
 pub mod sbp;
 pub mod scenario;
 pub mod solve;
+pub mod sweep;
+pub mod tune;

@@ -11,6 +11,7 @@ use skg_solve::output;
 use skg_solve::sbp::OperatorKind;
 use skg_solve::scenario::{Formulation, HessianMode, Overrides, Scene, SceneFile};
 use skg_solve::solve;
+use skg_solve::sweep;
 
 /// Exit code of a solve that ran but did not converge.
 const EXIT_NOT_CONVERGED: u8 = 3;
@@ -43,6 +44,20 @@ enum Command {
     /// Time solves of one scene over a ladder of node counts and print a table
     /// (wall time split into setup, initial guess, evaluations and Ipopt).
     Bench(BenchArgs),
+    /// Run a parameter sweep: every point of the sweep file's grid in its own worker
+    /// process, each finished point appended to DIR/results.csv. Rerunning resumes.
+    Sweep(SweepArgs),
+    /// Join the results of a sweep's shards into one results.csv.
+    Merge(MergeArgs),
+    /// Find the smallest wall width σ whose energy artifact stays below a tolerance
+    /// at the scene's N (bisection over solves).
+    Tune(TuneArgs),
+    /// Worker process of a sweep (internal).
+    #[command(hide = true)]
+    SweepWorker {
+        job: PathBuf,
+        result: PathBuf,
+    },
 }
 
 #[derive(Args, Clone)]
@@ -101,6 +116,65 @@ struct BenchArgs {
     /// Repetitions per node count (the fastest is reported).
     #[arg(long, default_value_t = 3)]
     repeat: usize,
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+#[derive(Args)]
+struct SweepArgs {
+    /// Sweep file (TOML), e.g. scenarios/sweeps/tumbler_sigma.toml.
+    #[arg(value_name = "SWEEP.toml")]
+    sweep: PathBuf,
+    /// Output directory [default: out/sweeps/<sweep file name without .toml>].
+    #[arg(short, long, value_name = "DIR")]
+    output: Option<PathBuf>,
+    /// Worker processes at once [default: the number of cores].
+    #[arg(short, long, value_name = "K")]
+    jobs: Option<usize>,
+    /// Run only the points whose index is k−1 mod n (1 ≤ k ≤ n), e.g. `--shard 3/8`.
+    #[arg(long, value_name = "k/n")]
+    shard: Option<sweep::Shard>,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// The shards' output directories (or their results.csv files).
+    #[arg(required = true, value_name = "SHARD")]
+    inputs: Vec<PathBuf>,
+    /// Output directory of the merged results.csv.
+    #[arg(short, long, value_name = "DIR")]
+    output: PathBuf,
+}
+
+#[derive(Args)]
+struct TuneArgs {
+    /// Scene file (TOML) with a wall whose width is a parameter.
+    #[arg(value_name = "SCENARIO.toml")]
+    scenario: PathBuf,
+    /// Number of time nodes N.
+    #[arg(long, value_name = "N")]
+    nodes: Option<usize>,
+    /// Parameter to tune [default: the parameter a wall's width is set to].
+    #[arg(long, value_name = "NAME")]
+    param: Option<String>,
+    /// Tolerance on the relative energy artifact.
+    #[arg(long, default_value_t = skg_solve::tune::DEFAULT_ARTIFACT_TOL)]
+    tol: f64,
+    /// Lower end of the initial bracket [default: the scene's value / 8].
+    #[arg(long)]
+    lo: Option<f64>,
+    /// Upper end of the initial bracket [default: the scene's value].
+    #[arg(long)]
+    hi: Option<f64>,
+    /// Stop when the bracket's ratio hi/lo is below 1 + REL.
+    #[arg(long, default_value_t = 0.02)]
+    rel: f64,
+    /// Write the search (every step) as JSON here.
+    #[arg(short, long, value_name = "FILE")]
+    output: Option<PathBuf>,
     #[command(flatten)]
     scene: SceneArgs,
 }
@@ -224,10 +298,109 @@ fn run_bench(args: BenchArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+fn run_sweep(args: SweepArgs) -> Result<ExitCode> {
+    let file = sweep::SweepFile::load(&args.sweep)?;
+    let out = args.output.unwrap_or_else(|| PathBuf::from("out/sweeps").join(file.name()));
+    let jobs = args
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let opts = sweep::SweepOptions {
+        out_dir: out,
+        jobs,
+        shard: args.shard,
+        worker_exe: std::env::current_exe().context("locating the skg-solve executable for the workers")?,
+        progress: !args.quiet,
+    };
+    let r = sweep::run_sweep(&file, &opts)?;
+    if !args.quiet {
+        println!(
+            "{}: {} points{}, {} already done, {} run ({} failed) with {} worker(s) in {:.1} s{}",
+            file.name(),
+            r.total,
+            args.shard.map_or(String::new(), |s| format!(" ({} in shard {}/{})", r.in_shard, s.k, s.n)),
+            r.skipped,
+            r.ran,
+            r.failed,
+            jobs,
+            r.wall_s,
+            if r.duplicates > 0 { format!("; {} duplicate points dropped", r.duplicates) } else { String::new() }
+        );
+        println!("  wrote {}", r.results.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_sweep_worker(job: &Path, result: &Path) -> Result<ExitCode> {
+    let text = std::fs::read_to_string(job).with_context(|| format!("reading {}", job.display()))?;
+    let job: sweep::Job = serde_json::from_str(&text).with_context(|| format!("parsing {}", job.display()))?;
+    let rec = sweep::run_job(&job);
+    output::write_json(result, &rec)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_merge(args: MergeArgs) -> Result<ExitCode> {
+    let r = sweep::merge(&args.inputs, &args.output)?;
+    println!(
+        "merged {} rows into {}{}{}",
+        r.rows,
+        args.output.join("results.csv").display(),
+        if r.duplicates > 0 { format!("; {} duplicate rows dropped", r.duplicates) } else { String::new() },
+        match r.missing {
+            Some(0) => "; every point of the sweep is present".to_string(),
+            Some(m) => format!("; {m} points of the sweep have no row yet"),
+            None => String::new(),
+        }
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_tune(args: TuneArgs) -> Result<ExitCode> {
+    let ov = args.scene.overrides(args.nodes)?;
+    let file = SceneFile::load(&args.scenario)?;
+    let opts = skg_solve::tune::TuneOptions {
+        param: args.param.clone(),
+        tol: args.tol,
+        lo: args.lo,
+        hi: args.hi,
+        rel: args.rel,
+        ..Default::default()
+    };
+    let r = skg_solve::tune::tune_width(&file, &ov, &opts, |s| {
+        eprintln!(
+            "  {:.6e}: {} artifact {:.3e} → {} ({:.2} s)",
+            s.value,
+            if s.converged { "converged," } else { "not converged," },
+            s.artifact,
+            if s.ok { "ok" } else { "artifacts" },
+            s.wall_s
+        );
+    })?;
+    for n in &r.notes {
+        eprintln!("note: {n}");
+    }
+    println!(
+        "{} = {:.6e} (1/{:.1}): the smallest value without energy artifacts above {:e} at N = {}{}",
+        r.param,
+        r.chosen,
+        1.0 / r.chosen,
+        r.tol,
+        r.nodes,
+        r.failing.map_or(String::new(), |f| format!("; {:.6e} (1/{:.1}) has artifacts", f, 1.0 / f))
+    );
+    let out = args.output.unwrap_or_else(|| skg_solve::tune::default_output(&args.scenario));
+    output::write_json(&out, &r)?;
+    println!("  wrote {}", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Bench(b)) => run_bench(b),
+        Some(Command::Sweep(a)) => run_sweep(a),
+        Some(Command::Merge(a)) => run_merge(a),
+        Some(Command::Tune(a)) => run_tune(a),
+        Some(Command::SweepWorker { job, result }) => run_sweep_worker(&job, &result),
         None => run_solve(cli.solve),
     };
     match result {
