@@ -6,12 +6,14 @@
 //! → `action` (SBP-discretized action on the time grid, `sbp`) → `ipopt` (the square
 //! system ∇S = 0) → `solve` (driver, initial guess, post-processing) → `output`.
 pub mod action;
+pub mod check;
 pub mod convergence;
 pub mod expr;
 pub mod ipopt;
 pub mod model;
 pub mod ode;
 pub mod output;
+pub mod reference;
 pub mod sbp;
 pub mod scenario;
 pub mod solve;

@@ -7,7 +7,9 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
+use skg_solve::check::{self, CheckOptions, Table, Tolerances};
 use skg_solve::output;
+use skg_solve::reference::{self, ReferenceOptions};
 use skg_solve::sbp::OperatorKind;
 use skg_solve::scenario::{Formulation, HessianMode, Overrides, Scene, SceneFile};
 use skg_solve::solve;
@@ -15,6 +17,8 @@ use skg_solve::sweep;
 
 /// Exit code of a solve that ran but did not converge.
 const EXIT_NOT_CONVERGED: u8 = 3;
+/// Exit code of `check` when a tolerance is exceeded.
+const EXIT_TOLERANCE_EXCEEDED: u8 = 2;
 
 #[derive(Parser)]
 #[command(
@@ -58,6 +62,75 @@ enum Command {
         job: PathBuf,
         result: PathBuf,
     },
+    /// Integrate the Lagrange–d'Alembert equations of a scene with a tight-tolerance
+    /// adaptive integrator (DOP853) and write a reference CSV with the solver's columns.
+    Reference(ReferenceArgs),
+    /// Compare a trajectory CSV with a reference CSV column by column (exit status 2 when
+    /// a tolerance is exceeded).
+    Check(CheckArgs),
+}
+
+#[derive(Args)]
+struct ReferenceArgs {
+    /// Scene file (TOML).
+    #[arg(value_name = "SCENARIO.toml")]
+    scenario: PathBuf,
+    /// Output CSV [default: out/<scene>/reference.csv, or reference.hard.csv with --hard-walls].
+    #[arg(short, long, value_name = "FILE.csv")]
+    output: Option<PathBuf>,
+    /// Relative tolerance of the integrator.
+    #[arg(long, default_value_t = 1e-12, value_name = "RTOL")]
+    rtol: f64,
+    /// Absolute tolerance of the integrator [default: the relative tolerance].
+    #[arg(long, value_name = "ATOL")]
+    atol: Option<f64>,
+    /// Ideal elastic walls (event location at h = 0, specular reflection) instead of the
+    /// scene's Gaussian walls: the reference for the model error.
+    #[arg(long)]
+    hard_walls: bool,
+    /// Sample on the scene's grid with N nodes (overrides time.nodes).
+    #[arg(long, value_name = "N", conflicts_with = "grid_from")]
+    nodes: Option<usize>,
+    /// Sample at the times (column t) of this CSV, e.g. a solver's trajectory.csv.
+    #[arg(long, value_name = "FILE.csv")]
+    grid_from: Option<PathBuf>,
+    /// Set a scene parameter, e.g. `--set sigma=1/200` (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+    /// Print only errors.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct CheckArgs {
+    /// The trajectory to check (e.g. out/tumbler/trajectory.csv).
+    #[arg(value_name = "SOLUTION.csv")]
+    solution: PathBuf,
+    /// The reference (e.g. tests/reference/tumbler.csv).
+    #[arg(value_name = "REFERENCE.csv")]
+    reference: PathBuf,
+    /// Leave out the last K rows of the solution (e.g. 2 for the SBP end nodes).
+    #[arg(long, default_value_t = 0, value_name = "K")]
+    skip_last: usize,
+    /// Compare only these columns (comma-separated) [default: every shared column except t].
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    columns: Option<Vec<String>>,
+    /// Tolerance on every compared column's max |error|.
+    #[arg(long, value_name = "TOL")]
+    tol: Option<f64>,
+    /// Tolerance on every compared column's RMS error.
+    #[arg(long, value_name = "TOL")]
+    tol_rms: Option<f64>,
+    /// Tolerance on one column's max |error| (repeatable; overrides --tol for it).
+    #[arg(long, value_name = "COLUMN=TOL")]
+    tol_column: Vec<String>,
+    /// JSON report [default: <SOLUTION without .csv>.check.json].
+    #[arg(long, value_name = "FILE.json")]
+    json: Option<PathBuf>,
+    /// Print only errors and exceeded tolerances.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 #[derive(Args, Clone)]
@@ -298,6 +371,131 @@ fn run_bench(args: BenchArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+fn run_reference(args: ReferenceArgs) -> Result<ExitCode> {
+    let set = args
+        .set
+        .iter()
+        .map(|s| Overrides::parse_assignment(s))
+        .collect::<Result<Vec<_>, _>>()?;
+    let ov = Overrides {
+        set,
+        nodes: args.nodes,
+        ..Overrides::default()
+    };
+    let scene = load(&args.scenario, &ov)?;
+    let times = match &args.grid_from {
+        Some(p) => Table::read(p)?.times(),
+        None => solve::grid(&scene).0,
+    };
+    if !(args.rtol > 0.0 && args.rtol.is_finite()) {
+        anyhow::bail!("--rtol must be a positive number, got {}", args.rtol);
+    }
+    let opts = ReferenceOptions {
+        rtol: args.rtol,
+        atol: args.atol.unwrap_or(args.rtol),
+    };
+    let r = if args.hard_walls {
+        reference::hard_wall(&scene, &times, &opts)?
+    } else {
+        reference::regularized(&scene, &times, &opts)?
+    };
+    let out = args.output.unwrap_or_else(|| {
+        let stem = args.scenario.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from("out")
+            .join(stem)
+            .join(if args.hard_walls { "reference.hard.csv" } else { "reference.csv" })
+    });
+    reference::write(&out, &scene, &args.scenario.display().to_string(), &r)?;
+    if !args.quiet {
+        println!(
+            "{}: {} reference, {} samples, {} steps ({} rejected), max |g| {:.1e}, max |E - E0| {:.3e}{}",
+            scene.name,
+            r.kind,
+            r.trajectory.t.len(),
+            r.stats.accepted,
+            r.stats.rejected,
+            r.constraint_drift,
+            r.energy_drift,
+            if args.hard_walls { format!(", {} impacts", r.impacts.len()) } else { String::new() }
+        );
+        println!("  wrote {}", out.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[derive(serde::Serialize)]
+struct CheckReport<'a> {
+    solution: String,
+    reference: String,
+    options: &'a CheckOptions,
+    tolerances: &'a Tolerances,
+    passed: bool,
+    violations: Vec<String>,
+    comparison: &'a check::Comparison,
+}
+
+fn run_check(args: CheckArgs) -> Result<ExitCode> {
+    let solution = Table::read(&args.solution)?;
+    let reference = Table::read(&args.reference)?;
+    let opts = CheckOptions {
+        skip_last: args.skip_last,
+        columns: args.columns.clone(),
+    };
+    let mut per_column = Vec::new();
+    for a in &args.tol_column {
+        let (name, value) = a
+            .split_once('=')
+            .with_context(|| format!("--tol-column `{a}`: expected COLUMN=TOL"))?;
+        let v: f64 = value
+            .trim()
+            .parse()
+            .with_context(|| format!("--tol-column `{a}`: `{value}` is not a number"))?;
+        per_column.push((name.trim().to_string(), v));
+    }
+    let tol = Tolerances {
+        max_abs: args.tol,
+        rms: args.tol_rms,
+        per_column,
+    };
+    let cmp = check::compare(&solution, &reference, &opts)
+        .with_context(|| format!("comparing {} with {}", args.solution.display(), args.reference.display()))?;
+    let violations = cmp.violations(&tol);
+    let json = args.json.clone().unwrap_or_else(|| args.solution.with_extension("check.json"));
+    let report = CheckReport {
+        solution: args.solution.display().to_string(),
+        reference: args.reference.display().to_string(),
+        options: &opts,
+        tolerances: &tol,
+        passed: violations.is_empty(),
+        violations: violations.clone(),
+        comparison: &cmp,
+    };
+    output::write_json(&json, &report)?;
+    if !args.quiet {
+        println!("| column | max abs error | at t | RMS error |");
+        println!("|---|---:|---:|---:|");
+        for c in &cmp.columns {
+            println!("| {} | {:.3e} | {} | {:.3e} |", c.column, c.max_abs, c.at_t, c.rms);
+        }
+        println!(
+            "{} rows compared ({} interpolated, last {} skipped); worst: {} {:.3e}",
+            cmp.rows_compared, cmp.rows_interpolated, cmp.skipped_last, cmp.worst_column, cmp.max_abs
+        );
+        if !cmp.missing_in_reference.is_empty() {
+            println!("not in the reference (not compared): {}", cmp.missing_in_reference.join(", "));
+        }
+        println!("wrote {}", json.display());
+    }
+    if violations.is_empty() {
+        Ok(ExitCode::SUCCESS)
+    } else {
+        for v in &violations {
+            eprintln!("tolerance exceeded: {v}");
+        }
+        Ok(ExitCode::from(EXIT_TOLERANCE_EXCEEDED))
+    }
+}
+
 fn run_sweep(args: SweepArgs) -> Result<ExitCode> {
     let file = sweep::SweepFile::load(&args.sweep)?;
     let out = args.output.unwrap_or_else(|| PathBuf::from("out/sweeps").join(file.name()));
@@ -401,6 +599,8 @@ fn main() -> ExitCode {
         Some(Command::Merge(a)) => run_merge(a),
         Some(Command::Tune(a)) => run_tune(a),
         Some(Command::SweepWorker { job, result }) => run_sweep_worker(&job, &result),
+        Some(Command::Reference(r)) => run_reference(r),
+        Some(Command::Check(c)) => run_check(c),
         None => run_solve(cli.solve),
     };
     match result {

@@ -24,6 +24,14 @@
 //!   again without an error path; the crate is edition 2024 (Rust ≥ 1.85, this crate
 //!   declares 1.80) and brings a large dependency tree.
 //!
+//! Re-checked for the reference solutions (issue 3): `differential-equations` 0.7 builds
+//! here (rustc 1.95, 17 s) and has dense output and Brent event location, but its
+//! right-hand side is still infallible (`diff(&self, …)`, so our model's workspace would
+//! need a `RefCell` and failures a NaN convention), and it pulls simba 0.10 beside this
+//! crate's nalgebra 0.33 / simba 0.9. Event location ([`integrate_to_event`]) was the only
+//! missing piece and is ~40 lines on top of the dense output below, so one integrator
+//! (this one) serves the initial guess, the regularized and the hard-wall references.
+//!
 //! A failing right-hand side (e.g. a singular mass matrix) must come back as an error, not
 //! a panic or a silently wrong NaN; threading that through either crate would need interior
 //! mutability plus NaN poisoning of the state, whose handling by the step-size controller
@@ -128,6 +136,62 @@ pub fn integrate<F>(
 where
     F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>,
 {
+    run(f, y0, times, opts, None::<fn(f64, &[f64]) -> f64>).map(|(sol, _)| sol)
+}
+
+/// A terminal event located by [`integrate_to_event`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventHit {
+    /// Time of the zero crossing.
+    pub t: f64,
+    /// State at `t` (from the dense output).
+    pub y: Vec<f64>,
+}
+
+/// Like [`integrate`], but stops at the first time where `event(t, y)` crosses zero
+/// upwards (from `< 0` to `≥ 0`).
+///
+/// The event function is evaluated at the end of every accepted step and at three
+/// interior points of it (on the 7th-order dense output, so an excursion that goes out
+/// and back within one step is caught if it lasts longer than about a quarter of the
+/// step; shorter grazes can be missed); a sign change is bracketed and
+/// the crossing located by bisection on the dense output down to a bracket of a few
+/// units in the last place of `t`. The crossing is then as accurate as the dense output
+/// (for a transversal crossing, the time error is about the position error divided by
+/// the crossing speed). A crossing at the very start (event value `≥ 0` at `times[0]`)
+/// is not reported.
+///
+/// Returns the states at the requested times before the event (`states.len()` may be
+/// shorter than `times.len()`) and the event, or every requested state and `None` if
+/// no crossing happens before the last time.
+pub fn integrate_to_event<F, E>(
+    f: F,
+    y0: &[f64],
+    times: &[f64],
+    opts: &OdeOptions,
+    event: E,
+) -> Result<(OdeSolution, Option<EventHit>), OdeError>
+where
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>,
+    E: FnMut(f64, &[f64]) -> f64,
+{
+    run(f, y0, times, opts, Some(event))
+}
+
+/// Interior points (fractions of a step) where the event function is sampled.
+const EVENT_SAMPLES: [f64; 4] = [0.25, 0.5, 0.75, 1.0];
+
+fn run<F, E>(
+    f: F,
+    y0: &[f64],
+    times: &[f64],
+    opts: &OdeOptions,
+    mut event: Option<E>,
+) -> Result<(OdeSolution, Option<EventHit>), OdeError>
+where
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>,
+    E: FnMut(f64, &[f64]) -> f64,
+{
     validate(y0, times, opts)?;
     let t0 = times[0];
     let t_end = times[times.len() - 1];
@@ -142,7 +206,7 @@ where
     if next == times.len() || y0.is_empty() {
         // Nothing to integrate: no time span, or an empty state.
         out.states.resize(times.len(), y0.to_vec());
-        return Ok(out);
+        return Ok((out, None));
     }
 
     let mut s = Dop853::new(f, y0, opts);
@@ -189,7 +253,7 @@ where
         if err <= 1.0 {
             let t_new = if last { t_end } else { t + h };
             // First stage of the next step, and the dense output if a sample lies inside.
-            let needs_dense = times[next] < t_new;
+            let needs_dense = times[next] < t_new || event.is_some();
             let extra = s
                 .eval(t_new, Stage::YNew, 12)
                 .map_err(|msg| (t_new, msg))
@@ -209,6 +273,45 @@ where
             }
             s.stats.accepted += 1;
             last_failure = None;
+            // Terminal event inside this step?
+            let mut hit: Option<EventHit> = None;
+            if let Some(ev) = event.as_mut() {
+                let mut e_prev = ev(t, &s.y);
+                let mut th_prev = 0.0;
+                for &th in &EVENT_SAMPLES {
+                    let y_th = if th == 1.0 { s.ynew.clone() } else { s.dense(th) };
+                    let e_th = ev(t + th * h, &y_th);
+                    if e_prev < 0.0 && e_th >= 0.0 {
+                        let (mut a, mut b) = (th_prev, th);
+                        // Bisection on the dense output (its bracket shrinks to round-off).
+                        for _ in 0..200 {
+                            let m = 0.5 * (a + b);
+                            if m <= a || m >= b || (b - a) * h.abs() <= 4.0 * f64::EPSILON * t.abs().max(t_new.abs()) {
+                                break;
+                            }
+                            if ev(t + m * h, &s.dense(m)) < 0.0 {
+                                a = m;
+                            } else {
+                                b = m;
+                            }
+                        }
+                        let te = if b == 1.0 { t_new } else { t + b * h };
+                        let ye = if b == 1.0 { s.ynew.clone() } else { s.dense(b) };
+                        hit = Some(EventHit { t: te, y: ye });
+                        break;
+                    }
+                    e_prev = e_th;
+                    th_prev = th;
+                }
+            }
+            if let Some(hit) = hit {
+                while next < times.len() && times[next] < hit.t {
+                    out.states.push(s.dense((times[next] - t) / h));
+                    next += 1;
+                }
+                out.stats = s.stats;
+                return Ok((out, Some(hit)));
+            }
             while next < times.len() && times[next] <= t_new {
                 let ts = times[next];
                 out.states.push(if ts == t_new {
@@ -237,7 +340,7 @@ where
         }
     }
     out.stats = s.stats;
-    Ok(out)
+    Ok((out, None))
 }
 
 /// Safety factor of the step-size controller.
@@ -1063,5 +1166,44 @@ mod tests {
         // An empty state is integrated trivially.
         let sol = integrate(f, &[], &[0.0, 1.0], &o).unwrap();
         assert_eq!(sol.states, vec![Vec::<f64>::new(); 2]);
+    }
+
+    #[test]
+    fn event_location() {
+        // Drop from y = 1 with v = 0.5 under g: the floor y = 0 is reached at the root of
+        // 1 + 0.5 t - g t²/2, event function -y (crossing upwards).
+        let g = 9.8;
+        let f = |_: f64, y: &[f64], dy: &mut [f64]| {
+            dy[0] = y[1];
+            dy[1] = -g;
+            Ok(())
+        };
+        let times = linspace(0.0, 2.0, 21);
+        let (sol, hit) = integrate_to_event(f, &[1.0, 0.5], &times, &tight(), |_, y| -y[0]).unwrap();
+        let hit = hit.expect("the floor is reached");
+        let exact = (0.5 + (0.25 + 2.0 * g).sqrt()) / g;
+        assert!((hit.t - exact).abs() < 1e-13, "{} vs {exact}", hit.t);
+        assert!(hit.y[0].abs() < 1e-13);
+        assert!((hit.y[1] - (0.5 - g * exact)).abs() < 1e-12);
+        let before = times.iter().filter(|&&t| t < hit.t).count();
+        assert_eq!(sol.states.len(), before);
+        for (t, y) in times.iter().zip(&sol.states) {
+            assert!((y[0] - (1.0 + 0.5 * t - 0.5 * g * t * t)).abs() < 1e-12);
+        }
+        // No crossing: every state, no event.
+        let (sol, hit) = integrate_to_event(f, &[1.0, 20.0], &times, &tight(), |_, y| -y[0]).unwrap();
+        assert!(hit.is_none());
+        assert_eq!(sol.states.len(), times.len());
+        // A short excursion inside one long step is still found: -y = sin t exceeds 0.99
+        // for 0.28 s around π/2, shorter than the steps taken at rtol 1e-6.
+        let osc = |_: f64, y: &[f64], dy: &mut [f64]| {
+            dy[0] = y[1];
+            dy[1] = -y[0];
+            Ok(())
+        };
+        let (_, hit) = integrate_to_event(osc, &[0.0, -1.0], &[0.0, 10.0], &OdeOptions { rtol: 1e-6, atol: 1e-8, ..OdeOptions::default() }, |_, y| -y[0] - 0.99).unwrap();
+        let hit = hit.expect("graze found");
+        let exact = std::f64::consts::PI / 2.0 - 0.99f64.acos();
+        assert!((hit.t - exact).abs() < 1e-5, "{} vs {exact}", hit.t);
     }
 }

@@ -228,7 +228,10 @@ pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
     Ok(Action::new(model, op, scene.initial_q.clone(), scene.initial_v.clone()))
 }
 
-/// The Lagrange–d'Alembert solution sampled at `times`: (q, v, λ) per node.
+/// The Lagrange–d'Alembert solution sampled at `times`: (q, v, λ) per node (the
+/// index-reduced integration of [`crate::reference::integrate_model`], which the
+/// reference solutions share).
+#[allow(clippy::type_complexity)]
 pub fn time_stepping(
     model: &Model,
     q0: &[f64],
@@ -236,32 +239,7 @@ pub fn time_stepping(
     times: &[f64],
     opts: &OdeOptions,
 ) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>), ode::OdeError> {
-    let d = q0.len();
-    let mut ws = model.workspace();
-    let y0: Vec<f64> = q0.iter().chain(v0).copied().collect();
-    let sol = ode::integrate(
-        |_, y, dy| {
-            let (a, _) = model.accelerations(&y[..d], &y[d..], &mut ws)?;
-            dy[..d].copy_from_slice(&y[d..]);
-            dy[d..].copy_from_slice(&a);
-            Ok(())
-        },
-        &y0,
-        times,
-        opts,
-    )?;
-    let mut q = Vec::new();
-    let mut v = Vec::new();
-    let mut lam = Vec::new();
-    for (k, y) in sol.states.iter().enumerate() {
-        let (_, l) = model
-            .accelerations(&y[..d], &y[d..], &mut ws)
-            .map_err(|msg| ode::OdeError::Rhs { t: times[k], msg })?;
-        q.push(y[..d].to_vec());
-        v.push(y[d..].to_vec());
-        lam.push(l);
-    }
-    Ok((q, v, lam))
+    crate::reference::integrate_model(model, q0, v0, times, opts).map(|(q, v, lam, _)| (q, v, lam))
 }
 
 /// Initial point Z0 and a description of how it was made; also the time-stepping
