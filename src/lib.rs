@@ -13,6 +13,7 @@ pub mod ipopt;
 pub mod model;
 pub mod ode;
 pub mod output;
+pub mod plot;
 pub mod reference;
 pub mod sbp;
 pub mod scenario;

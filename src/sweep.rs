@@ -99,7 +99,7 @@ pub enum ReferenceSpec {
     /// A reference CSV (`skg-solve reference`), compared by time.
     File(PathBuf),
     /// The scene's Lagrange–d'Alembert equations integrated on the point's own grid at
-    /// a tight tolerance (rtol 1e-12, atol 1e-14).
+    /// a tight tolerance ([`crate::reference::regularized`], rtol = atol = 1e-12).
     Integrate,
 }
 
@@ -136,7 +136,7 @@ pub struct SweepMeta {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PeerSpec {
-    /// Relative tolerances (the absolute tolerance is rtol/100).
+    /// Relative tolerances (the absolute tolerance is the same).
     pub tolerances: Vec<f64>,
     /// Output grid of the peer runs (default: the base scene's nodes).
     #[serde(default)]
@@ -168,7 +168,8 @@ pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "hessian
 pub enum Method {
     /// The SKG action solved by Ipopt.
     Skg,
-    /// The time-stepping reference integrator at a relative tolerance.
+    /// The time-stepping reference integrator (DOP853, [`crate::reference::regularized`])
+    /// at a relative tolerance (absolute tolerance the same).
     Ode { rtol: f64 },
 }
 
@@ -540,19 +541,15 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             }
         }
         Method::Ode { rtol } => {
-            let model = crate::model::Model::build(&scene).map_err(|e| e.to_string())?;
             let (times, _) = crate::solve::grid(&scene);
-            let opts = crate::ode::OdeOptions {
-                rtol,
-                atol: rtol / 100.0,
-                ..Default::default()
-            };
-            let (q, v, _) = crate::solve::time_stepping(&model, &scene.initial_q, &scene.initial_v, &times, &opts)
-                .map_err(|e| e.to_string())?;
+            let opts = crate::reference::ReferenceOptions { rtol, atol: rtol };
+            let r = crate::reference::regularized(&scene, &times, &opts).map_err(|e| e.to_string())?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
             rec.converged = true;
             rec.status = "ODE_Succeeded".into();
-            let (header, rows) = ode_table(&scene, &times, &q, &v);
+            rec.energy_artifact = Some(crate::tune::energy_artifact(&scene, &r.trajectory, job.skip_last).value);
+            let header = output::trajectory_header(&scene.coordinates, &scene.constraints, &walls);
+            let rows = output::trajectory_rows(&r.trajectory);
             if let Some(r) = &job.reference {
                 apply_errors(&mut rec, &scene, r, &header, &rows, &compare_cols, job.skip_last);
             }
@@ -563,28 +560,6 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
         }
     }
     Ok(rec)
-}
-
-/// Columns t, q, q_dot of a time-stepping solution.
-fn ode_table(scene: &Scene, times: &[f64], q: &[Vec<f64>], v: &[Vec<f64>]) -> (Vec<String>, Vec<Vec<f64>>) {
-    let mut header = vec!["t".to_string()];
-    for c in &scene.coordinates {
-        header.push(c.clone());
-        header.push(format!("{c}{}", crate::scenario::VELOCITY_SUFFIX));
-    }
-    let rows = times
-        .iter()
-        .enumerate()
-        .map(|(k, &t)| {
-            let mut r = vec![t];
-            for i in 0..scene.coordinates.len() {
-                r.push(q[k][i]);
-                r.push(v[k][i]);
-            }
-            r
-        })
-        .collect();
-    (header, rows)
 }
 
 /// Fill the error columns of a record (errors go into `message`, never abort the point).
