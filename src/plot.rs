@@ -108,7 +108,8 @@ pub fn cell_value(s: &str) -> Option<f64> {
 }
 
 /// Rows of a results table that satisfy every `column=value` filter (equal as text or as
-/// numbers).
+/// numbers). A row that leaves the column blank is kept: the peer rows have no scene
+/// parameters, and they belong on every chart of the same scene.
 fn filtered<'a>(res: &'a Results, filters: &[(String, String)]) -> Result<Vec<&'a Vec<String>>, PlotError> {
     let mut idx = Vec::new();
     for (k, v) in filters {
@@ -122,7 +123,7 @@ fn filtered<'a>(res: &'a Results, filters: &[(String, String)]) -> Result<Vec<&'
         .iter()
         .filter(|r| {
             idx.iter().all(|(i, v)| {
-                r[*i] == **v || matches!((cell_value(&r[*i]), cell_value(v)), (Some(a), Some(b)) if (a - b).abs() <= 1e-12 * a.abs().max(b.abs()))
+                r[*i].is_empty() || r[*i] == **v || matches!((cell_value(&r[*i]), cell_value(v)), (Some(a), Some(b)) if (a - b).abs() <= 1e-12 * a.abs().max(b.abs()))
             })
         })
         .collect())

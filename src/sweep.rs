@@ -130,6 +130,10 @@ pub struct SweepMeta {
     /// Keep each point's `trajectory.csv` and `summary.json` under `points/<id>/`.
     #[serde(default)]
     pub keep_trajectories: bool,
+    /// Wall-time limit of one point in seconds: a worker still running then is killed and
+    /// the point recorded with status `timeout` (default: no limit).
+    #[serde(default)]
+    pub timeout: Option<f64>,
 }
 
 /// `[peer]`: the time-stepping reference integrator at a ladder of tolerances.
@@ -347,6 +351,14 @@ impl SweepFile {
                 return Err(SweepError::Invalid {
                     location: self.origin.path.clone(),
                     message: format!("sweep.artifact_tol must be a positive number, got {tol}"),
+                });
+            }
+        }
+        if let Some(t) = self.sweep.timeout {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(SweepError::Invalid {
+                    location: self.origin.path.clone(),
+                    message: format!("sweep.timeout must be a positive number of seconds, got {t}"),
                 });
             }
         }
@@ -784,6 +796,7 @@ pub struct SweepReport {
 
 struct Running {
     child: Child,
+    started: Instant,
     point: Point,
     job_path: PathBuf,
     result_path: PathBuf,
@@ -854,6 +867,7 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
     let jobs = opts.jobs.max(1);
     let mut running: Vec<Running> = Vec::new();
     let artifact_tol = file.artifact_tol();
+    let timeout = file.sweep.timeout;
     let reference = file.reference();
     let scene_path = std::path::absolute(file.scene_path()).unwrap_or(file.scene_path());
     while !queue.is_empty() || !running.is_empty() {
@@ -876,6 +890,7 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
             let child = spawn_worker(&opts.worker_exe, &job_path, &result_path, &err_path)?;
             running.push(Running {
                 child,
+                started: Instant::now(),
                 point,
                 job_path,
                 result_path,
@@ -889,12 +904,24 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
                 exe: opts.worker_exe.clone(),
                 source: e,
             })?;
-            let Some(status) = status else {
+            let timed_out = status.is_none() && timeout.is_some_and(|t| running[k].started.elapsed().as_secs_f64() > t);
+            if status.is_none() && !timed_out {
                 k += 1;
                 continue;
-            };
-            let r = running.swap_remove(k);
-            let rec = match std::fs::read_to_string(&r.result_path).ok().and_then(|t| serde_json::from_str::<Record>(&t).ok()) {
+            }
+            let mut r = running.swap_remove(k);
+            let rec = if timed_out {
+                let _ = r.child.kill();
+                let _ = r.child.wait();
+                Record {
+                    status: "timeout".into(),
+                    wall_s: Some(r.started.elapsed().as_secs_f64()),
+                    message: format!("killed after the sweep's timeout of {} s", timeout.unwrap_or_default()),
+                    ..Record::default()
+                }
+            } else {
+                let status = status.expect("finished");
+                match std::fs::read_to_string(&r.result_path).ok().and_then(|t| serde_json::from_str::<Record>(&t).ok()) {
                 Some(rec) => rec,
                 None => {
                     let stderr = std::fs::read_to_string(&r.err_path).unwrap_or_default();
@@ -905,6 +932,7 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
                         ..Record::default()
                     }
                 }
+            }
             };
             let line = csv_line(&results_row(&header, &r.point, &rec, artifact_tol));
             results.write_all(&line).map_err(io_err(&results_path))?;
