@@ -308,6 +308,25 @@ impl SweepFile {
         }
     }
 
+    /// Location of `key = …` inside the table spanned by `table` (falls back to the
+    /// table's own location).
+    fn locate_key<T>(&self, table: &Spanned<T>, key: &str) -> String {
+        let start = table.span().start.min(self.origin.text.len());
+        let end = table.span().end.min(self.origin.text.len()).max(start);
+        let body = &self.origin.text[start..end];
+        let mut offset = 0;
+        for line in body.split_inclusive('\n') {
+            let t = line.trim_start();
+            let bare = t.strip_prefix(key).is_some_and(|r| r.trim_start().starts_with('='));
+            let quoted = t.strip_prefix(&format!("\"{key}\"")).is_some_and(|r| r.trim_start().starts_with('='));
+            if bare || quoted {
+                return self.origin.locate(start + offset + (line.len() - t.len()));
+            }
+            offset += line.len();
+        }
+        self.origin.locate_in(table, None)
+    }
+
     /// Path of the base scene.
     pub fn scene_path(&self) -> PathBuf {
         self.dir().join(self.sweep.scene.get_ref())
@@ -383,9 +402,12 @@ impl SweepFile {
             }
         };
         for g in &self.grid {
-            let at = |m: String| self.invalid(g, format!("[[grid]]: {m}"));
             let mut combos: Vec<Vec<(String, String)>> = vec![Vec::new()];
             for (axis, values) in g.get_ref() {
+                let at = |m: String| SweepError::Invalid {
+                    location: self.locate_key(g, axis),
+                    message: format!("[[grid]]: {m}"),
+                };
                 check_axis(axis, &at)?;
                 let vals = values.values();
                 if vals.is_empty() {
@@ -409,9 +431,12 @@ impl SweepFile {
             raw.extend(combos.into_iter().map(|c| (c, Method::Skg, loc.clone())));
         }
         for p in &self.points {
-            let at = |m: String| self.invalid(p, format!("[[points]]: {m}"));
             let mut c = Vec::new();
             for (axis, v) in p.get_ref() {
+                let at = |m: String| SweepError::Invalid {
+                    location: self.locate_key(p, axis),
+                    message: format!("[[points]]: {m}"),
+                };
                 check_axis(axis, &at)?;
                 if !axes.contains(axis) {
                     axes.push(axis.clone());
@@ -821,7 +846,9 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
     let header = results_header(&expanded.axes);
     let dir = &opts.out_dir;
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+    // Worker files left by an interrupted run are stale: start from an empty .work.
     let work = dir.join(".work");
+    let _ = std::fs::remove_dir_all(&work);
     std::fs::create_dir_all(&work).map_err(io_err(&work))?;
     let results_path = dir.join("results.csv");
     let (mut results, done) = open_results(&results_path, &header)?;

@@ -81,7 +81,7 @@ tolerances = [1e-6, 1e-9]
 fn bad_sweep_files_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
     let cases: &[(&str, &[&str])] = &[
-        ("[[grid]]\nnodes = [64]\nbogus = 1\n", &["`bogus`", "sigma", "sweep.toml:4:1"]),
+        ("[[grid]]\nnodes = [64]\nbogus = 1\n", &["`bogus`", "sigma", "sweep.toml:5:1"]),
         ("colour = 1\n[[grid]]\nnodes = [64]\n", &["sweep.toml:3:1", "colour"]),
         ("[[grid]]\noperator = [\"SBP999\"]\n", &["SBP999"]),
         ("[[grid]]\nnodes = [1]\n", &["nodes"]),
