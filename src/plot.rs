@@ -234,7 +234,13 @@ fn draw_loglog<DB: DrawingBackend>(
 }
 
 /// Group the converged SKG rows by "operator formulation": (label, [(x, y, nodes)]).
-fn skg_groups(res: &Results, rows: &[&Vec<String>], x: &str, y: &str) -> Result<BTreeMap<String, Vec<(f64, f64, f64)>>, PlotError> {
+/// Points (x, y, N) of each line, by label.
+type Groups = BTreeMap<String, Vec<(f64, f64, f64)>>;
+
+/// One line of a time-series panel: label, points, colour, whether it is the reference.
+type Series = (String, Vec<(f64, f64)>, RGBColor, bool);
+
+fn skg_groups(res: &Results, rows: &[&Vec<String>], x: &str, y: &str) -> Result<Groups, PlotError> {
     let (im, ic, io, ifm, inodes, ix, iy) = (
         col(res, "method")?,
         col(res, "converged")?,
@@ -244,7 +250,7 @@ fn skg_groups(res: &Results, rows: &[&Vec<String>], x: &str, y: &str) -> Result<
         col(res, x)?,
         col(res, y)?,
     );
-    let mut groups: BTreeMap<String, Vec<(f64, f64, f64)>> = BTreeMap::new();
+    let mut groups: Groups = BTreeMap::new();
     for r in rows {
         if r[im] != "skg" || r[ic] != "true" {
             continue;
@@ -349,7 +355,7 @@ fn draw_trajectory<DB: DrawingBackend>(
     let panels = root.split_evenly((1, 2));
     let coords = coordinates(&solutions[0].1);
     // Left: coordinates over time.
-    let mut series: Vec<(String, Vec<(f64, f64)>, RGBColor, bool)> = Vec::new();
+    let mut series: Vec<Series> = Vec::new();
     if let Some(r) = reference {
         let ts = r.times();
         for c in &coords {
@@ -368,7 +374,7 @@ fn draw_trajectory<DB: DrawingBackend>(
             }
         }
     }
-    let energy: Vec<(String, Vec<(f64, f64)>, RGBColor, bool)> = reference
+    let energy: Vec<Series> = reference
         .and_then(|r| r.column("energy").map(|e| ("reference".to_string(), r.times().into_iter().zip(e).collect(), RGBColor(0, 0, 0), true)))
         .into_iter()
         .chain(
@@ -378,7 +384,7 @@ fn draw_trajectory<DB: DrawingBackend>(
                 .filter_map(|(si, (label, t))| t.column("energy").map(|e| (label.clone(), t.times().into_iter().zip(e).collect(), color(si), false))),
         )
         .collect();
-    let panel = |area: &DrawingArea<DB, Shift>, name: &str, ydesc: &str, data: Vec<(String, Vec<(f64, f64)>, RGBColor, bool)>| -> Result<(), String> {
+    let panel = |area: &DrawingArea<DB, Shift>, name: &str, ydesc: &str, data: Vec<Series>| -> Result<(), String> {
         let xs = data.iter().flat_map(|d| d.1.iter().map(|p| p.0));
         let (x0, x1) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
         let (y0, y1) = data
@@ -386,7 +392,7 @@ fn draw_trajectory<DB: DrawingBackend>(
             .flat_map(|d| d.1.iter().map(|p| p.1))
             .filter(|y| y.is_finite())
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(y), b.max(y)));
-        if !(x0 < x1) || !y0.is_finite() {
+        if x0.partial_cmp(&x1) != Some(std::cmp::Ordering::Less) || !y0.is_finite() {
             return Err(format!("no data for the {name} panel"));
         }
         let pad = ((y1 - y0) * 0.08).max(1e-9 * y1.abs().max(1.0));

@@ -19,6 +19,9 @@
 //! * **Shards**: `--shard k/n` keeps the points whose index is `k−1 mod n`; [`merge`]
 //!   joins the shards' `results.csv` files.
 
+// Errors carry file:line:column text, as in the core modules.
+#![allow(clippy::result_large_err)]
+
 use std::collections::{BTreeMap, HashSet, VecDeque};
 use std::fmt;
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -387,7 +390,9 @@ impl SweepFile {
                 return Err(self.invalid(r, format!("reference file {} does not exist (give a CSV written by `skg-solve reference`, or \"integrate\")", p.display())));
             }
         }
-        let mut raw: Vec<(Vec<(String, String)>, Method, String)> = Vec::new();
+        // (axis values, method, location in the sweep file) of each point, in order.
+        type Raw = (Vec<(String, String)>, Method, String);
+        let mut raw: Vec<Raw> = Vec::new();
         let mut axes: Vec<String> = Vec::new();
         let check_axis = |name: &str, at: &dyn Fn(String) -> SweepError| -> Result<(), SweepError> {
             if SETTING_AXES.contains(&name) || base.parameters.contains_key(name) {
@@ -856,7 +861,7 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
     let mine: Vec<Point> = expanded
         .points
         .iter()
-        .filter(|p| opts.shard.is_none_or(|s| s.contains(p.index)))
+        .filter(|p| opts.shard.map_or(true, |s| s.contains(p.index)))
         .cloned()
         .collect();
     let info = SweepInfo {
@@ -949,17 +954,17 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
             } else {
                 let status = status.expect("finished");
                 match std::fs::read_to_string(&r.result_path).ok().and_then(|t| serde_json::from_str::<Record>(&t).ok()) {
-                Some(rec) => rec,
-                None => {
-                    let stderr = std::fs::read_to_string(&r.err_path).unwrap_or_default();
-                    let tail: String = stderr.lines().rev().take(3).collect::<Vec<_>>().into_iter().rev().collect::<Vec<_>>().join(" | ");
-                    Record {
-                        status: "crashed".into(),
-                        message: format!("worker exited with {status} without a result: {tail}"),
-                        ..Record::default()
+                    Some(rec) => rec,
+                    None => {
+                        let stderr = std::fs::read_to_string(&r.err_path).unwrap_or_default();
+                        let tail: String = stderr.lines().rev().take(3).collect::<Vec<_>>().into_iter().rev().collect::<Vec<_>>().join(" | ");
+                        Record {
+                            status: "crashed".into(),
+                            message: format!("worker exited with {status} without a result: {tail}"),
+                            ..Record::default()
+                        }
                     }
                 }
-            }
             };
             let line = csv_line(&results_row(&header, &r.point, &rec, artifact_tol));
             results.write_all(&line).map_err(io_err(&results_path))?;

@@ -25,6 +25,9 @@
 //! **σ selection** ([`tune_width`]): bisection in log σ between a σ with artifacts and one
 //! without, over in-process solves; it assumes the artifact decreases as σ grows.
 
+// Errors carry a SceneError (with its file:line:column text), as in the core modules.
+#![allow(clippy::result_large_err)]
+
 use std::path::PathBuf;
 
 use crate::scenario::{NumOrExpr, Overrides, Scene, SceneFile};
@@ -61,11 +64,9 @@ pub fn energy_artifact(scene: &Scene, tr: &Trajectory, skip_last: usize) -> Arti
     let scale = tr.energy.iter().fold(0.0_f64, |m, e| m.max(e.abs())).max(1e-300);
     let mut value = 0.0_f64;
     let mut free_nodes = 0;
-    for k in 0..end {
-        if !contact[k] {
-            free_nodes += 1;
-            value = value.max((tr.energy[k] - e0).abs() / scale);
-        }
+    for (e, _) in tr.energy[..end].iter().zip(&contact).filter(|(_, c)| !**c) {
+        free_nodes += 1;
+        value = value.max((e - e0).abs() / scale);
     }
     Artifact { value, free_nodes }
 }
@@ -223,7 +224,7 @@ pub fn tune_width(
         Some(p) => p.clone(),
         None => width_parameter(file)?,
     };
-    if !(opts.tol > 0.0) {
+    if opts.tol.is_nan() || opts.tol <= 0.0 {
         return Err(TuneError::Invalid(format!("the tolerance must be positive, got {}", opts.tol)));
     }
     let base = file.clone().resolve(ov)?;
@@ -257,7 +258,7 @@ pub fn tune_width(
         Ok(ok)
     };
     let mut hi = opts.hi.unwrap_or(current);
-    if !(hi > 0.0) {
+    if hi.is_nan() || hi <= 0.0 {
         return Err(TuneError::Invalid(format!("`{param}` must be positive to be tuned, got {hi}")));
     }
     let mut grow = 0;
