@@ -233,7 +233,7 @@ enum PlotKind {
         #[arg(long, default_value = "sigma")]
         y: String,
     },
-    /// Coordinates over time (reference overlaid, dashed) and the energy over time.
+    /// Coordinates over time (reference overlaid as a thin black line) and the energy over time.
     Trajectory {
         /// Solutions: output directories, trajectory CSV files, or sweep directories
         /// (their kept trajectories); several are overlaid.

@@ -478,7 +478,7 @@ pub fn sweep_solutions(dir: &Path) -> Result<Vec<(String, Table)>, PlotError> {
 }
 
 /// Trajectory and energy chart of one or more solutions (label, table), with an
-/// optional reference overlaid (dashed black).
+/// optional reference overlaid (a thin black line; the solutions as dots at their nodes).
 pub fn trajectory(solutions: &[(String, Table)], reference: Option<&Table>, title: &str, stem: &Path) -> Result<Vec<PathBuf>, PlotError> {
     if solutions.is_empty() {
         return Err(PlotError::Data("no solution to plot".into()));
