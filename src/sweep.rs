@@ -9,7 +9,8 @@
 //!   order; a point's **id** is a hash of its canonical string (axis names sorted,
 //!   `name=value` joined by `;`), so it does not depend on the order of the file.
 //! * **Workers**: Debian's Ipopt/MUMPS is not thread-safe (DESIGN §8), so each point runs
-//!   in a child process (`skg-solve sweep-worker JOB.json`), at most `jobs` at once. A
+//!   in a child process (`skg-solve sweep-worker JOB.json`), at most `jobs` at once, the
+//!   points with the largest [`estimated_cost`] first. A
 //!   child dies with the driver (`PR_SET_PDEATHSIG`), and Ctrl-C reaches the whole
 //!   process group.
 //! * **Results**: the driver alone appends to `results.csv`, one whole line per
@@ -270,6 +271,8 @@ impl Shard {
 #[derive(Debug, Clone)]
 pub struct Expanded {
     pub points: Vec<Point>,
+    /// Rough relative cost of each point (see [`estimated_cost`]), by index.
+    pub costs: Vec<f64>,
     /// Grid axes in order of first appearance.
     pub axes: Vec<String>,
     /// Identical points given twice (their later copies were dropped).
@@ -472,6 +475,7 @@ impl SweepFile {
             });
         }
         let mut points = Vec::new();
+        let mut costs = Vec::new();
         let mut seen = HashSet::new();
         let mut duplicates = 0;
         for (values, method, loc) in raw {
@@ -485,17 +489,42 @@ impl SweepFile {
                 location: loc.clone(),
                 message: m,
             })?;
-            base.clone().resolve(&ov).map_err(|e| SweepError::Invalid {
+            let scene = base.clone().resolve(&ov).map_err(|e| SweepError::Invalid {
                 location: loc.clone(),
                 message: format!("point {}: {e}", p.canonical()),
             })?;
             if seen.insert(p.id()) {
+                costs.push(estimated_cost(&scene, &p.method));
                 points.push(p);
             } else {
                 duplicates += 1;
             }
         }
-        Ok(Expanded { points, axes, duplicates })
+        Ok(Expanded {
+            points,
+            costs,
+            axes,
+            duplicates,
+        })
+    }
+}
+
+/// Rough relative cost of a point, used only to start the expensive points first (so
+/// that a sweep does not end with one long point running alone): N × the operator's
+/// stencil width × 2 for the full formulation; a time-stepping peer point counts N/10.
+pub fn estimated_cost(scene: &Scene, method: &Method) -> f64 {
+    let n = scene.nodes as f64;
+    match method {
+        Method::Ode { .. } => n / 10.0,
+        Method::Skg => {
+            let width = match scene.operator {
+                OperatorKind::Sbp121 => 1.0,
+                OperatorKind::Sbp242 => 2.0,
+                _ => 3.0,
+            };
+            let full = if scene.formulation == Formulation::Full { 2.0 } else { 1.0 };
+            n * width * full
+        }
     }
 }
 
@@ -873,7 +902,10 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
         ids: mine.iter().map(Point::id).collect(),
     };
     output::write_json(&dir.join("sweep.json"), &info)?;
-    let mut queue: VecDeque<Point> = mine.iter().filter(|p| !done.contains(&p.id())).cloned().collect();
+    // Largest first (stable: equal costs keep the file's order); rows carry their index.
+    let mut todo: Vec<Point> = mine.iter().filter(|p| !done.contains(&p.id())).cloned().collect();
+    todo.sort_by(|a, b| expanded.costs[b.index].total_cmp(&expanded.costs[a.index]));
+    let mut queue: VecDeque<Point> = todo.into();
     let mut report = SweepReport {
         total: expanded.points.len(),
         in_shard: mine.len(),
