@@ -430,11 +430,10 @@ fn run_bench(args: BenchArgs) -> Result<ExitCode> {
 }
 
 fn run_reference(args: ReferenceArgs) -> Result<ExitCode> {
-    let set = args
-        .set
-        .iter()
-        .map(|s| Overrides::parse_assignment(s))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut set = Vec::new();
+    for a in &args.set {
+        set.push(Overrides::parse_assignment(a)?);
+    }
     let ov = Overrides {
         set,
         nodes: args.nodes,

@@ -20,11 +20,23 @@
 //!   capped so that it at most stops the tangential motion (Coulomb). The distance of a
 //!   solve from this reference is its *model error* (plus its discretization error).
 //!
-//! Not covered by the hard-wall reference, each an error rather than a wrong answer:
-//! walls together with velocity constraints (the impact law would have to respect the
-//! constraints), and sustained contact (an impact with vanishing normal speed, i.e. a
-//! particle coming to rest on a wall; the Zeno sequence of bounces is detected).
+//!
+//! Sustained contact — a start on a wall, or an arrival with vanishing normal speed
+//! (`≤ 1e-7 (1 + max|q̇₀|)`) — while the wall pushes (`N > 0`): the motion is constrained to
+//! `h_j = 0` (index-reduced: `∇h·q̈ + q̇ᵀ∇²h q̇ = 0`) with kinetic Coulomb friction
+//! `μ N |∇h| d̂` along the friction direction, until lift-off, located as the zero crossing
+//! of `N` ([`Contact`] phases are listed in the provenance).
+//!
+//! Not covered, each an error rather than a wrong answer: walls together with velocity
+//! constraints (the impact law would have to respect the constraints), sticking under
+//! velocity-dependent friction (a particle coming to rest in contact), and impacts that
+//! accumulate without settling into contact.
 
+
+// `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// `SceneError` (wrapped in `ReferenceError`) is large; it is the crate-wide error type.
+#![allow(clippy::result_large_err)]
 use std::path::Path;
 
 use crate::expr::{ExprId, Graph, Symbol};
@@ -84,6 +96,15 @@ pub struct Impact {
     pub q: Vec<f64>,
 }
 
+/// A phase of sustained contact of the hard-wall reference: sliding along a wall.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Contact {
+    pub wall: String,
+    pub t_start: f64,
+    /// Lift-off time; `None` if still in contact at the end.
+    pub t_end: Option<f64>,
+}
+
 /// A reference trajectory and how it was made.
 #[derive(Debug, Clone)]
 pub struct Reference {
@@ -95,6 +116,8 @@ pub struct Reference {
     pub stats: OdeStats,
     /// Impacts (hard-wall reference only).
     pub impacts: Vec<Impact>,
+    /// Phases of sustained contact (hard-wall reference only).
+    pub contacts: Vec<Contact>,
     /// max |g^a| over the samples: the drift of the index-reduced integration.
     pub constraint_drift: f64,
     /// max |E − E(t₀)| over the samples.
@@ -220,6 +243,7 @@ pub fn regularized(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Res
         options: *opts,
         stats,
         impacts: vec![],
+        contacts: vec![],
         constraint_drift,
         energy_drift,
     })
@@ -232,6 +256,8 @@ struct WallSet {
     names: Vec<String>,
     h: Vec<ExprId>,
     grad: Vec<Vec<ExprId>>,
+    /// ∂²h/∂q_i∂q_k, row-major d×d.
+    hess: Vec<Vec<ExprId>>,
     friction: Vec<f64>,
     direction: Vec<Option<Vec<ExprId>>>,
 }
@@ -254,6 +280,7 @@ impl WallSet {
             names: vec![],
             h: vec![],
             grad: vec![],
+            hess: vec![],
             friction: vec![],
             direction: vec![],
         };
@@ -264,7 +291,9 @@ impl WallSet {
             let h = graph
                 .parse(spec.h.get_ref(), &mut resolve)
                 .map_err(|e| file.expression_error(&spec.h, &key, e))?;
-            let grad = (0..d).map(|i| graph.diff(h, i)).collect();
+            let grad: Vec<ExprId> = (0..d).map(|i| graph.diff(h, i)).collect();
+            let hess = grad.iter().flat_map(|&gi| (0..d).map(move |k| (gi, k))).collect::<Vec<_>>();
+            let hess = hess.into_iter().map(|(gi, k)| graph.diff(gi, k)).collect();
             let direction = match &spec.friction_direction {
                 Some(dir) if wall.friction > 0.0 => {
                     let mut comps = Vec::new();
@@ -279,6 +308,7 @@ impl WallSet {
             set.names.push(wall.name.clone());
             set.h.push(h);
             set.grad.push(grad);
+            set.hess.push(hess);
             set.friction.push(wall.friction);
             set.direction.push(direction);
         }
@@ -295,6 +325,60 @@ impl WallSet {
             .into_iter()
             .enumerate()
             .fold((0, f64::NEG_INFINITY), |best, (j, h)| if h > best.1 { (j, h) } else { best })
+    }
+
+    /// Sliding on wall `j` (h_j = 0 kept at the acceleration level): the accelerations
+    /// and the normal force magnitude `N` (≥ 0 while in contact) of
+    /// `W q̈ = f + F − (∂p/∂q) q̇ − N ∇h + μ N |∇h| d̂`, `∇h·q̈ + q̇ᵀ(∇²h) q̇ = 0`,
+    /// with `d̂` the wall's friction direction (kinetic Coulomb friction).
+    fn contact(&self, model: &Model, ws: &mut crate::model::Workspace, j: usize, q: &[f64], v: &[f64]) -> Result<(Vec<f64>, f64), String> {
+        use nalgebra::{DMatrix, DVector};
+        let d = q.len();
+        let ph = model.physical(q, v, ws);
+        let vv = DVector::from_column_slice(v);
+        let rhs = DVector::from_column_slice(&ph.force) - &ph.dpdq * &vv;
+        let n = DVector::from_vec(self.graph.eval_many(&self.grad[j], q));
+        let hm = DMatrix::from_row_slice(d, d, &self.graph.eval_many(&self.hess[j], q));
+        let curv = vv.dot(&(&hm * &vv));
+        let mut b = -&n;
+        let mu = self.friction[j];
+        if mu > 0.0 {
+            let dhat = match &self.direction[j] {
+                Some(dir) => DVector::from_vec(self.graph.eval_many(dir, q)),
+                None => {
+                    let nhat = &n / n.norm();
+                    let vpar = &vv - nhat.dot(&vv) * &nhat;
+                    if !(vpar.norm() > 1e-12) {
+                        return Err(format!(
+                            "wall `{}`: the particle comes to rest in contact (sticking under velocity-dependent friction is not supported)",
+                            self.names[j]
+                        ));
+                    }
+                    -vpar
+                }
+            };
+            b += (mu * n.norm() / dhat.norm()) * dhat;
+        }
+        let lu = ph.kinetic.lu();
+        let a0 = lu.solve(&rhs).ok_or("the kinetic matrix is singular")?;
+        let wb = lu.solve(&b).ok_or("the kinetic matrix is singular")?;
+        let den = n.dot(&wb);
+        if !(den.abs() > 0.0) {
+            return Err(format!("wall `{}`: the contact force law is singular", self.names[j]));
+        }
+        let big_n = -(curv + n.dot(&a0)) / den;
+        let acc = a0 + big_n * wb;
+        Ok((acc.iter().copied().collect(), big_n))
+    }
+
+    /// Remove the normal velocity of wall `j` (in the kinetic metric).
+    fn project(&self, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<f64>) -> Option<Vec<f64>> {
+        use nalgebra::DVector;
+        let n = DVector::from_vec(self.graph.eval_many(&self.grad[j], q));
+        let wn = w.clone().lu().solve(&n)?;
+        let vv = DVector::from_column_slice(v);
+        let out = &vv - (n.dot(&vv) / n.dot(&wn)) * wn;
+        Some(out.iter().copied().collect())
     }
 
     /// The velocity after an impact on wall `j` at `q` with incoming velocity `v`.
@@ -376,12 +460,6 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         )));
     }
     let walls = WallSet::build(scene)?;
-    let (_, h0) = walls.max_h(&scene.initial_q);
-    if h0 >= 0.0 {
-        return Err(ReferenceError::HardWall(format!(
-            "the initial state is not strictly inside the walls (max h = {h0:.3e})"
-        )));
-    }
     // The same scene without its walls: the motion between impacts.
     let mut free = scene.clone();
     free.file.walls.clear();
@@ -389,23 +467,77 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
     let model = Model::build(&free)?;
     let d = scene.coordinates.len();
     let ode_opts = opts.ode();
+    let vscale = 1.0 + scene.initial_v.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let kinetic = |q: &[f64], v: &[f64]| {
+        let mut ws = model.workspace();
+        model.physical(q, v, &mut ws).kinetic
+    };
+    let hard = |m: String| ReferenceError::HardWall(m);
+
+    let mut y: Vec<f64> = scene.initial_q.iter().chain(&scene.initial_v).copied().collect();
+    let (j0, h0) = walls.max_h(&scene.initial_q);
+    let on_wall_tol = 1e-12 * (1.0 + scene.initial_q.iter().fold(0.0_f64, |m, q| m.max(q.abs())));
+    // Contact: Some((wall, start time)).
+    let mut contact: Option<(usize, f64)> = None;
+    if h0 > on_wall_tol {
+        return Err(hard(format!("the initial state is outside the walls (max h = {h0:.3e})")));
+    }
+    if h0 >= -on_wall_tol {
+        // Starting on a wall: slide along it if it pushes, else leave it.
+        let w = kinetic(&y[..d], &y[d..]);
+        let vt = walls.project(j0, &y[..d], &y[d..], &w).ok_or_else(|| hard("singular kinetic matrix".into()))?;
+        let mut ws = model.workspace();
+        let (_, big_n) = walls.contact(&model, &mut ws, j0, &y[..d], &vt).map_err(hard)?;
+        if big_n > 0.0 {
+            y[d..].copy_from_slice(&vt);
+            contact = Some((j0, times[0]));
+        } else {
+            return Err(hard(format!(
+                "the initial state lies on wall `{}` and moves away from it or outwards; start strictly inside",
+                walls.names[j0]
+            )));
+        }
+    }
 
     let mut states: Vec<Vec<f64>> = Vec::with_capacity(times.len());
     let mut impacts = Vec::new();
+    let mut contacts = Vec::new();
     let mut stats = OdeStats::default();
-    let mut y: Vec<f64> = scene.initial_q.iter().chain(&scene.initial_v).copied().collect();
     let mut t_cur = times[0];
     let mut first = true;
     loop {
-        // Sample times still to fill; after an impact the restart time comes first and
-        // its state (the reflected one) is not a sample.
+        // Sample times still to fill; after an event the restart time comes first and
+        // its state (the new one) is not a sample.
         let mut ts = Vec::with_capacity(times.len() - states.len() + 1);
         if !first {
             ts.push(t_cur);
         }
         ts.extend_from_slice(&times[states.len()..]);
-        let mut ws = model.workspace();
-        let (sol, hit) = ode::integrate_to_event(rhs(&model, &mut ws), &y, &ts, &ode_opts, |_, y| walls.max_h(&y[..d]).1)?;
+        let (sol, hit) = match contact {
+            None => {
+                let mut ws = model.workspace();
+                ode::integrate_to_event(rhs(&model, &mut ws), &y, &ts, &ode_opts, |_, y| walls.max_h(&y[..d]).1)?
+            }
+            Some((j, _)) => {
+                let mut ws = model.workspace();
+                let mut ws_e = model.workspace();
+                let walls_ref = &walls;
+                let model_ref = &model;
+                ode::integrate_to_event(
+                    move |_, y: &[f64], dy: &mut [f64]| {
+                        let (a, _) = walls_ref.contact(model_ref, &mut ws, j, &y[..d], &y[d..])?;
+                        dy[..d].copy_from_slice(&y[d..]);
+                        dy[d..].copy_from_slice(&a);
+                        Ok(())
+                    },
+                    &y,
+                    &ts,
+                    &ode_opts,
+                    // Lift-off: the normal force falls to zero.
+                    |_, y| walls.contact(&model, &mut ws_e, j, &y[..d], &y[d..]).map_or(f64::NAN, |(_, n)| -n),
+                )?
+            }
+        };
         stats.accepted += sol.stats.accepted;
         stats.rejected += sol.stats.rejected;
         stats.rhs_evals += sol.stats.rhs_evals;
@@ -413,27 +545,51 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         states.extend(sol.states.into_iter().skip(skip));
         first = false;
         let Some(EventHit { t, y: ye }) = hit else { break };
+        t_cur = t;
+        if let Some((j, t0)) = contact.take() {
+            contacts.push(Contact { wall: walls.names[j].clone(), t_start: t0, t_end: Some(t) });
+            y = ye;
+            if states.len() == times.len() {
+                break;
+            }
+            continue;
+        }
         let (j, _) = walls.max_h(&ye[..d]);
-        let mut ws = model.workspace();
-        let w = model.physical(&ye[..d], &ye[d..], &mut ws).kinetic;
-        let (v_new, vn) = walls.reflect(j, &ye[..d], &ye[d..], &w).map_err(ReferenceError::HardWall)?;
+        let w = kinetic(&ye[..d], &ye[d..]);
+        let (v_new, vn) = walls.reflect(j, &ye[..d], &ye[d..], &w).map_err(hard)?;
         impacts.push(Impact {
             t,
             wall: walls.names[j].clone(),
             normal_speed: vn,
             q: ye[..d].to_vec(),
         });
+        if vn.abs() <= 1e-7 * vscale {
+            // Grazing arrival: slide along the wall if it pushes back.
+            let vt = walls.project(j, &ye[..d], &ye[d..], &w).ok_or_else(|| hard("singular kinetic matrix".into()))?;
+            let mut ws = model.workspace();
+            let (_, big_n) = walls.contact(&model, &mut ws, j, &ye[..d], &vt).map_err(hard)?;
+            if big_n > 0.0 {
+                contact = Some((j, t));
+                y = ye[..d].iter().chain(&vt).copied().collect();
+                if states.len() == times.len() {
+                    break;
+                }
+                continue;
+            }
+        }
         if impacts.len() >= MAX_IMPACTS || (impacts.len() > 1 && t - impacts[impacts.len() - 2].t <= 1e-9 * (1.0 + t.abs())) {
-            return Err(ReferenceError::HardWall(format!(
-                "impacts accumulate near t = {t} on wall `{}` (normal speed {vn:.3e}): sustained contact is not supported",
+            return Err(hard(format!(
+                "impacts accumulate near t = {t} on wall `{}` (normal speed {vn:.3e}) without settling into contact",
                 walls.names[j]
             )));
         }
         y = ye[..d].iter().chain(&v_new).copied().collect();
-        t_cur = t;
         if states.len() == times.len() {
             break;
         }
+    }
+    if let Some((j, t0)) = contact {
+        contacts.push(Contact { wall: walls.names[j].clone(), t_start: t0, t_end: None });
     }
     let mut ws = model.workspace();
     let (q, v, lambda) = split_states(&model, &states, times, &mut ws, d)?;
@@ -454,6 +610,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         options: *opts,
         stats,
         impacts,
+        contacts,
         constraint_drift,
         energy_drift,
     })
@@ -492,6 +649,15 @@ pub fn provenance(scene: &Scene, scene_path: &str, r: &Reference) -> String {
         ));
         for (i, im) in r.impacts.iter().enumerate() {
             s.push_str(&format!("\nimpact {}: t = {:?}, wall {}, normal speed {:?}", i + 1, im.t, im.wall, im.normal_speed));
+        }
+        for (i, c) in r.contacts.iter().enumerate() {
+            s.push_str(&format!(
+                "\ncontact {}: sliding on wall {} from t = {:?} {}",
+                i + 1,
+                c.wall,
+                c.t_start,
+                c.t_end.map_or("to the end".to_string(), |t| format!("to lift-off at t = {t:?}"))
+            ));
         }
     }
     s

@@ -12,7 +12,7 @@ pub fn scenario(name: &str) -> PathBuf {
 }
 
 /// Every shipped scene.
-pub const SHIPPED: &[&str] = &["free_fall", "rolling_disk", "tumbler", "incline_friction", "incline_frictionless"];
+pub const SHIPPED: &[&str] = &["free_fall", "rolling_disk", "tumbler", "incline_friction", "incline_frictionless", "knife_edge"];
 
 pub fn load(name: &str, ov: &Overrides) -> Scene {
     SceneFile::load(&scenario(name)).unwrap().resolve(ov).unwrap()

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Regenerate the reference CSVs in tests/reference/ from the shipped scenes:
+#   <scene>.csv       regularized reference (the scene as written, Gaussian walls)
+#   <scene>.hard.csv  hard-wall reference (ideal elastic walls), for scenes with walls
+# each sampled on the scene's own grid, DOP853 at rtol = atol = 1e-12, with a
+# provenance header. tests/reference.rs regenerates one of them and checks that it
+# matches the checked-in file. Run from anywhere: bash ci/regenerate-references.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --quiet
+bin=./target/debug/skg-solve
+out=tests/reference
+mkdir -p "$out"
+for scene in free_fall rolling_disk tumbler incline_friction incline_frictionless knife_edge; do
+    "$bin" reference "scenarios/$scene.toml" -o "$out/$scene.csv" --rtol 1e-12 --quiet
+    if grep -q '^\[\[walls\]\]' "scenarios/$scene.toml"; then
+        "$bin" reference "scenarios/$scene.toml" -o "$out/$scene.hard.csv" --rtol 1e-12 --hard-walls --quiet
+    fi
+done
+ls -l "$out"
