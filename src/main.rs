@@ -13,6 +13,7 @@ use skg_solve::reference::{self, ReferenceOptions};
 use skg_solve::sbp::OperatorKind;
 use skg_solve::scenario::{Formulation, HessianMode, Overrides, Scene, SceneFile};
 use skg_solve::solve;
+use skg_solve::sweep;
 
 /// Exit code of a solve that ran but did not converge.
 const EXIT_NOT_CONVERGED: u8 = 3;
@@ -47,6 +48,23 @@ enum Command {
     /// Time solves of one scene over a ladder of node counts and print a table
     /// (wall time split into setup, initial guess, evaluations and Ipopt).
     Bench(BenchArgs),
+    /// Run a parameter sweep: every point of the sweep file's grid in its own worker
+    /// process, each finished point appended to DIR/results.csv. Rerunning resumes.
+    Sweep(SweepArgs),
+    /// Join the results of a sweep's shards into one results.csv.
+    Merge(MergeArgs),
+    /// Find the smallest wall width σ whose energy artifact stays below a tolerance
+    /// at the scene's N (bisection over solves).
+    Tune(TuneArgs),
+    /// Charts (SVG and PNG) from a sweep's results.csv or from solutions.
+    #[command(subcommand)]
+    Plot(PlotKind),
+    /// Worker process of a sweep (internal).
+    #[command(hide = true)]
+    SweepWorker {
+        job: PathBuf,
+        result: PathBuf,
+    },
     /// Integrate the Lagrange–d'Alembert equations of a scene with a tight-tolerance
     /// adaptive integrator (DOP853) and write a reference CSV with the solver's columns.
     Reference(ReferenceArgs),
@@ -174,6 +192,120 @@ struct BenchArgs {
     /// Repetitions per node count (the fastest is reported).
     #[arg(long, default_value_t = 3)]
     repeat: usize,
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+#[derive(Args)]
+struct SweepArgs {
+    /// Sweep file (TOML), e.g. scenarios/sweeps/tumbler_sigma.toml.
+    #[arg(value_name = "SWEEP.toml")]
+    sweep: PathBuf,
+    /// Output directory [default: out/sweeps/<sweep file name without .toml>].
+    #[arg(short, long, value_name = "DIR")]
+    output: Option<PathBuf>,
+    /// Worker processes at once [default: the number of cores].
+    #[arg(short, long, value_name = "K")]
+    jobs: Option<usize>,
+    /// Run only the points whose index is k−1 mod n (1 ≤ k ≤ n), e.g. `--shard 3/8`.
+    #[arg(long, value_name = "k/n")]
+    shard: Option<sweep::Shard>,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Subcommand)]
+enum PlotKind {
+    /// Error against the reference versus wall time, one line per operator and
+    /// formulation, the reference integrator's tolerance ladder as the peer line.
+    WorkPrecision(ResultsPlotArgs),
+    /// Error versus N (log-log), the fitted order in the legend.
+    Convergence(ResultsPlotArgs),
+    /// Map over two grid axes: converged / failed / converged with energy artifacts.
+    Stability {
+        #[command(flatten)]
+        common: ResultsPlotArgs,
+        /// Column on the horizontal axis.
+        #[arg(long, default_value = "nodes")]
+        x: String,
+        /// Column on the vertical axis.
+        #[arg(long, default_value = "sigma")]
+        y: String,
+    },
+    /// Coordinates over time (reference overlaid as a thin black line) and the energy over time.
+    Trajectory {
+        /// Solutions: output directories, trajectory CSV files, or sweep directories
+        /// (their kept trajectories); several are overlaid.
+        #[arg(required = true, value_name = "SOLUTION")]
+        inputs: Vec<PathBuf>,
+        /// Reference CSV to overlay (e.g. from `skg-solve reference`).
+        #[arg(long, value_name = "FILE.csv")]
+        reference: Option<PathBuf>,
+        /// Legend label of each solution, in order [default: the directory or file name].
+        #[arg(long, value_name = "TEXT")]
+        label: Vec<String>,
+        /// Output path without extension (writes .svg and .png).
+        #[arg(short, long, value_name = "STEM")]
+        output: PathBuf,
+        /// Chart title.
+        #[arg(long, default_value = "trajectory and energy")]
+        title: String,
+    },
+}
+
+#[derive(Args)]
+struct ResultsPlotArgs {
+    /// A sweep's results.csv, or its output directory.
+    #[arg(value_name = "RESULTS")]
+    results: PathBuf,
+    /// Output path without extension (writes .svg and .png).
+    #[arg(short, long, value_name = "STEM")]
+    output: PathBuf,
+    /// Keep only rows whose column equals the value, e.g. `--where sigma=1/110` (repeatable).
+    #[arg(long = "where", value_name = "COLUMN=VALUE")]
+    filters: Vec<String>,
+    /// Chart title [default: the kind of chart and the sweep directory].
+    #[arg(long)]
+    title: Option<String>,
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// The shards' output directories (or their results.csv files).
+    #[arg(required = true, value_name = "SHARD")]
+    inputs: Vec<PathBuf>,
+    /// Output directory of the merged results.csv.
+    #[arg(short, long, value_name = "DIR")]
+    output: PathBuf,
+}
+
+#[derive(Args)]
+struct TuneArgs {
+    /// Scene file (TOML) with a wall whose width is a parameter.
+    #[arg(value_name = "SCENARIO.toml")]
+    scenario: PathBuf,
+    /// Number of time nodes N.
+    #[arg(long, value_name = "N")]
+    nodes: Option<usize>,
+    /// Parameter to tune [default: the parameter a wall's width is set to].
+    #[arg(long, value_name = "NAME")]
+    param: Option<String>,
+    /// Tolerance on the relative energy artifact.
+    #[arg(long, default_value_t = skg_solve::tune::DEFAULT_ARTIFACT_TOL)]
+    tol: f64,
+    /// Lower end of the initial bracket [default: the scene's value / 8].
+    #[arg(long)]
+    lo: Option<f64>,
+    /// Upper end of the initial bracket [default: the scene's value].
+    #[arg(long)]
+    hi: Option<f64>,
+    /// Stop when the bracket's ratio hi/lo is below 1 + REL.
+    #[arg(long, default_value_t = 0.02)]
+    rel: f64,
+    /// Write the search (every step) as JSON here.
+    #[arg(short, long, value_name = "FILE")]
+    output: Option<PathBuf>,
     #[command(flatten)]
     scene: SceneArgs,
 }
@@ -425,10 +557,166 @@ fn run_check(args: CheckArgs) -> Result<ExitCode> {
     }
 }
 
+fn run_sweep(args: SweepArgs) -> Result<ExitCode> {
+    let file = sweep::SweepFile::load(&args.sweep)?;
+    let out = args.output.unwrap_or_else(|| PathBuf::from("out/sweeps").join(file.name()));
+    let jobs = args
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let opts = sweep::SweepOptions {
+        out_dir: out,
+        jobs,
+        shard: args.shard,
+        worker_exe: std::env::current_exe().context("locating the skg-solve executable for the workers")?,
+        progress: !args.quiet,
+    };
+    let r = sweep::run_sweep(&file, &opts)?;
+    if !args.quiet {
+        println!(
+            "{}: {} points{}, {} already done, {} run ({} failed) with {} worker(s) in {:.1} s{}",
+            file.name(),
+            r.total,
+            args.shard.map_or(String::new(), |s| format!(" ({} in shard {}/{})", r.in_shard, s.k, s.n)),
+            r.skipped,
+            r.ran,
+            r.failed,
+            jobs,
+            r.wall_s,
+            if r.duplicates > 0 { format!("; {} duplicate points dropped", r.duplicates) } else { String::new() }
+        );
+        println!("  wrote {}", r.results.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_sweep_worker(job: &Path, result: &Path) -> Result<ExitCode> {
+    let text = std::fs::read_to_string(job).with_context(|| format!("reading {}", job.display()))?;
+    let job: sweep::Job = serde_json::from_str(&text).with_context(|| format!("parsing {}", job.display()))?;
+    let rec = sweep::run_job(&job);
+    output::write_json(result, &rec)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_merge(args: MergeArgs) -> Result<ExitCode> {
+    let r = sweep::merge(&args.inputs, &args.output)?;
+    println!(
+        "merged {} rows into {}{}{}",
+        r.rows,
+        args.output.join("results.csv").display(),
+        if r.duplicates > 0 { format!("; {} duplicate rows dropped", r.duplicates) } else { String::new() },
+        match r.missing {
+            Some(0) => "; every point of the sweep is present".to_string(),
+            Some(m) => format!("; {m} points of the sweep have no row yet"),
+            None => String::new(),
+        }
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_plot(kind: PlotKind) -> Result<ExitCode> {
+    use skg_solve::plot;
+    let parse_filters = |f: &[String]| -> Result<Vec<(String, String)>> {
+        f.iter()
+            .map(|s| {
+                s.split_once('=')
+                    .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+                    .ok_or_else(|| anyhow::anyhow!("--where {s}: expected COLUMN=VALUE"))
+            })
+            .collect()
+    };
+    let title_for = |c: &ResultsPlotArgs, kind: &str| {
+        c.title.clone().unwrap_or_else(|| {
+            let dir = if c.results.is_dir() { c.results.clone() } else { c.results.parent().map(Path::to_path_buf).unwrap_or_default() };
+            let name = dir.file_name().map_or(String::new(), |n| format!(": {}", n.to_string_lossy()));
+            format!("{kind}{name}")
+        })
+    };
+    let written = match kind {
+        PlotKind::WorkPrecision(c) => {
+            let r = sweep::Results::read(&c.results)?;
+            plot::work_precision(&r, &parse_filters(&c.filters)?, &title_for(&c, "work-precision"), &c.output)?
+        }
+        PlotKind::Convergence(c) => {
+            let r = sweep::Results::read(&c.results)?;
+            plot::convergence(&r, &parse_filters(&c.filters)?, &title_for(&c, "convergence"), &c.output)?
+        }
+        PlotKind::Stability { common: c, x, y } => {
+            let r = sweep::Results::read(&c.results)?;
+            plot::stability(&r, &x, &y, &parse_filters(&c.filters)?, &title_for(&c, "stability"), &c.output)?
+        }
+        PlotKind::Trajectory { inputs, reference, label, output: out, title } => {
+            let mut sols = Vec::new();
+            for (k, p) in inputs.iter().enumerate() {
+                if p.is_dir() && p.join("results.csv").is_file() {
+                    sols.extend(plot::sweep_solutions(p)?);
+                    continue;
+                }
+                let file = if p.is_dir() { p.join("trajectory.csv") } else { p.clone() };
+                let t = Table::read(&file)?;
+                let name = label.get(k).cloned().unwrap_or_else(|| {
+                    let base = if p.is_dir() { p.as_path() } else { p.parent().unwrap_or(p) };
+                    base.file_name().map_or(file.display().to_string(), |n| n.to_string_lossy().into_owned())
+                });
+                sols.push((name, t));
+            }
+            let r = reference.as_deref().map(Table::read).transpose()?;
+            plot::trajectory(&sols, r.as_ref(), &title, &out)?
+        }
+    };
+    for w in written {
+        println!("wrote {}", w.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_tune(args: TuneArgs) -> Result<ExitCode> {
+    let ov = args.scene.overrides(args.nodes)?;
+    let file = SceneFile::load(&args.scenario)?;
+    let opts = skg_solve::tune::TuneOptions {
+        param: args.param.clone(),
+        tol: args.tol,
+        lo: args.lo,
+        hi: args.hi,
+        rel: args.rel,
+        ..Default::default()
+    };
+    let r = skg_solve::tune::tune_width(&file, &ov, &opts, |s| {
+        eprintln!(
+            "  {:.6e}: {} artifact {:.3e} → {} ({:.2} s)",
+            s.value,
+            if s.converged { "converged," } else { "not converged," },
+            s.artifact,
+            if s.ok { "ok" } else { "artifacts" },
+            s.wall_s
+        );
+    })?;
+    for n in &r.notes {
+        eprintln!("note: {n}");
+    }
+    println!(
+        "{} = {:.6e} (1/{:.1}): the smallest value without energy artifacts above {:e} at N = {}{}",
+        r.param,
+        r.chosen,
+        1.0 / r.chosen,
+        r.tol,
+        r.nodes,
+        r.failing.map_or(String::new(), |f| format!("; {:.6e} (1/{:.1}) has artifacts", f, 1.0 / f))
+    );
+    let out = args.output.unwrap_or_else(|| skg_solve::tune::default_output(&args.scenario));
+    output::write_json(&out, &r)?;
+    println!("  wrote {}", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Bench(b)) => run_bench(b),
+        Some(Command::Sweep(a)) => run_sweep(a),
+        Some(Command::Merge(a)) => run_merge(a),
+        Some(Command::Tune(a)) => run_tune(a),
+        Some(Command::Plot(k)) => run_plot(k),
+        Some(Command::SweepWorker { job, result }) => run_sweep_worker(&job, &result),
         Some(Command::Reference(r)) => run_reference(r),
         Some(Command::Check(c)) => run_check(c),
         None => run_solve(cli.solve),
