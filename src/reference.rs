@@ -46,6 +46,9 @@ use crate::output::{self, OutputError};
 use crate::scenario::{Scene, SceneError};
 use crate::solve::Trajectory;
 
+/// Values per node: `series[k][i]` is component i at node k.
+pub type NodeSeries = Vec<Vec<f64>>;
+
 /// Errors of building a reference.
 #[derive(Debug, thiserror::Error)]
 pub enum ReferenceError {
@@ -134,7 +137,7 @@ pub fn integrate_model(
     v0: &[f64],
     times: &[f64],
     opts: &OdeOptions,
-) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>, OdeStats), ode::OdeError> {
+) -> Result<(NodeSeries, NodeSeries, NodeSeries, OdeStats), ode::OdeError> {
     let d = q0.len();
     let mut ws = model.workspace();
     let y0: Vec<f64> = q0.iter().chain(v0).copied().collect();
@@ -164,7 +167,7 @@ fn split_states(
     times: &[f64],
     ws: &mut crate::model::Workspace,
     d: usize,
-) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>), ode::OdeError> {
+) -> Result<(NodeSeries, NodeSeries, NodeSeries), ode::OdeError> {
     let mut q = Vec::with_capacity(states.len());
     let mut v = Vec::with_capacity(states.len());
     let mut lam = Vec::with_capacity(states.len());
@@ -200,7 +203,23 @@ fn check_times(scene: &Scene, times: &[f64]) -> Result<(), ReferenceError> {
     Ok(())
 }
 
-fn physical_columns(model: &Model, tr: &mut Trajectory, walls: Option<&WallSet>) {
+/// The trajectory with its physical columns (energy, constraint residuals, gaps).
+fn with_physical_columns(
+    model: &Model,
+    times: &[f64],
+    (q, v, lambda): (NodeSeries, NodeSeries, NodeSeries),
+    walls: Option<&WallSet>,
+) -> Trajectory {
+    let mut tr = Trajectory {
+        t: times.to_vec(),
+        q,
+        v,
+        lambda,
+        energy: vec![],
+        wall_energy: vec![],
+        g: vec![],
+        h: vec![],
+    };
     let mut ws = model.workspace();
     for k in 0..tr.t.len() {
         let ph = model.physical(&tr.q[k], &tr.v[k], &mut ws);
@@ -213,6 +232,7 @@ fn physical_columns(model: &Model, tr: &mut Trajectory, walls: Option<&WallSet>)
             None => ph.h,
         });
     }
+    tr
 }
 
 fn drifts(tr: &Trajectory) -> (f64, f64) {
@@ -229,17 +249,7 @@ pub fn regularized(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Res
     check_times(scene, times)?;
     let model = Model::build(scene)?;
     let (q, v, lambda, stats) = integrate_model(&model, &scene.initial_q, &scene.initial_v, times, &opts.ode())?;
-    let mut tr = Trajectory {
-        t: times.to_vec(),
-        q,
-        v,
-        lambda,
-        energy: vec![],
-        wall_energy: vec![],
-        g: vec![],
-        h: vec![],
-    };
-    physical_columns(&model, &mut tr, None);
+    let tr = with_physical_columns(&model, times, (q, v, lambda), None);
     let (constraint_drift, energy_drift) = drifts(&tr);
     Ok(Reference {
         trajectory: tr,
@@ -596,18 +606,8 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         contacts.push(Contact { wall: walls.names[j].clone(), t_start: t0, t_end: None });
     }
     let mut ws = model.workspace();
-    let (q, v, lambda) = split_states(&model, &states, times, &mut ws, d)?;
-    let mut tr = Trajectory {
-        t: times.to_vec(),
-        q,
-        v,
-        lambda,
-        energy: vec![],
-        wall_energy: vec![],
-        g: vec![],
-        h: vec![],
-    };
-    physical_columns(&model, &mut tr, Some(&walls));
+    let columns = split_states(&model, &states, times, &mut ws, d)?;
+    let tr = with_physical_columns(&model, times, columns, Some(&walls));
     let (constraint_drift, energy_drift) = drifts(&tr);
     Ok(Reference {
         trajectory: tr,

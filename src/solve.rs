@@ -18,6 +18,7 @@ use crate::action::{Action, Block, MatrixPlan};
 use crate::ipopt::{self, EvalError, Problem};
 use crate::model::{Model, Workspace};
 use crate::ode::{self, OdeOptions};
+use crate::reference::NodeSeries;
 use crate::sbp::{SbpError, SbpOperator};
 use crate::scenario::{Formulation, HessianMode, IpoptValue, Scene, SceneError};
 
@@ -256,7 +257,7 @@ pub fn time_stepping(
     v0: &[f64],
     times: &[f64],
     opts: &OdeOptions,
-) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>), ode::OdeError> {
+) -> Result<(NodeSeries, NodeSeries, NodeSeries), ode::OdeError> {
     crate::reference::integrate_model(model, q0, v0, times, opts).map(|(q, v, lam, _)| (q, v, lam))
 }
 
