@@ -62,6 +62,10 @@ pub struct OdeOptions {
     pub max_steps: usize,
     /// First trial step; `None` picks one automatically (Hairer's `hinit`).
     pub initial_step: Option<f64>,
+    /// Largest step. An error estimate cannot see a force it steps over: in free flight
+    /// (a parabola, integrated exactly) the step grows until it jumps across a thin
+    /// Gaussian wall. Callers that sample on a grid cap the step at the grid spacing.
+    pub max_step: Option<f64>,
 }
 
 impl Default for OdeOptions {
@@ -71,6 +75,7 @@ impl Default for OdeOptions {
             atol: 1e-12,
             max_steps: 1_000_000,
             initial_step: None,
+            max_step: None,
         }
     }
 }
@@ -213,7 +218,7 @@ where
     let mut t = t0;
     s.eval(t, Stage::Y, 0)
         .map_err(|msg| OdeError::Rhs { t, msg })?;
-    let hmax = t_end - t0;
+    let hmax = opts.max_step.unwrap_or(f64::INFINITY).min(t_end - t0);
     let mut h = match opts.initial_step {
         Some(h0) => h0.min(hmax),
         None => s.hinit(t, hmax),
@@ -387,6 +392,11 @@ fn validate(y0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<(), OdeError
             return bad(format!(
                 "initial step must be finite and positive, got {h0}"
             ));
+        }
+    }
+    if let Some(hm) = opts.max_step {
+        if !(hm.is_finite() && hm > 0.0) {
+            return bad(format!("maximum step must be finite and positive, got {hm}"));
         }
     }
     Ok(())

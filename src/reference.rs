@@ -78,14 +78,22 @@ impl Default for ReferenceOptions {
 }
 
 impl ReferenceOptions {
-    fn ode(&self) -> OdeOptions {
+    /// Integrator options for sampling at `times`: the step is capped at the smallest
+    /// sample spacing, so no wall narrower than the grid can be stepped over unseen.
+    fn ode(&self, times: &[f64]) -> OdeOptions {
         OdeOptions {
             rtol: self.rtol,
             atol: self.atol,
             max_steps: 20_000_000,
             initial_step: None,
+            max_step: min_spacing(times),
         }
     }
+}
+
+/// Smallest spacing of increasing sample times (None for fewer than two samples).
+pub fn min_spacing(times: &[f64]) -> Option<f64> {
+    times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).reduce(f64::min)
 }
 
 /// One impact of the hard-wall reference.
@@ -248,7 +256,7 @@ fn drifts(tr: &Trajectory) -> (f64, f64) {
 pub fn regularized(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Result<Reference, ReferenceError> {
     check_times(scene, times)?;
     let model = Model::build(scene)?;
-    let (q, v, lambda, stats) = integrate_model(&model, &scene.initial_q, &scene.initial_v, times, &opts.ode())?;
+    let (q, v, lambda, stats) = integrate_model(&model, &scene.initial_q, &scene.initial_v, times, &opts.ode(times))?;
     let tr = with_physical_columns(&model, times, (q, v, lambda), None);
     let (constraint_drift, energy_drift) = drifts(&tr);
     Ok(Reference {
@@ -480,7 +488,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
     free.walls.clear();
     let model = Model::build(&free)?;
     let d = scene.coordinates.len();
-    let ode_opts = opts.ode();
+    let ode_opts = opts.ode(times);
     let vscale = 1.0 + scene.initial_v.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     let kinetic = |q: &[f64], v: &[f64]| {
         let mut ws = model.workspace();
@@ -625,7 +633,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
 /// than the scene file as given).
 pub fn provenance(scene: &Scene, scene_path: &str, r: &Reference) -> String {
     let mut s = format!(
-        "skg-solve {} reference ({}) of {} (scene \"{}\"): {}, rtol {:e}, atol {:e}; index-reduced Lagrange-d'Alembert equations ([W G^T; G 0] solve for accelerations and multipliers); {} samples from t = {} to {}; {} accepted steps, {} rejected, {} right-hand-side evaluations; max |g| {:.3e}, max |E - E0| {:.3e}",
+        "skg-solve {} reference ({}) of {} (scene \"{}\"): {}, rtol {:e}, atol {:e}, step at most the sample spacing; index-reduced Lagrange-d'Alembert equations ([W G^T; G 0] solve for accelerations and multipliers); {} samples from t = {} to {}; {} accepted steps, {} rejected, {} right-hand-side evaluations; max |g| {:.3e}, max |E - E0| {:.3e}",
         env!("CARGO_PKG_VERSION"),
         r.kind,
         scene_path,

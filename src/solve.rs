@@ -267,9 +267,12 @@ fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> 
     let lay = &action.layout;
     let (d, n) = (lay.d, lay.n);
     let mut z = vec![0.0; lay.len()];
+    // Steps at most the node spacing: a larger step can jump across a thin wall that
+    // the error estimate never sees (free flight is integrated exactly).
     let opts = OdeOptions {
         rtol: 1e-8,
         atol: 1e-10,
+        max_step: crate::reference::min_spacing(times),
         ..OdeOptions::default()
     };
     let (q, lam, desc, reference) = match time_stepping(&action.model, &action.q0, &action.v0, times, &opts) {
