@@ -24,6 +24,9 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use crate::scenario::Scene;
+use crate::solve::Trajectory;
+
 /// Errors of reading or comparing tables.
 #[derive(Debug, thiserror::Error)]
 pub enum CheckError {
@@ -47,6 +50,15 @@ pub struct Table {
 }
 
 impl Table {
+    /// A trajectory as the table its CSV would hold (no comments).
+    pub fn of_trajectory(scene: &Scene, tr: &Trajectory) -> Table {
+        Table {
+            columns: crate::output::trajectory_header(scene),
+            comments: Vec::new(),
+            rows: crate::output::trajectory_rows(tr),
+        }
+    }
+
     /// Read a table; errors name the file and line.
     pub fn read(path: &Path) -> Result<Table, CheckError> {
         let text = std::fs::read_to_string(path).map_err(|source| CheckError::Io {

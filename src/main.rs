@@ -348,7 +348,7 @@ fn run_solve(args: SolveArgs) -> Result<ExitCode> {
         scene.solver.log_file = Some(dir.join(log));
     }
     let mut outcome = solve::solve_scene(&scene)?;
-    let (csv, json) = output::write_outcome(&dir, &mut outcome, &scene.coordinates, &scene.constraints, &scene.walls.iter().map(|w| w.name.clone()).collect::<Vec<_>>())
+    let (csv, json) = output::write_outcome(&dir, &mut outcome, &scene)
         .context("writing the results")?;
     for w in &outcome.warnings {
         eprintln!("warning: {w}");

@@ -5,6 +5,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use crate::scenario::Scene;
 use crate::solve::{Outcome, Trajectory};
 
 #[derive(Debug, thiserror::Error)]
@@ -50,25 +51,25 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::R
     Ok(())
 }
 
-/// Column names of the trajectory CSV.
-pub fn trajectory_header(coordinates: &[String], constraints: &[String], walls: &[String]) -> Vec<String> {
+/// Column names of a scene's trajectory CSV.
+pub fn trajectory_header(scene: &Scene) -> Vec<String> {
     let mut h = vec!["t".to_string()];
-    for c in coordinates {
+    for c in &scene.coordinates {
         h.push(c.clone());
         h.push(format!("{c}_dot"));
     }
-    for c in constraints {
+    for c in &scene.constraints {
         h.push(format!("lambda_{c}"));
     }
     h.push("energy".into());
-    if !walls.is_empty() {
+    if !scene.walls.is_empty() {
         h.push("wall_energy".into());
     }
-    for c in constraints {
+    for c in &scene.constraints {
         h.push(format!("residual_{c}"));
     }
-    for w in walls {
-        h.push(format!("gap_{w}"));
+    for w in &scene.walls {
+        h.push(format!("gap_{}", w.name));
     }
     h
 }
@@ -125,11 +126,11 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), Out
 }
 
 /// Write `trajectory.csv` and `summary.json` of a solve into `dir`.
-pub fn write_outcome(dir: &Path, outcome: &mut Outcome, coordinates: &[String], constraints: &[String], walls: &[String]) -> Result<(PathBuf, PathBuf), OutputError> {
+pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result<(PathBuf, PathBuf), OutputError> {
     let t = std::time::Instant::now();
     let csv_path = dir.join("trajectory.csv");
     let json_path = dir.join("summary.json");
-    let header = trajectory_header(coordinates, constraints, walls);
+    let header = trajectory_header(scene);
     write_csv(&csv_path, None, &header, &trajectory_rows(&outcome.trajectory))?;
     outcome.timings.output_s = t.elapsed().as_secs_f64();
     write_json(&json_path, outcome)?;

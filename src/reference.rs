@@ -678,8 +678,7 @@ pub fn provenance(scene: &Scene, scene_path: &str, r: &Reference) -> String {
 
 /// Write a reference as a trajectory CSV with the provenance as `#` lines.
 pub fn write(path: &Path, scene: &Scene, scene_path: &str, r: &Reference) -> Result<(), ReferenceError> {
-    let walls: Vec<String> = scene.walls.iter().map(|w| w.name.clone()).collect();
-    let header = output::trajectory_header(&scene.coordinates, &scene.constraints, &walls);
+    let header = output::trajectory_header(scene);
     output::write_csv(path, Some(&provenance(scene, scene_path, r)), &header, &output::trajectory_rows(&r.trajectory))?;
     Ok(())
 }

@@ -34,6 +34,7 @@ use indexmap::IndexMap;
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
+use crate::check::{self, CheckOptions, Comparison, Table};
 use crate::output;
 use crate::sbp::OperatorKind;
 use crate::scenario::{Formulation, HessianMode, Origin, Overrides, Scene, SceneFile};
@@ -585,8 +586,7 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
         ..Record::default()
     };
     let compare_cols = job.compare.clone().unwrap_or_else(|| scene.coordinates.clone());
-    let walls: Vec<String> = scene.walls.iter().map(|w| w.name.clone()).collect();
-    match job.point.method {
+    let (trajectory, ode_csv) = match job.point.method {
         Method::Skg => {
             rec.operator = Some(scene.operator.name().to_string());
             rec.formulation = Some(scene.formulation.to_string());
@@ -599,17 +599,10 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             rec.energy_drift = Some(d.energy_drift);
             rec.max_residual = Some(d.max_residual);
             rec.message = outcome.warnings.join(" | ");
-            let tr = &outcome.trajectory;
-            rec.energy_artifact = Some(crate::tune::energy_artifact(&scene, tr, job.skip_last).value);
-            let header = output::trajectory_header(&scene.coordinates, &scene.constraints, &walls);
-            let rows = output::trajectory_rows(tr);
-            if let Some(r) = &job.reference {
-                apply_errors(&mut rec, &scene, r, &header, &rows, &compare_cols, job.skip_last);
-            }
             if let Some(dir) = &job.keep_dir {
-                output::write_outcome(dir, &mut outcome, &scene.coordinates, &scene.constraints, &walls)
-                    .map_err(|e| e.to_string())?;
+                output::write_outcome(dir, &mut outcome, &scene).map_err(|e| e.to_string())?;
             }
+            (outcome.trajectory, None)
         }
         Method::Ode { rtol } => {
             let (times, _) = crate::solve::grid(&scene);
@@ -618,44 +611,50 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             rec.wall_s = Some(start.elapsed().as_secs_f64());
             rec.converged = true;
             rec.status = "ODE_Succeeded".into();
-            rec.energy_artifact = Some(crate::tune::energy_artifact(&scene, &r.trajectory, job.skip_last).value);
-            let header = output::trajectory_header(&scene.coordinates, &scene.constraints, &walls);
-            let rows = output::trajectory_rows(&r.trajectory);
-            if let Some(r) = &job.reference {
-                apply_errors(&mut rec, &scene, r, &header, &rows, &compare_cols, job.skip_last);
+            (r.trajectory, Some(format!("time stepping, rtol {rtol:e}")))
+        }
+    };
+    rec.energy_artifact = Some(crate::tune::energy_artifact(&scene, &trajectory, job.skip_last).value);
+    let solution = Table::of_trajectory(&scene, &trajectory);
+    if let Some(r) = &job.reference {
+        match reference_errors(&scene, r, &solution, &compare_cols, job.skip_last) {
+            Ok(c) => {
+                rec.error_max = Some(c.max_abs);
+                rec.error_rms = c.columns.iter().find(|e| e.column == c.worst_column).map(|e| e.rms);
+                rec.error_column = Some(c.worst_column);
             }
-            if let Some(dir) = &job.keep_dir {
-                output::write_csv(&dir.join("trajectory.csv"), Some(&format!("time stepping, rtol {rtol:e}")), &header, &rows)
-                    .map_err(|e| e.to_string())?;
+            Err(m) => {
+                if !rec.message.is_empty() {
+                    rec.message.push_str(" | ");
+                }
+                rec.message.push_str(&format!("reference comparison failed: {m}"));
             }
         }
+    }
+    if let (Some(dir), Some(comment)) = (&job.keep_dir, ode_csv) {
+        output::write_csv(&dir.join("trajectory.csv"), Some(&comment), &solution.columns, &solution.rows)
+            .map_err(|e| e.to_string())?;
     }
     Ok(rec)
 }
 
-/// Fill the error columns of a record (errors go into `message`, never abort the point).
-fn apply_errors(
-    rec: &mut Record,
-    scene: &Scene,
-    reference: &ReferenceSpec,
-    header: &[String],
-    rows: &[Vec<f64>],
-    columns: &[String],
-    skip_last: usize,
-) {
-    match crate::tune::reference_errors(scene, reference, header, rows, columns, skip_last) {
-        Ok(e) => {
-            rec.error_max = Some(e.max_abs);
-            rec.error_rms = Some(e.rms);
-            rec.error_column = Some(e.column);
+/// Errors of a solution against the sweep's reference on `columns`, the last
+/// `skip_last` nodes excluded (errors go into the record's message, never abort the
+/// point).
+fn reference_errors(scene: &Scene, reference: &ReferenceSpec, solution: &Table, columns: &[String], skip_last: usize) -> Result<Comparison, String> {
+    let reference = match reference {
+        ReferenceSpec::File(p) => Table::read(p).map_err(|e| e.to_string())?,
+        ReferenceSpec::Integrate => {
+            let r = crate::reference::regularized(scene, &solution.times(), &crate::reference::ReferenceOptions::default())
+                .map_err(|e| e.to_string())?;
+            Table::of_trajectory(scene, &r.trajectory)
         }
-        Err(m) => {
-            if !rec.message.is_empty() {
-                rec.message.push_str(" | ");
-            }
-            rec.message.push_str(&format!("reference comparison failed: {m}"));
-        }
-    }
+    };
+    let opts = CheckOptions {
+        skip_last,
+        columns: Some(columns.to_vec()),
+    };
+    check::compare(solution, &reference, &opts).map_err(|e| e.to_string())
 }
 
 // ---------------------------------------------------------------------------------------

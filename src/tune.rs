@@ -32,7 +32,6 @@ use std::path::PathBuf;
 
 use crate::scenario::{NumOrExpr, Overrides, Scene, SceneFile};
 use crate::solve::{self, Trajectory};
-use crate::sweep::ReferenceSpec;
 
 /// Default tolerance on the relative energy artifact.
 pub const DEFAULT_ARTIFACT_TOL: f64 = 1e-5;
@@ -69,59 +68,6 @@ pub fn energy_artifact(scene: &Scene, tr: &Trajectory, skip_last: usize) -> Arti
         value = value.max((e - e0).abs() / scale);
     }
     Artifact { value, free_nodes }
-}
-
-/// Largest error against a reference over the compared columns.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RefErrors {
-    pub max_abs: f64,
-    /// RMS error of the column with the largest max error.
-    pub rms: f64,
-    /// The column with the largest max error.
-    pub column: String,
-}
-
-/// Errors of a solution table (`header`, `rows`) against the reference of a sweep, on
-/// `columns`, the last `skip_last` nodes excluded.
-pub fn reference_errors(
-    scene: &Scene,
-    reference: &ReferenceSpec,
-    header: &[String],
-    rows: &[Vec<f64>],
-    columns: &[String],
-    skip_last: usize,
-) -> Result<RefErrors, String> {
-    use crate::check::{self, CheckOptions, Table};
-    let solution = Table {
-        columns: header.to_vec(),
-        comments: Vec::new(),
-        rows: rows.to_vec(),
-    };
-    let reference = match reference {
-        ReferenceSpec::File(p) => Table::read(p).map_err(|e| e.to_string())?,
-        ReferenceSpec::Integrate => {
-            let times: Vec<f64> = rows.iter().map(|r| r[0]).collect();
-            let r = crate::reference::regularized(scene, &times, &crate::reference::ReferenceOptions::default())
-                .map_err(|e| e.to_string())?;
-            let walls: Vec<String> = scene.walls.iter().map(|w| w.name.clone()).collect();
-            Table {
-                columns: crate::output::trajectory_header(&scene.coordinates, &scene.constraints, &walls),
-                comments: Vec::new(),
-                rows: crate::output::trajectory_rows(&r.trajectory),
-            }
-        }
-    };
-    let opts = CheckOptions {
-        skip_last,
-        columns: Some(columns.to_vec()),
-    };
-    let c = check::compare(&solution, &reference, &opts).map_err(|e| e.to_string())?;
-    let worst = c.columns.iter().find(|e| e.column == c.worst_column);
-    Ok(RefErrors {
-        max_abs: c.max_abs,
-        rms: worst.map_or(f64::NAN, |e| e.rms),
-        column: c.worst_column.clone(),
-    })
 }
 
 /// Options of [`tune_width`].

@@ -10,28 +10,17 @@ mod common;
 
 use skg_solve::check::{self, CheckOptions, Table};
 use skg_solve::convergence::{fit_order, pairwise_orders};
-use skg_solve::output;
 use skg_solve::reference::{self, ReferenceOptions};
 use skg_solve::scenario::{Overrides, Scene};
 use skg_solve::solve::{self, Outcome};
 
 /// The solver's trajectory as a [`Table`] (the CSV it would write).
 fn table(scene: &Scene, o: &Outcome) -> Table {
-    let walls: Vec<String> = scene.walls.iter().map(|w| w.name.clone()).collect();
-    Table {
-        columns: output::trajectory_header(&scene.coordinates, &scene.constraints, &walls),
-        comments: vec![],
-        rows: output::trajectory_rows(&o.trajectory),
-    }
+    Table::of_trajectory(scene, &o.trajectory)
 }
 
 fn ref_table(scene: &Scene, r: &reference::Reference) -> Table {
-    let walls: Vec<String> = scene.walls.iter().map(|w| w.name.clone()).collect();
-    Table {
-        columns: output::trajectory_header(&scene.coordinates, &scene.constraints, &walls),
-        comments: vec![],
-        rows: output::trajectory_rows(&r.trajectory),
-    }
+    Table::of_trajectory(scene, &r.trajectory)
 }
 
 /// Max error of the coordinates (not velocities) against the regularized reference on
