@@ -41,30 +41,26 @@ fn paper_grid_matches_closed_form_and_constraints_hold() {
     assert!(d.energy_drift < 0.05, "energy drift {}", d.energy_drift);
 }
 
-#[test]
-fn sbp242_error_and_order_match_the_independent_implementation() {
-    let ns = [32, 64, 128];
-    let reference = [0.109, 0.0152, 0.00199];
-    let errors: Vec<f64> = ns.iter().map(|&n| disk_error(n, "SBP242")).collect();
+/// Errors on a ladder within 5 % of the independent implementation's, and the fitted
+/// order within `tol` of `order`.
+fn assert_matches_independent(op: &str, ns: &[usize], reference: &[f64], order: f64, tol: f64) {
+    let errors: Vec<f64> = ns.iter().map(|&n| disk_error(n, op)).collect();
     for ((n, e), r) in ns.iter().zip(&errors).zip(reference) {
-        assert!((e - r).abs() < 0.05 * r, "N={n}: error {e}, independent implementation {r}");
+        assert!((e - r).abs() < 0.05 * r, "{op} N={n}: error {e}, independent implementation {r}");
     }
     let h: Vec<f64> = ns.iter().map(|&n| 1.0 / (n as f64 - 1.0)).collect();
     let fit = fit_order(&h, &errors, 1e-12).unwrap();
-    assert!((fit.order - 2.9).abs() < 0.2, "order {}", fit.order);
+    assert!((fit.order - order).abs() < tol, "{op}: order {}", fit.order);
+}
+
+#[test]
+fn sbp242_error_and_order_match_the_independent_implementation() {
+    assert_matches_independent("SBP242", &[32, 64, 128], &[0.109, 0.0152, 0.00199], 2.9, 0.2);
 }
 
 #[test]
 fn sbp121_error_and_order_match_the_independent_implementation() {
-    let ns = [64, 128, 256];
-    let reference = [0.083, 0.022, 0.0057];
-    let errors: Vec<f64> = ns.iter().map(|&n| disk_error(n, "SBP121")).collect();
-    for ((n, e), r) in ns.iter().zip(&errors).zip(reference) {
-        assert!((e - r).abs() < 0.05 * r, "N={n}: error {e}, independent implementation {r}");
-    }
-    let h: Vec<f64> = ns.iter().map(|&n| 1.0 / (n as f64 - 1.0)).collect();
-    let fit = fit_order(&h, &errors, 1e-12).unwrap();
-    assert!((fit.order - 1.9).abs() < 0.15, "order {}", fit.order);
+    assert_matches_independent("SBP121", &[64, 128, 256], &[0.083, 0.022, 0.0057], 1.9, 0.15);
 }
 
 #[test]
