@@ -9,5 +9,5 @@ if ! command -v cargo >/dev/null 2>&1 && [[ -f "$HOME/.cargo/env" ]]; then
     # shellcheck disable=SC1091
     source "$HOME/.cargo/env"
 fi
-cargo build --release --quiet
+cargo build --release --quiet -p skg-cli
 ./target/release/skg-solve scenarios/rolling_disk.toml "$@"

@@ -1,0 +1,612 @@
+//! Solving one scene: build the discrete action, make a physical initial guess, hand
+//! the square system to Ipopt, and turn the critical point into a trajectory.
+//!
+//! Initial guess: the Lagrange–d'Alembert equations of the same scene are integrated
+//! with an adaptive high-order Runge–Kutta method (index-reduced: accelerations and
+//! multipliers from `[W Gᵀ; G 0]`, see [`Model::accelerations`]) at a moderate
+//! tolerance and sampled at the nodes; the minus variables start at zero and the
+//! boundary multipliers at the values that make their rows vanish. A global-in-time
+//! Newton solve started there converges in a few iterations (DESIGN §9: constant
+//! velocity extrapolation did not converge on the disk). If time stepping fails, the
+//! guess falls back to constant-velocity extrapolation and the summary says so.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::action::{Action, Block, MatrixPlan};
+use crate::model::{Model, Workspace};
+use crate::ode::{self, OdeOptions};
+use crate::reference::NodeSeries;
+use crate::sbp::{SbpError, SbpOperator};
+use crate::scenario::{Formulation, HessianMode, IpoptValue, Scene, SceneError};
+use skg_ipopt::{self as ipopt, EvalError, Problem};
+
+/// A solution farther than this fraction of the coordinates' range from the
+/// time-stepping solution gets a warning. Discretization errors of usable grids are
+/// below 1 % (disk N=32 SBP242: 0.4 %); the spurious solutions seen were 35 % (tumbler
+/// N=48) and 100 %+ (knife edge on SBP121, an odd-even mode).
+const FAR_FROM_TIME_STEPPING: f64 = 0.1;
+
+/// Why a solve could not be attempted or completed (a non-converged Ipopt run is not
+/// an error: it is an [`Outcome`] with `converged == false`).
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Sbp(#[from] SbpError),
+    #[error(transparent)]
+    Ipopt(#[from] ipopt::SolveError),
+}
+
+/// The trajectory at the nodes.
+#[derive(Debug, Clone, Serialize)]
+pub struct Trajectory {
+    pub t: Vec<f64>,
+    /// q[k][i]: coordinate i at node k.
+    pub q: Vec<Vec<f64>>,
+    /// (Dq)[k][i]: the SBP derivative of the solution.
+    pub v: Vec<Vec<f64>>,
+    /// λ[k][a]; interior nodes from the solve, end nodes from a least-squares solve of
+    /// the node's equation of motion.
+    pub lambda: Vec<Vec<f64>>,
+    /// v·∂L/∂v − L (without the walls' potential, nonzero only in contact).
+    pub energy: Vec<f64>,
+    /// The walls' potential Σ A Φ(h/σ); `energy + wall_energy` is conserved when no
+    /// friction or other non-conservative force acts.
+    pub wall_energy: Vec<f64>,
+    /// Constraint residuals g^a at each node.
+    pub g: Vec<Vec<f64>>,
+    /// Wall gaps h_j at each node (≤ 0 on the allowed side).
+    pub h: Vec<Vec<f64>>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Timings {
+    /// Parsing, symbolic derivatives, tapes, sparsity structure.
+    pub setup_s: f64,
+    pub initial_guess_s: f64,
+    /// Wall time of the Ipopt call, split into time in our callbacks and inside Ipopt.
+    pub ipopt_total_s: f64,
+    pub evaluation_s: f64,
+    pub ipopt_internal_s: f64,
+    pub postprocess_s: f64,
+    /// Writing files (filled in by the output module).
+    pub output_s: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Sizes {
+    pub nodes: usize,
+    pub coordinates: usize,
+    pub constraints: usize,
+    pub walls: usize,
+    pub variables: usize,
+    pub equations: usize,
+    pub jacobian_nonzeros: usize,
+    pub hessian_nonzeros: usize,
+    pub tape_instructions: usize,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Diagnostics {
+    /// max |c| of the system handed to Ipopt (unscaled), at the returned point.
+    pub max_residual: f64,
+    /// max |equation of motion| at interior nodes, unweighted (force units).
+    pub max_eom_residual: f64,
+    /// max |g^a| over interior nodes, and at the last node (not enforced there).
+    pub max_constraint_interior: f64,
+    pub constraint_last_node: f64,
+    /// max |E_k − E_1| of the total energy E = energy + wall_energy over nodes 1..N−2
+    /// (the last two excluded: their equations are the boundary closure) and over all
+    /// nodes. Conserved up to the discretization error unless friction or other
+    /// non-conservative forces act.
+    pub energy_drift: f64,
+    pub energy_drift_all: f64,
+    /// Largest wall gap h (positive = penetration), per wall.
+    pub max_wall_gap: Vec<f64>,
+    /// max over nodes and coordinates of |q − q_time-stepping|: a large value hints at a
+    /// spurious critical point or a too coarse grid.
+    pub distance_from_time_stepping: Option<f64>,
+    /// Contact episodes per wall (maximal runs of nodes with h > −3σ) in the solution
+    /// and in the time-stepping solution on the same nodes. A difference means an extra
+    /// or a missing bounce: a spurious critical point (DESIGN §9) or a too coarse grid;
+    /// the solve then adds a warning.
+    pub contact_episodes: Vec<usize>,
+    pub contact_episodes_time_stepping: Option<Vec<usize>>,
+    /// max |q-|, |λ-| of the full formulation's solution (0 in the physical limit).
+    pub max_minus_variable: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Settings {
+    pub operator: String,
+    pub nodes: usize,
+    pub t_start: f64,
+    pub t_end: f64,
+    pub formulation: Formulation,
+    pub hessian: HessianMode,
+    pub tol: f64,
+    pub max_iter: u32,
+    pub parameters: indexmap::IndexMap<String, f64>,
+    pub initial_guess: String,
+}
+
+/// Everything a solve produced.
+#[derive(Debug, Clone, Serialize)]
+pub struct Outcome {
+    pub scene: String,
+    pub converged: bool,
+    pub status: String,
+    pub status_text: String,
+    pub ipopt_version: String,
+    pub iterations: usize,
+    pub settings: Settings,
+    pub sizes: Sizes,
+    pub timings: Timings,
+    pub diagnostics: Diagnostics,
+    pub warnings: Vec<String>,
+    pub history: Vec<ipopt::IterationStat>,
+    #[serde(skip)]
+    pub trajectory: Trajectory,
+}
+
+/// Ipopt's view of the reduced system R(P) = ∂S/∂M = 0.
+struct Reduced<'a> {
+    action: &'a Action,
+    z: Vec<f64>,
+    ws: Workspace,
+    jac: MatrixPlan,
+    hess: Option<MatrixPlan>,
+}
+
+impl Reduced<'_> {
+    fn set(&mut self, x: &[f64], minus: Option<&[f64]>) {
+        let n_p = self.action.layout.n_p;
+        self.z[..n_p].copy_from_slice(x);
+        match minus {
+            Some(y) => self.z[n_p..].copy_from_slice(y),
+            None => self.z[n_p..].iter_mut().for_each(|v| *v = 0.0),
+        }
+    }
+}
+
+impl Problem for Reduced<'_> {
+    fn num_variables(&self) -> usize {
+        self.action.layout.n_p
+    }
+    fn num_constraints(&self) -> usize {
+        self.action.layout.n_m
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.set(x, None);
+        self.action.gradient(&self.z, true, c, &mut self.ws);
+        Ok(())
+    }
+    fn jacobian_structure(&self) -> &[(u32, u32)] {
+        &self.jac.structure
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.set(x, None);
+        self.action.matrix_values(&self.jac, &self.z, values, &mut self.ws);
+        Ok(())
+    }
+    fn hessian_structure(&self) -> &[(u32, u32)] {
+        self.hess.as_ref().map_or(&[], |h| &h.structure)
+    }
+    fn hessian_values(&mut self, x: &[f64], _obj: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        if self.hess.is_some() {
+            self.set(x, Some(lambda));
+            let plan = self.hess.as_ref().expect("checked");
+            self.action.matrix_values(plan, &self.z, values, &mut self.ws);
+        }
+        Ok(())
+    }
+}
+
+/// Ipopt's view of the full system ∇S(Z) = 0.
+struct Full<'a> {
+    action: &'a Action,
+    ws: Workspace,
+    jac: MatrixPlan,
+}
+
+impl Problem for Full<'_> {
+    fn num_variables(&self) -> usize {
+        self.action.layout.len()
+    }
+    fn num_constraints(&self) -> usize {
+        self.action.layout.len()
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.action.gradient(x, false, c, &mut self.ws);
+        Ok(())
+    }
+    fn jacobian_structure(&self) -> &[(u32, u32)] {
+        &self.jac.structure
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.action.matrix_values(&self.jac, x, values, &mut self.ws);
+        Ok(())
+    }
+}
+
+/// Node times of a scene's grid.
+pub fn grid(scene: &Scene) -> (Vec<f64>, f64) {
+    let n = scene.nodes;
+    let dt = (scene.t_end - scene.t_start) / (n as f64 - 1.0);
+    ((0..n).map(|k| scene.t_start + k as f64 * dt).collect(), dt)
+}
+
+/// Build the discrete action of a resolved scene.
+pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
+    let model = Model::build(scene)?;
+    let (_, dt) = grid(scene);
+    let op = SbpOperator::new(scene.operator, scene.nodes, dt)?;
+    Ok(Action::new(model, op, scene.initial_q.clone(), scene.initial_v.clone()))
+}
+
+/// The Lagrange–d'Alembert solution sampled at `times`: (q, v, λ) per node (the
+/// index-reduced integration of [`crate::reference::integrate_model`], which the
+/// reference solutions share).
+#[allow(clippy::type_complexity)]
+pub fn time_stepping(
+    model: &Model,
+    q0: &[f64],
+    v0: &[f64],
+    times: &[f64],
+    opts: &OdeOptions,
+) -> Result<(NodeSeries, NodeSeries, NodeSeries), ode::OdeError> {
+    crate::reference::integrate_model(model, q0, v0, times, opts).map(|(q, v, lam, _)| (q, v, lam))
+}
+
+/// Initial point Z0 and a description of how it was made; also the time-stepping
+/// coordinates when available (for the spurious-solution check).
+fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> (Vec<f64>, String, Option<Vec<Vec<f64>>>) {
+    let lay = &action.layout;
+    let (d, n) = (lay.d, lay.n);
+    let mut z = vec![0.0; lay.len()];
+    // Steps at most the node spacing: a larger step can jump across a thin wall that
+    // the error estimate never sees (free flight is integrated exactly).
+    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step: crate::reference::min_spacing(times), ..OdeOptions::default() };
+    let (q, lam, desc, reference) = match time_stepping(&action.model, &action.q0, &action.v0, times, &opts) {
+        Ok((q, _, lam)) => (
+            q.clone(),
+            lam,
+            "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
+            Some(q),
+        ),
+        Err(e) => {
+            warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
+            let q = times.iter().map(|t| (0..d).map(|i| action.q0[i] + action.v0[i] * (t - times[0])).collect()).collect();
+            (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
+        }
+    };
+    for k in 0..lay.nodes {
+        for i in 0..d {
+            z[lay.qp[k * d + i] as usize] = q[k][i];
+        }
+        for a in 0..n {
+            let zi = lay.lp[k * n + a];
+            if zi != u32::MAX {
+                z[zi as usize] = lam[k][a];
+            }
+        }
+    }
+    // Boundary multipliers: the values that make their rows vanish.
+    let mut ws = action.model.workspace();
+    let mut r = vec![0.0; lay.n_m];
+    action.gradient(&z, true, &mut r, &mut ws);
+    let last = lay.nodes - 1;
+    let row = |zi: u32| zi as usize - lay.n_p;
+    for i in 0..d {
+        z[lay.nu_q1[i] as usize] = -r[row(lay.qm[i])];
+        z[lay.nu_qn[i] as usize] = -r[row(lay.qm[last * d + i])];
+    }
+    for a in 0..n {
+        z[lay.nu_l1[a] as usize] = -r[row(lay.lm[a])];
+        z[lay.nu_ln[a] as usize] = -r[row(lay.lm[last * n + a])];
+    }
+    (z, desc, reference)
+}
+
+/// Solve a resolved scene.
+pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    let t_setup = Instant::now();
+    let action = build_action(scene)?;
+    solve_action(scene, &action, t_setup)
+}
+
+/// Solve with an already built action (`started` marks the beginning of setup).
+pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<Outcome, SolveError> {
+    let (times, _) = grid(scene);
+    let lay = &action.layout;
+    let mut warnings = Vec::new();
+    let formulation = scene.formulation;
+    let hessian = scene.solver.hessian;
+    let jac_block = match formulation {
+        Formulation::Reduced => Block::ReducedJacobian,
+        Formulation::Full => Block::FullJacobian,
+    };
+    let jac = action.plan(jac_block);
+    let hess = (formulation == Formulation::Reduced && hessian == HessianMode::Exact).then(|| action.plan(Block::ReducedHessian));
+    let setup_s = started.elapsed().as_secs_f64();
+
+    let t_guess = Instant::now();
+    let (z0, guess_desc, ts_q) = initial_guess(action, &times, &mut warnings);
+    let initial_guess_s = t_guess.elapsed().as_secs_f64();
+
+    let options = ipopt::Options {
+        tol: scene.solver.tol,
+        constr_viol_tol: scene.solver.tol,
+        max_iter: scene.solver.max_iter,
+        print_level: scene.solver.print_level,
+        linear_solver: scene.solver.linear_solver.clone(),
+        output_file: scene.solver.log_file.clone(),
+        // MUMPS's default scaling (77, automatic) made the very first factorization of
+        // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
+        // on Debian's MUMPS 5.5). The scene's own [solver.ipopt] options come after and
+        // override it.
+        extra: std::iter::once(("mumps_scaling".to_string(), ipopt::OptionValue::Int(0)))
+            .chain(scene.solver.ipopt.iter().map(|(k, v)| {
+                let v = match v {
+                    IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
+                    IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
+                    IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
+                };
+                (k.clone(), v)
+            }))
+            .collect(),
+        ..ipopt::Options::default()
+    };
+    let jacobian_nonzeros = jac.structure.len();
+    let hessian_nonzeros = hess.as_ref().map_or(0, |h| h.structure.len());
+    let (solution, z) = match formulation {
+        Formulation::Reduced => {
+            let mut p = Reduced { action, z: z0.clone(), ws: action.model.workspace(), jac, hess };
+            let sol = ipopt::solve(&mut p, &z0[..lay.n_p], &options)?;
+            let mut z = vec![0.0; lay.len()];
+            z[..lay.n_p].copy_from_slice(&sol.x);
+            (sol, z)
+        }
+        Formulation::Full => {
+            let mut p = Full { action, ws: action.model.workspace(), jac };
+            let sol = ipopt::solve(&mut p, &z0, &options)?;
+            let z = sol.x.clone();
+            (sol, z)
+        }
+    };
+
+    let t_post = Instant::now();
+    let (trajectory, max_eom) = evaluate(action, &times, &z);
+    let diagnostics = diagnose(action, &trajectory, max_eom, &z, solution.max_constraint_violation, formulation, ts_q.as_deref());
+    let postprocess_s = t_post.elapsed().as_secs_f64();
+
+    let converged = solution.status.is_success() && diagnostics.max_residual <= 1e-8;
+    if let (Some(dist), Some(ts)) = (diagnostics.distance_from_time_stepping, &ts_q) {
+        // Scale: the largest range of a coordinate over the time-stepping trajectory.
+        let scale = (0..lay.d)
+            .map(|i| {
+                let (lo, hi) = ts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| (lo.min(q[i]), hi.max(q[i])));
+                hi - lo
+            })
+            .fold(0.0_f64, f64::max);
+        if dist > FAR_FROM_TIME_STEPPING * scale {
+            warnings.push(format!(
+                "the solution is {dist:.3e} away from time stepping of the same scene ({:.0} % of the coordinates' range): \
+                 a spurious critical point, an odd-even mode of the operator, or a grid too coarse (refine N or change the operator)",
+                100.0 * dist / scale
+            ));
+        }
+    }
+    if let Some(ts) = &diagnostics.contact_episodes_time_stepping {
+        for (j, (a, b)) in diagnostics.contact_episodes.iter().zip(ts).enumerate() {
+            if a != b {
+                warnings.push(format!(
+                    "wall `{}`: the solution has {a} contact episode(s), time stepping of the same scene has {b}: \
+                     possibly a spurious critical point or a grid too coarse for the wall width (refine N)",
+                    action.model.walls[j]
+                ));
+            }
+        }
+    }
+    if solution.status.is_success() && !converged {
+        warnings.push(format!(
+            "Ipopt reported success but the unscaled residual is {:.3e} (> 1e-8): not counted as converged",
+            diagnostics.max_residual
+        ));
+    }
+    let model = &action.model;
+    Ok(Outcome {
+        scene: scene.name.clone(),
+        converged,
+        status: solution.status.name().to_string(),
+        status_text: solution.status.to_string(),
+        ipopt_version: ipopt::ipopt_version().to_string(),
+        iterations: solution.iterations,
+        settings: Settings {
+            operator: scene.operator.name().to_string(),
+            nodes: scene.nodes,
+            t_start: scene.t_start,
+            t_end: scene.t_end,
+            formulation,
+            hessian,
+            tol: scene.solver.tol,
+            max_iter: scene.solver.max_iter,
+            parameters: scene.parameters.clone(),
+            initial_guess: guess_desc,
+        },
+        sizes: Sizes {
+            nodes: scene.nodes,
+            coordinates: lay.d,
+            constraints: lay.n,
+            walls: model.walls.len(),
+            variables: match formulation {
+                Formulation::Reduced => lay.n_p,
+                Formulation::Full => lay.len(),
+            },
+            equations: match formulation {
+                Formulation::Reduced => lay.n_m,
+                Formulation::Full => lay.len(),
+            },
+            jacobian_nonzeros,
+            hessian_nonzeros,
+            tape_instructions: model.minus_gradient.len() + model.mixed.tape.len(),
+        },
+        timings: Timings {
+            setup_s,
+            initial_guess_s,
+            ipopt_total_s: solution.total_seconds,
+            evaluation_s: solution.total_seconds - solution.ipopt_seconds,
+            ipopt_internal_s: solution.ipopt_seconds,
+            postprocess_s,
+            output_s: 0.0,
+        },
+        diagnostics,
+        warnings,
+        history: solution.history,
+        trajectory,
+    })
+}
+
+/// Coordinates, velocities, multipliers and physical quantities at every node.
+pub fn trajectory(action: &Action, times: &[f64], z: &[f64]) -> Trajectory {
+    evaluate(action, times, z).0
+}
+
+/// The trajectory and the largest equation-of-motion residual
+/// |f + F − Dp − Gᵀλ| over interior nodes (force units).
+fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
+    let lay = &action.layout;
+    let (d, n, nodes) = (lay.d, lay.n, lay.nodes);
+    let model = &action.model;
+    let mut ws = model.workspace();
+    let q: Vec<Vec<f64>> = (0..nodes).map(|k| (0..d).map(|i| z[lay.qp[k * d + i] as usize]).collect()).collect();
+    let v = apply_d(&action.op, &q);
+    let phys: Vec<_> = (0..nodes).map(|k| model.physical(&q[k], &v[k], &mut ws)).collect();
+    let p: Vec<Vec<f64>> = phys.iter().map(|ph| ph.p.clone()).collect();
+    let dp = apply_d(&action.op, &p);
+    let mut lambda = vec![vec![0.0; n]; nodes];
+    let mut max_eom = 0.0_f64;
+    for k in 0..nodes {
+        if k == 0 || k + 1 == nodes {
+            if n > 0 {
+                lambda[k] = end_multipliers(&phys[k], &dp[k]);
+            }
+            continue;
+        }
+        for a in 0..n {
+            lambda[k][a] = z[lay.lp[k * n + a] as usize];
+        }
+        for i in 0..d {
+            let gl: f64 = (0..n).map(|a| lambda[k][a] * phys[k].gv[(a, i)]).sum();
+            max_eom = max_eom.max((phys[k].force[i] - dp[k][i] - gl).abs());
+        }
+    }
+    let tr = Trajectory {
+        t: times.to_vec(),
+        energy: phys.iter().map(|ph| ph.energy).collect(),
+        wall_energy: phys.iter().map(|ph| ph.wall_energy).collect(),
+        g: phys.iter().map(|ph| ph.g.clone()).collect(),
+        h: phys.iter().map(|ph| ph.h.clone()).collect(),
+        q,
+        v,
+        lambda,
+    };
+    (tr, max_eom)
+}
+
+/// D applied to each component of a node-major series.
+fn apply_d(op: &SbpOperator, series: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let nodes = series.len();
+    let d = series.first().map_or(0, Vec::len);
+    let mut out = vec![vec![0.0; d]; nodes];
+    let mut col = vec![0.0; nodes];
+    let mut dcol = vec![0.0; nodes];
+    for i in 0..d {
+        for k in 0..nodes {
+            col[k] = series[k][i];
+        }
+        op.apply(&col, &mut dcol);
+        for k in 0..nodes {
+            out[k][i] = dcol[k];
+        }
+    }
+    out
+}
+
+/// λ at an end node: least-squares solution of that node's equation of motion
+/// `Gᵀ λ = f + F − (Dp)` (its row of ∂S/∂q- was absorbed by a boundary multiplier).
+fn end_multipliers(ph: &crate::model::Physical, dp: &[f64]) -> Vec<f64> {
+    let rhs = nalgebra::DVector::from_iterator(dp.len(), ph.force.iter().zip(dp).map(|(f, d)| f - d));
+    let g = &ph.gv; // n×d
+    let normal = g * g.transpose();
+    match normal.lu().solve(&(g * rhs)) {
+        Some(l) => l.iter().copied().collect(),
+        None => vec![f64::NAN; g.nrows()],
+    }
+}
+
+fn diagnose(
+    action: &Action,
+    tr: &Trajectory,
+    max_eom_residual: f64,
+    z: &[f64],
+    max_residual: f64,
+    formulation: Formulation,
+    ts_q: Option<&[Vec<f64>]>,
+) -> Diagnostics {
+    let lay = &action.layout;
+    let nodes = lay.nodes;
+    let max_abs = |rows: &[Vec<f64>]| rows.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let max_constraint_interior = if nodes > 2 { max_abs(&tr.g[1..nodes - 1]) } else { 0.0 };
+    let constraint_last_node = max_abs(&tr.g[nodes - 1..]);
+    let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
+    let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - total[0]).abs()));
+    let model = &action.model;
+    let max_wall_gap = (0..model.walls.len()).map(|j| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max)).collect();
+    let episodes = contact_episodes(model, &tr.h);
+    let contact_episodes_time_stepping = ts_q.map(|qs| {
+        let mut ws = model.workspace();
+        let rest = vec![0.0; lay.d]; // h depends on q only (validated)
+        let h: Vec<Vec<f64>> = qs.iter().map(|q| model.physical(q, &rest, &mut ws).h).collect();
+        contact_episodes(model, &h)
+    });
+    let distance_from_time_stepping =
+        ts_q.map(|qs| qs.iter().zip(&tr.q).flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs())).fold(0.0_f64, f64::max));
+    let max_minus_variable =
+        (formulation == Formulation::Full).then(|| lay.qm.iter().chain(&lay.lm).map(|&i| z[i as usize].abs()).fold(0.0_f64, f64::max));
+    Diagnostics {
+        max_residual,
+        max_eom_residual,
+        max_constraint_interior,
+        constraint_last_node,
+        energy_drift: drift(&total[..nodes.saturating_sub(2).max(1)]),
+        energy_drift_all: drift(&total),
+        max_wall_gap,
+        distance_from_time_stepping,
+        contact_episodes: episodes,
+        contact_episodes_time_stepping,
+        max_minus_variable,
+    }
+}
+
+/// Number of contact episodes (maximal runs of nodes with h > −3σ) per wall.
+fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> Vec<usize> {
+    (0..model.walls.len())
+        .map(|j| {
+            let sigma = model.wall_width(j);
+            let mut count = 0;
+            let mut inside = false;
+            for hk in h {
+                let now = hk[j] > -3.0 * sigma;
+                if now && !inside {
+                    count += 1;
+                }
+                inside = now;
+            }
+            count
+        })
+        .collect()
+}
