@@ -1,4 +1,4 @@
-//! The two formulations of DESIGN §3 and the two Hessian modes describe the same
+//! The two formulations of docs/mathematics.md and the two Hessian modes describe the same
 //! discrete critical point: on every shipped scene they must agree.
 
 mod common;
@@ -31,7 +31,7 @@ fn full_and_reduced_formulations_agree_on_every_shipped_scene() {
 /// Ipopt's step solves [H Jᵀ; J 0] [dx; dy] = −[∇ℒ; c]. For a square nonsingular J the
 /// second row alone gives dx = −J⁻¹c: the primal step does not depend on the Hessian H,
 /// only the multiplier step does. So the exact Hessian and the zero Hessian must walk
-/// the same primal path (DESIGN §8 measured identical iterates).
+/// the same primal path (docs/solver.md measured identical iterates).
 #[test]
 fn exact_and_zero_hessian_give_the_same_iterates() {
     for name in ["rolling_disk", "tumbler"] {

@@ -81,7 +81,7 @@ fn regenerated_references_match_the_checked_in_files() {
 
 #[test]
 fn rolling_disk_reference_matches_closed_form() {
-    // DESIGN §4: φ = t, x = 5 sin t + k sin²t/2, y = 5(1 − cos t) + k(t/2 − sin 2t/4),
+    // docs/scenes.md: φ = t, x = 5 sin t + k sin²t/2, y = 5(1 − cos t) + k(t/2 − sin 2t/4),
     // θ = 5t + k(1 − cos t), k = g sin α/(1 + I_S/(M R²)).
     let k = G * 0.5 / 1.5;
     let t = checked_in("rolling_disk.csv");
@@ -275,7 +275,7 @@ fn check_command_exit_codes_and_json() {
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("run/trajectory.check.json")).unwrap()).unwrap();
     assert_eq!(json["passed"], true);
     let max = json["comparison"]["max_abs"].as_f64().unwrap();
-    // The solver's own test pins this at 0.0152 (DESIGN §2.4); the reference agrees.
+    // The solver's own test pins this at 0.0152 (docs/errata.md, erratum 4); the reference agrees.
     assert!((max - 0.0152).abs() < 0.001, "{max}");
     // Exceeded: exit 2, the column is named.
     let o = common::skg(
@@ -327,7 +327,7 @@ fn reference_command_samples_a_given_grid() {
 #[test]
 fn hard_wall_sliding_from_rest_follows_newton() {
     // δ = 0: the mass starts on the plane at rest and slides with the uniform
-    // acceleration g (sin α − μ cos α) along (cos α, sin α), downwards (DESIGN §5).
+    // acceleration g (sin α − μ cos α) along (cos α, sin α), downwards (docs/validation.md).
     let alpha = std::f64::consts::PI / 6.0;
     for (name, mu) in [("incline_friction", 0.4), ("incline_frictionless", 0.0)] {
         let ov = Overrides { set: vec![("delta".into(), "0".into())], ..Default::default() };

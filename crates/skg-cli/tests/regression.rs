@@ -1,5 +1,5 @@
 //! Regression and convergence of every shipped scene and operator against its
-//! regularized reference (discretization error, DESIGN §5), and the tumbler's model
+//! regularized reference (discretization error, docs/validation.md), and the tumbler's model
 //! error against the hard-wall reference as σ shrinks (the paper's Fig. 3, centre).
 //!
 //! The tolerances come from the measured study in the README ("Convergence against the
@@ -181,7 +181,7 @@ fn knife_edge_converges_against_reference() {
 /// solution whose error grows ∝ N (12 / 23 / 48 at N = 32 / 64 / 128): the interior
 /// central difference annihilates (−1)^k, and nothing else in this scene's discrete
 /// equations controls that mode. It is the discrete critical point, so Ipopt converges;
-/// the solve must flag it instead of returning it silently (DESIGN §9).
+/// the solve must flag it instead of returning it silently (docs/solver.md).
 #[test]
 fn knife_edge_sbp121_odd_even_mode_is_flagged() {
     let o = common::solve("knife_edge", &common::grid(64, "SBP121"));
@@ -205,6 +205,6 @@ fn tumbler_model_error_decreases_with_sigma() {
         assert!(disc < 0.05 * model, "σ = 1/{k}: discretization {disc:.3e} vs model {model:.3e}");
         prev = model;
     }
-    // The independent implementation measured 2.95e-3 at σ = 1/110 (DESIGN §9).
+    // The independent implementation measured 2.95e-3 at σ = 1/110 (docs/solver.md).
     assert!((prev - 2.95e-3).abs() < 0.05e-3, "{prev:e}");
 }

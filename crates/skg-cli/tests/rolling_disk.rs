@@ -1,5 +1,5 @@
-//! The rolling-spinning disk against its closed form (DESIGN §4), with the numbers of
-//! the independent CasADi + Ipopt implementation of the same discretization (DESIGN §2.4).
+//! The rolling-spinning disk against its closed form (docs/scenes.md), with the numbers of
+//! the independent CasADi + Ipopt implementation of the same discretization (docs/errata.md, erratum 4).
 
 mod common;
 

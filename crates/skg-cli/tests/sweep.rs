@@ -253,7 +253,7 @@ fn failed_points_are_recorded_and_the_sweep_goes_on() {
 
 #[test]
 fn sigma_auto_selection_reproduces_the_papers_choice() {
-    // Tumbler at N = 256: artifacts appear between sigma = 1/120 and 1/110 (DESIGN §9),
+    // Tumbler at N = 256: artifacts appear between sigma = 1/120 and 1/110 (docs/solver.md),
     // so the smallest artifact-free width at the default tolerance lies in between.
     let file = SceneFile::load(&common::scenario("tumbler")).unwrap();
     let opts = TuneOptions { lo: Some(1.0 / 160.0), hi: Some(1.0 / 90.0), rel: 0.03, ..TuneOptions::default() };

@@ -1,5 +1,5 @@
 //! Walls: the tumbler's bounces and the incline's sliding, against the physics the
-//! regularized model must reproduce (DESIGN §4, §5).
+//! regularized model must reproduce (docs/scenes.md, docs/validation.md).
 
 mod common;
 
@@ -56,7 +56,7 @@ fn tumbler_bounces_twice_and_energy_returns_after_each_bounce() {
     // its pre-impact value after each bounce. Tolerance: the error is the discretization
     // error of resolving a contact of ~20 nodes; measured 6.2e-6 (relative) at N = 256
     // and 6.6e-10 at N = 512 (order ≈ 13 here: the Gaussian contact is resolved only
-    // from N ≈ 256 on, DESIGN §9). The bound 2e-5 leaves a factor 3 over the
+    // from N ≈ 256 on, docs/solver.md). The bound 2e-5 leaves a factor 3 over the
     // measurement; the refined grid must be at least 100× better, which shows the
     // deviation is discretization error, not a modelling error.
     let coarse = free_flight_energy_error(&o, sigma);
@@ -132,7 +132,7 @@ fn frictionless_incline_slides_with_g_sin_alpha() {
     check_incline("incline_frictionless", 0.0);
 }
 
-/// DESIGN §9: wall scenes have spurious discrete critical points. On a grid far too
+/// docs/solver.md: wall scenes have spurious discrete critical points. On a grid far too
 /// coarse for σ = 1/110 (N = 48: Δt ≈ 0.011 s, about the duration of a contact) Ipopt
 /// converges to a trajectory with one bounce where the physics has two; the solve
 /// must say so instead of returning it silently. At the paper's N = 256 it must not.

@@ -142,7 +142,7 @@ impl Table {
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct CheckOptions {
     /// Leave out the last `skip_last` rows of the solution (e.g. the end nodes whose
-    /// constraint is not enforced, DESIGN §9).
+    /// constraint is not enforced, docs/solver.md).
     pub skip_last: usize,
     /// Columns to compare; `None` = every column both tables share except `t`.
     pub columns: Option<Vec<String>>,

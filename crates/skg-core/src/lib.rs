@@ -15,6 +15,7 @@ pub mod convergence;
 pub mod model;
 pub mod ode;
 pub mod output;
+pub mod provenance;
 pub mod reference;
 pub mod sbp;
 pub mod scenario;

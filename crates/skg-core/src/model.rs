@@ -1,6 +1,6 @@
 //! The mechanical model of a scene as symbolic expressions with exact derivatives.
 //!
-//! The physical-limit SKG action (DESIGN §1) is a sum over time nodes of one
+//! The physical-limit SKG action (docs/mathematics.md) is a sum over time nodes of one
 //! node-local density. With `v = Dq` (the SBP derivative of the plus coordinates),
 //! `w = q-`, `dw = D q-` and `μ = λ-`,
 //!

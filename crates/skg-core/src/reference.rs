@@ -1,4 +1,4 @@
-//! Reference solutions of a scene, independent of the SBP discretization (DESIGN §5).
+//! Reference solutions of a scene, independent of the SBP discretization (docs/validation.md).
 //!
 //! * **Regularized** ([`regularized`]): the Lagrange–d'Alembert equations of exactly the
 //!   scene the solver discretizes (same TOML, same symbolic model and derivatives,

@@ -54,7 +54,7 @@ impl fmt::Display for NumOrExpr {
     }
 }
 
-/// How the discrete action is posed to Ipopt (DESIGN §3).
+/// How the discrete action is posed to Ipopt (docs/mathematics.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Formulation {
@@ -86,7 +86,7 @@ impl fmt::Display for Formulation {
 }
 
 /// What Ipopt is given as the Hessian of its Lagrangian. For the square systems
-/// solved here the Newton step does not depend on it (DESIGN §3, §8).
+/// solved here the Newton step does not depend on it (docs/mathematics.md, docs/solver.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum HessianMode {
@@ -230,6 +230,11 @@ impl Origin {
         let line = before.matches('\n').count() + 1;
         let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
         format!("{}:{}:{}", self.path, line, col)
+    }
+
+    /// Hash of the scene file's text ([`crate::provenance::content_hash`]).
+    pub fn content_hash(&self) -> String {
+        crate::provenance::content_hash(self.text.as_bytes())
     }
 
     /// Location of a spanned value. For a string value the span starts at the opening

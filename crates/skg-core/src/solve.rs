@@ -6,7 +6,7 @@
 //! multipliers from `[W Gᵀ; G 0]`, see [`Model::accelerations`]) at a moderate
 //! tolerance and sampled at the nodes; the minus variables start at zero and the
 //! boundary multipliers at the values that make their rows vanish. A global-in-time
-//! Newton solve started there converges in a few iterations (DESIGN §9: constant
+//! Newton solve started there converges in a few iterations (docs/solver.md: constant
 //! velocity extrapolation did not converge on the disk). If time stepping fails, the
 //! guess falls back to constant-velocity extrapolation and the summary says so.
 
@@ -111,7 +111,7 @@ pub struct Diagnostics {
     pub distance_from_time_stepping: Option<f64>,
     /// Contact episodes per wall (maximal runs of nodes with h > −3σ) in the solution
     /// and in the time-stepping solution on the same nodes. A difference means an extra
-    /// or a missing bounce: a spurious critical point (DESIGN §9) or a too coarse grid;
+    /// or a missing bounce: a spurious critical point (docs/solver.md) or a too coarse grid;
     /// the solve then adds a warning.
     pub contact_episodes: Vec<usize>,
     pub contact_episodes_time_stepping: Option<Vec<usize>>,

@@ -12,15 +12,15 @@
 //! over the *free* nodes k: nodes where every wall's gap satisfies h < −6σ (the Gaussian
 //! force is below 1.5e-8 of its peak), not within 3 nodes of a node in contact (the SBP
 //! stencil of Dq reaches that far), and not among the last `skip_last` nodes (benign
-//! boundary nodes, DESIGN §9). A σ too small for N makes the discrete solution ring after
-//! each impact and A jumps by orders of magnitude (paper, fig. 3; DESIGN §9). A scene
+//! boundary nodes, docs/solver.md). A σ too small for N makes the discrete solution ring after
+//! each impact and A jumps by orders of magnitude (paper, fig. 3; docs/solver.md). A scene
 //! without walls uses every node but the last `skip_last`, so A is the relative energy
 //! drift.
 //!
 //! Measured on the tumbler (SBP242): at N = 256, A = 3e-7 (σ = 1/80), 5e-6 (1/110),
 //! 3e-5 (1/120), 2e-4 (1/140), 1e-3 (1/200); at N = 512, A ≤ 2e-6 up to σ = 1/200 and
 //! 2e-4 at 1/300; at N = 1024, A ≤ 3e-8 down to 1/300. The default tolerance 1e-5
-//! therefore reproduces the paper's choice σ = 1/110 at N = 256 (DESIGN §4, §9).
+//! therefore reproduces the paper's choice σ = 1/110 at N = 256 (docs/scenes.md, docs/solver.md).
 //!
 //! **σ selection** ([`tune_width`]): bisection in log σ between a σ with artifacts and one
 //! without, over in-process solves; it assumes the artifact decreases as σ grows.

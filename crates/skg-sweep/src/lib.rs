@@ -8,7 +8,7 @@
 //!   tolerances (the peer line of the work-precision chart). Points are numbered in that
 //!   order; a point's **id** is a hash of its canonical string (axis names sorted,
 //!   `name=value` joined by `;`), so it does not depend on the order of the file.
-//! * **Workers**: Debian's Ipopt/MUMPS is not thread-safe (DESIGN §8), so each point runs
+//! * **Workers**: Debian's Ipopt/MUMPS is not thread-safe (docs/solver.md), so each point runs
 //!   in a child process (`skg-solve sweep-worker JOB.json`), at most `jobs` at once, the
 //!   points with the largest [`estimated_cost`] first. A
 //!   child dies with the driver (`PR_SET_PDEATHSIG`), and Ctrl-C reaches the whole
@@ -122,7 +122,7 @@ pub struct SweepMeta {
     #[serde(default)]
     pub compare: Option<Vec<String>>,
     /// Nodes at the end excluded from errors and the energy artifact (default 2: the
-    /// benign boundary nodes, DESIGN §9).
+    /// benign boundary nodes, docs/solver.md).
     #[serde(default)]
     pub skip_last: Option<usize>,
     /// Tolerance on the energy artifact: above it a converged point counts as
