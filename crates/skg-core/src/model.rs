@@ -531,7 +531,7 @@ impl Model {
     fn validate_initial_state(&self, scene: &Scene) -> Result<(), SceneError> {
         let mut ws = self.workspace();
         let ph = self.physical(&scene.initial_q, &scene.initial_v, &mut ws);
-        let location = scene.file.origin.path.clone();
+        let location = scene.file.origin.whole();
         let sym = (&ph.kinetic + ph.kinetic.transpose()) * 0.5;
         let eig = sym.symmetric_eigenvalues();
         let min = eig.iter().cloned().fold(f64::INFINITY, f64::min);

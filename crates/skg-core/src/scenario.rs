@@ -28,11 +28,11 @@ pub enum SceneError {
     #[error("cannot read scene file {path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
     #[error("{location}: {message}")]
-    Toml { location: String, message: String },
+    Toml { location: Location, message: String },
     #[error("{location}: in `{key}`: {error}\n{caret}")]
-    Expression { location: String, key: String, error: Box<ParseError>, caret: String },
+    Expression { location: Location, key: String, error: Box<ParseError>, caret: String },
     #[error("{location}: {message}")]
-    Invalid { location: String, message: String },
+    Invalid { location: Location, message: String },
     #[error("--set {assignment}: {message}")]
     Override { assignment: String, message: String },
 }
@@ -215,6 +215,35 @@ pub struct SceneFile {
     pub origin: Origin,
 }
 
+/// A place in an input file: the file and, where known, the line and column (both
+/// 1-based, columns counted in characters). Displayed as `file:line:col`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Location {
+    pub file: String,
+    pub line: Option<usize>,
+    pub col: Option<usize>,
+}
+
+impl Location {
+    /// The file as a whole (no line or column).
+    pub fn file(path: impl Into<String>) -> Location {
+        Location { file: path.into(), line: None, col: None }
+    }
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file)?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+            if let Some(col) = self.col {
+                write!(f, ":{col}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Where a scene came from, to turn byte spans into `file:line:column`.
 #[derive(Debug, Clone, Default)]
 pub struct Origin {
@@ -224,12 +253,17 @@ pub struct Origin {
 
 impl Origin {
     /// `file:line:column` of a byte offset (1-based line and column, columns in chars).
-    pub fn locate(&self, offset: usize) -> String {
+    pub fn locate(&self, offset: usize) -> Location {
         let offset = offset.min(self.text.len());
         let before = &self.text[..offset];
         let line = before.matches('\n').count() + 1;
         let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-        format!("{}:{}:{}", self.path, line, col)
+        Location { file: self.path.clone(), line: Some(line), col: Some(col) }
+    }
+
+    /// The file as a whole, for errors that belong to no single key.
+    pub fn whole(&self) -> Location {
+        Location::file(self.path.clone())
     }
 
     /// Hash of the scene file's text ([`crate::provenance::content_hash`]).
@@ -239,7 +273,7 @@ impl Origin {
 
     /// Location of a spanned value. For a string value the span starts at the opening
     /// quote; `inner` is a char offset inside the string.
-    pub fn locate_in<T>(&self, v: &Spanned<T>, inner: Option<usize>) -> String {
+    pub fn locate_in<T>(&self, v: &Spanned<T>, inner: Option<usize>) -> Location {
         let start = v.span().start;
         match inner {
             Some(k) => {
@@ -340,7 +374,7 @@ impl SceneFile {
         let mut file: SceneFile = toml::from_str(text).map_err(|e| {
             let location = match e.span() {
                 Some(span) => origin.locate(span.start),
-                None => path.to_string(),
+                None => Location::file(path),
             };
             SceneError::Toml { location, message: e.message().trim_end().to_string() }
         })?;
@@ -535,7 +569,7 @@ impl SceneFile {
     }
 
     fn toml_error(&self, message: String) -> SceneError {
-        SceneError::Invalid { location: self.origin.path.clone(), message }
+        SceneError::Invalid { location: self.origin.whole(), message }
     }
 
     /// Evaluate parameters in dependency order (each may use the others); overrides

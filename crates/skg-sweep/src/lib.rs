@@ -37,7 +37,7 @@ use toml::Spanned;
 use skg_core::check::{self, CheckOptions, Comparison, Table};
 use skg_core::output;
 use skg_core::sbp::OperatorKind;
-use skg_core::scenario::{Formulation, HessianMode, Origin, Overrides, Scene, SceneFile};
+use skg_core::scenario::{Formulation, HessianMode, Location, Origin, Overrides, Scene, SceneFile};
 
 /// Errors of a sweep file, a results file or the sweep driver.
 #[derive(Debug, thiserror::Error)]
@@ -45,7 +45,7 @@ pub enum SweepError {
     #[error("cannot read {path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
     #[error("{location}: {message}")]
-    Invalid { location: String, message: String },
+    Invalid { location: Location, message: String },
     #[error("{path}: {message}")]
     Results { path: PathBuf, message: String },
     #[error("cannot start a worker process ({exe}): {source}")]
@@ -161,7 +161,7 @@ pub struct SweepFile {
     #[serde(default)]
     pub points: Vec<Spanned<IndexMap<String, AxisValue>>>,
     #[serde(default)]
-    pub peer: Option<PeerSpec>,
+    pub peer: Option<Spanned<PeerSpec>>,
     #[serde(skip)]
     pub origin: Origin,
 }
@@ -287,7 +287,7 @@ impl SweepFile {
     pub fn parse(text: &str, path: &str) -> Result<SweepFile, SweepError> {
         let origin = Origin { path: path.to_string(), text: text.to_string() };
         let mut f: SweepFile = toml::from_str(text).map_err(|e| {
-            let location = e.span().map_or(path.to_string(), |s| origin.locate(s.start));
+            let location = e.span().map_or(Location::file(path), |s| origin.locate(s.start));
             let mut message = e.message().trim_end().to_string();
             if message.contains("expected a sequence") {
                 message.push_str(" (write each grid as `[[grid]]` and each explicit point as `[[points]]`)");
@@ -308,7 +308,7 @@ impl SweepFile {
 
     /// Location of `key = …` inside the table spanned by `table` (falls back to the
     /// table's own location).
-    fn locate_key<T>(&self, table: &Spanned<T>, key: &str) -> String {
+    fn locate_key<T>(&self, table: &Spanned<T>, key: &str) -> Location {
         let start = table.span().start.min(self.origin.text.len());
         let end = table.span().end.min(self.origin.text.len()).max(start);
         let body = &self.origin.text[start..end];
@@ -365,7 +365,7 @@ impl SweepFile {
         if let Some(tol) = self.sweep.artifact_tol {
             if !(tol > 0.0 && tol.is_finite()) {
                 return Err(SweepError::Invalid {
-                    location: self.origin.path.clone(),
+                    location: self.origin.whole(),
                     message: format!("sweep.artifact_tol must be a positive number, got {tol}"),
                 });
             }
@@ -373,7 +373,7 @@ impl SweepFile {
         if let Some(t) = self.sweep.timeout {
             if !(t > 0.0 && t.is_finite()) {
                 return Err(SweepError::Invalid {
-                    location: self.origin.path.clone(),
+                    location: self.origin.whole(),
                     message: format!("sweep.timeout must be a positive number of seconds, got {t}"),
                 });
             }
@@ -391,7 +391,7 @@ impl SweepFile {
             }
         }
         // (axis values, method, location in the sweep file) of each point, in order.
-        type Raw = (Vec<(String, String)>, Method, String);
+        type Raw = (Vec<(String, String)>, Method, Location);
         let mut raw: Vec<Raw> = Vec::new();
         let mut axes: Vec<String> = Vec::new();
         let check_axis = |name: &str, at: &dyn Fn(String) -> SweepError| -> Result<(), SweepError> {
@@ -444,11 +444,12 @@ impl SweepFile {
             }
             raw.push((c, Method::Skg, self.origin.locate_in(p, None)));
         }
-        if let Some(peer) = &self.peer {
+        if let Some(spanned) = &self.peer {
+            let peer = spanned.get_ref();
             for &rtol in &peer.tolerances {
                 if !(rtol > 0.0 && rtol < 1.0) {
                     return Err(SweepError::Invalid {
-                        location: self.origin.path.clone(),
+                        location: self.origin.whole(),
                         message: format!("peer.tolerances: {rtol} is not in (0, 1)"),
                     });
                 }
@@ -456,12 +457,12 @@ impl SweepFile {
                 if let Some(n) = peer.nodes {
                     c.push(("nodes".to_string(), n.to_string()));
                 }
-                raw.push((c, Method::Ode { rtol }, format!("{} [peer]", self.origin.path)));
+                raw.push((c, Method::Ode { rtol }, self.origin.locate_in(spanned, None)));
             }
         }
         if raw.is_empty() {
             return Err(SweepError::Invalid {
-                location: self.origin.path.clone(),
+                location: self.origin.whole(),
                 message: "the sweep has no points: add a [[grid]], [[points]] or [peer] table".into(),
             });
         }
