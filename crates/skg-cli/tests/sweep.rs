@@ -14,10 +14,7 @@ use skg_sweep::{Method, Results, Shard, SweepFile};
 
 /// Write a sweep file into `dir` whose base scene is the shipped `scene`.
 fn sweep_file(dir: &Path, scene: &str, body: &str) -> PathBuf {
-    let p = dir.join("sweep.toml");
-    let text = format!("[sweep]\nscene = \"{}\"\n{body}", common::scenario(scene).display());
-    std::fs::write(&p, text).unwrap();
-    p
+    common::sweep_file(dir, &common::scenario(scene), body)
 }
 
 #[test]
