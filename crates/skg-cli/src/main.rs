@@ -39,6 +39,7 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Run a parameter sweep: every point of the sweep file's grid in its own worker
     /// process, each finished point appended to DIR/results.csv. Rerunning resumes.
+    #[command(long_about = sweep::sweep_long_about())]
     Sweep(sweep::SweepArgs),
     /// Join the results of a sweep's shards into one results.csv.
     Merge(sweep::MergeArgs),

@@ -2,9 +2,10 @@
 
 mod common;
 
+use common::G;
+
 use skg_core::scenario::{Formulation, Overrides};
 
-const G: f64 = 9.8;
 const X0: f64 = 10.0;
 const V0: f64 = 3.0;
 

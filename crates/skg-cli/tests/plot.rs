@@ -18,17 +18,13 @@ fn check_chart(stem: &Path, needle: &str) {
 #[test]
 fn every_chart_is_written_as_svg_and_png() {
     let dir = tempfile::tempdir().unwrap();
-    let sweep = dir.path().join("s.toml");
-    std::fs::write(
-        &sweep,
-        format!(
-            "[sweep]\nscene = \"{}\"\nreference = \"integrate\"\nkeep_trajectories = true\n\
-             [[grid]]\noperator = [\"SBP121\", \"SBP242\"]\nnodes = [128, 256]\nsigma = [\"1/80\", \"1/140\"]\n\
-             [peer]\ntolerances = [1e-6, 1e-9]\n",
-            common::scenario("tumbler").display()
-        ),
-    )
-    .unwrap();
+    let sweep = common::sweep_file(
+        dir.path(),
+        &common::scenario("tumbler"),
+        "reference = \"integrate\"\nkeep_trajectories = true\n\
+         [[grid]]\noperator = [\"SBP121\", \"SBP242\"]\nnodes = [128, 256]\nsigma = [\"1/80\", \"1/140\"]\n\
+         [peer]\ntolerances = [1e-6, 1e-9]\n",
+    );
     let out = dir.path().join("out");
     let o = common::skg(&["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"], Path::new("."));
     assert!(o.status.success(), "{}", common::text(&o));

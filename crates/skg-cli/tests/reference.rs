@@ -4,13 +4,13 @@
 
 mod common;
 
+use common::G;
+
 use skg_core::check::Table;
 use skg_core::output;
 use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scenario::Overrides;
 use skg_core::solve;
-
-const G: f64 = 9.8;
 
 fn checked_in(file: &str) -> Table {
     Table::read(&common::root().join("references").join(file)).unwrap()

@@ -3,10 +3,12 @@
 
 mod common;
 
+use common::G;
+
 use skg_core::convergence::fit_order;
 use skg_core::scenario::Overrides;
 
-const K: f64 = 9.8 * 0.5 / 1.5; // g sin α / (1 + I_S / (M R²))
+const K: f64 = G * 0.5 / 1.5; // g sin α / (1 + I_S / (M R²))
 
 fn exact(t: f64) -> Vec<f64> {
     vec![

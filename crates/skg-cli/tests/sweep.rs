@@ -10,14 +10,11 @@ use std::time::{Duration, Instant};
 
 use skg_core::scenario::{Overrides, SceneFile};
 use skg_core::tune::{self, TuneOptions};
-use skg_sweep::{Method, Results, Shard, SweepFile};
+use skg_sweep::{Method, PointStatus, Results, Shard, SweepFile};
 
 /// Write a sweep file into `dir` whose base scene is the shipped `scene`.
 fn sweep_file(dir: &Path, scene: &str, body: &str) -> PathBuf {
-    let p = dir.join("sweep.toml");
-    let text = format!("[sweep]\nscene = \"{}\"\n{body}", common::scenario(scene).display());
-    std::fs::write(&p, text).unwrap();
-    p
+    common::sweep_file(dir, &common::scenario(scene), body)
 }
 
 #[test]
@@ -235,11 +232,12 @@ fn failed_points_are_recorded_and_the_sweep_goes_on() {
     assert!(o.status.success(), "{}", common::text(&o));
     assert!(common::text(&o).contains("(1 failed)"), "{}", common::text(&o));
     let r = Results::read(&out).unwrap();
-    let (c, s) = (r.column_index("converged").unwrap(), r.column_index("status").unwrap());
-    let mut states: Vec<(String, String)> = r.rows.iter().map(|row| (row[c].clone(), row[s].clone())).collect();
+    let (c, s, ss) = (r.column_index("converged").unwrap(), r.column_index("status").unwrap(), r.column_index("solver_status").unwrap());
+    let mut states: Vec<(&str, &str, &str)> = r.rows.iter().map(|row| (row[c].as_str(), row[s].as_str(), row[ss].as_str())).collect();
     states.sort();
-    assert_eq!(states[0], ("false".into(), "Maximum_Iterations_Exceeded".into()));
-    assert_eq!(states[1], ("true".into(), "Solve_Succeeded".into()));
+    assert_eq!(states[0], ("false", "not_converged", "Maximum_Iterations_Exceeded"));
+    assert_eq!(states[1], ("true", "converged", "Solve_Succeeded"));
+    assert_eq!(r.status(&r.rows[0]).unwrap().is_converged(), r.rows[0][c] == "true");
     // A point over the time limit is killed and recorded as such.
     let p = sweep_file(dir.path(), "tumbler", "timeout = 0.01\n[[grid]]\nnodes = [1024]\n");
     let out = dir.path().join("timeout");
@@ -249,6 +247,123 @@ fn failed_points_are_recorded_and_the_sweep_goes_on() {
     assert_eq!(r.rows.len(), 1);
     assert_eq!(r.rows[0][r.column_index("status").unwrap()], "timeout");
     assert_eq!(r.rows[0][r.column_index("converged").unwrap()], "false");
+}
+
+/// `sha256:<hex>` of a file's bytes, computed here with the `sha2` crate.
+fn sha256_of(path: &Path) -> String {
+    use sha2::{Digest, Sha256};
+    let hex: String = Sha256::digest(std::fs::read(path).unwrap()).iter().map(|b| format!("{b:02x}")).collect();
+    format!("sha256:{hex}")
+}
+
+/// The cells of column `name` in every row.
+fn column<'a>(r: &'a Results, name: &str) -> Vec<&'a str> {
+    let i = r.column_index(name).unwrap_or_else(|| panic!("no column {name} in {:?}", r.header));
+    r.rows.iter().map(|row| row[i].as_str()).collect()
+}
+
+#[test]
+fn results_hold_axis_numbers_expressions_and_provenance() {
+    let dir = tempfile::tempdir().unwrap();
+    // A copy of the tumbler (R = 1), so that its content can change below.
+    let scene = dir.path().join("tumbler.toml");
+    std::fs::copy(common::scenario("tumbler"), &scene).unwrap();
+    let p = common::sweep_file(dir.path(), &scene, "[[grid]]\nnodes = 128\nsigma = [\"1/110\", 0.005, \"R/100\"]\nV0 = [10, 12]\n");
+    let out = dir.path().join("out");
+    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    let r = Results::read(&out).unwrap();
+    assert_eq!(r.rows.len(), 6);
+    // The expressions' column follows its axis; an axis of plain numbers has none.
+    let sigma = r.column_index("sigma").unwrap();
+    assert_eq!(r.header[sigma + 1], "sigma_expr");
+    assert!(r.column_index("V0").is_some() && r.column_index("V0_expr").is_none(), "{:?}", r.header);
+    // Each sigma cell is the double the expression denotes (R = 1 in the scene).
+    for (cell, written) in column(&r, "sigma").into_iter().zip(column(&r, "sigma_expr")) {
+        let expected = match written {
+            "1/110" => 1.0 / 110.0,
+            "0.005" => 0.005,
+            "R/100" => 1.0 / 100.0,
+            other => panic!("sigma_expr {other}"),
+        };
+        assert_eq!(cell.parse::<f64>().unwrap(), expected, "sigma {cell} for {written}");
+    }
+    for cell in column(&r, "V0") {
+        assert!([10.0, 12.0].contains(&cell.parse::<f64>().unwrap()), "V0 {cell}");
+    }
+    // Statuses are stable names; `converged` says the same.
+    for (status, converged) in column(&r, "status").into_iter().zip(column(&r, "converged")) {
+        assert_eq!(status.parse::<PointStatus>().unwrap().is_converged().to_string(), converged);
+    }
+    // Provenance: this build's version and schema, and the SHA-256 of the scene's bytes.
+    let hash = sha256_of(&scene);
+    assert!(column(&r, "scene_hash").iter().all(|h| *h == hash), "{:?} vs {hash}", column(&r, "scene_hash"));
+    assert!(column(&r, "skg_solve_version").iter().all(|v| *v == env!("CARGO_PKG_VERSION")));
+    let schema = skg_core::provenance::SCHEMA_VERSION.to_string();
+    assert!(column(&r, "schema_version").iter().all(|v| *v == schema));
+    let info: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(info["scene_hash"], hash.as_str());
+    assert_eq!(info["skg_solve_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(info["schema_version"].as_u64(), Some(skg_core::provenance::SCHEMA_VERSION as u64));
+
+    // Charts filter by value: the expression, the number, or an expression of scene
+    // parameters (matched as written) each select one sigma, so each (N, V0) cell has one point.
+    let stem = dir.path().join("map");
+    let map = |filter: &str| {
+        let mut args = vec!["plot", "stability", out.to_str().unwrap(), "-o", stem.to_str().unwrap(), "--x", "nodes", "--y", "V0"];
+        if !filter.is_empty() {
+            args.extend(["--where", filter]);
+        }
+        common::skg(&args, Path::new("."))
+    };
+    for filter in ["sigma=1/110", "sigma=0.00909090909090909", "sigma=R/100", "sigma=1/200", "sigma=1/300"] {
+        let o = map(filter);
+        let found = filter != "sigma=1/300"; // 1/200 is the point written 0.005
+        assert_eq!(o.status.success(), found, "--where {filter}: {}", common::text(&o));
+    }
+    let o = map("");
+    assert!(!o.status.success() && common::text(&o).contains("several points share"), "{}", common::text(&o));
+
+    // A rerun after the base scene changed refuses to mix its rows with the old ones.
+    std::fs::write(&scene, std::fs::read_to_string(&scene).unwrap() + "# edited\n").unwrap();
+    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"], Path::new("."));
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("results.csv") && t.contains(&hash) && t.contains(&sha256_of(&scene)), "{t}");
+    // Nor does merge join the rows of the two scene contents.
+    let edited = dir.path().join("edited");
+    assert!(common::skg(&["sweep", p.to_str().unwrap(), "-o", edited.to_str().unwrap(), "-q"], Path::new(".")).status.success());
+    let merged = dir.path().join("merged");
+    let o = common::skg(&["merge", "-o", merged.to_str().unwrap(), out.to_str().unwrap(), edited.to_str().unwrap()], Path::new("."));
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("not shards of one sweep") && t.contains(&hash) && t.contains(&sha256_of(&scene)), "{t}");
+}
+
+#[test]
+fn results_of_another_schema_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let old = dir.path().join("results.csv");
+    // The layout before schema versions: Ipopt's status names, no provenance columns.
+    std::fs::write(
+        &old,
+        "id,index,method,rtol,nodes,operator,formulation,sigma,converged,status,iterations,wall_s,error_max\n\
+         0123456789abcdef,0,skg,,128,SBP242,reduced,1/110,true,Solve_Succeeded,6,0.01,1e-3\n",
+    )
+    .unwrap();
+    let o = common::skg(&["plot", "convergence", old.to_str().unwrap(), "-o", dir.path().join("c").to_str().unwrap()], Path::new("."));
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains(old.to_str().unwrap()) && t.contains("schema_version") && t.contains("schema 1"), "{t}");
+    let e = merge_error(dir.path(), &old);
+    assert!(e.contains("schema 1"), "{e}");
+}
+
+/// The error of merging one results file.
+fn merge_error(dir: &Path, input: &Path) -> String {
+    let o = common::skg(&["merge", "-o", dir.join("merged").to_str().unwrap(), input.to_str().unwrap()], Path::new("."));
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    common::text(&o)
 }
 
 #[test]

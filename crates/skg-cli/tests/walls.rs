@@ -3,6 +3,8 @@
 
 mod common;
 
+use common::G;
+
 use skg_core::scenario::Overrides;
 use skg_core::solve::Outcome;
 
@@ -66,8 +68,6 @@ fn tumbler_bounces_twice_and_energy_returns_after_each_bounce() {
     let fine_err = free_flight_energy_error(&fine, sigma);
     assert!(fine_err < coarse / 100.0, "N=512: relative energy error outside contact {fine_err:e} (N=256: {coarse:e})");
 }
-
-const G: f64 = 9.8;
 
 /// Slope coordinate s (down the slope is decreasing s) and normal coordinate n of the
 /// incline α = π/6.

@@ -9,7 +9,13 @@
 //! * [`trajectory`]: the coordinates over time with the reference overlaid, and the
 //!   energy over time.
 //! * [`stability`]: a map over two grid axes, each cell converged / failed / converged
-//!   with energy artifacts.
+//!   with energy artifacts / not run.
+//!
+//! Points are judged by their [`PointStatus`] (the `status` column of results.csv).
+//! Axis values are read as numbers; where a sweep wrote them as expressions (the
+//! `<axis>_expr` column), labels show the expression (`1/110`).
+
+#![warn(missing_docs)]
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -20,16 +26,33 @@ use plotters::prelude::*;
 
 use skg_core::check::Table;
 use skg_core::convergence::fit_order;
-use skg_sweep::Results;
+use skg_sweep::{PointStatus, Results, SweepError};
 
+/// Why a chart could not be drawn.
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
+    /// The data cannot make the chart asked for (missing column, no points, …).
     #[error("{0}")]
     Data(String),
+    /// A results file that cannot be read or has a bad cell.
+    #[error(transparent)]
+    Results(#[from] SweepError),
+    /// plotters failed while drawing.
     #[error("drawing {path}: {message}")]
-    Draw { path: PathBuf, message: String },
+    Draw {
+        /// The chart file.
+        path: PathBuf,
+        /// plotters' message.
+        message: String,
+    },
+    /// A chart or its directory could not be written.
     #[error("cannot write {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
 }
 
 static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
@@ -104,28 +127,33 @@ pub fn cell_value(s: &str) -> Option<f64> {
     s.parse::<f64>().ok().or_else(|| skg_core::scenario::eval_constant(s, &indexmap::IndexMap::new()).ok()).filter(|x| x.is_finite())
 }
 
-/// Rows of a results table that satisfy every `column=value` filter (equal as text or as
-/// numbers). A row that leaves the column blank is kept: the peer rows have no scene
-/// parameters, and they belong on every chart of the same scene.
+/// Whether two numbers are equal to a relative tolerance of 1e-12.
+fn same_number(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * a.abs().max(b.abs())
+}
+
+/// Whether a row's cell in `column` matches a `--where` value: equal as text, as written
+/// in the sweep file (the `<column>_expr` cell), or as numbers (the value may be a
+/// constant expression: `sigma=1/110` matches the cell 0.00909090909090909).
+fn cell_matches(res: &Results, row: &[String], column: usize, value: &str) -> bool {
+    let cell = &row[column];
+    cell == value
+        || res.written(row, column) == value
+        || matches!((cell_value(cell), cell_value(value)), (Some(a), Some(b)) if same_number(a, b))
+}
+
+/// Rows of a results table that satisfy every `column=value` filter ([`cell_matches`]).
+/// A row that leaves the column blank is kept: the peer rows have no scene parameters,
+/// and they belong on every chart of the same scene.
 fn filtered<'a>(res: &'a Results, filters: &[(String, String)]) -> Result<Vec<&'a Vec<String>>, PlotError> {
     let mut idx = Vec::new();
     for (k, v) in filters {
         let i = res
             .column_index(k)
             .ok_or_else(|| PlotError::Data(format!("--where {k}={v}: no column `{k}` (columns: {})", res.header.join(", "))))?;
-        idx.push((i, v));
+        idx.push((i, v.as_str()));
     }
-    Ok(res
-        .rows
-        .iter()
-        .filter(|r| {
-            idx.iter().all(|(i, v)| {
-                r[*i].is_empty()
-                    || r[*i] == **v
-                    || matches!((cell_value(&r[*i]), cell_value(v)), (Some(a), Some(b)) if (a - b).abs() <= 1e-12 * a.abs().max(b.abs()))
-            })
-        })
-        .collect())
+    Ok(res.rows.iter().filter(|r| idx.iter().all(|&(i, v)| r[i].is_empty() || cell_matches(res, r, i, v))).collect())
 }
 
 fn col(res: &Results, name: &str) -> Result<usize, PlotError> {
@@ -236,18 +264,11 @@ type Groups = BTreeMap<String, Vec<(f64, f64, f64)>>;
 type Series = (String, Vec<(f64, f64)>, RGBColor, bool);
 
 fn skg_groups(res: &Results, rows: &[&Vec<String>], x: &str, y: &str) -> Result<Groups, PlotError> {
-    let (im, ic, io, ifm, inodes, ix, iy) = (
-        col(res, "method")?,
-        col(res, "converged")?,
-        col(res, "operator")?,
-        col(res, "formulation")?,
-        col(res, "nodes")?,
-        col(res, x)?,
-        col(res, y)?,
-    );
+    let (im, io, ifm, inodes, ix, iy) =
+        (col(res, "method")?, col(res, "operator")?, col(res, "formulation")?, col(res, "nodes")?, col(res, x)?, col(res, y)?);
     let mut groups: Groups = BTreeMap::new();
     for r in rows {
-        if r[im] != "skg" || r[ic] != "true" {
+        if r[im] != "skg" || !res.status(r)?.is_converged() {
             continue;
         }
         if let (Some(xv), Some(yv), Some(n)) = (cell_value(&r[ix]), cell_value(&r[iy]), cell_value(&r[inodes])) {
@@ -428,12 +449,13 @@ fn draw_trajectory<DB: DrawingBackend>(
 /// The kept trajectories of a sweep (`sweep.keep_trajectories = true`), each labelled
 /// with the values of the columns that vary between points (ODE peer points excluded).
 pub fn sweep_solutions(dir: &Path) -> Result<Vec<(String, Table)>, PlotError> {
-    let res = Results::read(dir).map_err(|e| PlotError::Data(e.to_string()))?;
+    let res = Results::read(dir)?;
     let (id, im) = (col(&res, "id")?, col(&res, "method")?);
     let first = col(&res, "nodes")?;
     let last = col(&res, "converged")?;
     let rows: Vec<&Vec<String>> = res.rows.iter().filter(|r| r[im] == "skg").collect();
-    let varying: Vec<usize> = (first..last).filter(|&c| rows.iter().any(|r| r[c] != rows[0][c])).collect();
+    // The settings and axes that vary (an axis's `_expr` column varies with it).
+    let varying: Vec<usize> = (first..last).filter(|&c| !res.is_expr_column(c) && rows.iter().any(|r| r[c] != rows[0][c])).collect();
     let mut out = Vec::new();
     for r in rows {
         let file = dir.join("points").join(&r[id]).join("trajectory.csv");
@@ -441,7 +463,7 @@ pub fn sweep_solutions(dir: &Path) -> Result<Vec<(String, Table)>, PlotError> {
             continue;
         }
         let t = Table::read(&file).map_err(|e| PlotError::Data(e.to_string()))?;
-        let label = varying.iter().map(|&c| format!("{}={}", res.header[c], r[c])).collect::<Vec<_>>().join(", ");
+        let label = varying.iter().map(|&c| format!("{}={}", res.header[c], res.written(r, c))).collect::<Vec<_>>().join(", ");
         out.push((if label.is_empty() { r[id].clone() } else { label }, t));
     }
     if out.is_empty() {
@@ -462,12 +484,26 @@ pub fn trajectory(solutions: &[(String, Table)], reference: Option<&Table>, titl
     render!(stem, (SIZE.0 + 300, SIZE.1), draw_trajectory(title, solutions, reference))
 }
 
-/// State of one stability-map cell.
+/// State of one stability-map cell (a cell without a point is drawn as "not run").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Cell {
+    /// Converged, energy artifact within the sweep's tolerance.
     Converged,
+    /// Converged, energy artifact above the sweep's tolerance.
     Artifacts,
+    /// Any other [`PointStatus`]: not converged, error, crashed, timed out.
     Failed,
+}
+
+impl Cell {
+    /// The cell of a point with this status and `artifacts` flag.
+    pub fn of(status: PointStatus, artifacts: bool) -> Cell {
+        match (status.is_converged(), artifacts) {
+            (false, _) => Cell::Failed,
+            (true, true) => Cell::Artifacts,
+            (true, false) => Cell::Converged,
+        }
+    }
 }
 
 fn draw_stability<DB: DrawingBackend>(
@@ -555,13 +591,16 @@ fn draw_stability<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Sort axis values numerically where they are numbers (or constant expressions).
-fn sorted_values(mut v: Vec<String>) -> Vec<String> {
+/// The distinct values of a column among `rows` as (cell, label): the label is the
+/// value as the sweep file wrote it (`1/110` for the cell 0.00909090909090909). Sorted
+/// numerically where the cells are numbers.
+fn axis_values(res: &Results, rows: &[&Vec<String>], column: usize) -> Vec<(String, String)> {
+    let mut v: Vec<(String, String)> = rows.iter().map(|r| (r[column].clone(), res.written(r, column).to_string())).collect();
     v.sort();
-    v.dedup();
-    v.sort_by(|a, b| match (cell_value(a), cell_value(b)) {
+    v.dedup_by(|a, b| a.0 == b.0);
+    v.sort_by(|a, b| match (cell_value(&a.0), cell_value(&b.0)) {
         (Some(x), Some(y)) => x.total_cmp(&y),
-        _ => a.cmp(b),
+        _ => a.0.cmp(&b.0),
     });
     v
 }
@@ -577,38 +616,27 @@ pub fn stability(
     stem: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let rows = filtered(res, filters)?;
-    let (ix, iy, ic, ia, iv, im) = (
-        col(res, xaxis)?,
-        col(res, yaxis)?,
-        col(res, "converged")?,
-        col(res, "artifacts")?,
-        col(res, "energy_artifact")?,
-        col(res, "method")?,
-    );
+    let (ix, iy, ia, iv, im) =
+        (col(res, xaxis)?, col(res, yaxis)?, col(res, "artifacts")?, col(res, "energy_artifact")?, col(res, "method")?);
     let rows: Vec<_> = rows.into_iter().filter(|r| r[im] == "skg").collect();
     if rows.is_empty() {
         return Err(PlotError::Data("no solver points to map".into()));
     }
-    let xs = sorted_values(rows.iter().map(|r| r[ix].clone()).collect());
-    let ys = sorted_values(rows.iter().map(|r| r[iy].clone()).collect());
+    let xs = axis_values(res, &rows, ix);
+    let ys = axis_values(res, &rows, iy);
     let mut cells = BTreeMap::new();
     for r in &rows {
-        let i = xs.iter().position(|x| *x == r[ix]).expect("value listed");
-        let j = ys.iter().position(|y| *y == r[iy]).expect("value listed");
-        let state = if r[ic] != "true" {
-            Cell::Failed
-        } else if r[ia] == "true" {
-            Cell::Artifacts
-        } else {
-            Cell::Converged
-        };
+        let i = xs.iter().position(|x| x.0 == r[ix]).expect("value listed");
+        let j = ys.iter().position(|y| y.0 == r[iy]).expect("value listed");
+        let state = Cell::of(res.status(r)?, r[ia] == "true");
         let prev = cells.insert((i, j), (state, cell_value(&r[iv]).filter(|_| state != Cell::Failed)));
         if prev.is_some() {
             return Err(PlotError::Data(format!(
                 "several points share {xaxis}={} and {yaxis}={}: restrict the others with --where",
-                r[ix], r[iy]
+                xs[i].1, ys[j].1
             )));
         }
     }
-    render!(stem, SIZE, draw_stability(title, xaxis, yaxis, &xs, &ys, &cells))
+    let labels = |v: &[(String, String)]| v.iter().map(|(_, label)| label.clone()).collect::<Vec<_>>();
+    render!(stem, SIZE, draw_stability(title, xaxis, yaxis, &labels(&xs), &labels(&ys), &cells))
 }

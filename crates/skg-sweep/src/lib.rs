@@ -16,16 +16,54 @@
 //! * **Results**: the driver alone appends to `results.csv`, one whole line per
 //!   finished point, flushed and fsync'd. On a rerun a trailing partial line (from a
 //!   kill in the middle of a write) is cut off and points whose id is present are skipped:
-//!   no row is lost or duplicated.
+//!   no row is lost or duplicated. A rerun refuses a `results.csv` whose rows come from a
+//!   base scene with other content (their `scene_hash`).
 //! * **Shards**: `--shard k/n` keeps the points whose index is `k−1 mod n`; [`merge`]
-//!   joins the shards' `results.csv` files.
+//!   joins the shards' `results.csv` files (of one base scene and one schema).
+//!
+//! **`results.csv`** is a plain CSV (one header line, no comments: `pd.read_csv` reads
+//! it). Its columns ([`results_columns`]), in order:
+//!
+//! * `id`, `index`, `method` (`skg` or `ode`), `rtol` (the peer's tolerance), `nodes`,
+//!   `operator`, `formulation`: the point and its resolved settings;
+//! * one column per grid axis. A scene parameter's column holds the **number** the
+//!   resolved scene has (`sigma = "1/110"` gives `0.00909090909090909`, the shortest text
+//!   that reads back to the same double, as in every numeric column); a setting's column
+//!   (`max_iter`, `hessian`) holds the value as written. A parameter axis with at least
+//!   one value written as an expression also gets the column **`<axis>_expr`**, right
+//!   after it, with every value as written in the sweep file (`1/110`, and `0.005` for a
+//!   plain number); an axis whose values are all plain numbers gets none;
+//! * `converged` (`true`/`false`), `status` (the stable name of the [`PointStatus`]:
+//!   `converged`, `not_converged`, `error`, `crashed`, `timeout`), `solver_status`
+//!   (Ipopt's status name, `ODE_Succeeded` for a peer point, empty when the solver did
+//!   not finish), then `iterations`, `wall_s`, `error_max`, `error_rms`, `error_column`,
+//!   `energy_drift`, `energy_artifact`, `artifacts`, `max_residual`, `message`;
+//! * the provenance ([`Provenance`]): `skg_solve_version`, `schema_version` and
+//!   `scene_hash` (`sha256:…` of the base scene file's content, as the worker read it).
+//!
+//! [`Results::read`] refuses a file of another schema version (or one without the
+//! `schema_version` column, written before it existed) with a message naming the file.
+//!
+//! **`sweep.json`**, beside `results.csv` ([`SweepInfo`]): the sweep's name, the sweep
+//! file, the base scene, `skg_solve_version`, `schema_version`, `scene_hash`, the number
+//! of points of the whole sweep, the shard and the ids of this run's points.
 
+#![warn(missing_docs)]
 // Errors carry file:line:column text, as in the core modules.
 #![allow(clippy::result_large_err)]
 
+mod results;
+mod status;
+
+pub use results::{
+    csv_line, header_names, results_columns, results_row, Column, Provenance, Results, EXPR_SUFFIX, LEADING_COLUMNS, PROVENANCE_COLUMNS,
+    RESULT_COLUMNS,
+};
+pub use status::{PointStatus, UnknownStatus};
+
 use std::collections::{BTreeMap, HashSet, VecDeque};
 use std::fmt;
-use std::io::{Read, Seek, SeekFrom, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -42,14 +80,39 @@ use skg_core::scenario::{Formulation, HessianMode, Location, Origin, Overrides, 
 /// Errors of a sweep file, a results file or the sweep driver.
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
+    /// A file could not be read or written.
     #[error("cannot read {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// Bad input at a place in a file (sweep file, or a row of a results file).
     #[error("{location}: {message}")]
-    Invalid { location: Location, message: String },
+    Invalid {
+        /// File, line and column where known.
+        location: Location,
+        /// What is wrong.
+        message: String,
+    },
+    /// A results file that cannot be used as asked (layout, schema, other sweep).
     #[error("{path}: {message}")]
-    Results { path: PathBuf, message: String },
+    Results {
+        /// The results file (or output directory).
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A worker process could not be started or waited for.
     #[error("cannot start a worker process ({exe}): {source}")]
-    Spawn { exe: PathBuf, source: std::io::Error },
+    Spawn {
+        /// The worker executable.
+        exe: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// Writing `sweep.json`, a job file or `results.csv` failed.
     #[error(transparent)]
     Output(#[from] output::OutputError),
 }
@@ -63,8 +126,11 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum AxisValue {
+    /// A whole number (`nodes = 64`).
     Int(i64),
+    /// A number (`sigma = 0.005`).
     Num(f64),
+    /// A string: an expression (`"1/110"`), an operator or formulation name.
     Str(String),
 }
 
@@ -82,7 +148,9 @@ impl fmt::Display for AxisValue {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(untagged)]
 pub enum AxisValues {
+    /// A single value (`sigma = "1/110"`).
     One(AxisValue),
+    /// A list of values (`nodes = [64, 128]`).
     Many(Vec<AxisValue>),
 }
 
@@ -133,7 +201,7 @@ pub struct SweepMeta {
     #[serde(default)]
     pub keep_trajectories: bool,
     /// Wall-time limit of one point in seconds: a worker still running then is killed and
-    /// the point recorded with status `timeout` (default: no limit).
+    /// the point recorded as [`PointStatus::TimedOut`] (default: no limit).
     #[serde(default)]
     pub timeout: Option<f64>,
 }
@@ -153,6 +221,7 @@ pub struct PeerSpec {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepFile {
+    /// `[sweep]`.
     pub sweep: SweepMeta,
     /// Cartesian products (one per `[[grid]]` table).
     #[serde(default)]
@@ -160,8 +229,10 @@ pub struct SweepFile {
     /// Explicit points (one per `[[points]]` table).
     #[serde(default)]
     pub points: Vec<Spanned<IndexMap<String, AxisValue>>>,
+    /// `[peer]`, the time-stepping ladder.
     #[serde(default)]
     pub peer: Option<Spanned<PeerSpec>>,
+    /// Path and text of the sweep file, for error positions.
     #[serde(skip)]
     pub origin: Origin,
 }
@@ -176,7 +247,20 @@ pub enum Method {
     Skg,
     /// The time-stepping reference integrator (DOP853, [`skg_core::reference::regularized`])
     /// at a relative tolerance (absolute tolerance the same).
-    Ode { rtol: f64 },
+    Ode {
+        /// Relative (and absolute) tolerance.
+        rtol: f64,
+    },
+}
+
+impl Method {
+    /// The `method` column: `skg` or `ode`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Skg => "skg",
+            Method::Ode { .. } => "ode",
+        }
+    }
 }
 
 /// One point of a sweep.
@@ -186,6 +270,11 @@ pub struct Point {
     pub index: usize,
     /// Axis name → value as written (canonical text).
     pub values: Vec<(String, String)>,
+    /// Axis name → value in the resolved scene, for the scene-parameter axes (`1/110` →
+    /// 0.00909…), filled by [`SweepFile::expand`]. Not part of the id.
+    #[serde(default)]
+    pub evaluated: Vec<(String, f64)>,
+    /// How the point is computed.
     pub method: Method,
 }
 
@@ -193,8 +282,8 @@ impl Point {
     /// Canonical text: `method` first, then the axes sorted by name.
     pub fn canonical(&self) -> String {
         let mut parts = vec![match &self.method {
-            Method::Skg => "method=skg".to_string(),
-            Method::Ode { rtol } => format!("method=ode;rtol={rtol:?}"),
+            Method::Skg => format!("method={}", self.method.name()),
+            Method::Ode { rtol } => format!("method={};rtol={rtol:?}", self.method.name()),
         }];
         let sorted: BTreeMap<&str, &str> = self.values.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
         parts.extend(sorted.iter().map(|(k, v)| format!("{k}={v}")));
@@ -211,8 +300,14 @@ impl Point {
         format!("{h:016x}")
     }
 
+    /// The value of an axis as written, if the point sets it.
     pub fn value(&self, axis: &str) -> Option<&str> {
         self.values.iter().find(|(k, _)| k == axis).map(|(_, v)| v.as_str())
+    }
+
+    /// The value of a scene-parameter axis in the resolved scene (see [`Point::evaluated`]).
+    pub fn evaluated(&self, axis: &str) -> Option<f64> {
+        self.evaluated.iter().find(|(k, _)| k == axis).map(|&(_, v)| v)
     }
 
     /// The scene overrides this point stands for.
@@ -241,7 +336,9 @@ impl Point {
 /// A shard `k/n` (1-based k).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Shard {
+    /// This shard's number, 1 ≤ k ≤ n.
     pub k: usize,
+    /// The number of shards.
     pub n: usize,
 }
 
@@ -268,16 +365,47 @@ impl Shard {
 /// The expanded sweep.
 #[derive(Debug, Clone)]
 pub struct Expanded {
+    /// The points, in order (grids, explicit points, peer ladder).
     pub points: Vec<Point>,
     /// Rough relative cost of each point (see [`estimated_cost`]), by index.
     pub costs: Vec<f64>,
     /// Grid axes in order of first appearance.
     pub axes: Vec<String>,
+    /// The scene-parameter axes with some value written as an expression (they get an
+    /// `<axis>_expr` column), in the order of `axes`.
+    pub expression_axes: Vec<String>,
     /// Identical points given twice (their later copies were dropped).
     pub duplicates: usize,
+    /// SHA-256 of the base scene file's content (`sha256:…`).
+    pub scene_hash: String,
+}
+
+impl Expanded {
+    /// The columns of this sweep's `results.csv`.
+    pub fn columns(&self) -> Vec<Column> {
+        results_columns(&self.axes, &self.expression_axes)
+    }
+}
+
+/// Whether an axis value as written is a plain number (not an expression).
+fn is_plain_number(written: &str) -> bool {
+    written.trim().parse::<f64>().is_ok()
+}
+
+/// The scene-parameter axes (in `axes` order) with some value that is not a plain number.
+fn expression_axes(axes: &[String], points: &[Point]) -> Vec<String> {
+    let written_as_expression =
+        |axis: &str| points.iter().any(|p| p.evaluated(axis).is_some() && p.value(axis).is_some_and(|v| !is_plain_number(v)));
+    axes.iter().filter(|a| written_as_expression(a)).cloned().collect()
+}
+
+/// Values of the scene-parameter axes of `point` in its resolved scene.
+fn evaluated_parameters(point: &Point, scene: &Scene) -> Vec<(String, f64)> {
+    point.values.iter().filter_map(|(axis, _)| scene.parameters.get(axis).map(|&v| (axis.clone(), v))).collect()
 }
 
 impl SweepFile {
+    /// Read and deserialize a sweep file.
     pub fn load(path: &Path) -> Result<SweepFile, SweepError> {
         let text = std::fs::read_to_string(path).map_err(io_err(path))?;
         Self::parse(&text, &path.display().to_string())
@@ -330,6 +458,7 @@ impl SweepFile {
         self.dir().join(self.sweep.scene.get_ref())
     }
 
+    /// The sweep's name: `[sweep] name`, else the sweep file's name without `.toml`.
     pub fn name(&self) -> String {
         self.sweep
             .name
@@ -337,6 +466,7 @@ impl SweepFile {
             .unwrap_or_else(|| Path::new(&self.origin.path).file_stem().map_or("sweep".into(), |s| s.to_string_lossy().into_owned()))
     }
 
+    /// Where errors are measured against, if anywhere (`[sweep] reference`).
     pub fn reference(&self) -> Option<ReferenceSpec> {
         self.sweep.reference.as_ref().map(|r| {
             if r.get_ref().eq_ignore_ascii_case("integrate") {
@@ -347,10 +477,12 @@ impl SweepFile {
         })
     }
 
+    /// End nodes left out of errors and the energy artifact (default 2).
     pub fn skip_last(&self) -> usize {
         self.sweep.skip_last.unwrap_or(2)
     }
 
+    /// Tolerance on the energy artifact (default [`skg_core::tune::DEFAULT_ARTIFACT_TOL`]).
     pub fn artifact_tol(&self) -> f64 {
         self.sweep.artifact_tol.unwrap_or(skg_core::tune::DEFAULT_ARTIFACT_TOL)
     }
@@ -471,7 +603,7 @@ impl SweepFile {
         let mut seen = HashSet::new();
         let mut duplicates = 0;
         for (values, method, loc) in raw {
-            let p = Point { index: points.len(), values, method };
+            let mut p = Point { index: points.len(), values, evaluated: Vec::new(), method };
             // Validate by resolving the scene with the point's overrides (cheap: no model).
             let ov = p.overrides().map_err(|m| SweepError::Invalid { location: loc.clone(), message: m })?;
             let scene = base
@@ -479,13 +611,32 @@ impl SweepFile {
                 .resolve(&ov)
                 .map_err(|e| SweepError::Invalid { location: loc.clone(), message: format!("point {}: {e}", p.canonical()) })?;
             if seen.insert(p.id()) {
+                p.evaluated = evaluated_parameters(&p, &scene);
                 costs.push(estimated_cost(&scene, &p.method));
                 points.push(p);
             } else {
                 duplicates += 1;
             }
         }
-        Ok(Expanded { points, costs, axes, duplicates })
+        let expression_axes = expression_axes(&axes, &points);
+        let expanded = Expanded { points, costs, axes, expression_axes, duplicates, scene_hash: base.origin.content_hash() };
+        self.check_column_names(&expanded.columns())?;
+        Ok(expanded)
+    }
+
+    /// Refuse axes whose column would share its name with another column of
+    /// results.csv (e.g. a parameter `sigma_expr` beside the expressions of `sigma`).
+    fn check_column_names(&self, columns: &[Column]) -> Result<(), SweepError> {
+        let mut seen = HashSet::new();
+        for name in header_names(columns) {
+            if !seen.insert(name.clone()) {
+                return Err(SweepError::Invalid {
+                    location: self.origin.whole(),
+                    message: format!("two columns of results.csv would be called `{name}`: rename that scene parameter"),
+                });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -514,49 +665,95 @@ pub fn estimated_cost(scene: &Scene, method: &Method) -> f64 {
 /// What a worker process is asked to do.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Job {
+    /// The base scene file (absolute path).
     pub scene: PathBuf,
+    /// The point to compute.
     pub point: Point,
+    /// Where errors are measured against, if anywhere.
     pub reference: Option<ReferenceSpec>,
+    /// Columns compared with the reference (None: the scene's coordinates).
     pub compare: Option<Vec<String>>,
+    /// End nodes left out of errors and the energy artifact.
     pub skip_last: usize,
     /// Where to keep trajectory.csv and summary.json (None: not kept).
     pub keep_dir: Option<PathBuf>,
 }
 
-/// What a worker reports about one point.
-#[derive(Debug, Clone, Serialize, Deserialize, Default)]
+/// What a worker reports about one point (the columns of its row in results.csv).
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Record {
-    pub converged: bool,
-    /// Ipopt's status name (`Solve_Succeeded`, …), `ODE_Succeeded`, `error` or `crashed`.
-    pub status: String,
+    /// How the point ended.
+    pub status: PointStatus,
+    /// The solver's own status name: Ipopt's (`Solve_Succeeded`,
+    /// `Maximum_Iterations_Exceeded`, …) or `ODE_Succeeded` for the time-stepping peer;
+    /// empty when the solver did not finish.
+    pub solver_status: String,
+    /// Ipopt iterations.
     pub iterations: Option<usize>,
     /// Wall time of the computation inside the worker (scene setup, guess, solve).
     pub wall_s: Option<f64>,
+    /// Node count of the resolved scene.
     pub nodes: Option<usize>,
+    /// SBP operator of the resolved scene (SKG points).
     pub operator: Option<String>,
+    /// Formulation of the resolved scene (SKG points).
     pub formulation: Option<String>,
+    /// Largest max-abs error against the reference over the compared columns.
     pub error_max: Option<f64>,
+    /// RMS error of that column.
     pub error_rms: Option<f64>,
+    /// The column with the largest error.
     pub error_column: Option<String>,
+    /// max |E_k − E_1| over all but the last two nodes.
     pub energy_drift: Option<f64>,
+    /// The relative energy artifact ([`skg_core::tune::energy_artifact`]).
     pub energy_artifact: Option<f64>,
+    /// Unscaled max residual of the square system.
     pub max_residual: Option<f64>,
+    /// SHA-256 of the base scene file as the worker read it (None: not read).
+    pub scene_hash: Option<String>,
+    /// Warnings and errors.
     pub message: String,
+}
+
+impl Record {
+    /// A record with this status and nothing measured yet.
+    pub fn new(status: PointStatus, message: String) -> Record {
+        Record {
+            status,
+            solver_status: String::new(),
+            iterations: None,
+            wall_s: None,
+            nodes: None,
+            operator: None,
+            formulation: None,
+            error_max: None,
+            error_rms: None,
+            error_column: None,
+            energy_drift: None,
+            energy_artifact: None,
+            max_residual: None,
+            scene_hash: None,
+            message,
+        }
+    }
 }
 
 /// Run one point in this process (the body of `skg-solve sweep-worker`).
 pub fn run_job(job: &Job) -> Record {
     match run_job_inner(job) {
         Ok(r) => r,
-        Err(message) => Record { status: "error".into(), message, ..Record::default() },
+        Err(message) => Record::new(PointStatus::Error, message),
     }
 }
 
 fn run_job_inner(job: &Job) -> Result<Record, String> {
     let ov = job.point.overrides()?;
     let start = Instant::now();
-    let scene = SceneFile::load(&job.scene).and_then(|f| f.resolve(&ov)).map_err(|e| e.to_string())?;
-    let mut rec = Record { nodes: Some(scene.nodes), ..Record::default() };
+    let file = SceneFile::load(&job.scene).map_err(|e| e.to_string())?;
+    let scene_hash = file.origin.content_hash();
+    let scene = file.resolve(&ov).map_err(|e| e.to_string())?;
+    let mut rec = Record { nodes: Some(scene.nodes), scene_hash: Some(scene_hash), ..Record::new(PointStatus::Error, String::new()) };
     let compare_cols = job.compare.clone().unwrap_or_else(|| scene.coordinates.clone());
     let (trajectory, ode_csv) = match job.point.method {
         Method::Skg => {
@@ -564,8 +761,8 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             rec.formulation = Some(scene.formulation.to_string());
             let mut outcome = skg_core::solve::solve_scene(&scene).map_err(|e| e.to_string())?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
-            rec.converged = outcome.converged;
-            rec.status = outcome.status.clone();
+            rec.status = if outcome.converged { PointStatus::Converged } else { PointStatus::NotConverged };
+            rec.solver_status = outcome.status.clone();
             rec.iterations = Some(outcome.iterations);
             let d = &outcome.diagnostics;
             rec.energy_drift = Some(d.energy_drift);
@@ -581,8 +778,8 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             let opts = skg_core::reference::ReferenceOptions { rtol, atol: rtol };
             let r = skg_core::reference::regularized(&scene, &times, &opts).map_err(|e| e.to_string())?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
-            rec.converged = true;
-            rec.status = "ODE_Succeeded".into();
+            rec.status = PointStatus::Converged;
+            rec.solver_status = "ODE_Succeeded".into();
             (r.trajectory, Some(format!("time stepping, rtol {rtol:e}")))
         }
     };
@@ -632,167 +829,16 @@ fn reference_errors(
 }
 
 // ---------------------------------------------------------------------------------------
-// Results file.
-
-/// Result columns after the point's identity and axes.
-pub const RESULT_COLUMNS: &[&str] = &[
-    "converged",
-    "status",
-    "iterations",
-    "wall_s",
-    "error_max",
-    "error_rms",
-    "error_column",
-    "energy_drift",
-    "energy_artifact",
-    "artifacts",
-    "max_residual",
-    "message",
-];
-
-/// The header of `results.csv` for a sweep with these grid axes.
-pub fn results_header(axes: &[String]) -> Vec<String> {
-    let mut h: Vec<String> = ["id", "index", "method", "rtol", "nodes", "operator", "formulation"].iter().map(|s| s.to_string()).collect();
-    for a in axes {
-        if !h.contains(a) {
-            h.push(a.clone());
-        }
-    }
-    h.extend(RESULT_COLUMNS.iter().map(|s| s.to_string()));
-    h
-}
-
-fn fmt_opt(x: Option<f64>) -> String {
-    x.map_or(String::new(), |v| format!("{v:?}"))
-}
-
-/// One row of `results.csv` (one line: newlines in messages are replaced).
-pub fn results_row(header: &[String], point: &Point, rec: &Record, artifact_tol: f64) -> Vec<String> {
-    header
-        .iter()
-        .map(|col| match col.as_str() {
-            "id" => point.id(),
-            "index" => point.index.to_string(),
-            "method" => match point.method {
-                Method::Skg => "skg".into(),
-                Method::Ode { .. } => "ode".into(),
-            },
-            "rtol" => match point.method {
-                Method::Ode { rtol } => format!("{rtol:?}"),
-                Method::Skg => String::new(),
-            },
-            "nodes" => rec.nodes.map_or_else(|| point.value("nodes").unwrap_or("").to_string(), |n| n.to_string()),
-            "operator" => rec.operator.clone().unwrap_or_else(|| point.value("operator").unwrap_or("").to_string()),
-            "formulation" => rec.formulation.clone().unwrap_or_else(|| point.value("formulation").unwrap_or("").to_string()),
-            "converged" => rec.converged.to_string(),
-            "status" => rec.status.clone(),
-            "iterations" => rec.iterations.map_or(String::new(), |i| i.to_string()),
-            "wall_s" => fmt_opt(rec.wall_s),
-            "error_max" => fmt_opt(rec.error_max),
-            "error_rms" => fmt_opt(rec.error_rms),
-            "error_column" => rec.error_column.clone().unwrap_or_default(),
-            "energy_drift" => fmt_opt(rec.energy_drift),
-            "energy_artifact" => fmt_opt(rec.energy_artifact),
-            "artifacts" => match rec.energy_artifact {
-                Some(a) if rec.converged => (a > artifact_tol).to_string(),
-                _ => String::new(),
-            },
-            "max_residual" => fmt_opt(rec.max_residual),
-            "message" => rec.message.replace(['\n', '\r'], " | "),
-            axis => point.value(axis).unwrap_or("").to_string(),
-        })
-        .collect()
-}
-
-/// Encode one CSV record as a single line ending in `\n`.
-pub fn csv_line(fields: &[String]) -> Vec<u8> {
-    let mut w = csv::WriterBuilder::new().terminator(csv::Terminator::Any(b'\n')).from_writer(Vec::new());
-    // Writing to a Vec cannot fail.
-    let _ = w.write_record(fields);
-    w.into_inner().unwrap_or_default()
-}
-
-/// A results file read back: header and rows of text fields.
-#[derive(Debug, Clone, Default)]
-pub struct Results {
-    pub header: Vec<String>,
-    pub rows: Vec<Vec<String>>,
-}
-
-impl Results {
-    pub fn column_index(&self, name: &str) -> Option<usize> {
-        self.header.iter().position(|h| h == name)
-    }
-
-    /// Read a results.csv (or a directory holding one).
-    pub fn read(path: &Path) -> Result<Results, SweepError> {
-        let path = if path.is_dir() { path.join("results.csv") } else { path.to_path_buf() };
-        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
-        Self::parse(&text, &path)
-    }
-
-    fn parse(text: &str, path: &Path) -> Result<Results, SweepError> {
-        let mut r = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text.as_bytes());
-        let bad = |m: String| SweepError::Results { path: path.to_path_buf(), message: m };
-        let header: Vec<String> = r.headers().map_err(|e| bad(e.to_string()))?.iter().map(str::to_string).collect();
-        let mut rows = Vec::new();
-        for rec in r.records() {
-            let rec = rec.map_err(|e| bad(e.to_string()))?;
-            rows.push(rec.iter().map(str::to_string).collect());
-        }
-        Ok(Results { header, rows })
-    }
-
-    /// Ids present (column `id`).
-    pub fn ids(&self) -> HashSet<String> {
-        match self.column_index("id") {
-            Some(i) => self.rows.iter().map(|r| r[i].clone()).collect(),
-            None => HashSet::new(),
-        }
-    }
-}
-
-/// Open `results.csv` for appending, recovering from an interrupted run: a trailing
-/// partial line is cut off; the header must match. Returns the file and the ids already
-/// present.
-fn open_results(path: &Path, header: &[String]) -> Result<(std::fs::File, HashSet<String>), SweepError> {
-    let mut f = std::fs::OpenOptions::new().read(true).append(true).create(true).open(path).map_err(io_err(path))?;
-    let mut text = Vec::new();
-    f.read_to_end(&mut text).map_err(io_err(path))?;
-    let complete = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-    if complete < text.len() {
-        f.set_len(complete as u64).map_err(io_err(path))?;
-        f.seek(SeekFrom::End(0)).map_err(io_err(path))?;
-        text.truncate(complete);
-    }
-    if text.is_empty() {
-        f.write_all(&csv_line(header)).map_err(io_err(path))?;
-        f.sync_data().map_err(io_err(path))?;
-        return Ok((f, HashSet::new()));
-    }
-    let text = String::from_utf8_lossy(&text);
-    let existing = Results::parse(&text, path)?;
-    if existing.header != header {
-        return Err(SweepError::Results {
-            path: path.to_path_buf(),
-            message: format!(
-                "was written by a different sweep (columns {}; this sweep writes {}): use another output directory",
-                existing.header.join(","),
-                header.join(",")
-            ),
-        });
-    }
-    Ok((f, existing.ids()))
-}
-
-// ---------------------------------------------------------------------------------------
 // Driver.
 
 /// Options of [`run_sweep`].
 #[derive(Debug, Clone)]
 pub struct SweepOptions {
+    /// Output directory (results.csv, sweep.json, points/).
     pub out_dir: PathBuf,
+    /// Worker processes at once.
     pub jobs: usize,
+    /// Run only this shard's points.
     pub shard: Option<Shard>,
     /// The executable that runs `sweep-worker JOB.json` (the skg-solve binary).
     pub worker_exe: PathBuf,
@@ -803,15 +849,21 @@ pub struct SweepOptions {
 /// Summary of a sweep run.
 #[derive(Debug, Clone, Default)]
 pub struct SweepReport {
-    /// Points of the whole sweep and of this shard.
+    /// Points of the whole sweep.
     pub total: usize,
+    /// Points of this shard (all points without a shard).
     pub in_shard: usize,
     /// Already in results.csv when the run started.
     pub skipped: usize,
+    /// Points computed by this run.
     pub ran: usize,
+    /// Points of this run that did not converge (any status but converged).
     pub failed: usize,
+    /// Identical points given twice in the sweep file (run once).
     pub duplicates: usize,
+    /// The results file.
     pub results: PathBuf,
+    /// Wall time of the run in seconds.
     pub wall_s: f64,
 }
 
@@ -824,14 +876,24 @@ struct Running {
     err_path: PathBuf,
 }
 
-/// Provenance written beside results.csv (read by [`merge`] to find missing points).
+/// `sweep.json`, written beside results.csv: what was swept, from which scene content,
+/// by which skg-solve (read by [`merge`] to find missing points).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SweepInfo {
+    /// The sweep's name.
     pub name: String,
+    /// The sweep file as given.
     pub sweep_file: String,
+    /// The base scene file.
     pub scene: String,
+    /// skg-solve version, schema version and the base scene's content hash.
+    #[serde(flatten)]
+    pub provenance: Provenance,
+    /// Points of the whole sweep.
     pub total_points: usize,
+    /// `k/n` when run as a shard.
     pub shard: Option<String>,
+    /// Ids of this run's points (the shard's, or all).
     pub ids: Vec<String>,
 }
 
@@ -839,7 +901,8 @@ pub struct SweepInfo {
 pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, SweepError> {
     let started = Instant::now();
     let expanded = file.expand()?;
-    let header = results_header(&expanded.axes);
+    let columns = expanded.columns();
+    let provenance = Provenance::current(expanded.scene_hash.clone());
     let dir = &opts.out_dir;
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
     // Worker files left by an interrupted run are stale: start from an empty .work.
@@ -847,13 +910,14 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
     let _ = std::fs::remove_dir_all(&work);
     std::fs::create_dir_all(&work).map_err(io_err(&work))?;
     let results_path = dir.join("results.csv");
-    let (mut results, done) = open_results(&results_path, &header)?;
+    let (mut results, done) = results::open_results(&results_path, &header_names(&columns), &provenance.scene_hash)?;
 
     let mine: Vec<Point> = expanded.points.iter().filter(|p| opts.shard.map_or(true, |s| s.contains(p.index))).cloned().collect();
     let info = SweepInfo {
         name: file.name(),
         sweep_file: file.origin.path.clone(),
         scene: file.scene_path().display().to_string(),
+        provenance: provenance.clone(),
         total_points: expanded.points.len(),
         shard: opts.shard.map(|s| format!("{}/{}", s.k, s.n)),
         ids: mine.iter().map(Point::id).collect(),
@@ -872,15 +936,7 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
         ..SweepReport::default()
     };
 
-    let bar = if opts.progress { indicatif::ProgressBar::new(mine.len() as u64) } else { indicatif::ProgressBar::hidden() };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} points, {msg}, {elapsed} elapsed, ETA {eta}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar.set_position(report.skipped as u64);
-    bar.reset_eta();
-    bar.set_message("0 failed");
-
+    let bar = progress_bar(opts.progress, mine.len(), report.skipped);
     let jobs = opts.jobs.max(1);
     let mut running: Vec<Running> = Vec::new();
     let artifact_tol = file.artifact_tol();
@@ -893,63 +949,35 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
             let id = point.id();
             let job = Job {
                 scene: scene_path.clone(),
-                point: point.clone(),
+                point,
                 reference: reference.clone(),
                 compare: file.sweep.compare.clone(),
                 skip_last: file.skip_last(),
                 keep_dir: file.sweep.keep_trajectories.then(|| dir.join("points").join(&id)),
             };
-            let job_path = work.join(format!("{id}.job.json"));
-            let result_path = work.join(format!("{id}.result.json"));
-            let err_path = work.join(format!("{id}.stderr"));
-            let _ = std::fs::remove_file(&result_path);
-            output::write_json(&job_path, &job)?;
-            let child = spawn_worker(&opts.worker_exe, &job_path, &result_path, &err_path)?;
-            running.push(Running { child, started: Instant::now(), point, job_path, result_path, err_path });
+            running.push(start_worker(&opts.worker_exe, &work, job)?);
         }
         std::thread::sleep(Duration::from_millis(5));
         let mut k = 0;
         while k < running.len() {
-            let status = running[k].child.try_wait().map_err(|e| SweepError::Spawn { exe: opts.worker_exe.clone(), source: e })?;
-            let timed_out = status.is_none() && timeout.is_some_and(|t| running[k].started.elapsed().as_secs_f64() > t);
-            if status.is_none() && !timed_out {
-                k += 1;
-                continue;
-            }
-            let mut r = running.swap_remove(k);
-            let rec = if timed_out {
-                let _ = r.child.kill();
-                let _ = r.child.wait();
-                Record {
-                    status: "timeout".into(),
-                    wall_s: Some(r.started.elapsed().as_secs_f64()),
-                    message: format!("killed after the sweep's timeout of {} s", timeout.unwrap_or_default()),
-                    ..Record::default()
-                }
-            } else {
-                let status = status.expect("finished");
-                match std::fs::read_to_string(&r.result_path).ok().and_then(|t| serde_json::from_str::<Record>(&t).ok()) {
-                    Some(rec) => rec,
-                    None => {
-                        let stderr = std::fs::read_to_string(&r.err_path).unwrap_or_default();
-                        let tail: String =
-                            stderr.lines().rev().take(3).collect::<Vec<_>>().into_iter().rev().collect::<Vec<_>>().join(" | ");
-                        Record {
-                            status: "crashed".into(),
-                            message: format!("worker exited with {status} without a result: {tail}"),
-                            ..Record::default()
-                        }
-                    }
+            let exit = running[k].child.try_wait().map_err(|e| SweepError::Spawn { exe: opts.worker_exe.clone(), source: e })?;
+            let rec = match (exit, timeout) {
+                (Some(exit), _) => finished_record(&running[k], exit),
+                (None, Some(t)) if running[k].started.elapsed().as_secs_f64() > t => timed_out_record(&mut running[k], t),
+                (None, _) => {
+                    k += 1;
+                    continue;
                 }
             };
-            let line = csv_line(&results_row(&header, &r.point, &rec, artifact_tol));
+            let r = running.swap_remove(k);
+            let line = csv_line(&results_row(&columns, &r.point, &rec, artifact_tol, &provenance));
             results.write_all(&line).map_err(io_err(&results_path))?;
             results.sync_data().map_err(io_err(&results_path))?;
             for p in [&r.job_path, &r.result_path, &r.err_path] {
                 let _ = std::fs::remove_file(p);
             }
             report.ran += 1;
-            if !rec.converged {
+            if !rec.status.is_converged() {
                 report.failed += 1;
                 bar.set_message(format!("{} failed", report.failed));
             }
@@ -960,6 +988,52 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
     let _ = std::fs::remove_dir(&work);
     report.wall_s = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// The progress bar of a run over `len` points of which `done` are already done.
+fn progress_bar(visible: bool, len: usize, done: usize) -> indicatif::ProgressBar {
+    let bar = if visible { indicatif::ProgressBar::new(len as u64) } else { indicatif::ProgressBar::hidden() };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} points, {msg}, {elapsed} elapsed, ETA {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_position(done as u64);
+    bar.reset_eta();
+    bar.set_message("0 failed");
+    bar
+}
+
+/// Write the job file into `work` and start a worker on it.
+fn start_worker(exe: &Path, work: &Path, job: Job) -> Result<Running, SweepError> {
+    let id = job.point.id();
+    let job_path = work.join(format!("{id}.job.json"));
+    let result_path = work.join(format!("{id}.result.json"));
+    let err_path = work.join(format!("{id}.stderr"));
+    let _ = std::fs::remove_file(&result_path);
+    output::write_json(&job_path, &job)?;
+    let child = spawn_worker(exe, &job_path, &result_path, &err_path)?;
+    Ok(Running { child, started: Instant::now(), point: job.point, job_path, result_path, err_path })
+}
+
+/// The record of a worker that exited: its result file, or a crash with the last lines
+/// of its stderr.
+fn finished_record(r: &Running, exit: std::process::ExitStatus) -> Record {
+    match std::fs::read_to_string(&r.result_path).ok().and_then(|t| serde_json::from_str::<Record>(&t).ok()) {
+        Some(rec) => rec,
+        None => {
+            let stderr = std::fs::read_to_string(&r.err_path).unwrap_or_default();
+            let tail: Vec<&str> = stderr.lines().rev().take(3).collect::<Vec<_>>().into_iter().rev().collect();
+            Record::new(PointStatus::Crashed, format!("worker exited with {exit} without a result: {}", tail.join(" | ")))
+        }
+    }
+}
+
+/// Kill a worker that ran past the sweep's timeout of `limit_s` seconds; its record.
+fn timed_out_record(r: &mut Running, limit_s: f64) -> Record {
+    let _ = r.child.kill();
+    let _ = r.child.wait();
+    let message = format!("killed after the sweep's timeout of {limit_s} s");
+    Record { wall_s: Some(r.started.elapsed().as_secs_f64()), ..Record::new(PointStatus::TimedOut, message) }
 }
 
 fn spawn_worker(exe: &Path, job: &Path, result: &Path, err: &Path) -> Result<Child, SweepError> {
@@ -989,6 +1063,7 @@ fn spawn_worker(exe: &Path, job: &Path, result: &Path, err: &Path) -> Result<Chi
 /// Summary of [`merge`].
 #[derive(Debug, Clone, Default)]
 pub struct MergeReport {
+    /// Rows written.
     pub rows: usize,
     /// Rows whose id appeared in an earlier input (dropped).
     pub duplicates: usize,
@@ -997,16 +1072,32 @@ pub struct MergeReport {
 }
 
 /// Join shards' results (each a results.csv or a directory holding one) into
-/// `output` (a directory: writes `output/results.csv`), sorted by point index.
+/// `output` (a directory: writes `output/results.csv`), sorted by point index. The
+/// inputs must have the same columns and come from the same base scene content.
 pub fn merge(inputs: &[PathBuf], output_dir: &Path) -> Result<MergeReport, SweepError> {
     let mut header: Option<Vec<String>> = None;
+    let mut scene_hash: Option<String> = None;
     let mut rows: Vec<Vec<String>> = Vec::new();
     let mut ids = HashSet::new();
     let mut report = MergeReport::default();
     let mut all_ids: Option<HashSet<String>> = None;
     for input in inputs {
         let res = Results::read(input)?;
-        let path = if input.is_dir() { input.join("results.csv") } else { input.clone() };
+        let path = res.path.clone();
+        for hash in res.scene_hashes() {
+            match &scene_hash {
+                None => scene_hash = Some(hash),
+                Some(first) if *first != hash => {
+                    return Err(SweepError::Results {
+                        path,
+                        message: format!(
+                            "has rows of a base scene with content {hash}, the first rows' is {first}: not shards of one sweep"
+                        ),
+                    })
+                }
+                Some(_) => {}
+            }
+        }
         match &header {
             None => header = Some(res.header.clone()),
             Some(h) if *h != res.header => {
@@ -1017,9 +1108,7 @@ pub fn merge(inputs: &[PathBuf], output_dir: &Path) -> Result<MergeReport, Sweep
             }
             Some(_) => {}
         }
-        let id_col = res
-            .column_index("id")
-            .ok_or_else(|| SweepError::Results { path: path.clone(), message: "no `id` column: not a sweep's results.csv".into() })?;
+        let id_col = res.require_column("id")?;
         for row in res.rows {
             if ids.insert(row[id_col].clone()) {
                 rows.push(row);
@@ -1066,7 +1155,8 @@ mod tests {
 
     #[test]
     fn id_ignores_axis_order_and_csv_line_is_one_line() {
-        let a = Point { index: 0, values: vec![("nodes".into(), "64".into()), ("sigma".into(), "1/110".into())], method: Method::Skg };
+        let values = vec![("nodes".into(), "64".into()), ("sigma".into(), "1/110".into())];
+        let a = Point { index: 0, values, evaluated: vec![("sigma".into(), 1.0 / 110.0)], method: Method::Skg };
         let mut b = a.clone();
         b.values.reverse();
         b.index = 7;

@@ -57,7 +57,10 @@ pub struct ResultsPlotArgs {
     /// Output path without extension (writes .svg and .png).
     #[arg(short, long, value_name = "STEM")]
     pub output: PathBuf,
-    /// Keep only rows whose column equals the value, e.g. `--where sigma=1/110` (repeatable).
+    /// Keep only rows whose column equals the value, e.g. `--where sigma=1/110` (repeatable):
+    /// equal as text, as the sweep file wrote it (the `<column>_expr` column), or as numbers
+    /// to a relative 1e-12 (the value may be a constant expression). Rows that leave the
+    /// column blank (the peer rows) are kept.
     #[arg(long = "where", value_name = "COLUMN=VALUE")]
     pub filters: Vec<String>,
     /// Chart title [default: the kind of chart and the sweep directory].

@@ -1,4 +1,10 @@
 //! `skg-solve sweep`, `merge` and the hidden `sweep-worker`.
+//!
+//! The layout of `results.csv` and `sweep.json` is documented in the `skg_sweep` crate;
+//! [`sweep_long_about`] is its summary in `skg-solve sweep --help`. In short: a
+//! scene-parameter axis's column holds the evaluated number (`sigma = "1/110"` →
+//! `0.00909090909090909`), and an axis with any value written as an expression also
+//! gets `<axis>_expr` with the values as written (`1/110`).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -8,6 +14,30 @@ use clap::Args;
 
 use skg_core::output;
 use skg_sweep as sweep;
+
+/// `skg-solve sweep --help`: what the command writes (column lists from `skg_sweep`).
+pub fn sweep_long_about() -> String {
+    let statuses: Vec<&str> = sweep::PointStatus::ALL.iter().map(|s| s.name()).collect();
+    format!(
+        "Run a parameter sweep: every point of the sweep file's grid in its own worker process, each finished point \
+         appended to DIR/results.csv. Rerunning resumes (points already in results.csv are skipped; rows of a base \
+         scene whose content has changed since are refused).\n\n\
+         results.csv is a plain CSV, one row per point, with the columns {}; one column per grid axis; {}; and the \
+         provenance {}. status is one of {} (converged is true exactly for `converged`); solver_status is Ipopt's \
+         status name (ODE_Succeeded for a peer point); scene_hash is the SHA-256 of the base scene file's content.\n\n\
+         A grid axis that is a scene parameter holds the number the point's scene has (sigma = \"1/110\" gives \
+         0.00909090909090909, the shortest text that reads back to the same double). If any of its values is \
+         written as an expression, the column <axis>{} follows it with every value as written (1/110); an axis of \
+         plain numbers has none. `skg-solve plot ... --where sigma=1/110` matches either.\n\n\
+         DIR/sweep.json records the sweep's name, the sweep file, the base scene, the same provenance, the number \
+         of points, the shard and the ids of the shard's points.",
+        sweep::LEADING_COLUMNS.join(", "),
+        sweep::RESULT_COLUMNS.join(", "),
+        sweep::PROVENANCE_COLUMNS.join(", "),
+        statuses.join(", "),
+        sweep::EXPR_SUFFIX,
+    )
+}
 
 #[derive(Args)]
 pub struct SweepArgs {

@@ -17,6 +17,17 @@ pub fn scenario(name: &str) -> PathBuf {
     root().join("scenarios").join(format!("{name}.toml"))
 }
 
+/// Standard gravity of the shipped scenes (`g = 9.8`).
+pub const G: f64 = 9.8;
+
+/// Write `dir/sweep.toml` whose base scene is `scene`, followed by `body`.
+pub fn sweep_file(dir: &Path, scene: &Path, body: &str) -> PathBuf {
+    let p = dir.join("sweep.toml");
+    let text = format!("[sweep]\nscene = \"{}\"\n{body}", scene.display());
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
 /// Every shipped scene.
 pub const SHIPPED: &[&str] = &["free_fall", "rolling_disk", "tumbler", "incline_friction", "incline_frictionless", "knife_edge"];
 
