@@ -158,14 +158,14 @@ impl Action {
         let mut map = Vec::new();
         offsets.push(0u32);
         for k in 0..nodes {
-            let (cols, coefs) = op.row(k);
+            let row = op.row(k);
             for a in 0..m {
                 let (kind, c) = model.layout.kind(a);
                 match kind {
                     LocalKind::Q => map.push((layout.qp[k * d + c], 1.0)),
                     LocalKind::W => map.push((layout.qm[k * d + c], 1.0)),
-                    LocalKind::V => map.extend(cols.iter().zip(coefs).map(|(&j, &cf)| (layout.qp[j * d + c], cf))),
-                    LocalKind::Dw => map.extend(cols.iter().zip(coefs).map(|(&j, &cf)| (layout.qm[j * d + c], cf))),
+                    LocalKind::V => map.extend(row.iter().map(|&(j, cf)| (layout.qp[j * d + c], cf))),
+                    LocalKind::Dw => map.extend(row.iter().map(|&(j, cf)| (layout.qm[j * d + c], cf))),
                     LocalKind::Lambda => {
                         let z = layout.lp[k * n + c];
                         if z != NONE {
@@ -185,8 +185,7 @@ impl Action {
             bilinear.push((layout.nu_qn[i], layout.qm[last * d + i], 1.0));
             bilinear.push((layout.nu_x[i], layout.qp[i], 1.0));
             linear.push((layout.nu_x[i], -q0[i]));
-            let (cols, coefs) = op.row(0);
-            for (&j, &cf) in cols.iter().zip(coefs) {
+            for (j, cf) in op.row(0) {
                 bilinear.push((layout.nu_v[i], layout.qp[j * d + i], cf));
             }
             linear.push((layout.nu_v[i], -v0[i]));
