@@ -406,7 +406,7 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
                 warnings.push(format!(
                     "wall `{}`: the solution has {a} contact episode(s), time stepping of the same scene has {b}: \
                      possibly a spurious critical point or a grid too coarse for the wall width (refine N)",
-                    action.model.walls[j]
+                    action.model.walls[j].name
                 ));
             }
         }
@@ -596,7 +596,7 @@ fn diagnose(
 fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> Vec<usize> {
     (0..model.walls.len())
         .map(|j| {
-            let sigma = model.wall_width(j);
+            let sigma = model.walls[j].width;
             let mut count = 0;
             let mut inside = false;
             for hk in h {
