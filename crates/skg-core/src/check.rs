@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::scenario::Scene;
-use crate::solve::Trajectory;
+use crate::trajectory::Trajectory;
 
 /// Errors of reading or comparing tables.
 #[derive(Debug, thiserror::Error)]

@@ -1,12 +1,16 @@
-//! Output files: the trajectory CSV and the JSON summary, each written atomically
-//! (a temporary file in the target directory, flushed, then renamed over the target),
-//! so an interrupted or failed run never leaves a half-written file.
+//! Output files: the trajectory CSV and the JSON summary of a solve, the CSV of a
+//! reference, each written atomically (a temporary file in the target directory,
+//! flushed, then renamed over the target), so an interrupted or failed run never leaves
+//! a half-written file. The end of the data flow: it reads what [`crate::solve`] and
+//! [`crate::reference`] produced and writes it.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use crate::reference::{self, Reference};
 use crate::scenario::Scene;
-use crate::solve::{Outcome, Trajectory};
+use crate::solve::Outcome;
+use crate::trajectory::Trajectory;
 
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
@@ -124,6 +128,13 @@ pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result
     outcome.timings.output_s = t.elapsed().as_secs_f64();
     write_json(&json_path, outcome)?;
     Ok((csv_path, json_path))
+}
+
+/// Write a reference as a trajectory CSV with its provenance ([`reference::provenance`])
+/// as `#` lines; `scene_path` is the scene file as the user named it.
+pub fn write_reference(path: &Path, scene: &Scene, scene_path: &str, r: &Reference) -> Result<(), OutputError> {
+    let comment = reference::provenance(scene, scene_path, r);
+    write_csv(path, Some(&comment), &trajectory_header(scene), &trajectory_rows(&r.trajectory))
 }
 
 #[cfg(test)]

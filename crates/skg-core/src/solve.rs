@@ -2,9 +2,9 @@
 //! the square system to Ipopt, and turn the critical point into a trajectory.
 //!
 //! Initial guess: the Lagrange–d'Alembert equations of the same scene are integrated
-//! with an adaptive high-order Runge–Kutta method (index-reduced: accelerations and
-//! multipliers from `[W Gᵀ; G 0]`, see [`Model::accelerations`]) at a moderate
-//! tolerance and sampled at the nodes; the minus variables start at zero and the
+//! by [`crate::time_stepping`] (adaptive high-order Runge–Kutta, index-reduced:
+//! accelerations and multipliers from `[W Gᵀ; G 0]`, see [`Model::accelerations`]) at a
+//! moderate tolerance and sampled at the nodes; the minus variables start at zero and the
 //! boundary multipliers at the values that make their rows vanish. A global-in-time
 //! Newton solve started there converges in a few iterations (docs/solver.md: constant
 //! velocity extrapolation did not converge on the disk). If time stepping fails, the
@@ -16,10 +16,11 @@ use serde::Serialize;
 
 use crate::action::{Action, Block, MatrixPlan};
 use crate::model::{Model, Workspace};
-use crate::ode::{self, OdeOptions};
-use crate::reference::NodeSeries;
+use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
 use crate::scenario::{Formulation, HessianMode, IpoptValue, Scene, SceneError};
+use crate::time_stepping::{integrate_model, min_spacing};
+use crate::trajectory::{NodeSeries, States, Trajectory};
 use skg_ipopt::{self as ipopt, EvalError, Problem};
 
 /// A solution farther than this fraction of the coordinates' range from the
@@ -38,28 +39,6 @@ pub enum SolveError {
     Sbp(#[from] SbpError),
     #[error(transparent)]
     Ipopt(#[from] ipopt::SolveError),
-}
-
-/// The trajectory at the nodes.
-#[derive(Debug, Clone, Serialize)]
-pub struct Trajectory {
-    pub t: Vec<f64>,
-    /// q[k][i]: coordinate i at node k.
-    pub q: Vec<Vec<f64>>,
-    /// (Dq)[k][i]: the SBP derivative of the solution.
-    pub v: Vec<Vec<f64>>,
-    /// λ[k][a]; interior nodes from the solve, end nodes from a least-squares solve of
-    /// the node's equation of motion.
-    pub lambda: Vec<Vec<f64>>,
-    /// v·∂L/∂v − L (without the walls' potential, nonzero only in contact).
-    pub energy: Vec<f64>,
-    /// The walls' potential Σ A Φ(h/σ); `energy + wall_energy` is conserved when no
-    /// friction or other non-conservative force acts.
-    pub wall_energy: Vec<f64>,
-    /// Constraint residuals g^a at each node.
-    pub g: Vec<Vec<f64>>,
-    /// Wall gaps h_j at each node (≤ 0 on the allowed side).
-    pub h: Vec<Vec<f64>>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -247,20 +226,6 @@ pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
     Ok(Action::new(model, op, scene.initial_q.clone(), scene.initial_v.clone()))
 }
 
-/// The Lagrange–d'Alembert solution sampled at `times`: (q, v, λ) per node (the
-/// index-reduced integration of [`crate::reference::integrate_model`], which the
-/// reference solutions share).
-#[allow(clippy::type_complexity)]
-pub fn time_stepping(
-    model: &Model,
-    q0: &[f64],
-    v0: &[f64],
-    times: &[f64],
-    opts: &OdeOptions,
-) -> Result<(NodeSeries, NodeSeries, NodeSeries), ode::OdeError> {
-    crate::reference::integrate_model(model, q0, v0, times, opts).map(|(q, v, lam, _)| (q, v, lam))
-}
-
 /// Initial point Z0 and a description of how it was made; also the time-stepping
 /// coordinates when available (for the spurious-solution check).
 fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> (Vec<f64>, String, Option<Vec<Vec<f64>>>) {
@@ -269,17 +234,17 @@ fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> 
     let mut z = vec![0.0; lay.len()];
     // Steps at most the node spacing: a larger step can jump across a thin wall that
     // the error estimate never sees (free flight is integrated exactly).
-    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step: crate::reference::min_spacing(times), ..OdeOptions::default() };
-    let (q, lam, desc, reference) = match time_stepping(&action.model, &action.q0, &action.v0, times, &opts) {
-        Ok((q, _, lam)) => (
+    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step: min_spacing(times), ..OdeOptions::default() };
+    let (q, lam, desc, reference) = match integrate_model(&action.model, &action.q0, &action.v0, times, &opts) {
+        Ok((States { q, lambda, .. }, _)) => (
             q.clone(),
-            lam,
+            lambda,
             "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
             Some(q),
         ),
         Err(e) => {
             warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
-            let q = times.iter().map(|t| (0..d).map(|i| action.q0[i] + action.v0[i] * (t - times[0])).collect()).collect();
+            let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| action.q0[i] + action.v0[i] * (t - times[0])).collect()).collect();
             (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
         }
     };
@@ -504,17 +469,7 @@ fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
             max_eom = max_eom.max((phys[k].force[i] - dp[k][i] - gl).abs());
         }
     }
-    let tr = Trajectory {
-        t: times.to_vec(),
-        energy: phys.iter().map(|ph| ph.energy).collect(),
-        wall_energy: phys.iter().map(|ph| ph.wall_energy).collect(),
-        g: phys.iter().map(|ph| ph.g.clone()).collect(),
-        h: phys.iter().map(|ph| ph.h.clone()).collect(),
-        q,
-        v,
-        lambda,
-    };
-    (tr, max_eom)
+    (Trajectory::from_physical(times, States { q, v, lambda }, &phys), max_eom)
 }
 
 /// D applied to each component of a node-major series.

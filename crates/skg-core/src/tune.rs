@@ -31,7 +31,8 @@
 use std::path::PathBuf;
 
 use crate::scenario::{NumOrExpr, Overrides, Scene, SceneFile};
-use crate::solve::{self, Trajectory};
+use crate::solve;
+use crate::trajectory::Trajectory;
 
 /// Default tolerance on the relative energy artifact.
 pub const DEFAULT_ARTIFACT_TOL: f64 = 1e-5;
