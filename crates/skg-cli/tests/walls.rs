@@ -3,27 +3,16 @@
 
 mod common;
 
+use std::ops::Range;
+
+use skg_core::contact;
 use skg_core::scenario::Overrides;
 use skg_core::solve::Outcome;
 
-/// Contact episodes: maximal runs of nodes where the wall is within 6σ (h > −6σ).
-/// Beyond 6σ the Gaussian force is below e⁻¹⁸ ≈ 1.5e-8 of its peak: free flight.
-fn contact_episodes(o: &Outcome, sigma: f64) -> Vec<(usize, usize)> {
-    let h: Vec<f64> = o.trajectory.h.iter().map(|h| h[0]).collect();
-    let mut episodes = Vec::new();
-    let mut k = 0;
-    while k < h.len() {
-        if h[k] > -6.0 * sigma {
-            let start = k;
-            while k < h.len() && h[k] > -6.0 * sigma {
-                k += 1;
-            }
-            episodes.push((start, k - 1));
-        } else {
-            k += 1;
-        }
-    }
-    episodes
+/// Contact episodes of the scene's single wall (h > −6σ, [`skg_core::contact`]): beyond
+/// 6σ the Gaussian force is below e⁻¹⁸ ≈ 1.5e-8 of its peak: free flight.
+fn contact_episodes(o: &Outcome, sigma: f64) -> Vec<Range<usize>> {
+    contact::episodes(o.trajectory.h.iter().map(|h| h[0]), sigma)
 }
 
 /// Largest |E_k − E_0| of the mechanical energy over the free-flight nodes (outside
@@ -32,7 +21,7 @@ fn free_flight_energy_error(o: &Outcome, sigma: f64) -> f64 {
     let tr = &o.trajectory;
     let n = tr.t.len();
     let episodes = contact_episodes(o, sigma);
-    let in_contact = |k: usize| episodes.iter().any(|&(a, b)| a <= k && k <= b);
+    let in_contact = |k: usize| episodes.iter().any(|r| r.contains(&k));
     let e0 = tr.energy[0];
     (0..n - 2).filter(|&k| !in_contact(k)).map(|k| (tr.energy[k] - e0).abs() / e0.abs()).fold(0.0, f64::max)
 }
@@ -44,8 +33,8 @@ fn tumbler_bounces_twice_and_energy_returns_after_each_bounce() {
     assert_eq!(o.settings.nodes, 256);
     let episodes = contact_episodes(&o, sigma);
     let t = &o.trajectory.t;
-    assert_eq!(episodes.len(), 2, "contact episodes {:?}", episodes.iter().map(|&(a, b)| (t[a], t[b])).collect::<Vec<_>>());
-    for &(a, b) in &episodes {
+    assert_eq!(episodes.len(), 2, "contact episodes {:?}", episodes.iter().map(|r| (t[r.start], t[r.end - 1])).collect::<Vec<_>>());
+    for (a, b) in episodes.iter().map(|r| (r.start, r.end - 1)) {
         assert!(b + 1 < t.len() && t[b] < 0.5, "bounce must end within the 0.5 s span");
         // A bounce, not a graze: the gap reaches the wall's core (|h| < 1σ).
         let deepest = (a..=b).map(|k| o.trajectory.h[k][0]).fold(f64::NEG_INFINITY, f64::max);

@@ -7,7 +7,8 @@
 //!    summation-by-parts operators) and [`scenario`]: the TOML scene, validated and
 //!    resolved to numbers ([`scenario::Scene`]).
 //! 2. [`model`]: the scene's expressions, their exact derivatives compiled into tapes
-//!    ([`expr`]), and the walls' geometry.
+//!    ([`expr`]), and the walls' geometry; [`contact`]: when a node is in contact with
+//!    a wall.
 //! 3. [`action`]: the SBP-discretized action on the time grid and its derivatives.
 //! 4. [`trajectory`]: the states at the nodes with their physical columns, the common
 //!    result type; [`ode`] (DOP853) and [`time_stepping`]: the index-reduced
@@ -25,6 +26,7 @@
 
 pub mod action;
 pub mod check;
+pub mod contact;
 pub mod convergence;
 pub mod model;
 pub mod ode;

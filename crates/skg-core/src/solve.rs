@@ -15,6 +15,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::action::{Action, Block, MatrixPlan};
+use crate::contact;
 use crate::model::{Model, Workspace};
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
@@ -88,8 +89,8 @@ pub struct Diagnostics {
     /// max over nodes and coordinates of |q − q_time-stepping|: a large value hints at a
     /// spurious critical point or a too coarse grid.
     pub distance_from_time_stepping: Option<f64>,
-    /// Contact episodes per wall (maximal runs of nodes with h > −3σ) in the solution
-    /// and in the time-stepping solution on the same nodes. A difference means an extra
+    /// Contact episodes per wall (maximal runs of nodes in contact, [`contact`]) in the
+    /// solution and in the time-stepping solution on the same nodes. A difference means an extra
     /// or a missing bounce: a spurious critical point (docs/solver.md) or a too coarse grid;
     /// the solve then adds a warning.
     pub contact_episodes: Vec<usize>,
@@ -547,21 +548,7 @@ fn diagnose(
     }
 }
 
-/// Number of contact episodes (maximal runs of nodes with h > −3σ) per wall.
+/// Number of contact episodes ([`contact::episodes`]) per wall.
 fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> Vec<usize> {
-    (0..model.walls.len())
-        .map(|j| {
-            let sigma = model.walls[j].width;
-            let mut count = 0;
-            let mut inside = false;
-            for hk in h {
-                let now = hk[j] > -3.0 * sigma;
-                if now && !inside {
-                    count += 1;
-                }
-                inside = now;
-            }
-            count
-        })
-        .collect()
+    model.walls.iter().enumerate().map(|(j, w)| contact::episodes(h.iter().map(|hk| hk[j]), w.width).len()).collect()
 }

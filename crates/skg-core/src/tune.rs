@@ -9,9 +9,9 @@
 //! A = max |E_k − E_1| / max(max_k |E_k|, 1e-300)
 //! ```
 //!
-//! over the *free* nodes k: nodes where every wall's gap satisfies h < −6σ (the Gaussian
-//! force is below 1.5e-8 of its peak), not within 3 nodes of a node in contact (the SBP
-//! stencil of Dq reaches that far), and not among the last `skip_last` nodes (benign
+//! over the *free* nodes k: nodes in contact with no wall ([`contact::in_contact`]:
+//! every gap h ≤ −6σ, where the Gaussian force is below 1.5e-8 of its peak), not within
+//! 3 nodes of a node in contact (the SBP stencil of Dq reaches that far), and not among the last `skip_last` nodes (benign
 //! boundary nodes, docs/solver.md). A σ too small for N makes the discrete solution ring after
 //! each impact and A jumps by orders of magnitude (paper, fig. 3; docs/solver.md). A scene
 //! without walls uses every node but the last `skip_last`, so A is the relative energy
@@ -30,14 +30,13 @@
 
 use std::path::PathBuf;
 
+use crate::contact;
 use crate::scenario::{NumOrExpr, Overrides, Scene, SceneFile};
 use crate::solve;
 use crate::trajectory::Trajectory;
 
 /// Default tolerance on the relative energy artifact.
 pub const DEFAULT_ARTIFACT_TOL: f64 = 1e-5;
-/// A node is in contact when some wall's gap h > −CONTACT_WIDTHS·σ.
-pub const CONTACT_WIDTHS: f64 = 6.0;
 /// Nodes on each side of a contact node that are not counted as free.
 pub const CONTACT_GUARD: usize = 3;
 
@@ -54,7 +53,7 @@ pub fn energy_artifact(scene: &Scene, tr: &Trajectory, skip_last: usize) -> Arti
     let end = n.saturating_sub(skip_last);
     let mut contact = vec![false; n];
     for (k, h) in tr.h.iter().enumerate() {
-        if scene.walls.iter().zip(h).any(|(w, &hk)| hk > -CONTACT_WIDTHS * w.width) {
+        if scene.walls.iter().zip(h).any(|(w, &hk)| contact::in_contact(hk, w.width)) {
             let lo = k.saturating_sub(CONTACT_GUARD);
             let hi = (k + CONTACT_GUARD + 1).min(n);
             contact[lo..hi].iter_mut().for_each(|c| *c = true);
