@@ -10,6 +10,7 @@
 //! velocity extrapolation did not converge on the disk). If time stepping fails, the
 //! guess falls back to constant-velocity extrapolation and the summary says so.
 
+use std::fmt;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -31,7 +32,7 @@ use skg_ipopt::{self as ipopt, EvalError, Problem};
 const FAR_FROM_TIME_STEPPING: f64 = 0.1;
 
 /// Why a solve could not be attempted or completed (a non-converged Ipopt run is not
-/// an error: it is an [`Outcome`] with `converged == false`).
+/// an error: it is an [`Outcome`] whose [`SolveStatus`] says so).
 #[derive(Debug, thiserror::Error)]
 pub enum SolveError {
     #[error(transparent)]
@@ -113,13 +114,102 @@ pub struct Settings {
     pub initial_guess: String,
 }
 
+/// The largest unscaled residual max |c| of the discrete system at which a solve counts
+/// as converged (Ipopt's own tolerance applies to its possibly scaled problem).
+pub const CONVERGED_RESIDUAL: f64 = 1e-8;
+
+/// How a solve ended: Ipopt's verdict, checked against the unscaled residual.
+///
+/// `Display` gives readable text; [`SolveStatus::name`] a stable name. Serialized (into
+/// `summary.json`) as four fields: `"converged"` (true or false), `"status"` (Ipopt's
+/// status name, e.g. `"Solve_Succeeded"`), `"status_text"` (the readable text) and
+/// `"solve_status"` (the stable name).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SolveStatus {
+    /// Ipopt succeeded and the unscaled residual is at most [`CONVERGED_RESIDUAL`].
+    Converged {
+        /// Ipopt's status (`Solve_Succeeded` or `Solved_To_Acceptable_Level`).
+        ipopt: ipopt::Status,
+    },
+    /// Ipopt reported success, but the unscaled residual exceeds [`CONVERGED_RESIDUAL`]
+    /// (or is not a number): not counted as converged.
+    ResidualTooLarge {
+        /// Ipopt's status (a success).
+        ipopt: ipopt::Status,
+        /// The unscaled residual max |c|.
+        residual: f64,
+    },
+    /// Ipopt stopped without success.
+    NotConverged {
+        /// Ipopt's status, which says why.
+        ipopt: ipopt::Status,
+    },
+}
+
+impl SolveStatus {
+    /// The status of a solve that ended with Ipopt's status `ipopt` at an unscaled
+    /// residual `residual`.
+    pub fn classify(ipopt: ipopt::Status, residual: f64) -> SolveStatus {
+        match (ipopt.is_success(), residual <= CONVERGED_RESIDUAL) {
+            (true, true) => SolveStatus::Converged { ipopt },
+            (true, false) => SolveStatus::ResidualTooLarge { ipopt, residual },
+            (false, _) => SolveStatus::NotConverged { ipopt },
+        }
+    }
+
+    /// Whether the solve converged.
+    pub fn is_converged(&self) -> bool {
+        matches!(self, SolveStatus::Converged { .. })
+    }
+
+    /// Ipopt's status.
+    pub fn ipopt(&self) -> ipopt::Status {
+        match *self {
+            SolveStatus::Converged { ipopt } | SolveStatus::ResidualTooLarge { ipopt, .. } | SolveStatus::NotConverged { ipopt } => ipopt,
+        }
+    }
+
+    /// A stable name: `"converged"`, `"residual_too_large"` or `"not_converged"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SolveStatus::Converged { .. } => "converged",
+            SolveStatus::ResidualTooLarge { .. } => "residual_too_large",
+            SolveStatus::NotConverged { .. } => "not_converged",
+        }
+    }
+}
+
+impl fmt::Display for SolveStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SolveStatus::Converged { ipopt } | SolveStatus::NotConverged { ipopt } => write!(f, "{ipopt}"),
+            SolveStatus::ResidualTooLarge { ipopt, residual } => {
+                write!(f, "Ipopt reported success ({ipopt}) but the unscaled residual {residual:.3e} exceeds {CONVERGED_RESIDUAL:e}")
+            }
+        }
+    }
+}
+
+impl Serialize for SolveStatus {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(4))?;
+        map.serialize_entry("converged", &self.is_converged())?;
+        map.serialize_entry("status", &self.ipopt())?;
+        map.serialize_entry("status_text", &self.to_string())?;
+        map.serialize_entry("solve_status", self.name())?;
+        map.end()
+    }
+}
+
 /// Everything a solve produced.
 #[derive(Debug, Clone, Serialize)]
 pub struct Outcome {
     pub scene: String,
-    pub converged: bool,
-    pub status: String,
-    pub status_text: String,
+    /// How the solve ended (serialized as the fields `converged`, `status`,
+    /// `status_text` and `solve_status`).
+    #[serde(flatten)]
+    pub status: SolveStatus,
     pub ipopt_version: String,
     pub iterations: usize,
     pub settings: Settings,
@@ -130,6 +220,13 @@ pub struct Outcome {
     pub history: Vec<ipopt::IterationStat>,
     #[serde(skip)]
     pub trajectory: Trajectory,
+}
+
+impl Outcome {
+    /// Whether the solve converged ([`SolveStatus::is_converged`]).
+    pub fn converged(&self) -> bool {
+        self.status.is_converged()
+    }
 }
 
 /// Ipopt's view of the reduced system R(P) = ∂S/∂M = 0.
@@ -349,7 +446,7 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
     let diagnostics = diagnose(action, &trajectory, max_eom, &z, solution.max_constraint_violation, formulation, ts_q.as_deref());
     let postprocess_s = t_post.elapsed().as_secs_f64();
 
-    let converged = solution.status.is_success() && diagnostics.max_residual <= 1e-8;
+    let status = SolveStatus::classify(solution.status, diagnostics.max_residual);
     if let (Some(dist), Some(ts)) = (diagnostics.distance_from_time_stepping, &ts_q) {
         // Scale: the largest range of a coordinate over the time-stepping trajectory.
         let scale = (0..lay.d)
@@ -377,18 +474,13 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
             }
         }
     }
-    if solution.status.is_success() && !converged {
-        warnings.push(format!(
-            "Ipopt reported success but the unscaled residual is {:.3e} (> 1e-8): not counted as converged",
-            diagnostics.max_residual
-        ));
+    if let SolveStatus::ResidualTooLarge { residual, .. } = status {
+        warnings.push(format!("Ipopt reported success but the unscaled residual is {residual:.3e} (> 1e-8): not counted as converged"));
     }
     let model = &action.model;
     Ok(Outcome {
         scene: scene.name.clone(),
-        converged,
-        status: solution.status.name().to_string(),
-        status_text: solution.status.to_string(),
+        status,
         ipopt_version: ipopt::ipopt_version().to_string(),
         iterations: solution.iterations,
         settings: Settings {
@@ -551,4 +643,35 @@ fn diagnose(
 /// Number of contact episodes ([`contact::episodes`]) per wall.
 fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> Vec<usize> {
     model.walls.iter().enumerate().map(|(j, w)| contact::episodes(h.iter().map(|hk| hk[j]), w.width).len()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ipopt::Status;
+
+    #[test]
+    fn solve_status_from_ipopt_and_residual() {
+        let ok = SolveStatus::classify(Status::SolveSucceeded, 1e-12);
+        assert_eq!(ok, SolveStatus::Converged { ipopt: Status::SolveSucceeded });
+        assert!(ok.is_converged());
+        assert_eq!((ok.name(), ok.to_string().as_str()), ("converged", "solved to the requested tolerance"));
+
+        let loose = SolveStatus::classify(Status::SolvedToAcceptableLevel, 2e-5);
+        assert!(!loose.is_converged());
+        assert_eq!(loose.ipopt(), Status::SolvedToAcceptableLevel);
+        assert_eq!(loose.name(), "residual_too_large");
+        assert!(loose.to_string().contains("2.000e-5") && loose.to_string().contains("exceeds 1e-8"), "{loose}");
+        assert!(!SolveStatus::classify(Status::SolveSucceeded, f64::NAN).is_converged());
+
+        let failed = SolveStatus::classify(Status::MaximumIterationsExceeded, 1e-12);
+        assert_eq!(failed, SolveStatus::NotConverged { ipopt: Status::MaximumIterationsExceeded });
+        assert_eq!(failed.to_string(), "maximum number of iterations exceeded");
+
+        let json = serde_json::to_value(loose).unwrap();
+        assert_eq!(json["converged"], false);
+        assert_eq!(json["status"], "Solved_To_Acceptable_Level");
+        assert_eq!(json["solve_status"], "residual_too_large");
+        assert_eq!(json["status_text"], loose.to_string());
+    }
 }

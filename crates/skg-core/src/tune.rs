@@ -32,7 +32,7 @@ use std::path::PathBuf;
 
 use crate::contact;
 use crate::scenario::{NumOrExpr, Overrides, Scene, SceneFile};
-use crate::solve;
+use crate::solve::{self, SolveStatus};
 use crate::trajectory::Trajectory;
 
 /// Default tolerance on the relative energy artifact.
@@ -97,8 +97,10 @@ impl Default for TuneOptions {
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TuneStep {
     pub value: f64,
-    pub converged: bool,
-    pub status: String,
+    /// How the solve ended (serialized as `converged`, `status`, `status_text`,
+    /// `solve_status`).
+    #[serde(flatten)]
+    pub status: SolveStatus,
     pub artifact: f64,
     /// Converged and artifact ≤ tol.
     pub ok: bool,
@@ -184,10 +186,9 @@ pub fn tune_width(
         let artifact = energy_artifact(&scene, &out.trajectory, opts.skip_last).value;
         let step = TuneStep {
             value,
-            converged: out.converged,
-            status: out.status.clone(),
+            status: out.status,
             artifact,
-            ok: out.converged && artifact <= opts.tol,
+            ok: out.converged() && artifact <= opts.tol,
             wall_s: t.elapsed().as_secs_f64(),
         };
         progress(&step);

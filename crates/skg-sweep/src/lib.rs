@@ -564,8 +564,8 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             rec.formulation = Some(scene.formulation.to_string());
             let mut outcome = skg_core::solve::solve_scene(&scene).map_err(|e| e.to_string())?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
-            rec.converged = outcome.converged;
-            rec.status = outcome.status.clone();
+            rec.converged = outcome.converged();
+            rec.status = outcome.status.ipopt().name().to_string();
             rec.iterations = Some(outcome.iterations);
             let d = &outcome.diagnostics;
             rec.energy_drift = Some(d.energy_drift);
