@@ -7,6 +7,9 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use serde::Serialize;
+
+use crate::provenance;
 use crate::reference::{self, Reference};
 use crate::scenario::Scene;
 use crate::solve::Outcome;
@@ -110,7 +113,7 @@ pub fn write_csv(path: &Path, comment: Option<&str>, header: &[String], rows: &[
 }
 
 /// Write a value as pretty JSON.
-pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), OutputError> {
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), OutputError> {
     let text = serde_json::to_string_pretty(value).map_err(|e| OutputError::Format { path: path.to_path_buf(), message: e.to_string() })?;
     write_atomic(path, |w| {
         w.write_all(text.as_bytes())?;
@@ -118,7 +121,21 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), Out
     })
 }
 
-/// Write `trajectory.csv` and `summary.json` of a solve into `dir`.
+/// What `summary.json` holds: where it came from ([`crate::provenance`]), then the
+/// fields of the [`Outcome`].
+#[derive(Serialize)]
+struct Summary<'a> {
+    /// The skg-solve version that wrote the file.
+    skg_solve_version: &'static str,
+    /// The version of the file's layout.
+    schema_version: u32,
+    /// SHA-256 of the scene file's text (`sha256:<hex>`).
+    scene_hash: String,
+    #[serde(flatten)]
+    outcome: &'a Outcome,
+}
+
+/// Write `trajectory.csv` and `summary.json` of a solve of `scene` into `dir`.
 pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result<(PathBuf, PathBuf), OutputError> {
     let t = std::time::Instant::now();
     let csv_path = dir.join("trajectory.csv");
@@ -126,7 +143,13 @@ pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result
     let header = trajectory_header(scene);
     write_csv(&csv_path, None, &header, &trajectory_rows(&outcome.trajectory))?;
     outcome.timings.output_s = t.elapsed().as_secs_f64();
-    write_json(&json_path, outcome)?;
+    let summary = Summary {
+        skg_solve_version: provenance::VERSION,
+        schema_version: provenance::SCHEMA_VERSION,
+        scene_hash: scene.file.origin.content_hash(),
+        outcome,
+    };
+    write_json(&json_path, &summary)?;
     Ok((csv_path, json_path))
 }
 

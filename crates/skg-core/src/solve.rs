@@ -13,6 +13,7 @@
 use std::fmt;
 use std::time::Instant;
 
+use indexmap::IndexMap;
 use serde::Serialize;
 
 use crate::action::{Action, Block, MatrixPlan};
@@ -20,7 +21,7 @@ use crate::contact;
 use crate::model::{Model, Workspace};
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
-use crate::scenario::{Formulation, HessianMode, IpoptValue, Scene, SceneError};
+use crate::scenario::{Formulation, HessianMode, IpoptValue, Scene, SceneError, Wall};
 use crate::time_stepping::{integrate_model, min_spacing};
 use crate::trajectory::{NodeSeries, States, Trajectory};
 use skg_ipopt::{self as ipopt, EvalError, Problem};
@@ -85,17 +86,18 @@ pub struct Diagnostics {
     /// non-conservative forces act.
     pub energy_drift: f64,
     pub energy_drift_all: f64,
-    /// Largest wall gap h (positive = penetration), per wall.
-    pub max_wall_gap: Vec<f64>,
+    /// Largest wall gap h (positive = penetration), per wall (keyed by the wall's name).
+    pub max_wall_gap: IndexMap<String, f64>,
     /// max over nodes and coordinates of |q − q_time-stepping|: a large value hints at a
     /// spurious critical point or a too coarse grid.
     pub distance_from_time_stepping: Option<f64>,
-    /// Contact episodes per wall (maximal runs of nodes in contact, [`contact`]) in the
+    /// Contact episodes per wall (maximal runs of nodes in contact, [`contact`]; keyed by
+    /// the wall's name) in the
     /// solution and in the time-stepping solution on the same nodes. A difference means an extra
     /// or a missing bounce: a spurious critical point (docs/solver.md) or a too coarse grid;
     /// the solve then adds a warning.
-    pub contact_episodes: Vec<usize>,
-    pub contact_episodes_time_stepping: Option<Vec<usize>>,
+    pub contact_episodes: IndexMap<String, usize>,
+    pub contact_episodes_time_stepping: Option<IndexMap<String, usize>>,
     /// max |q-|, |λ-| of the full formulation's solution (0 in the physical limit).
     pub max_minus_variable: Option<f64>,
 }
@@ -110,7 +112,7 @@ pub struct Settings {
     pub hessian: HessianMode,
     pub tol: f64,
     pub max_iter: u32,
-    pub parameters: indexmap::IndexMap<String, f64>,
+    pub parameters: IndexMap<String, f64>,
     pub initial_guess: String,
 }
 
@@ -464,12 +466,11 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
         }
     }
     if let Some(ts) = &diagnostics.contact_episodes_time_stepping {
-        for (j, (a, b)) in diagnostics.contact_episodes.iter().zip(ts).enumerate() {
+        for ((wall, a), b) in diagnostics.contact_episodes.iter().zip(ts.values()) {
             if a != b {
                 warnings.push(format!(
-                    "wall `{}`: the solution has {a} contact episode(s), time stepping of the same scene has {b}: \
-                     possibly a spurious critical point or a grid too coarse for the wall width (refine N)",
-                    action.model.walls[j].name
+                    "wall `{wall}`: the solution has {a} contact episode(s), time stepping of the same scene has {b}: \
+                     possibly a spurious critical point or a grid too coarse for the wall width (refine N)"
                 ));
             }
         }
@@ -613,12 +614,10 @@ fn diagnose(
     let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
     let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - total[0]).abs()));
     let model = &action.model;
-    let max_wall_gap = (0..model.walls.len()).map(|j| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max)).collect();
+    let max_wall_gap = per_wall(model, |j, _| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max));
     let episodes = contact_episodes(model, &tr.h);
     let contact_episodes_time_stepping = ts_q.map(|qs| {
-        let mut ws = model.workspace();
-        let rest = vec![0.0; lay.d]; // h depends on q only (validated)
-        let h: Vec<Vec<f64>> = qs.iter().map(|q| model.physical(q, &rest, &mut ws).h).collect();
+        let h: Vec<Vec<f64>> = qs.iter().map(|q| model.wall_gaps(q)).collect();
         contact_episodes(model, &h)
     });
     let distance_from_time_stepping =
@@ -640,9 +639,14 @@ fn diagnose(
     }
 }
 
-/// Number of contact episodes ([`contact::episodes`]) per wall.
-fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> Vec<usize> {
-    model.walls.iter().enumerate().map(|(j, w)| contact::episodes(h.iter().map(|hk| hk[j]), w.width).len()).collect()
+/// `value(j, wall)` for every wall of the model, keyed by the wall's name in the scene's order.
+fn per_wall<T>(model: &Model, mut value: impl FnMut(usize, &Wall) -> T) -> IndexMap<String, T> {
+    model.walls.iter().enumerate().map(|(j, w)| (w.name.clone(), value(j, w))).collect()
+}
+
+/// Number of contact episodes ([`contact::episodes`]) per wall, given the gaps `h[k][j]`.
+fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> IndexMap<String, usize> {
+    per_wall(model, |j, w| contact::episodes(h.iter().map(|hk| hk[j]), w.width).len())
 }
 
 #[cfg(test)]
