@@ -146,6 +146,18 @@ impl PhysLayout {
     }
 }
 
+/// Why the accelerations of the Lagrange–d'Alembert equations cannot be computed at a
+/// state ([`Model::accelerations`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum DynamicsError {
+    /// The constrained mass matrix `[W Gᵀ; G 0]` is singular.
+    #[error("the constrained mass matrix [W Gᵀ; G 0] is singular")]
+    SingularMassMatrix,
+    /// The accelerations or multipliers are not finite.
+    #[error("non-finite acceleration")]
+    NonFinite,
+}
+
 /// How a model's walls act.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WallModel {
@@ -713,7 +725,7 @@ impl Model {
     /// Accelerations and multipliers of the Lagrange–d'Alembert equations at (q, v):
     /// the index-reduced system
     /// `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v; −(∂g/∂q) v]`.
-    pub fn accelerations(&self, q: &[f64], v: &[f64], ws: &mut Workspace) -> Result<(Vec<f64>, Vec<f64>), String> {
+    pub fn accelerations(&self, q: &[f64], v: &[f64], ws: &mut Workspace) -> Result<(Vec<f64>, Vec<f64>), DynamicsError> {
         let (d, n) = (self.layout.d, self.layout.n);
         let ph = self.physical(q, v, ws);
         let vv = DVector::from_column_slice(v);
@@ -730,9 +742,9 @@ impl Model {
             let gr = -(&ph.gq * &vv);
             rhs.rows_mut(d, n).copy_from(&gr);
         }
-        let sol = a.lu().solve(&rhs).ok_or_else(|| "the constrained mass matrix [W Gᵀ; G 0] is singular".to_string())?;
+        let sol = a.lu().solve(&rhs).ok_or(DynamicsError::SingularMassMatrix)?;
         if sol.iter().any(|x| !x.is_finite()) {
-            return Err("non-finite acceleration".into());
+            return Err(DynamicsError::NonFinite);
         }
         Ok((sol.rows(0, d).iter().copied().collect(), sol.rows(d, n).iter().copied().collect()))
     }

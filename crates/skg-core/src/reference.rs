@@ -40,22 +40,94 @@
 // `SceneError` (wrapped in `ReferenceError`) is large; it is the crate-wide error type.
 #![allow(clippy::result_large_err)]
 use crate::model::{Model, Workspace};
-use crate::ode::{self, EventHit, OdeOptions, OdeStats};
+use crate::ode::{self, EventHit, OdeOptions, OdeStats, RhsError};
 use crate::scenario::{Scene, SceneError};
 use crate::time_stepping::{integrate_model, min_spacing, rhs, split_states};
 use crate::trajectory::Trajectory;
 
-/// Errors of building a reference.
+/// Errors of building a reference. The message of a wrapped error is part of the
+/// variant's text (it is not also reported as its `source`, which would print it twice).
 #[derive(Debug, thiserror::Error)]
 pub enum ReferenceError {
+    /// The scene is invalid.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// The integrator failed.
     #[error("integrating the Lagrange–d'Alembert equations failed: {0}")]
-    Ode(#[from] ode::OdeError),
+    Ode(ode::OdeError),
+    /// The hard-wall reference does not model the scene, or its laws broke down.
     #[error("hard-wall reference: {0}")]
-    HardWall(String),
+    HardWall(HardWallError),
+    /// The sample times are unusable.
     #[error("bad sample times: {0}")]
-    Times(String),
+    Times(TimesError),
+}
+
+impl From<ode::OdeError> for ReferenceError {
+    fn from(e: ode::OdeError) -> Self {
+        ReferenceError::Ode(e)
+    }
+}
+
+impl From<HardWallError> for ReferenceError {
+    fn from(e: HardWallError) -> Self {
+        ReferenceError::HardWall(e)
+    }
+}
+
+impl From<TimesError> for ReferenceError {
+    fn from(e: TimesError) -> Self {
+        ReferenceError::Times(e)
+    }
+}
+
+/// Sample times a reference cannot use.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TimesError {
+    /// No times at all.
+    #[error("no sample times")]
+    Empty,
+    /// `t[index] = t` is followed by `next ≤ t`.
+    #[error("sample times must increase strictly: t[{index}] = {t} is followed by {next}")]
+    NotIncreasing { index: usize, t: f64, next: f64 },
+    /// The first time is not the scene's start time.
+    #[error("the first sample time {first} must be the scene's start time {start} (where its initial state is given)")]
+    NotAtStart { first: f64, start: f64 },
+}
+
+/// What the hard-wall reference does not model, or where its impact and contact laws
+/// break down. Walls are named.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum HardWallError {
+    #[error("scene `{scene}` has no walls; its regularized reference is the reference")]
+    NoWalls { scene: String },
+    #[error("scene `{scene}` has walls and velocity constraints; impacts of constrained systems are not supported")]
+    WallsWithConstraints { scene: String },
+    #[error("the initial state is outside the walls (max h = {max_h:.3e})")]
+    StartsOutside { max_h: f64 },
+    #[error("the initial state lies on wall `{wall}` and moves away from it or outwards; start strictly inside")]
+    StartsLeaving { wall: String },
+    #[error("the kinetic matrix is singular")]
+    SingularKineticMatrix,
+    #[error("wall `{wall}`: the particle comes to rest in contact (sticking under velocity-dependent friction is not supported)")]
+    Sticking { wall: String },
+    #[error("wall `{wall}`: the contact force law is singular")]
+    SingularContactLaw { wall: String },
+    #[error("wall `{wall}`: ∇h vanishes at the impact point {q:?}")]
+    VanishingNormal { wall: String, q: Vec<f64> },
+    #[error("wall `{wall}`: the friction direction vanishes at the impact")]
+    VanishingFrictionDirection { wall: String },
+    #[error("wall `{wall}`: friction impulse law is singular at the impact")]
+    SingularFrictionImpulse { wall: String },
+    #[error("impacts accumulate near t = {t} on wall `{wall}` (normal speed {normal_speed:.3e}) without settling into contact")]
+    ImpactsAccumulate { t: f64, wall: String, normal_speed: f64 },
+}
+
+/// A breakdown of the contact law while sliding fails the integrator's right-hand side.
+impl From<HardWallError> for RhsError {
+    fn from(e: HardWallError) -> Self {
+        RhsError(e.to_string())
+    }
 }
 
 /// Settings of a reference integration.
@@ -120,21 +192,13 @@ pub struct Reference {
 
 fn check_times(scene: &Scene, times: &[f64]) -> Result<(), ReferenceError> {
     if times.is_empty() {
-        return Err(ReferenceError::Times("no sample times".into()));
+        return Err(TimesError::Empty.into());
     }
     if let Some(i) = times.windows(2).position(|w| !(w[1] > w[0])) {
-        return Err(ReferenceError::Times(format!(
-            "sample times must increase strictly: t[{}] = {} is followed by {}",
-            i,
-            times[i],
-            times[i + 1]
-        )));
+        return Err(TimesError::NotIncreasing { index: i, t: times[i], next: times[i + 1] }.into());
     }
     if (times[0] - scene.t_start).abs() > 1e-12 * (1.0 + scene.t_start.abs()) {
-        return Err(ReferenceError::Times(format!(
-            "the first sample time {} must be the scene's start time {} (where its initial state is given)",
-            times[0], scene.t_start
-        )));
+        return Err(TimesError::NotAtStart { first: times[0], start: scene.t_start }.into());
     }
     Ok(())
 }
@@ -176,10 +240,10 @@ fn max_gap(model: &Model, q: &[f64]) -> (usize, f64) {
 /// and the normal force magnitude `N` (≥ 0 while in contact) of
 /// `W q̈ = f + F − (∂p/∂q) q̇ − N ∇h + μ N |∇h| d̂`, `∇h·q̈ + q̇ᵀ(∇²h) q̇ = 0`,
 /// with `d̂` the wall's friction direction (kinetic Coulomb friction).
-fn sliding(model: &Model, ws: &mut Workspace, j: usize, q: &[f64], v: &[f64]) -> Result<(Vec<f64>, f64), String> {
+fn sliding(model: &Model, ws: &mut Workspace, j: usize, q: &[f64], v: &[f64]) -> Result<(Vec<f64>, f64), HardWallError> {
     use nalgebra::{DMatrix, DVector};
     let d = q.len();
-    let name = &model.walls[j].name;
+    let wall = || model.walls[j].name.clone();
     let ph = model.physical(q, v, ws);
     let vv = DVector::from_column_slice(v);
     let rhs = DVector::from_column_slice(&ph.force) - &ph.dpdq * &vv;
@@ -195,9 +259,7 @@ fn sliding(model: &Model, ws: &mut Workspace, j: usize, q: &[f64], v: &[f64]) ->
                 let nhat = &n / n.norm();
                 let vpar = &vv - nhat.dot(&vv) * &nhat;
                 if !(vpar.norm() > 1e-12) {
-                    return Err(format!(
-                        "wall `{name}`: the particle comes to rest in contact (sticking under velocity-dependent friction is not supported)"
-                    ));
+                    return Err(HardWallError::Sticking { wall: wall() });
                 }
                 -vpar
             }
@@ -205,11 +267,11 @@ fn sliding(model: &Model, ws: &mut Workspace, j: usize, q: &[f64], v: &[f64]) ->
         b += (mu * n.norm() / dhat.norm()) * dhat;
     }
     let lu = ph.kinetic.lu();
-    let a0 = lu.solve(&rhs).ok_or("the kinetic matrix is singular")?;
-    let wb = lu.solve(&b).ok_or("the kinetic matrix is singular")?;
+    let a0 = lu.solve(&rhs).ok_or(HardWallError::SingularKineticMatrix)?;
+    let wb = lu.solve(&b).ok_or(HardWallError::SingularKineticMatrix)?;
     let den = n.dot(&wb);
     if !(den.abs() > 0.0) {
-        return Err(format!("wall `{name}`: the contact force law is singular"));
+        return Err(HardWallError::SingularContactLaw { wall: wall() });
     }
     let big_n = -(curv + n.dot(&a0)) / den;
     let acc = a0 + big_n * wb;
@@ -227,17 +289,17 @@ fn project(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<
 }
 
 /// The velocity after an impact on wall `j` at `q` with incoming velocity `v`.
-fn reflect(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<f64>) -> Result<(Vec<f64>, f64), String> {
+fn reflect(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<f64>) -> Result<(Vec<f64>, f64), HardWallError> {
     use nalgebra::DVector;
     let d = q.len();
-    let name = &model.walls[j].name;
+    let wall = || model.walls[j].name.clone();
     let n = DVector::from_vec(model.wall_normal(j, q));
     let n_norm = n.norm();
     if !(n_norm > 0.0) {
-        return Err(format!("wall `{name}`: ∇h vanishes at the impact point {q:?}"));
+        return Err(HardWallError::VanishingNormal { wall: wall(), q: q.to_vec() });
     }
     let lu = w.clone().lu();
-    let winv = |x: &DVector<f64>| lu.solve(x).ok_or_else(|| "the kinetic matrix is singular at the impact".to_string());
+    let winv = |x: &DVector<f64>| lu.solve(x).ok_or(HardWallError::SingularKineticMatrix);
     let vv = DVector::from_column_slice(v);
     let vn = n.dot(&vv);
     let wn = winv(&n)?;
@@ -250,13 +312,13 @@ fn reflect(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<
             let mut dhat = DVector::from_vec(dir);
             let dn = dhat.norm();
             if !(dn > 0.0) {
-                return Err(format!("wall `{name}`: the friction direction vanishes at the impact"));
+                return Err(HardWallError::VanishingFrictionDirection { wall: wall() });
             }
             dhat /= dn;
             let wd = winv(&dhat)?;
             let denom = nwn - mu * n_norm * n.dot(&wd);
             if !(denom > 0.0) {
-                return Err(format!("wall `{name}`: friction impulse law is singular at the impact"));
+                return Err(HardWallError::SingularFrictionImpulse { wall: wall() });
             }
             let jn = 2.0 * vn / denom;
             v_new += (-jn) * &wn + (mu * jn * n_norm) * &wd;
@@ -293,13 +355,10 @@ const MAX_IMPACTS: usize = 10_000;
 pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Result<Reference, ReferenceError> {
     check_times(scene, times)?;
     if scene.walls.is_empty() {
-        return Err(ReferenceError::HardWall(format!("scene `{}` has no walls; its regularized reference is the reference", scene.name)));
+        return Err(HardWallError::NoWalls { scene: scene.name.clone() }.into());
     }
     if !scene.constraints.is_empty() {
-        return Err(ReferenceError::HardWall(format!(
-            "scene `{}` has walls and velocity constraints; impacts of constrained systems are not supported",
-            scene.name
-        )));
+        return Err(HardWallError::WallsWithConstraints { scene: scene.name.clone() }.into());
     }
     // No wall force: the motion between impacts is the scene's without its walls.
     let model = Model::with_hard_walls(scene)?;
@@ -310,7 +369,6 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         let mut ws = model.workspace();
         model.physical(q, v, &mut ws).kinetic
     };
-    let hard = |m: String| ReferenceError::HardWall(m);
 
     let mut y: Vec<f64> = scene.initial_q.iter().chain(&scene.initial_v).copied().collect();
     let (j0, h0) = max_gap(&model, &scene.initial_q);
@@ -318,22 +376,19 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
     // Contact: Some((wall, start time)).
     let mut contact: Option<(usize, f64)> = None;
     if h0 > on_wall_tol {
-        return Err(hard(format!("the initial state is outside the walls (max h = {h0:.3e})")));
+        return Err(HardWallError::StartsOutside { max_h: h0 }.into());
     }
     if h0 >= -on_wall_tol {
         // Starting on a wall: slide along it if it pushes, else leave it.
         let w = kinetic(&y[..d], &y[d..]);
-        let vt = project(&model, j0, &y[..d], &y[d..], &w).ok_or_else(|| hard("singular kinetic matrix".into()))?;
+        let vt = project(&model, j0, &y[..d], &y[d..], &w).ok_or(HardWallError::SingularKineticMatrix)?;
         let mut ws = model.workspace();
-        let (_, big_n) = sliding(&model, &mut ws, j0, &y[..d], &vt).map_err(hard)?;
+        let (_, big_n) = sliding(&model, &mut ws, j0, &y[..d], &vt)?;
         if big_n > 0.0 {
             y[d..].copy_from_slice(&vt);
             contact = Some((j0, times[0]));
         } else {
-            return Err(hard(format!(
-                "the initial state lies on wall `{}` and moves away from it or outwards; start strictly inside",
-                model.walls[j0].name
-            )));
+            return Err(HardWallError::StartsLeaving { wall: model.walls[j0].name.clone() }.into());
         }
     }
 
@@ -393,13 +448,13 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         }
         let (j, _) = max_gap(&model, &ye[..d]);
         let w = kinetic(&ye[..d], &ye[d..]);
-        let (v_new, vn) = reflect(&model, j, &ye[..d], &ye[d..], &w).map_err(hard)?;
+        let (v_new, vn) = reflect(&model, j, &ye[..d], &ye[d..], &w)?;
         impacts.push(Impact { t, wall: model.walls[j].name.clone(), normal_speed: vn, q: ye[..d].to_vec() });
         if vn.abs() <= 1e-7 * vscale {
             // Grazing arrival: slide along the wall if it pushes back.
-            let vt = project(&model, j, &ye[..d], &ye[d..], &w).ok_or_else(|| hard("singular kinetic matrix".into()))?;
+            let vt = project(&model, j, &ye[..d], &ye[d..], &w).ok_or(HardWallError::SingularKineticMatrix)?;
             let mut ws = model.workspace();
-            let (_, big_n) = sliding(&model, &mut ws, j, &ye[..d], &vt).map_err(hard)?;
+            let (_, big_n) = sliding(&model, &mut ws, j, &ye[..d], &vt)?;
             if big_n > 0.0 {
                 contact = Some((j, t));
                 y = ye[..d].iter().chain(&vt).copied().collect();
@@ -410,10 +465,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
             }
         }
         if impacts.len() >= MAX_IMPACTS || (impacts.len() > 1 && t - impacts[impacts.len() - 2].t <= 1e-9 * (1.0 + t.abs())) {
-            return Err(hard(format!(
-                "impacts accumulate near t = {t} on wall `{}` (normal speed {vn:.3e}) without settling into contact",
-                model.walls[j].name
-            )));
+            return Err(HardWallError::ImpactsAccumulate { t, wall: model.walls[j].name.clone(), normal_speed: vn }.into());
         }
         y = ye[..d].iter().chain(&v_new).copied().collect();
         if states.len() == times.len() {

@@ -65,13 +65,23 @@ pub enum Formulation {
     Full,
 }
 
+/// Error of parsing a [`Formulation`] from a string.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown formulation `{input}` (expected `reduced` or `full`)")]
+pub struct ParseFormulationError {
+    /// The rejected input.
+    pub input: String,
+}
+
 impl std::str::FromStr for Formulation {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = ParseFormulationError;
+
+    /// Case-insensitive: `reduced` or `full`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s.to_ascii_lowercase().as_str() {
             "reduced" => Ok(Formulation::Reduced),
             "full" => Ok(Formulation::Full),
-            _ => Err(format!("unknown formulation `{s}` (expected `reduced` or `full`)")),
+            _ => Err(ParseFormulationError { input: s.to_string() }),
         }
     }
 }
@@ -422,7 +432,7 @@ impl SceneFile {
             seen.insert(r.to_string(), "a built-in name");
         }
         for p in params.keys() {
-            check_identifier(p).map_err(|m| self.toml_error(format!("parameter `{p}`: {m}")))?;
+            check_identifier(p).map_err(|e| self.toml_error(format!("parameter `{p}`: {e}")))?;
             if let Some(what) = seen.insert(p.clone(), "a parameter") {
                 return Err(self.toml_error(format!("parameter `{p}` clashes with {what}")));
             }
@@ -433,7 +443,7 @@ impl SceneFile {
         let mut coordinates = Vec::new();
         for c in &self.coordinates {
             let name = c.name.get_ref();
-            check_identifier(name).map_err(|m| self.invalid(&c.name, m))?;
+            check_identifier(name).map_err(|e| self.invalid(&c.name, e.to_string()))?;
             for key in [name.clone(), format!("{name}{VELOCITY_SUFFIX}")] {
                 if let Some(what) = seen.insert(key.clone(), "a coordinate or velocity") {
                     return Err(self.invalid(&c.name, format!("`{key}` clashes with {what}")));
@@ -451,7 +461,7 @@ impl SceneFile {
         let mut constraints = Vec::new();
         for c in &self.constraints {
             let name = c.name.get_ref();
-            check_identifier(name).map_err(|m| self.invalid(&c.name, m))?;
+            check_identifier(name).map_err(|e| self.invalid(&c.name, e.to_string()))?;
             if constraints.contains(name) {
                 return Err(self.invalid(&c.name, format!("constraint `{name}` declared twice")));
             }
@@ -467,7 +477,7 @@ impl SceneFile {
         let mut walls = Vec::new();
         for w in &self.walls {
             let name = w.name.get_ref().clone();
-            check_identifier(&name).map_err(|m| self.invalid(&w.name, m))?;
+            check_identifier(&name).map_err(|e| self.invalid(&w.name, e.to_string()))?;
             let strength = self.eval_value(&w.strength, &format!("walls.{name}.strength"), &params)?;
             if strength < 0.0 {
                 return Err(self.invalid(&w.strength, format!("wall `{name}`: strength must be ≥ 0, got {strength}")));
@@ -664,13 +674,23 @@ pub fn eval_constant(src: &str, params: &IndexMap<String, f64>) -> Result<f64, P
     Ok(g.eval(e, &[]))
 }
 
-fn check_identifier(name: &str) -> Result<(), String> {
+/// A name that cannot be a parameter, coordinate, constraint or wall.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("`{name}` is not a valid name (letters, digits and _, not starting with a digit)")]
+pub struct InvalidName {
+    /// The rejected name.
+    pub name: String,
+}
+
+/// Check that `name` is an identifier of the expression language: ASCII letters, digits
+/// and `_`, not starting with a digit.
+fn check_identifier(name: &str) -> Result<(), InvalidName> {
     let mut chars = name.chars();
     let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_') && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
     if ok {
         Ok(())
     } else {
-        Err(format!("`{name}` is not a valid name (letters, digits and _, not starting with a digit)"))
+        Err(InvalidName { name: name.to_string() })
     }
 }
 

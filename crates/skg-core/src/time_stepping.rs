@@ -8,8 +8,8 @@
 //! [`crate::ode`] and sampled at the requested times from its dense output. The
 //! constraints `g = 0` then hold only up to the integrator's drift.
 
-use crate::model::{Model, Workspace};
-use crate::ode::{self, OdeError, OdeOptions, OdeStats};
+use crate::model::{DynamicsError, Model, Workspace};
+use crate::ode::{self, OdeError, OdeOptions, OdeStats, RhsError};
 use crate::trajectory::States;
 
 /// Smallest spacing of increasing sample times (None for fewer than two samples).
@@ -27,7 +27,7 @@ pub fn integrate_model(model: &Model, q0: &[f64], v0: &[f64], times: &[f64], opt
 }
 
 /// The right-hand side `(q, v) ↦ (v, q̈)` of the index-reduced equations.
-pub fn rhs<'a>(model: &'a Model, ws: &'a mut Workspace) -> impl FnMut(f64, &[f64], &mut [f64]) -> Result<(), String> + 'a {
+pub fn rhs<'a>(model: &'a Model, ws: &'a mut Workspace) -> impl FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError> + 'a {
     let d = model.layout.d;
     move |_, y, dy| {
         let (a, _) = model.accelerations(&y[..d], &y[d..], ws)?;
@@ -44,10 +44,17 @@ pub fn split_states(model: &Model, states: &[Vec<f64>], times: &[f64], ws: &mut 
     let mut out =
         States { q: Vec::with_capacity(states.len()), v: Vec::with_capacity(states.len()), lambda: Vec::with_capacity(states.len()) };
     for (y, &t) in states.iter().zip(times) {
-        let (_, lambda) = model.accelerations(&y[..d], &y[d..], ws).map_err(|msg| OdeError::Rhs { t, msg })?;
+        let (_, lambda) = model.accelerations(&y[..d], &y[d..], ws).map_err(|e| OdeError::Rhs { t, error: e.into() })?;
         out.q.push(y[..d].to_vec());
         out.v.push(y[d..].to_vec());
         out.lambda.push(lambda);
     }
     Ok(out)
+}
+
+/// A failure of the model's dynamics is a failure of the integrator's right-hand side.
+impl From<DynamicsError> for RhsError {
+    fn from(e: DynamicsError) -> Self {
+        RhsError(e.to_string())
+    }
 }

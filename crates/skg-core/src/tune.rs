@@ -122,14 +122,52 @@ pub struct TuneResult {
     pub notes: Vec<String>,
 }
 
+/// Why a width could not be tuned.
 #[derive(Debug, thiserror::Error)]
 pub enum TuneError {
+    /// The scene, or the scene with a trial value, is invalid.
     #[error(transparent)]
     Scene(#[from] crate::scenario::SceneError),
+    /// A solve could not be attempted.
     #[error(transparent)]
     Solve(#[from] crate::solve::SolveError),
-    #[error("{0}")]
-    Invalid(String),
+    /// No wall's width is written as a parameter, and none was named.
+    #[error("no wall's width is a parameter (write e.g. `width = \"sigma\"` with `sigma` under [parameters], or pass --param)")]
+    NoWidthParameter,
+    /// The walls' widths are several parameters, and none was named.
+    #[error("walls use several width parameters ({}): pass --param", .0.join(", "))]
+    SeveralWidthParameters(Vec<String>),
+    /// The tolerance on the artifact is not positive.
+    #[error("the tolerance must be positive, got {0}")]
+    BadTolerance(f64),
+    /// The parameter to tune is not one of the scene's.
+    #[error("the scene has no parameter `{param}` (parameters: {})", .known.join(", "))]
+    UnknownParameter {
+        /// The parameter asked for.
+        param: String,
+        /// The scene's parameters.
+        known: Vec<String>,
+    },
+    /// The starting value of the parameter is not positive.
+    #[error("`{param}` must be positive to be tuned, got {value}")]
+    NotPositive {
+        /// The parameter.
+        param: String,
+        /// Its value.
+        value: f64,
+    },
+    /// Even the largest value tried shows artifacts or fails.
+    #[error("even {param} = {value:.6e} shows energy artifacts above {tol:e} (or fails) at N = {nodes}: raise N or the tolerance")]
+    ArtifactsEverywhere {
+        /// The parameter.
+        param: String,
+        /// The largest value tried.
+        value: f64,
+        /// The tolerance on the artifact.
+        tol: f64,
+        /// The number of nodes.
+        nodes: usize,
+    },
 }
 
 /// The parameter a wall's width is written as (`width = "sigma"`), if exactly one.
@@ -145,10 +183,8 @@ pub fn width_parameter(file: &SceneFile) -> Result<String, TuneError> {
     }
     match names.len() {
         1 => Ok(names.remove(0)),
-        0 => Err(TuneError::Invalid(
-            "no wall's width is a parameter (write e.g. `width = \"sigma\"` with `sigma` under [parameters], or pass --param)".into(),
-        )),
-        _ => Err(TuneError::Invalid(format!("walls use several width parameters ({}): pass --param", names.join(", ")))),
+        0 => Err(TuneError::NoWidthParameter),
+        _ => Err(TuneError::SeveralWidthParameters(names)),
     }
 }
 
@@ -165,15 +201,13 @@ pub fn tune_width(
         None => width_parameter(file)?,
     };
     if opts.tol.is_nan() || opts.tol <= 0.0 {
-        return Err(TuneError::Invalid(format!("the tolerance must be positive, got {}", opts.tol)));
+        return Err(TuneError::BadTolerance(opts.tol));
     }
     let base = file.clone().resolve(ov)?;
-    let current = *base.parameters.get(&param).ok_or_else(|| {
-        TuneError::Invalid(format!(
-            "the scene has no parameter `{param}` (parameters: {})",
-            base.parameters.keys().cloned().collect::<Vec<_>>().join(", ")
-        ))
-    })?;
+    let current = *base
+        .parameters
+        .get(&param)
+        .ok_or_else(|| TuneError::UnknownParameter { param: param.clone(), known: base.parameters.keys().cloned().collect() })?;
     let mut steps = Vec::new();
     let mut notes = Vec::new();
     let mut eval = |value: f64, steps: &mut Vec<TuneStep>| -> Result<bool, TuneError> {
@@ -198,16 +232,13 @@ pub fn tune_width(
     };
     let mut hi = opts.hi.unwrap_or(current);
     if hi.is_nan() || hi <= 0.0 {
-        return Err(TuneError::Invalid(format!("`{param}` must be positive to be tuned, got {hi}")));
+        return Err(TuneError::NotPositive { param, value: hi });
     }
     let mut grow = 0;
     while !eval(hi, &mut steps)? {
         grow += 1;
         if grow > 4 {
-            return Err(TuneError::Invalid(format!(
-                "even {param} = {hi:.6e} shows energy artifacts above {:e} (or fails) at N = {}: raise N or the tolerance",
-                opts.tol, base.nodes
-            )));
+            return Err(TuneError::ArtifactsEverywhere { param, value: hi, tol: opts.tol, nodes: base.nodes });
         }
         hi *= 2.0;
     }

@@ -222,7 +222,7 @@ impl Point {
             match k.as_str() {
                 "nodes" => ov.nodes = Some(v.parse().map_err(|_| format!("nodes = {v}: expected a whole number"))?),
                 "operator" => ov.operator = Some(v.parse::<OperatorKind>().map_err(|e| format!("operator = {v}: {e}"))?),
-                "formulation" => ov.formulation = Some(v.parse::<Formulation>()?),
+                "formulation" => ov.formulation = Some(v.parse::<Formulation>().map_err(|e| e.to_string())?),
                 "hessian" => {
                     ov.hessian = Some(match v.to_ascii_lowercase().as_str() {
                         "zero" => HessianMode::Zero,
