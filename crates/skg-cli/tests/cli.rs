@@ -172,7 +172,9 @@ fn bad_override_and_operator_names() {
     assert!(common::text(&o).contains("SBP242"), "lists the valid operators: {}", common::text(&o));
     let o = common::skg(&["missing.toml"], dir.path());
     assert_eq!(o.status.code(), Some(1));
-    assert!(common::text(&o).contains("cannot read scene file missing.toml"), "{}", common::text(&o));
+    let t = common::text(&o);
+    assert!(t.contains("cannot read scene file missing.toml"), "{t}");
+    assert_eq!(t.matches("No such file").count(), 1, "the cause is printed once: {t}");
 }
 
 #[test]
