@@ -2,7 +2,7 @@
 //!
 //! A scene file is read in two steps. [`SceneFile::parse`] deserializes the TOML
 //! (unknown keys and type errors are reported with file, line and column by the
-//! `toml` crate). [`SceneFile::resolve`] then evaluates the parameters (numbers or
+//! `toml` crate, through [`parse_toml`], which sweep files use too). [`SceneFile::resolve`] then evaluates the parameters (numbers or
 //! expressions of other parameters), applies command-line overrides and checks
 //! every number a solve depends on. Expressions of the model itself (Lagrangian,
 //! constraints, forces, walls) are parsed later by [`crate::model`], which reports
@@ -371,23 +371,66 @@ pub const RESERVED: &[&str] = &["pi", "sin", "cos", "tan", "exp", "log", "sqrt",
 /// Suffix that turns a coordinate name into its velocity: `x` → `x_dot`.
 pub const VELOCITY_SUFFIX: &str = "_dot";
 
+/// Errors of reading a TOML input file ([`read_toml`], [`parse_toml`]).
+#[derive(Debug, thiserror::Error)]
+pub enum TomlError {
+    /// The file cannot be read.
+    #[error("cannot read {path}: {error}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        error: std::io::Error,
+    },
+    /// The text is not valid TOML or does not have the expected keys and types.
+    #[error("{location}: {message}")]
+    Parse {
+        /// Where, as precisely as the `toml` crate says.
+        location: Location,
+        /// The `toml` crate's message.
+        message: String,
+    },
+}
+
+/// Read a TOML file and deserialize it. Returns the value and its [`Origin`] (the path
+/// as given and the text), with which later errors can be located in the file.
+pub fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<(T, Origin), TomlError> {
+    let text = std::fs::read_to_string(path).map_err(|error| TomlError::Io { path: path.to_path_buf(), error })?;
+    parse_toml(&text, &path.display().to_string())
+}
+
+/// Deserialize TOML text; `path` only labels error locations (`file:line:col`).
+pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &str) -> Result<(T, Origin), TomlError> {
+    let origin = Origin { path: path.to_string(), text: text.to_string() };
+    match toml::from_str(text) {
+        Ok(value) => Ok((value, origin)),
+        Err(e) => {
+            let location = e.span().map_or_else(|| origin.whole(), |span| origin.locate(span.start));
+            Err(TomlError::Parse { location, message: e.message().trim_end().to_string() })
+        }
+    }
+}
+
+impl From<TomlError> for SceneError {
+    fn from(e: TomlError) -> Self {
+        match e {
+            TomlError::Io { path, error } => SceneError::Io { path, source: error },
+            TomlError::Parse { location, message } => SceneError::Toml { location, message },
+        }
+    }
+}
+
 impl SceneFile {
     /// Read and deserialize a scene file.
     pub fn load(path: &Path) -> Result<SceneFile, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
-        Self::parse(&text, &path.display().to_string())
+        let (mut file, origin): (SceneFile, Origin) = read_toml(path)?;
+        file.origin = origin;
+        Ok(file)
     }
 
     /// Deserialize a scene from its text; `path` only labels error messages.
     pub fn parse(text: &str, path: &str) -> Result<SceneFile, SceneError> {
-        let origin = Origin { path: path.to_string(), text: text.to_string() };
-        let mut file: SceneFile = toml::from_str(text).map_err(|e| {
-            let location = match e.span() {
-                Some(span) => origin.locate(span.start),
-                None => Location::file(path),
-            };
-            SceneError::Toml { location, message: e.message().trim_end().to_string() }
-        })?;
+        let (mut file, origin): (SceneFile, Origin) = parse_toml(text, path)?;
         file.origin = origin;
         Ok(file)
     }
