@@ -13,13 +13,14 @@
 //! 4. [`trajectory`]: the states at the nodes with their physical columns, the common
 //!    result type; [`ode`] (DOP853) and [`time_stepping`]: the index-reduced
 //!    Lagrange–d'Alembert equations of a model integrated in time.
-//! 5. [`solve`]: the square system ∇S = 0 handed to Ipopt ([`ipopt`]) from a time-stepping
-//!    initial guess, and its diagnostics ([`solve::Outcome`]); [`reference`]: reference
-//!    solutions by time stepping, regularized or with hard walls.
+//! 5. [`solve`]: the square system ∇S = 0 handed to Ipopt ([`ipopt`]) from a
+//!    time-stepping initial guess, and its diagnostics ([`solve::Outcome`]);
+//!    [`reference`](mod@reference): reference solutions by time stepping, regularized
+//!    or with hard walls.
 //! 6. [`output`]: writes what solve and reference produced (CSV, JSON), atomically.
 //! 7. Consumers of results: [`check`] (a trajectory against a reference),
 //!    [`convergence`] (observed orders), [`tune`] (the wall width σ).
-
+#![warn(missing_docs)]
 // Numerical kernels index several arrays by the same node/coordinate index; the
 // index loops say that more plainly than zipped iterators.
 #![allow(clippy::needless_range_loop)]

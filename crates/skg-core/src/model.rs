@@ -36,11 +36,17 @@ pub struct LocalLayout {
 /// Which of the six blocks a local variable belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LocalKind {
+    /// q = q+, a coordinate.
     Q,
+    /// v = Dq+, a velocity.
     V,
+    /// λ = λ+, a constraint multiplier.
     Lambda,
+    /// w = q-.
     W,
+    /// dw = Dq-.
     Dw,
+    /// μ = λ-.
     Mu,
 }
 
@@ -61,24 +67,37 @@ impl LocalLayout {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+
+    /// Index of q_i.
     pub fn q(&self, i: usize) -> usize {
         i
     }
+
+    /// Index of v_i.
     pub fn v(&self, i: usize) -> usize {
         self.d + i
     }
+
+    /// Index of λ_a.
     pub fn lambda(&self, a: usize) -> usize {
         2 * self.d + a
     }
+
+    /// Index of w_i.
     pub fn w(&self, i: usize) -> usize {
         2 * self.d + self.n + i
     }
+
+    /// Index of dw_i.
     pub fn dw(&self, i: usize) -> usize {
         3 * self.d + self.n + i
     }
+
+    /// Index of μ_a.
     pub fn mu(&self, a: usize) -> usize {
         4 * self.d + self.n + a
     }
+
     /// Kind and component of local variable `k`.
     pub fn kind(&self, k: usize) -> (LocalKind, usize) {
         let (d, n) = (self.d, self.n);
@@ -101,7 +120,9 @@ impl LocalLayout {
 /// A set of second derivatives of `s`: the unordered local pairs `(a, b)`, `a ≥ b`,
 /// whose derivative is not identically zero, and the tape computing them.
 pub struct PairTape {
+    /// The pairs `(a, b)` of local variables, in the tape's output order.
     pub pairs: Vec<(usize, usize)>,
+    /// Computes ∂²s/∂u_a∂u_b for every pair.
     pub tape: Tape,
 }
 

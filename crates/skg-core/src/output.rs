@@ -15,12 +15,25 @@ use crate::scenario::Scene;
 use crate::solve::Outcome;
 use crate::trajectory::Trajectory;
 
+/// Why an output file could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
+    /// Creating, writing or renaming the file failed.
     #[error("cannot write {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The target file or directory.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The value could not be serialized.
     #[error("cannot write {path}: {message}")]
-    Format { path: PathBuf, message: String },
+    Format {
+        /// The target file.
+        path: PathBuf,
+        /// The serializer's message.
+        message: String,
+    },
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {

@@ -39,6 +39,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 // `SceneError` (wrapped in `ReferenceError`) is large; it is the crate-wide error type.
 #![allow(clippy::result_large_err)]
+use std::fmt;
+
 use crate::model::{Model, Workspace};
 use crate::ode::{self, EventHit, OdeOptions, OdeStats, RhsError};
 use crate::scenario::{Scene, SceneError};
@@ -87,40 +89,99 @@ pub enum TimesError {
     /// No times at all.
     #[error("no sample times")]
     Empty,
-    /// `t[index] = t` is followed by `next ≤ t`.
+    /// The times do not increase strictly.
     #[error("sample times must increase strictly: t[{index}] = {t} is followed by {next}")]
-    NotIncreasing { index: usize, t: f64, next: f64 },
+    NotIncreasing {
+        /// Position of the first offending time.
+        index: usize,
+        /// That time.
+        t: f64,
+        /// The time after it (≤ `t`, or NaN).
+        next: f64,
+    },
     /// The first time is not the scene's start time.
     #[error("the first sample time {first} must be the scene's start time {start} (where its initial state is given)")]
-    NotAtStart { first: f64, start: f64 },
+    NotAtStart {
+        /// The first sample time.
+        first: f64,
+        /// The scene's start time.
+        start: f64,
+    },
 }
 
 /// What the hard-wall reference does not model, or where its impact and contact laws
-/// break down. Walls are named.
+/// break down.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum HardWallError {
+    /// The scene has no walls.
     #[error("scene `{scene}` has no walls; its regularized reference is the reference")]
-    NoWalls { scene: String },
+    NoWalls {
+        /// The scene's name.
+        scene: String,
+    },
+    /// The scene has walls and velocity constraints.
     #[error("scene `{scene}` has walls and velocity constraints; impacts of constrained systems are not supported")]
-    WallsWithConstraints { scene: String },
+    WallsWithConstraints {
+        /// The scene's name.
+        scene: String,
+    },
+    /// The initial position is outside a wall.
     #[error("the initial state is outside the walls (max h = {max_h:.3e})")]
-    StartsOutside { max_h: f64 },
+    StartsOutside {
+        /// The largest gap at the initial position.
+        max_h: f64,
+    },
+    /// The initial state lies on a wall that does not push it.
     #[error("the initial state lies on wall `{wall}` and moves away from it or outwards; start strictly inside")]
-    StartsLeaving { wall: String },
+    StartsLeaving {
+        /// The wall.
+        wall: String,
+    },
+    /// The kinetic matrix W is singular.
     #[error("the kinetic matrix is singular")]
     SingularKineticMatrix,
+    /// Sliding under velocity-dependent friction comes to rest.
     #[error("wall `{wall}`: the particle comes to rest in contact (sticking under velocity-dependent friction is not supported)")]
-    Sticking { wall: String },
+    Sticking {
+        /// The wall.
+        wall: String,
+    },
+    /// The normal force of sliding contact is undetermined.
     #[error("wall `{wall}`: the contact force law is singular")]
-    SingularContactLaw { wall: String },
+    SingularContactLaw {
+        /// The wall.
+        wall: String,
+    },
+    /// The wall's normal ∇h vanishes at an impact.
     #[error("wall `{wall}`: ∇h vanishes at the impact point {q:?}")]
-    VanishingNormal { wall: String, q: Vec<f64> },
+    VanishingNormal {
+        /// The wall.
+        wall: String,
+        /// The impact position.
+        q: Vec<f64>,
+    },
+    /// The declared friction direction vanishes at an impact.
     #[error("wall `{wall}`: the friction direction vanishes at the impact")]
-    VanishingFrictionDirection { wall: String },
+    VanishingFrictionDirection {
+        /// The wall.
+        wall: String,
+    },
+    /// The friction impulse cannot reverse the normal velocity.
     #[error("wall `{wall}`: friction impulse law is singular at the impact")]
-    SingularFrictionImpulse { wall: String },
+    SingularFrictionImpulse {
+        /// The wall.
+        wall: String,
+    },
+    /// Impacts follow each other ever faster without settling into sliding contact.
     #[error("impacts accumulate near t = {t} on wall `{wall}` (normal speed {normal_speed:.3e}) without settling into contact")]
-    ImpactsAccumulate { t: f64, wall: String, normal_speed: f64 },
+    ImpactsAccumulate {
+        /// The time of the last impact.
+        t: f64,
+        /// The wall.
+        wall: String,
+        /// The normal speed at the last impact.
+        normal_speed: f64,
+    },
 }
 
 /// A breakdown of the contact law while sliding fails the integrator's right-hand side.
@@ -133,7 +194,9 @@ impl From<HardWallError> for RhsError {
 /// Settings of a reference integration.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct ReferenceOptions {
+    /// Relative tolerance of the integrator (default 1e-12).
     pub rtol: f64,
+    /// Absolute tolerance of the integrator (default 1e-12).
     pub atol: f64,
 }
 
@@ -154,7 +217,9 @@ impl ReferenceOptions {
 /// One impact of the hard-wall reference.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Impact {
+    /// Time of the impact.
     pub t: f64,
+    /// The wall hit.
     pub wall: String,
     /// Outward normal speed `n̂·v` just before the impact.
     pub normal_speed: f64,
@@ -165,10 +230,30 @@ pub struct Impact {
 /// A phase of sustained contact of the hard-wall reference: sliding along a wall.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Contact {
+    /// The wall slid along.
     pub wall: String,
+    /// Start of the contact (a grazing arrival, or the start time).
     pub t_start: f64,
     /// Lift-off time; `None` if still in contact at the end.
     pub t_end: Option<f64>,
+}
+
+/// The two references of a scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReferenceKind {
+    /// The scene's own model, Gaussian walls included ([`regularized`]).
+    Regularized,
+    /// Every wall ideal and elastic ([`hard_wall`]).
+    HardWall,
+}
+
+impl fmt::Display for ReferenceKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ReferenceKind::Regularized => "regularized",
+            ReferenceKind::HardWall => "hard-wall",
+        })
+    }
 }
 
 /// A reference trajectory and how it was made.
@@ -176,9 +261,11 @@ pub struct Contact {
 pub struct Reference {
     /// Same layout as the solver's trajectory (CSV columns via [`crate::output::trajectory_rows`]).
     pub trajectory: Trajectory,
-    /// "regularized" or "hard-wall".
-    pub kind: &'static str,
+    /// Which reference it is.
+    pub kind: ReferenceKind,
+    /// The integrator's tolerances.
     pub options: ReferenceOptions,
+    /// The integrator's work.
     pub stats: OdeStats,
     /// Impacts (hard-wall reference only).
     pub impacts: Vec<Impact>,
@@ -221,7 +308,7 @@ pub fn regularized(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Res
     let (constraint_drift, energy_drift) = drifts(&tr);
     Ok(Reference {
         trajectory: tr,
-        kind: "regularized",
+        kind: ReferenceKind::Regularized,
         options: *opts,
         stats,
         impacts: vec![],
@@ -478,7 +565,16 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
     let mut ws = model.workspace();
     let tr = Trajectory::with_physical_columns(&model, times, split_states(&model, &states, times, &mut ws)?);
     let (constraint_drift, energy_drift) = drifts(&tr);
-    Ok(Reference { trajectory: tr, kind: "hard-wall", options: *opts, stats, impacts, contacts, constraint_drift, energy_drift })
+    Ok(Reference {
+        trajectory: tr,
+        kind: ReferenceKind::HardWall,
+        options: *opts,
+        stats,
+        impacts,
+        contacts,
+        constraint_drift,
+        energy_drift,
+    })
 }
 
 /// The provenance comment of a reference CSV (deterministic: no dates, no paths other
@@ -506,7 +602,7 @@ pub fn provenance(scene: &Scene, scene_path: &str, r: &Reference) -> String {
         let p: Vec<String> = scene.parameters.iter().map(|(k, v)| format!("{k}={v:?}")).collect();
         s.push_str(&format!("\nparameters: {}", p.join(", ")));
     }
-    if r.kind == "hard-wall" {
+    if r.kind == ReferenceKind::HardWall {
         s.push_str(&format!(
             "\nhard walls: ideal elastic reflection in the kinetic metric at h = 0 (event location on the dense output){}; {} impacts",
             if scene.walls.iter().any(|w| w.friction > 0.0) { ", friction impulse mu |J_N|" } else { "" },

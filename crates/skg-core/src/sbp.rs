@@ -243,7 +243,14 @@ impl FromStr for OperatorKind {
 pub enum SbpError {
     /// The grid has fewer nodes than the operator's two boundary blocks need.
     #[error("{kind} needs at least {min} grid nodes, got {nodes}")]
-    TooFewNodes { kind: OperatorKind, nodes: usize, min: usize },
+    TooFewNodes {
+        /// The operator.
+        kind: OperatorKind,
+        /// The nodes asked for.
+        nodes: usize,
+        /// The operator's minimum ([`OperatorKind::min_nodes`]).
+        min: usize,
+    },
     /// The time step is not finite and positive.
     #[error("the time step must be finite and positive, got {0}")]
     BadStep(f64),

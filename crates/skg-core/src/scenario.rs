@@ -25,23 +25,60 @@ use skg_expr::{Graph, ParseError, Symbol};
 /// the line and column.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
+    /// The scene file cannot be read.
     #[error("cannot read scene file {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file as given.
+        path: PathBuf,
+        /// Why it cannot be read.
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML, or has unknown keys or values of the wrong type.
     #[error("{location}: {message}")]
-    Toml { location: Location, message: String },
+    Toml {
+        /// Where.
+        location: Location,
+        /// The `toml` crate's message.
+        message: String,
+    },
+    /// An expression (Lagrangian, constraint, force, wall, parameter) does not parse or
+    /// names something unknown.
     #[error("{location}: in `{key}`: {error}\n{caret}")]
-    Expression { location: Location, key: String, error: Box<ParseError>, caret: String },
+    Expression {
+        /// Where the error is, inside the expression's string.
+        location: Location,
+        /// The key holding the expression, e.g. `constraints.g1.expression`.
+        key: String,
+        /// The parser's error.
+        error: Box<ParseError>,
+        /// The expression with a caret under the error's position.
+        caret: String,
+    },
+    /// A value is out of range, a name clashes, the initial state is inadmissible, ….
     #[error("{location}: {message}")]
-    Invalid { location: Location, message: String },
+    Invalid {
+        /// Where.
+        location: Location,
+        /// What is wrong.
+        message: String,
+    },
+    /// A `--set` (or sweep) assignment is malformed or names no parameter.
     #[error("--set {assignment}: {message}")]
-    Override { assignment: String, message: String },
+    Override {
+        /// The assignment as given.
+        assignment: String,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// A number or an expression of the scene's parameters, e.g. `0.5` or `"pi/6"`.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum NumOrExpr {
+    /// A number.
     Num(f64),
+    /// An expression of the parameters and `pi`.
     Expr(String),
 }
 
@@ -108,19 +145,24 @@ pub enum HessianMode {
     Exact,
 }
 
+/// The `[scene]` table.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneMeta {
+    /// The scene's name (in summaries and provenance).
     pub name: String,
+    /// Free text.
     #[serde(default)]
     pub description: String,
     /// L(q, q̇) in terms of coordinates `x`, velocities `x_dot` and parameters.
     pub lagrangian: Spanned<String>,
 }
 
+/// One `[[coordinates]]` entry.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CoordinateSpec {
+    /// The coordinate's name; `<name>_dot` is its velocity in expressions.
     pub name: Spanned<String>,
     /// Initial value q_i(t_start).
     pub initial: Spanned<NumOrExpr>,
@@ -128,17 +170,21 @@ pub struct CoordinateSpec {
     pub velocity: Spanned<NumOrExpr>,
 }
 
+/// One `[[constraints]]` entry: a velocity constraint.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConstraintSpec {
+    /// The constraint's name (columns `lambda_<name>`, `residual_<name>`).
     pub name: Spanned<String>,
     /// g(q, q̇) = 0, linear or nonlinear in the velocities.
     pub expression: Spanned<String>,
 }
 
+/// One `[[walls]]` entry: a regularized wall with optional friction.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct WallSpec {
+    /// The wall's name (column `gap_<name>`, keys of per-wall diagnostics).
     pub name: Spanned<String>,
     /// h(q): the allowed side is h ≤ 0.
     pub h: Spanned<String>,
@@ -158,30 +204,43 @@ pub struct WallSpec {
     pub friction_velocity: Option<Spanned<NumOrExpr>>,
 }
 
+/// The `[time]` table: the time grid.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimeSpec {
+    /// Start time t_i (where the initial state is given).
     pub start: Spanned<NumOrExpr>,
+    /// End time t_f.
     pub end: Spanned<NumOrExpr>,
+    /// Number of grid nodes N.
     pub nodes: Spanned<i64>,
 }
 
+/// The `[discretization]` table.
 #[derive(Debug, Clone, Deserialize, Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct DiscretizationSpec {
+    /// The SBP operator's name (default SBP242).
     #[serde(default)]
     pub operator: Option<Spanned<String>>,
+    /// The formulation (default reduced).
     #[serde(default)]
     pub formulation: Option<Formulation>,
 }
 
+/// The `[solver]` table: Ipopt's settings.
 #[derive(Debug, Clone, Deserialize, Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
+    /// Ipopt's `tol` and `constr_viol_tol` (default 1e-11).
     pub tol: Option<f64>,
+    /// Ipopt's `max_iter` (default 100).
     pub max_iter: Option<u32>,
+    /// Ipopt's console `print_level` (default 0: silent).
     pub print_level: Option<i32>,
+    /// Ipopt's `linear_solver` (default: Ipopt's).
     pub linear_solver: Option<String>,
+    /// The Hessian given to Ipopt (default zero).
     pub hessian: Option<HessianMode>,
     /// Ipopt log file, relative to the output directory.
     pub log_file: Option<String>,
@@ -195,8 +254,11 @@ pub struct SolverSpec {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum IpoptValue {
+    /// An integer option.
     Int(i32),
+    /// A numeric option.
     Num(f64),
+    /// A string option.
     Str(String),
 }
 
@@ -204,20 +266,28 @@ pub enum IpoptValue {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
+    /// `[scene]`: name, description, Lagrangian.
     pub scene: SceneMeta,
+    /// `[parameters]`: named numbers or expressions of other parameters.
     #[serde(default)]
     pub parameters: IndexMap<String, Spanned<NumOrExpr>>,
+    /// `[[coordinates]]`, in order.
     pub coordinates: Vec<CoordinateSpec>,
+    /// `[[constraints]]`, in order.
     #[serde(default)]
     pub constraints: Vec<ConstraintSpec>,
     /// Generalized forces, one expression per coordinate name.
     #[serde(default)]
     pub forces: IndexMap<String, Spanned<String>>,
+    /// `[[walls]]`, in order.
     #[serde(default)]
     pub walls: Vec<WallSpec>,
+    /// `[time]`.
     pub time: TimeSpec,
+    /// `[discretization]`.
     #[serde(default)]
     pub discretization: DiscretizationSpec,
+    /// `[solver]`.
     #[serde(default)]
     pub solver: SolverSpec,
     /// Path and source text, for error positions.
@@ -229,8 +299,11 @@ pub struct SceneFile {
 /// 1-based, columns counted in characters). Displayed as `file:line:col`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Location {
+    /// The file, as the user named it.
     pub file: String,
+    /// 1-based line, if known.
     pub line: Option<usize>,
+    /// 1-based column in characters, if known.
     pub col: Option<usize>,
 }
 
@@ -257,7 +330,9 @@ impl fmt::Display for Location {
 /// Where a scene came from, to turn byte spans into `file:line:column`.
 #[derive(Debug, Clone, Default)]
 pub struct Origin {
+    /// The file, as the user named it.
     pub path: String,
+    /// Its whole text.
     pub text: String,
 }
 
@@ -302,10 +377,15 @@ impl Origin {
 pub struct Overrides {
     /// `name=value` parameter assignments (value: number or expression).
     pub set: Vec<(String, String)>,
+    /// Number of nodes N.
     pub nodes: Option<usize>,
+    /// SBP operator.
     pub operator: Option<OperatorKind>,
+    /// Formulation.
     pub formulation: Option<Formulation>,
+    /// Hessian given to Ipopt.
     pub hessian: Option<HessianMode>,
+    /// Ipopt's iteration limit.
     pub max_iter: Option<u32>,
 }
 
@@ -325,43 +405,69 @@ impl Overrides {
 /// Settings of the Ipopt solve, resolved.
 #[derive(Debug, Clone, Serialize)]
 pub struct SolverSettings {
+    /// Ipopt's `tol` and `constr_viol_tol`.
     pub tol: f64,
+    /// Ipopt's `max_iter`.
     pub max_iter: u32,
+    /// Ipopt's console `print_level`.
     pub print_level: i32,
+    /// Ipopt's `linear_solver`, if set.
     pub linear_solver: Option<String>,
+    /// The Hessian given to Ipopt.
     pub hessian: HessianMode,
     /// Ipopt's log file; the scene gives it relative to the output directory and the
     /// caller of the solve joins it to that directory.
     pub log_file: Option<PathBuf>,
+    /// Further Ipopt options, passed through verbatim.
     pub ipopt: IndexMap<String, IpoptValue>,
 }
 
-/// A wall, resolved to numbers (its `h` expression is parsed by the model).
+/// A wall, resolved to numbers (its `h` and friction direction expressions are parsed
+/// by the model).
 #[derive(Debug, Clone, Serialize)]
 pub struct Wall {
+    /// The wall's name.
     pub name: String,
+    /// A in F_N = −A δ_σ(h) ∇h (≥ 0).
     pub strength: f64,
+    /// σ, the width of the Gaussian δ_σ (> 0).
     pub width: f64,
+    /// Kinetic friction coefficient μ (≥ 0; 0 = no friction force).
     pub friction: f64,
+    /// ε in |v∥| ≈ sqrt(|v∥|² + ε²) (> 0; default 1e-3).
     pub friction_velocity: f64,
 }
 
 /// A validated scene: every number resolved, every name checked.
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// The file it was resolved from (expressions, spans, origin).
     pub file: SceneFile,
+    /// The scene's name.
     pub name: String,
+    /// Parameter values, in declaration order, overrides applied.
     pub parameters: IndexMap<String, f64>,
+    /// Coordinate names, in order.
     pub coordinates: Vec<String>,
+    /// Initial coordinates q(t_start).
     pub initial_q: Vec<f64>,
+    /// Initial velocities q̇(t_start).
     pub initial_v: Vec<f64>,
+    /// Constraint names, in order.
     pub constraints: Vec<String>,
+    /// Walls, in order.
     pub walls: Vec<Wall>,
+    /// Start time.
     pub t_start: f64,
+    /// End time (> start).
     pub t_end: f64,
+    /// Number of grid nodes N (at least the operator's minimum).
     pub nodes: usize,
+    /// The SBP operator.
     pub operator: OperatorKind,
+    /// The formulation.
     pub formulation: Formulation,
+    /// Ipopt's settings.
     pub solver: SolverSettings,
 }
 

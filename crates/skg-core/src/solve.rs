@@ -36,55 +36,75 @@ const FAR_FROM_TIME_STEPPING: f64 = 0.1;
 /// an error: it is an [`Outcome`] whose [`SolveStatus`] says so).
 #[derive(Debug, thiserror::Error)]
 pub enum SolveError {
+    /// The scene's model cannot be built (an expression, the initial state).
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// The SBP operator cannot be built on the scene's grid.
     #[error(transparent)]
     Sbp(#[from] SbpError),
+    /// Ipopt could not be run (options, sizes, a callback error it did not recover from).
     #[error(transparent)]
     Ipopt(#[from] ipopt::SolveError),
 }
 
+/// Where a solve's wall time went, in seconds.
 #[derive(Debug, Clone, Serialize)]
 pub struct Timings {
     /// Parsing, symbolic derivatives, tapes, sparsity structure.
     pub setup_s: f64,
+    /// Time stepping for the initial guess.
     pub initial_guess_s: f64,
     /// Wall time of the Ipopt call, split into time in our callbacks and inside Ipopt.
     pub ipopt_total_s: f64,
+    /// Time in our callbacks (residual, Jacobian, Hessian).
     pub evaluation_s: f64,
+    /// Time inside Ipopt (mostly the linear solver).
     pub ipopt_internal_s: f64,
+    /// Trajectory, end multipliers and diagnostics from the solution.
     pub postprocess_s: f64,
     /// Writing files (filled in by the output module).
     pub output_s: f64,
 }
 
+/// The sizes of the problem handed to Ipopt.
 #[derive(Debug, Clone, Serialize)]
 pub struct Sizes {
+    /// Grid nodes N.
     pub nodes: usize,
+    /// Coordinates d.
     pub coordinates: usize,
+    /// Velocity constraints n.
     pub constraints: usize,
+    /// Walls.
     pub walls: usize,
+    /// Unknowns of the system (P for the reduced formulation, Z for the full one).
     pub variables: usize,
+    /// Equations (as many as unknowns: the system is square).
     pub equations: usize,
+    /// Nonzeros of the Jacobian's structure.
     pub jacobian_nonzeros: usize,
+    /// Nonzeros of the Hessian's structure (0 unless the exact Hessian is used).
     pub hessian_nonzeros: usize,
+    /// Instructions of the residual and Jacobian tapes.
     pub tape_instructions: usize,
 }
 
+/// Checks of the solution: residuals, energy, walls, distance from time stepping.
 #[derive(Debug, Clone, Serialize)]
 pub struct Diagnostics {
     /// max |c| of the system handed to Ipopt (unscaled), at the returned point.
     pub max_residual: f64,
     /// max |equation of motion| at interior nodes, unweighted (force units).
     pub max_eom_residual: f64,
-    /// max |g^a| over interior nodes, and at the last node (not enforced there).
+    /// max |g^a| over interior nodes.
     pub max_constraint_interior: f64,
+    /// max |g^a| at the last node, where the constraints are not enforced.
     pub constraint_last_node: f64,
     /// max |E_k − E_1| of the total energy E = energy + wall_energy over nodes 1..N−2
-    /// (the last two excluded: their equations are the boundary closure) and over all
-    /// nodes. Conserved up to the discretization error unless friction or other
-    /// non-conservative forces act.
+    /// (the last two excluded: their equations are the boundary closure). Conserved up
+    /// to the discretization error unless friction or other non-conservative forces act.
     pub energy_drift: f64,
+    /// The same over all nodes.
     pub energy_drift_all: f64,
     /// Largest wall gap h (positive = penetration), per wall (keyed by the wall's name).
     pub max_wall_gap: IndexMap<String, f64>,
@@ -92,27 +112,39 @@ pub struct Diagnostics {
     /// spurious critical point or a too coarse grid.
     pub distance_from_time_stepping: Option<f64>,
     /// Contact episodes per wall (maximal runs of nodes in contact, [`contact`]; keyed by
-    /// the wall's name) in the
-    /// solution and in the time-stepping solution on the same nodes. A difference means an extra
-    /// or a missing bounce: a spurious critical point (docs/solver.md) or a too coarse grid;
-    /// the solve then adds a warning.
+    /// the wall's name) in the solution. A difference from the time-stepping solution
+    /// means an extra or a missing bounce: a spurious critical point (docs/solver.md) or
+    /// a too coarse grid; the solve then adds a warning.
     pub contact_episodes: IndexMap<String, usize>,
+    /// The same for the time-stepping solution on the same nodes (if time stepping
+    /// succeeded).
     pub contact_episodes_time_stepping: Option<IndexMap<String, usize>>,
     /// max |q-|, |λ-| of the full formulation's solution (0 in the physical limit).
     pub max_minus_variable: Option<f64>,
 }
 
+/// The settings a solve ran with.
 #[derive(Debug, Clone, Serialize)]
 pub struct Settings {
+    /// The SBP operator's name.
     pub operator: String,
+    /// Grid nodes N.
     pub nodes: usize,
+    /// Start time.
     pub t_start: f64,
+    /// End time.
     pub t_end: f64,
+    /// The formulation.
     pub formulation: Formulation,
+    /// The Hessian given to Ipopt.
     pub hessian: HessianMode,
+    /// Ipopt's tolerance.
     pub tol: f64,
+    /// Ipopt's iteration limit.
     pub max_iter: u32,
+    /// The scene's parameter values.
     pub parameters: IndexMap<String, f64>,
+    /// How the initial guess was made.
     pub initial_guess: String,
 }
 
@@ -207,19 +239,29 @@ impl Serialize for SolveStatus {
 /// Everything a solve produced.
 #[derive(Debug, Clone, Serialize)]
 pub struct Outcome {
+    /// The scene's name.
     pub scene: String,
     /// How the solve ended (serialized as the fields `converged`, `status`,
     /// `status_text` and `solve_status`).
     #[serde(flatten)]
     pub status: SolveStatus,
+    /// The Ipopt version the tool was built against.
     pub ipopt_version: String,
+    /// Ipopt's iterations.
     pub iterations: usize,
+    /// The settings the solve ran with.
     pub settings: Settings,
+    /// The sizes of the problem.
     pub sizes: Sizes,
+    /// Where the time went.
     pub timings: Timings,
+    /// Checks of the solution.
     pub diagnostics: Diagnostics,
+    /// Suspicions about the solution (spurious critical point, residual too large, …).
     pub warnings: Vec<String>,
+    /// Ipopt's iteration table.
     pub history: Vec<ipopt::IterationStat>,
+    /// The solution at the nodes (written as trajectory.csv, not into the summary).
     #[serde(skip)]
     pub trajectory: Trajectory,
 }

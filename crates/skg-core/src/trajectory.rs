@@ -16,11 +16,11 @@ pub type NodeSeries = Vec<Vec<f64>>;
 /// States at the nodes: coordinates, velocities and multipliers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct States {
-    /// q[k][i]: coordinate i at node k.
+    /// `q[k][i]`: coordinate i at node k.
     pub q: NodeSeries,
-    /// v[k][i]: velocity of coordinate i at node k.
+    /// `v[k][i]`: velocity of coordinate i at node k.
     pub v: NodeSeries,
-    /// λ[k][a]: multiplier of constraint a at node k.
+    /// `λ[k][a]`: multiplier of constraint a at node k.
     pub lambda: NodeSeries,
 }
 
@@ -29,11 +29,11 @@ pub struct States {
 pub struct Trajectory {
     /// Node times.
     pub t: Vec<f64>,
-    /// q[k][i]: coordinate i at node k.
+    /// `q[k][i]`: coordinate i at node k.
     pub q: NodeSeries,
-    /// v[k][i]: velocity i at node k (for a solve, the SBP derivative Dq of the solution).
+    /// `v[k][i]`: velocity i at node k (for a solve, the SBP derivative Dq of the solution).
     pub v: NodeSeries,
-    /// λ[k][a]; for a solve, interior nodes from the solve, end nodes from a
+    /// `λ[k][a]`; for a solve, interior nodes from the solve, end nodes from a
     /// least-squares solve of the node's equation of motion.
     pub lambda: NodeSeries,
     /// v·∂L/∂v − L (without the walls' potential, nonzero only in contact).

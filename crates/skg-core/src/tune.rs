@@ -43,7 +43,9 @@ pub const CONTACT_GUARD: usize = 3;
 /// The energy artifact of a solution and how many nodes it was measured on.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Artifact {
+    /// The relative energy artifact A.
     pub value: f64,
+    /// The number of free nodes it was measured on.
     pub free_nodes: usize,
 }
 
@@ -77,13 +79,15 @@ pub struct TuneOptions {
     pub param: Option<String>,
     /// Tolerance on the relative energy artifact.
     pub tol: f64,
-    /// Initial bracket; defaults: hi = the scene's value, lo = hi/8.
+    /// Lower end of the initial bracket (default: hi/8).
     pub lo: Option<f64>,
+    /// Upper end of the initial bracket (default: the scene's value).
     pub hi: Option<f64>,
     /// Stop when hi/lo < 1 + rel.
     pub rel: f64,
     /// Most solves in the bisection phase.
     pub max_solves: usize,
+    /// Last nodes left out of the artifact (the boundary closure).
     pub skip_last: usize,
 }
 
@@ -96,27 +100,34 @@ impl Default for TuneOptions {
 /// One solve of the search.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TuneStep {
+    /// The parameter's value.
     pub value: f64,
     /// How the solve ended (serialized as `converged`, `status`, `status_text`,
     /// `solve_status`).
     #[serde(flatten)]
     pub status: SolveStatus,
+    /// The energy artifact of the solution.
     pub artifact: f64,
     /// Converged and artifact ≤ tol.
     pub ok: bool,
+    /// Wall time of the solve, in seconds.
     pub wall_s: f64,
 }
 
 /// Result of [`tune_width`].
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TuneResult {
+    /// The tuned parameter.
     pub param: String,
+    /// The number of nodes N of every solve.
     pub nodes: usize,
+    /// The tolerance on the energy artifact.
     pub tol: f64,
     /// The smallest value found without artifacts.
     pub chosen: f64,
     /// The largest value found with artifacts (or failing), if any.
     pub failing: Option<f64>,
+    /// Every solve, in order.
     pub steps: Vec<TuneStep>,
     /// Notes (e.g. the lower end of the bracket had no artifacts either).
     pub notes: Vec<String>,
