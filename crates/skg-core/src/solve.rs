@@ -428,72 +428,158 @@ pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
 /// Solve with an already built action (`started` marks the beginning of setup).
 pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<Outcome, SolveError> {
     let (times, _) = grid(scene);
-    let lay = &action.layout;
-    let mut warnings = Vec::new();
-    let formulation = scene.formulation;
-    let hessian = scene.solver.hessian;
-    let jac_block = match formulation {
-        Formulation::Reduced => Block::ReducedJacobian,
-        Formulation::Full => Block::FullJacobian,
-    };
-    let jac = action.plan(jac_block);
-    let hess = (formulation == Formulation::Reduced && hessian == HessianMode::Exact).then(|| action.plan(Block::ReducedHessian));
+    let (jac, hess) = matrix_plans(scene, action);
     let setup_s = started.elapsed().as_secs_f64();
+    let sizes = sizes(scene, action, &jac, hess.as_ref());
 
     let t_guess = Instant::now();
+    let mut warnings = Vec::new();
     let (z0, guess_desc, ts_q) = initial_guess(action, &times, &mut warnings);
     let initial_guess_s = t_guess.elapsed().as_secs_f64();
 
-    let options = ipopt::Options {
-        tol: scene.solver.tol,
-        constr_viol_tol: scene.solver.tol,
-        max_iter: scene.solver.max_iter,
-        print_level: scene.solver.print_level,
-        linear_solver: scene.solver.linear_solver.clone(),
-        output_file: scene.solver.log_file.clone(),
+    let (solution, z) = run_ipopt(scene.formulation, action, jac, hess, &z0, &ipopt_options(scene))?;
+
+    let t_post = Instant::now();
+    let (trajectory, max_eom) = evaluate(action, &times, &z);
+    let diagnostics = diagnose(action, &trajectory, max_eom, &z, solution.max_constraint_violation, scene.formulation, ts_q.as_deref());
+    let postprocess_s = t_post.elapsed().as_secs_f64();
+
+    let status = SolveStatus::classify(solution.status, diagnostics.max_residual);
+    warnings.extend(suspicions(&diagnostics, ts_q.as_deref(), status));
+    Ok(Outcome {
+        scene: scene.name.clone(),
+        status,
+        ipopt_version: ipopt::ipopt_version().to_string(),
+        iterations: solution.iterations,
+        settings: settings(scene, guess_desc),
+        sizes,
+        timings: Timings {
+            setup_s,
+            initial_guess_s,
+            ipopt_total_s: solution.total_seconds,
+            evaluation_s: solution.total_seconds - solution.ipopt_seconds,
+            ipopt_internal_s: solution.ipopt_seconds,
+            postprocess_s,
+            output_s: 0.0,
+        },
+        diagnostics,
+        warnings,
+        history: solution.history,
+        trajectory,
+    })
+}
+
+/// The sparsity plans of the Jacobian of the scene's formulation and, for the reduced
+/// formulation with the exact Hessian, of the Hessian.
+fn matrix_plans(scene: &Scene, action: &Action) -> (MatrixPlan, Option<MatrixPlan>) {
+    let jac_block = match scene.formulation {
+        Formulation::Reduced => Block::ReducedJacobian,
+        Formulation::Full => Block::FullJacobian,
+    };
+    let exact_hessian = scene.formulation == Formulation::Reduced && scene.solver.hessian == HessianMode::Exact;
+    (action.plan(jac_block), exact_hessian.then(|| action.plan(Block::ReducedHessian)))
+}
+
+/// Ipopt's options for a scene: its `[solver]` settings, then the pass-through options.
+fn ipopt_options(scene: &Scene) -> ipopt::Options {
+    let solver = &scene.solver;
+    let pass_through = solver.ipopt.iter().map(|(k, v)| {
+        let v = match v {
+            IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
+            IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
+            IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
+        };
+        (k.clone(), v)
+    });
+    ipopt::Options {
+        tol: solver.tol,
+        constr_viol_tol: solver.tol,
+        max_iter: solver.max_iter,
+        print_level: solver.print_level,
+        linear_solver: solver.linear_solver.clone(),
+        output_file: solver.log_file.clone(),
         // MUMPS's default scaling (77, automatic) made the very first factorization of
         // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
         // on Debian's MUMPS 5.5). The scene's own [solver.ipopt] options come after and
         // override it.
-        extra: std::iter::once(("mumps_scaling".to_string(), ipopt::OptionValue::Int(0)))
-            .chain(scene.solver.ipopt.iter().map(|(k, v)| {
-                let v = match v {
-                    IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
-                    IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
-                    IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
-                };
-                (k.clone(), v)
-            }))
-            .collect(),
+        extra: std::iter::once(("mumps_scaling".to_string(), ipopt::OptionValue::Int(0))).chain(pass_through).collect(),
         ..ipopt::Options::default()
-    };
-    let jacobian_nonzeros = jac.structure.len();
-    let hessian_nonzeros = hess.as_ref().map_or(0, |h| h.structure.len());
-    let (solution, z) = match formulation {
+    }
+}
+
+/// Solve the formulation's square system with Ipopt from `z0`; returns Ipopt's solution
+/// and the whole unknown vector Z (the minus block zero for the reduced formulation).
+fn run_ipopt(
+    formulation: Formulation,
+    action: &Action,
+    jac: MatrixPlan,
+    hess: Option<MatrixPlan>,
+    z0: &[f64],
+    options: &ipopt::Options,
+) -> Result<(ipopt::Solution, Vec<f64>), SolveError> {
+    let lay = &action.layout;
+    Ok(match formulation {
         Formulation::Reduced => {
-            let mut p = Reduced { action, z: z0.clone(), ws: action.model.workspace(), jac, hess };
-            let sol = ipopt::solve(&mut p, &z0[..lay.n_p], &options)?;
+            let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac, hess };
+            let sol = ipopt::solve(&mut p, &z0[..lay.n_p], options)?;
             let mut z = vec![0.0; lay.len()];
             z[..lay.n_p].copy_from_slice(&sol.x);
             (sol, z)
         }
         Formulation::Full => {
             let mut p = Full { action, ws: action.model.workspace(), jac };
-            let sol = ipopt::solve(&mut p, &z0, &options)?;
+            let sol = ipopt::solve(&mut p, z0, options)?;
             let z = sol.x.clone();
             (sol, z)
         }
+    })
+}
+
+/// The settings a scene is solved with.
+fn settings(scene: &Scene, initial_guess: String) -> Settings {
+    Settings {
+        operator: scene.operator.name().to_string(),
+        nodes: scene.nodes,
+        t_start: scene.t_start,
+        t_end: scene.t_end,
+        formulation: scene.formulation,
+        hessian: scene.solver.hessian,
+        tol: scene.solver.tol,
+        max_iter: scene.solver.max_iter,
+        parameters: scene.parameters.clone(),
+        initial_guess,
+    }
+}
+
+/// The sizes of the system handed to Ipopt.
+fn sizes(scene: &Scene, action: &Action, jac: &MatrixPlan, hess: Option<&MatrixPlan>) -> Sizes {
+    let (lay, model) = (&action.layout, &action.model);
+    let (variables, equations) = match scene.formulation {
+        Formulation::Reduced => (lay.n_p, lay.n_m),
+        Formulation::Full => (lay.len(), lay.len()),
     };
+    Sizes {
+        nodes: scene.nodes,
+        coordinates: lay.d,
+        constraints: lay.n,
+        walls: model.walls.len(),
+        variables,
+        equations,
+        jacobian_nonzeros: jac.structure.len(),
+        hessian_nonzeros: hess.map_or(0, |h| h.structure.len()),
+        tape_instructions: model.minus_gradient.len() + model.mixed.tape.len(),
+    }
+}
 
-    let t_post = Instant::now();
-    let (trajectory, max_eom) = evaluate(action, &times, &z);
-    let diagnostics = diagnose(action, &trajectory, max_eom, &z, solution.max_constraint_violation, formulation, ts_q.as_deref());
-    let postprocess_s = t_post.elapsed().as_secs_f64();
-
-    let status = SolveStatus::classify(solution.status, diagnostics.max_residual);
-    if let (Some(dist), Some(ts)) = (diagnostics.distance_from_time_stepping, &ts_q) {
+/// Warnings about a solution: far from time stepping, a contact episode more or less
+/// than time stepping (a spurious critical point or a grid too coarse), or Ipopt's
+/// success contradicted by the unscaled residual.
+fn suspicions(diagnostics: &Diagnostics, ts_q: Option<&[Vec<f64>]>, status: SolveStatus) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if let (Some(dist), Some(ts)) = (diagnostics.distance_from_time_stepping, ts_q) {
         // Scale: the largest range of a coordinate over the time-stepping trajectory.
-        let scale = (0..lay.d)
+        let d = ts.first().map_or(0, Vec::len);
+        let scale = (0..d)
             .map(|i| {
                 let (lo, hi) = ts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| (lo.min(q[i]), hi.max(q[i])));
                 hi - lo
@@ -520,60 +606,7 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
     if let SolveStatus::ResidualTooLarge { residual, .. } = status {
         warnings.push(format!("Ipopt reported success but the unscaled residual is {residual:.3e} (> 1e-8): not counted as converged"));
     }
-    let model = &action.model;
-    Ok(Outcome {
-        scene: scene.name.clone(),
-        status,
-        ipopt_version: ipopt::ipopt_version().to_string(),
-        iterations: solution.iterations,
-        settings: Settings {
-            operator: scene.operator.name().to_string(),
-            nodes: scene.nodes,
-            t_start: scene.t_start,
-            t_end: scene.t_end,
-            formulation,
-            hessian,
-            tol: scene.solver.tol,
-            max_iter: scene.solver.max_iter,
-            parameters: scene.parameters.clone(),
-            initial_guess: guess_desc,
-        },
-        sizes: Sizes {
-            nodes: scene.nodes,
-            coordinates: lay.d,
-            constraints: lay.n,
-            walls: model.walls.len(),
-            variables: match formulation {
-                Formulation::Reduced => lay.n_p,
-                Formulation::Full => lay.len(),
-            },
-            equations: match formulation {
-                Formulation::Reduced => lay.n_m,
-                Formulation::Full => lay.len(),
-            },
-            jacobian_nonzeros,
-            hessian_nonzeros,
-            tape_instructions: model.minus_gradient.len() + model.mixed.tape.len(),
-        },
-        timings: Timings {
-            setup_s,
-            initial_guess_s,
-            ipopt_total_s: solution.total_seconds,
-            evaluation_s: solution.total_seconds - solution.ipopt_seconds,
-            ipopt_internal_s: solution.ipopt_seconds,
-            postprocess_s,
-            output_s: 0.0,
-        },
-        diagnostics,
-        warnings,
-        history: solution.history,
-        trajectory,
-    })
-}
-
-/// Coordinates, velocities, multipliers and physical quantities at every node.
-pub fn trajectory(action: &Action, times: &[f64], z: &[f64]) -> Trajectory {
-    evaluate(action, times, z).0
+    warnings
 }
 
 /// The trajectory and the largest equation-of-motion residual
