@@ -42,7 +42,7 @@
 use std::fmt;
 
 use crate::model::{Model, Workspace};
-use crate::ode::{self, EventHit, OdeOptions, OdeStats, RhsError};
+use crate::ode::{self, EventHit, OdeOptions, OdeSolution, OdeStats, RhsError};
 use crate::scenario::{Scene, SceneError};
 use crate::time_stepping::{integrate_model, min_spacing, rhs, split_states};
 use crate::trajectory::Trajectory;
@@ -434,6 +434,43 @@ fn reflect(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<
     Ok((v_new.iter().copied().collect(), vn / n_norm))
 }
 
+/// The velocity along wall `j` (its normal part removed in the kinetic metric `w`) if the
+/// wall pushes the particle at (q, v) sliding along it (normal force `N > 0`); `None` if
+/// the particle would leave it.
+fn slide_if_pushed(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<f64>) -> Result<Option<Vec<f64>>, HardWallError> {
+    let vt = project(model, j, q, v, w).ok_or(HardWallError::SingularKineticMatrix)?;
+    let (_, big_n) = sliding(model, &mut model.workspace(), j, q, &vt)?;
+    Ok((big_n > 0.0).then_some(vt))
+}
+
+/// Integrate from the state `y` over the sample times `ts`: in free flight (no contact)
+/// up to the first impact, the first upward zero crossing of the largest gap; or sliding
+/// on wall `j` up to lift-off, where the normal force falls to zero.
+fn integrate_phase(
+    model: &Model,
+    contact: Option<usize>,
+    y: &[f64],
+    ts: &[f64],
+    opts: &OdeOptions,
+) -> Result<(OdeSolution, Option<EventHit>), ode::OdeError> {
+    let d = model.layout.d;
+    let mut ws = model.workspace();
+    match contact {
+        None => ode::integrate_to_event(rhs(model, &mut ws), y, ts, opts, |_, y| max_gap(model, &y[..d]).1),
+        Some(j) => {
+            let mut ws_event = model.workspace();
+            let slide = |_: f64, y: &[f64], dy: &mut [f64]| -> Result<(), RhsError> {
+                let (a, _) = sliding(model, &mut ws, j, &y[..d], &y[d..])?;
+                dy[..d].copy_from_slice(&y[d..]);
+                dy[d..].copy_from_slice(&a);
+                Ok(())
+            };
+            let lift_off = |_: f64, y: &[f64]| sliding(model, &mut ws_event, j, &y[..d], &y[d..]).map_or(f64::NAN, |(_, n)| -n);
+            ode::integrate_to_event(slide, y, ts, opts, lift_off)
+        }
+    }
+}
+
 /// Impacts after which the hard-wall integration gives up (a Zeno sequence means the
 /// particle is coming to rest on a wall: sustained contact).
 const MAX_IMPACTS: usize = 10_000;
@@ -468,15 +505,11 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
     if h0 >= -on_wall_tol {
         // Starting on a wall: slide along it if it pushes, else leave it.
         let w = kinetic(&y[..d], &y[d..]);
-        let vt = project(&model, j0, &y[..d], &y[d..], &w).ok_or(HardWallError::SingularKineticMatrix)?;
-        let mut ws = model.workspace();
-        let (_, big_n) = sliding(&model, &mut ws, j0, &y[..d], &vt)?;
-        if big_n > 0.0 {
-            y[d..].copy_from_slice(&vt);
-            contact = Some((j0, times[0]));
-        } else {
+        let Some(vt) = slide_if_pushed(&model, j0, &y[..d], &y[d..], &w)? else {
             return Err(HardWallError::StartsLeaving { wall: model.walls[j0].name.clone() }.into());
-        }
+        };
+        y[d..].copy_from_slice(&vt);
+        contact = Some((j0, times[0]));
     }
 
     let mut states: Vec<Vec<f64>> = Vec::with_capacity(times.len());
@@ -493,30 +526,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
             ts.push(t_cur);
         }
         ts.extend_from_slice(&times[states.len()..]);
-        let (sol, hit) = match contact {
-            None => {
-                let mut ws = model.workspace();
-                ode::integrate_to_event(rhs(&model, &mut ws), &y, &ts, &ode_opts, |_, y| max_gap(&model, &y[..d]).1)?
-            }
-            Some((j, _)) => {
-                let mut ws = model.workspace();
-                let mut ws_e = model.workspace();
-                let model_ref = &model;
-                ode::integrate_to_event(
-                    move |_, y: &[f64], dy: &mut [f64]| {
-                        let (a, _) = sliding(model_ref, &mut ws, j, &y[..d], &y[d..])?;
-                        dy[..d].copy_from_slice(&y[d..]);
-                        dy[d..].copy_from_slice(&a);
-                        Ok(())
-                    },
-                    &y,
-                    &ts,
-                    &ode_opts,
-                    // Lift-off: the normal force falls to zero.
-                    |_, y| sliding(&model, &mut ws_e, j, &y[..d], &y[d..]).map_or(f64::NAN, |(_, n)| -n),
-                )?
-            }
-        };
+        let (sol, hit) = integrate_phase(&model, contact.map(|(j, _)| j), &y, &ts, &ode_opts)?;
         stats.accepted += sol.stats.accepted;
         stats.rejected += sol.stats.rejected;
         stats.rhs_evals += sol.stats.rhs_evals;
@@ -539,10 +549,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         impacts.push(Impact { t, wall: model.walls[j].name.clone(), normal_speed: vn, q: ye[..d].to_vec() });
         if vn.abs() <= 1e-7 * vscale {
             // Grazing arrival: slide along the wall if it pushes back.
-            let vt = project(&model, j, &ye[..d], &ye[d..], &w).ok_or(HardWallError::SingularKineticMatrix)?;
-            let mut ws = model.workspace();
-            let (_, big_n) = sliding(&model, &mut ws, j, &ye[..d], &vt)?;
-            if big_n > 0.0 {
+            if let Some(vt) = slide_if_pushed(&model, j, &ye[..d], &ye[d..], &w)? {
                 contact = Some((j, t));
                 y = ye[..d].iter().chain(&vt).copied().collect();
                 if states.len() == times.len() {
