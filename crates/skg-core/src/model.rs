@@ -18,6 +18,13 @@
 //!
 //! Sign convention: varying `q-` gives `d/dt p = f + F − Σ_a λ_a ∂g^a/∂q̇`; the
 //! multipliers reported are the `λ` of this action.
+//!
+//! [`Model::build`] parses the scene's expressions into one graph (each exactly once),
+//! adds the walls' Gaussian normal and friction forces, derives `p`, `f`, `G` and `s`,
+//! and compiles the derivative tapes and a tape of physical quantities
+//! ([`Model::physical`]). The model keeps the walls' geometry (gap, normal, curvature,
+//! friction direction) for the hard-wall reference, which builds the same model without
+//! wall forces ([`Model::with_hard_walls`]).
 
 use crate::scenario::{Scene, SceneError, Wall, WallSpec, VELOCITY_SUFFIX};
 use nalgebra::{DMatrix, DVector};
@@ -641,11 +648,13 @@ impl Model {
         Self::build_with(scene, WallModel::Hard)
     }
 
+    /// Parse the scene's expressions, add the walls' forces as `wall_model` says, derive
+    /// the mechanics and the node density, compile the tapes, check the initial state.
     fn build_with(scene: &Scene, wall_model: WallModel) -> Result<Model, SceneError> {
         let lay = LocalLayout { d: scene.coordinates.len(), n: scene.constraints.len() };
         let mut e = Expressions::parse(scene, lay)?;
         let mut g = std::mem::take(&mut e.graph);
-        let mut forces = e.forces.clone();
+        let mut forces = std::mem::take(&mut e.forces);
         if wall_model == WallModel::Gaussian {
             for (wall, w) in scene.walls.iter().zip(&e.walls) {
                 let delta = add_normal_force(&mut g, wall, w, &mut forces);
