@@ -50,6 +50,30 @@ fn solve_writes_csv_and_summary() {
     assert!(common::text(&o).contains("trajectory.csv"), "prints where the output went");
 }
 
+/// summary.json says which program and which scene produced it, and keys per-wall
+/// diagnostics by the wall's name.
+#[test]
+fn summary_carries_provenance_and_per_wall_entries_by_name() {
+    use sha2::{Digest, Sha256};
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scenario("tumbler");
+    let o = common::skg(&[scene.to_str().unwrap(), "-o", "res", "-q"], dir.path());
+    assert!(o.status.success(), "{}", common::text(&o));
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("res/summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["skg_solve_version"], skg_core::provenance::VERSION);
+    assert_eq!(summary["skg_solve_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(summary["schema_version"], skg_core::provenance::SCHEMA_VERSION);
+    let digest = Sha256::digest(std::fs::read(&scene).unwrap());
+    let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
+    assert_eq!(summary["scene_hash"], format!("sha256:{hex}"));
+    let d = &summary["diagnostics"];
+    assert!(d["max_wall_gap"]["drum"].as_f64().unwrap() < 0.0, "{d}");
+    assert_eq!(d["contact_episodes"], serde_json::json!({ "drum": 2 }));
+    assert_eq!(d["contact_episodes_time_stepping"], serde_json::json!({ "drum": 2 }));
+    assert_eq!(summary["solve_status"], "converged");
+    assert_eq!(summary["status_text"], "solved to the requested tolerance");
+}
+
 #[test]
 fn non_converged_solve_exits_3_and_marks_the_summary() {
     let dir = tempfile::tempdir().unwrap();
@@ -60,6 +84,8 @@ fn non_converged_solve_exits_3_and_marks_the_summary() {
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("res/summary.json")).unwrap()).unwrap();
     assert_eq!(summary["converged"], false);
     assert_eq!(summary["status"], "Maximum_Iterations_Exceeded");
+    assert_eq!(summary["solve_status"], "not_converged");
+    assert_eq!(summary["status_text"], "maximum number of iterations exceeded");
 }
 
 #[test]
@@ -146,7 +172,9 @@ fn bad_override_and_operator_names() {
     assert!(common::text(&o).contains("SBP242"), "lists the valid operators: {}", common::text(&o));
     let o = common::skg(&["missing.toml"], dir.path());
     assert_eq!(o.status.code(), Some(1));
-    assert!(common::text(&o).contains("cannot read scene file missing.toml"), "{}", common::text(&o));
+    let t = common::text(&o);
+    assert!(t.contains("cannot read scene file missing.toml"), "{t}");
+    assert_eq!(t.matches("No such file").count(), 1, "the cause is printed once: {t}");
 }
 
 #[test]

@@ -27,7 +27,7 @@ fn ref_table(scene: &Scene, r: &reference::Reference) -> Table {
 /// the same grid, last two nodes excluded (the end nodes' benign boundary error).
 fn discretization_error(name: &str, nodes: usize, op: &str) -> (f64, Outcome) {
     let (e, o) = try_discretization_error(name, nodes, op);
-    assert!(o.converged, "{name} {op} N={nodes}: {} after {} iterations", o.status_text, o.iterations);
+    assert!(o.converged(), "{name} {op} N={nodes}: {} after {} iterations", o.status, o.iterations);
     (e, o)
 }
 
@@ -36,7 +36,7 @@ fn try_discretization_error(name: &str, nodes: usize, op: &str) -> (f64, Outcome
     let ov = common::grid(nodes, op);
     let scene = common::load(name, &ov);
     let o = solve::solve_scene(&scene).unwrap();
-    if !o.converged {
+    if !o.converged() {
         return (f64::NAN, o);
     }
     let (times, _) = solve::grid(&scene);
@@ -91,7 +91,7 @@ fn measure() {
                 let t = std::time::Instant::now();
                 let (e, o) = try_discretization_error(name, n, op);
                 let s = t.elapsed().as_secs_f64();
-                if !o.converged {
+                if !o.converged() {
                     println!("| {name} | {op} | {n} | no convergence ({}, {} iterations) | | {s:.2} |", o.status, o.iterations);
                     continue;
                 }

@@ -3,29 +3,17 @@
 
 mod common;
 
-use common::G;
+use std::ops::Range;
 
+use common::G;
+use skg_core::contact;
 use skg_core::scenario::Overrides;
 use skg_core::solve::Outcome;
 
-/// Contact episodes: maximal runs of nodes where the wall is within 6σ (h > −6σ).
-/// Beyond 6σ the Gaussian force is below e⁻¹⁸ ≈ 1.5e-8 of its peak: free flight.
-fn contact_episodes(o: &Outcome, sigma: f64) -> Vec<(usize, usize)> {
-    let h: Vec<f64> = o.trajectory.h.iter().map(|h| h[0]).collect();
-    let mut episodes = Vec::new();
-    let mut k = 0;
-    while k < h.len() {
-        if h[k] > -6.0 * sigma {
-            let start = k;
-            while k < h.len() && h[k] > -6.0 * sigma {
-                k += 1;
-            }
-            episodes.push((start, k - 1));
-        } else {
-            k += 1;
-        }
-    }
-    episodes
+/// Contact episodes of the scene's single wall (h > −6σ, [`skg_core::contact`]): beyond
+/// 6σ the Gaussian force is below e⁻¹⁸ ≈ 1.5e-8 of its peak: free flight.
+fn contact_episodes(o: &Outcome, sigma: f64) -> Vec<Range<usize>> {
+    contact::episodes(o.trajectory.h.iter().map(|h| h[0]), sigma)
 }
 
 /// Largest |E_k − E_0| of the mechanical energy over the free-flight nodes (outside
@@ -34,7 +22,7 @@ fn free_flight_energy_error(o: &Outcome, sigma: f64) -> f64 {
     let tr = &o.trajectory;
     let n = tr.t.len();
     let episodes = contact_episodes(o, sigma);
-    let in_contact = |k: usize| episodes.iter().any(|&(a, b)| a <= k && k <= b);
+    let in_contact = |k: usize| episodes.iter().any(|r| r.contains(&k));
     let e0 = tr.energy[0];
     (0..n - 2).filter(|&k| !in_contact(k)).map(|k| (tr.energy[k] - e0).abs() / e0.abs()).fold(0.0, f64::max)
 }
@@ -46,8 +34,8 @@ fn tumbler_bounces_twice_and_energy_returns_after_each_bounce() {
     assert_eq!(o.settings.nodes, 256);
     let episodes = contact_episodes(&o, sigma);
     let t = &o.trajectory.t;
-    assert_eq!(episodes.len(), 2, "contact episodes {:?}", episodes.iter().map(|&(a, b)| (t[a], t[b])).collect::<Vec<_>>());
-    for &(a, b) in &episodes {
+    assert_eq!(episodes.len(), 2, "contact episodes {:?}", episodes.iter().map(|r| (t[r.start], t[r.end - 1])).collect::<Vec<_>>());
+    for (a, b) in episodes.iter().map(|r| (r.start, r.end - 1)) {
         assert!(b + 1 < t.len() && t[b] < 0.5, "bounce must end within the 0.5 s span");
         // A bounce, not a graze: the gap reaches the wall's core (|h| < 1σ).
         let deepest = (a..=b).map(|k| o.trajectory.h[k][0]).fold(f64::NEG_INFINITY, f64::max);
@@ -119,7 +107,7 @@ fn check_incline(name: &str, mu: f64) {
     // It slides: the mass moves down the slope by ½|a|T² (within the same bound).
     assert!(s[keep - 1] < s[0] - 0.3, "{name}: did not slide");
     // And never passes through the plane.
-    assert!(o.diagnostics.max_wall_gap[0] < 0.0, "{name}: penetrated the plane");
+    assert!(o.diagnostics.max_wall_gap["plane"] < 0.0, "{name}: penetrated the plane");
 }
 
 #[test]
@@ -132,6 +120,11 @@ fn frictionless_incline_slides_with_g_sin_alpha() {
     check_incline("incline_frictionless", 0.0);
 }
 
+/// A per-wall diagnostic as (wall name, value) pairs in the scene's order.
+fn per_wall<'a, V: Copy + 'a>(m: impl IntoIterator<Item = (&'a String, &'a V)>) -> Vec<(&'a str, V)> {
+    m.into_iter().map(|(k, v)| (k.as_str(), *v)).collect()
+}
+
 /// docs/solver.md: wall scenes have spurious discrete critical points. On a grid far too
 /// coarse for σ = 1/110 (N = 48: Δt ≈ 0.011 s, about the duration of a contact) Ipopt
 /// converges to a trajectory with one bounce where the physics has two; the solve
@@ -141,10 +134,10 @@ fn a_spurious_solution_with_a_missing_bounce_is_flagged() {
     let scene = common::load("tumbler", &Overrides { nodes: Some(48), ..Default::default() });
     let o = skg_core::solve::solve_scene(&scene).unwrap();
     let d = &o.diagnostics;
-    assert_eq!(d.contact_episodes_time_stepping.as_deref(), Some(&[2][..]));
-    assert_ne!(d.contact_episodes, vec![2], "N=48 unexpectedly found both bounces");
+    assert_eq!(d.contact_episodes_time_stepping.as_ref().map(per_wall), Some(vec![("drum", 2)]));
+    assert_ne!(per_wall(&d.contact_episodes), vec![("drum", 2)], "N=48 unexpectedly found both bounces");
     assert!(o.warnings.iter().any(|w| w.contains("contact episode") && w.contains("spurious")), "{:?}", o.warnings);
     let good = common::solve("tumbler", &Overrides::default());
-    assert_eq!(good.diagnostics.contact_episodes, vec![2]);
+    assert_eq!(per_wall(&good.diagnostics.contact_episodes), vec![("drum", 2)]);
     assert!(good.warnings.is_empty(), "{:?}", good.warnings);
 }

@@ -67,8 +67,8 @@ fn main() -> ExitCode {
 fn max_error() -> Result<(usize, f64), String> {
     let scene = SceneFile::parse(SCENE, "in-code").and_then(|f| f.resolve(&Overrides::default())).map_err(|e| e.to_string())?;
     let outcome = solve::solve_scene(&scene).map_err(|e| e.to_string())?;
-    if !outcome.converged {
-        return Err(format!("the solve did not converge: {}", outcome.status_text));
+    if !outcome.converged() {
+        return Err(format!("the solve did not converge: {}", outcome.status));
     }
     let trajectory = &outcome.trajectory;
     let errors = trajectory.t.iter().zip(&trajectory.q).map(|(t, q)| (q[0] - (OMEGA * t).cos()).abs());

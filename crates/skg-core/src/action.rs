@@ -30,29 +30,41 @@ const NONE: u32 = u32::MAX;
 /// Index bookkeeping of the global unknown vector `Z = [P, M]`.
 #[derive(Debug, Clone)]
 pub struct GlobalLayout {
+    /// Coordinates per node.
     pub d: usize,
+    /// Constraints per node.
     pub n: usize,
+    /// Grid nodes N.
     pub nodes: usize,
-    /// Z index of q+[k][i] at `k*d + i`.
+    /// Z index of `q+[k][i]` at `k*d + i`.
     pub qp: Vec<u32>,
-    /// Z index of λ+[k][a] at `k*n + a` (NONE at the pinned end nodes).
+    /// Z index of `λ+[k][a]` at `k*n + a` (NONE at the pinned end nodes).
     pub lp: Vec<u32>,
+    /// Z index of the multiplier of `q-[1] = 0`, per coordinate.
     pub nu_q1: Vec<u32>,
+    /// Z index of the multiplier of `q-[N] = 0`, per coordinate.
     pub nu_qn: Vec<u32>,
+    /// Z index of the multiplier of `λ-[1] = 0`, per constraint.
     pub nu_l1: Vec<u32>,
+    /// Z index of the multiplier of `λ-[N] = 0`, per constraint.
     pub nu_ln: Vec<u32>,
-    /// Z index of q-[k][i].
+    /// Z index of `q-[k][i]`.
     pub qm: Vec<u32>,
-    /// Z index of λ-[k][a].
+    /// Z index of `λ-[k][a]`.
     pub lm: Vec<u32>,
+    /// Z index of the multiplier of the initial condition `q+[1] = q_i`, per coordinate.
     pub nu_x: Vec<u32>,
+    /// Z index of the multiplier of the initial condition `(Dq+)[1] = q̇_i`, per coordinate.
     pub nu_v: Vec<u32>,
     /// Size of P (= size of M).
     pub n_p: usize,
+    /// Size of M.
     pub n_m: usize,
 }
 
 impl GlobalLayout {
+    /// The layout for `d` coordinates and `n` constraints on `nodes` nodes: P first
+    /// (node by node, then the boundary multipliers on minus variables), then M.
     pub fn new(d: usize, n: usize, nodes: usize) -> Self {
         let next = std::cell::Cell::new(0u32);
         let take = || {
@@ -103,6 +115,7 @@ impl GlobalLayout {
         self.len() == 0
     }
 
+    /// Whether Z index `z` belongs to the plus block P.
     pub fn is_plus(&self, z: u32) -> bool {
         (z as usize) < self.n_p
     }
@@ -121,6 +134,7 @@ pub enum Block {
 
 /// A sparse matrix's structure and the recipe to fill its values.
 pub struct MatrixPlan {
+    /// The block it fills.
     pub block: Block,
     /// (row, col) of each nonzero in the target's numbering.
     pub structure: Vec<(u32, u32)>,
@@ -132,10 +146,15 @@ pub struct MatrixPlan {
 
 /// The discrete action of one scene on one grid.
 pub struct Action {
+    /// The scene's model (the node density and its derivatives).
     pub model: Model,
+    /// The SBP operator on the grid.
     pub op: SbpOperator,
+    /// Where each unknown lives in Z.
     pub layout: GlobalLayout,
+    /// Initial coordinates q_i.
     pub q0: Vec<f64>,
+    /// Initial velocities q̇_i.
     pub v0: Vec<f64>,
     /// Node map T: for node k and local variable a, entries `map[offsets[k*m+a]..offsets[k*m+a+1]]`.
     offsets: Vec<u32>,
@@ -149,6 +168,8 @@ pub struct Action {
 }
 
 impl Action {
+    /// The discrete action of `model` on the grid of `op` with initial state (q0, v0):
+    /// the node map T and the boundary terms.
     pub fn new(model: Model, op: SbpOperator, q0: Vec<f64>, v0: Vec<f64>) -> Action {
         let (d, n) = (model.layout.d, model.layout.n);
         let nodes = op.len();
@@ -158,14 +179,14 @@ impl Action {
         let mut map = Vec::new();
         offsets.push(0u32);
         for k in 0..nodes {
-            let (cols, coefs) = op.row(k);
+            let row = op.row(k);
             for a in 0..m {
                 let (kind, c) = model.layout.kind(a);
                 match kind {
                     LocalKind::Q => map.push((layout.qp[k * d + c], 1.0)),
                     LocalKind::W => map.push((layout.qm[k * d + c], 1.0)),
-                    LocalKind::V => map.extend(cols.iter().zip(coefs).map(|(&j, &cf)| (layout.qp[j * d + c], cf))),
-                    LocalKind::Dw => map.extend(cols.iter().zip(coefs).map(|(&j, &cf)| (layout.qm[j * d + c], cf))),
+                    LocalKind::V => map.extend(row.iter().map(|&(j, cf)| (layout.qp[j * d + c], cf))),
+                    LocalKind::Dw => map.extend(row.iter().map(|&(j, cf)| (layout.qm[j * d + c], cf))),
                     LocalKind::Lambda => {
                         let z = layout.lp[k * n + c];
                         if z != NONE {
@@ -185,8 +206,7 @@ impl Action {
             bilinear.push((layout.nu_qn[i], layout.qm[last * d + i], 1.0));
             bilinear.push((layout.nu_x[i], layout.qp[i], 1.0));
             linear.push((layout.nu_x[i], -q0[i]));
-            let (cols, coefs) = op.row(0);
-            for (&j, &cf) in cols.iter().zip(coefs) {
+            for (j, cf) in op.row(0) {
                 bilinear.push((layout.nu_v[i], layout.qp[j * d + i], cf));
             }
             linear.push((layout.nu_v[i], -v0[i]));

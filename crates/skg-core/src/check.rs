@@ -24,17 +24,38 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::scenario::Scene;
-use crate::solve::Trajectory;
+use crate::trajectory::Trajectory;
 
 /// Errors of reading or comparing tables.
 #[derive(Debug, thiserror::Error)]
 pub enum CheckError {
+    /// The file cannot be read.
     #[error("cannot read {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A line of the table is malformed.
     #[error("{path}:{line}: {message}")]
-    Parse { path: String, line: usize, message: String },
+    Parse {
+        /// The file.
+        path: String,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// The table as a whole is unusable (no header, no rows).
     #[error("{path}: {message}")]
-    Invalid { path: String, message: String },
+    Invalid {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The two tables cannot be compared (no shared column, times out of range, …).
     #[error("cannot compare: {0}")]
     Mismatch(String),
 }
@@ -42,9 +63,11 @@ pub enum CheckError {
 /// A numeric table read from CSV. The first column is `t`; `#` lines are comments.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Table {
+    /// Column names, `t` first.
     pub columns: Vec<String>,
     /// Comment lines without their leading `#` and one following space.
     pub comments: Vec<String>,
+    /// One row per time, in the order of `columns`.
     pub rows: Vec<Vec<f64>>,
 }
 
@@ -151,6 +174,7 @@ pub struct CheckOptions {
 /// Error of one column.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ColumnError {
+    /// The column's name.
     pub column: String,
     /// max |solution − reference| over the compared rows.
     pub max_abs: f64,
@@ -163,6 +187,7 @@ pub struct ColumnError {
 /// Result of [`compare`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Comparison {
+    /// Errors of each compared column.
     pub columns: Vec<ColumnError>,
     /// Largest `max_abs` over the compared columns.
     pub max_abs: f64,
@@ -170,6 +195,7 @@ pub struct Comparison {
     pub worst_column: String,
     /// Solution rows compared (after `skip_last`).
     pub rows_compared: usize,
+    /// Last solution rows left out.
     pub skipped_last: usize,
     /// Rows where the reference had to be interpolated (0 when the grids coincide).
     pub rows_interpolated: usize,

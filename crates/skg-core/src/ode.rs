@@ -38,7 +38,7 @@
 //! is unspecified. The method itself is ~200 lines, so it is implemented here.
 //!
 //! # Failures of the right-hand side
-//! `f` may return `Err(message)`, and a non-finite derivative counts as a failure too. A
+//! `f` may return `Err(RhsError)`, and a non-finite derivative counts as a failure too. A
 //! failure at the very first evaluation (the initial state) is returned at once as
 //! [`OdeError::Rhs`]. A failure in a trial stage of a step rejects the step and retries it
 //! with half the step size (a trial stage may leave the region where `f` is defined while
@@ -84,20 +84,51 @@ pub struct OdeStats {
     pub rhs_evals: usize,
 }
 
+/// Why the right-hand side `f(t, y)` could not be evaluated: the caller's message (e.g.
+/// "the constrained mass matrix is singular"), or a non-finite derivative.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct RhsError(pub String);
+
+impl From<&str> for RhsError {
+    fn from(message: &str) -> Self {
+        RhsError(message.to_string())
+    }
+}
+
+impl From<String> for RhsError {
+    fn from(message: String) -> Self {
+        RhsError(message)
+    }
+}
+
 /// Failure of [`integrate`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum OdeError {
     /// The right-hand side returned an error (or a non-finite value) at time `t`, and
     /// shrinking the step did not get past it.
-    #[error("the right-hand side failed at t = {t}: {msg}")]
-    Rhs { t: f64, msg: String },
+    #[error("the right-hand side failed at t = {t}: {error}")]
+    Rhs {
+        /// Where the right-hand side failed.
+        t: f64,
+        /// Why.
+        error: RhsError,
+    },
     /// The step size fell below the round-off limit at time `t` (stiffness or a
     /// singularity of the solution).
     #[error("step size underflow at t = {t}")]
-    StepTooSmall { t: f64 },
+    StepTooSmall {
+        /// Where the step size underflowed.
+        t: f64,
+    },
     /// `max_steps` step attempts were used up at time `t`.
     #[error("maximum number of steps ({steps}) reached at t = {t}")]
-    MaxSteps { t: f64, steps: usize },
+    MaxSteps {
+        /// Where the integration stopped.
+        t: f64,
+        /// The step attempts made.
+        steps: usize,
+    },
     /// Invalid arguments (times, initial state, options).
     #[error("bad input: {0}")]
     BadInput(String),
@@ -123,11 +154,11 @@ pub struct OdeSolution {
 /// entry is the start time and the last one the end time, which the integration hits
 /// exactly. Intermediate times are filled from the 7th-order dense output, so requesting
 /// many of them costs little. `f(t, y, dy)` writes the derivative into `dy` (zero-filled
-/// before each call) and may fail with `Err(message)`; see the module documentation for
+/// before each call) and may fail with an [`RhsError`]; see the module documentation for
 /// how failures are handled.
 pub fn integrate<F>(f: F, y0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<OdeSolution, OdeError>
 where
-    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>,
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
 {
     run(f, y0, times, opts, None::<fn(f64, &[f64]) -> f64>).map(|(sol, _)| sol)
 }
@@ -165,7 +196,7 @@ pub fn integrate_to_event<F, E>(
     event: E,
 ) -> Result<(OdeSolution, Option<EventHit>), OdeError>
 where
-    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>,
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
     E: FnMut(f64, &[f64]) -> f64,
 {
     run(f, y0, times, opts, Some(event))
@@ -176,7 +207,7 @@ const EVENT_SAMPLES: [f64; 4] = [0.25, 0.5, 0.75, 1.0];
 
 fn run<F, E>(f: F, y0: &[f64], times: &[f64], opts: &OdeOptions, mut event: Option<E>) -> Result<(OdeSolution, Option<EventHit>), OdeError>
 where
-    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>,
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
     E: FnMut(f64, &[f64]) -> f64,
 {
     validate(y0, times, opts)?;
@@ -194,14 +225,14 @@ where
 
     let mut s = Dop853::new(f, y0, opts);
     let mut t = t0;
-    s.eval(t, Stage::Y, 0).map_err(|msg| OdeError::Rhs { t, msg })?;
+    s.eval(t, Stage::Y, 0).map_err(|error| OdeError::Rhs { t, error })?;
     let hmax = opts.max_step.unwrap_or(f64::INFINITY).min(t_end - t0);
     let mut h = match opts.initial_step {
         Some(h0) => h0.min(hmax),
         None => s.hinit(t, hmax),
     };
     let mut reject = false;
-    let mut last_failure: Option<(f64, String)> = None;
+    let mut last_failure: Option<(f64, RhsError)> = None;
     let mut attempts = 0usize;
 
     loop {
@@ -211,7 +242,7 @@ where
         let hmin = 10.0 * f64::EPSILON * t.abs().max(t_end.abs());
         if h.is_nan() || h <= hmin {
             return Err(match last_failure.take() {
-                Some((t, msg)) => OdeError::Rhs { t, msg },
+                Some((t, error)) => OdeError::Rhs { t, error },
                 None => OdeError::StepTooSmall { t },
             });
         }
@@ -236,7 +267,7 @@ where
             let t_new = if last { t_end } else { t + h };
             // First stage of the next step, and the dense output if a sample lies inside.
             let needs_dense = times[next] < t_new || event.is_some();
-            let extra = s.eval(t_new, Stage::YNew, 12).map_err(|msg| (t_new, msg)).and_then(|()| {
+            let extra = s.eval(t_new, Stage::YNew, 12).map_err(|error| (t_new, error)).and_then(|()| {
                 if needs_dense {
                     s.dense_stages(t, h)
                 } else {
@@ -389,7 +420,7 @@ struct Dop853<F> {
 
 impl<F> Dop853<F>
 where
-    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>,
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
 {
     fn new(f: F, y0: &[f64], opts: &OdeOptions) -> Self {
         let n = y0.len();
@@ -409,7 +440,7 @@ where
     }
 
     /// `k[stage] = f(t, state)`; a non-finite derivative counts as a failure.
-    fn eval(&mut self, t: f64, state: Stage, stage: usize) -> Result<(), String> {
+    fn eval(&mut self, t: f64, state: Stage, stage: usize) -> Result<(), RhsError> {
         self.stats.rhs_evals += 1;
         let y = match state {
             Stage::Y => &self.y,
@@ -420,13 +451,13 @@ where
         dy.fill(0.0);
         (self.f)(t, y, dy)?;
         if let Some(i) = dy.iter().position(|v| !v.is_finite()) {
-            return Err(format!("the right-hand side returned a non-finite value in component {i}"));
+            return Err(RhsError(format!("the right-hand side returned a non-finite value in component {i}")));
         }
         Ok(())
     }
 
     /// Stage `i`: `tmp = y + h Σ_j a_ij k_j`, `k_i = f(t + c_i h, tmp)`.
-    fn stage(&mut self, t: f64, h: f64, i: usize) -> Result<(), (f64, String)> {
+    fn stage(&mut self, t: f64, h: f64, i: usize) -> Result<(), (f64, RhsError)> {
         self.tmp.copy_from_slice(&self.y);
         for (j, &a) in tableau::A[i].iter().enumerate() {
             if a != 0.0 {
@@ -437,11 +468,11 @@ where
             }
         }
         let ti = t + tableau::C[i] * h;
-        self.eval(ti, Stage::Tmp, i).map_err(|msg| (ti, msg))
+        self.eval(ti, Stage::Tmp, i).map_err(|error| (ti, error))
     }
 
     /// Stages 1..=11 and the new solution `ynew = y + h Σ b_j k_j`.
-    fn main_stages(&mut self, t: f64, h: f64) -> Result<(), (f64, String)> {
+    fn main_stages(&mut self, t: f64, h: f64) -> Result<(), (f64, RhsError)> {
         for i in 1..12 {
             self.stage(t, h, i)?;
         }
@@ -485,7 +516,7 @@ where
 
     /// The three extra stages of the dense output and the interpolation coefficients
     /// (needs `k[12] = f(t + h, ynew)`).
-    fn dense_stages(&mut self, t: f64, h: f64) -> Result<(), (f64, String)> {
+    fn dense_stages(&mut self, t: f64, h: f64) -> Result<(), (f64, RhsError)> {
         for i in 13..16 {
             self.stage(t, h, i)?;
         }
@@ -911,9 +942,9 @@ mod tests {
             &OdeOptions::default(),
         );
         match res {
-            Err(OdeError::Rhs { t, msg }) => {
+            Err(OdeError::Rhs { t, error }) => {
                 assert!((t - 0.5).abs() < 1e-9, "t = {t}");
-                assert_eq!(msg, "mass matrix is singular");
+                assert_eq!(error, RhsError::from("mass matrix is singular"));
             }
             other => panic!("expected OdeError::Rhs, got {other:?}"),
         }

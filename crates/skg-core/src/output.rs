@@ -1,19 +1,39 @@
-//! Output files: the trajectory CSV and the JSON summary, each written atomically
-//! (a temporary file in the target directory, flushed, then renamed over the target),
-//! so an interrupted or failed run never leaves a half-written file.
+//! Output files: the trajectory CSV and the JSON summary of a solve, the CSV of a
+//! reference, each written atomically (a temporary file in the target directory,
+//! flushed, then renamed over the target), so an interrupted or failed run never leaves
+//! a half-written file. The end of the data flow: it reads what [`crate::solve`] and
+//! [`crate::reference`] produced and writes it.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::scenario::Scene;
-use crate::solve::{Outcome, Trajectory};
+use serde::Serialize;
 
+use crate::provenance;
+use crate::reference::{self, Reference};
+use crate::scenario::Scene;
+use crate::solve::Outcome;
+use crate::trajectory::Trajectory;
+
+/// Why an output file could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
+    /// Creating, writing or renaming the file failed.
     #[error("cannot write {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The target file or directory.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The value could not be serialized.
     #[error("cannot write {path}: {message}")]
-    Format { path: PathBuf, message: String },
+    Format {
+        /// The target file.
+        path: PathBuf,
+        /// The serializer's message.
+        message: String,
+    },
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
@@ -106,7 +126,7 @@ pub fn write_csv(path: &Path, comment: Option<&str>, header: &[String], rows: &[
 }
 
 /// Write a value as pretty JSON.
-pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), OutputError> {
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), OutputError> {
     let text = serde_json::to_string_pretty(value).map_err(|e| OutputError::Format { path: path.to_path_buf(), message: e.to_string() })?;
     write_atomic(path, |w| {
         w.write_all(text.as_bytes())?;
@@ -114,7 +134,21 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), Out
     })
 }
 
-/// Write `trajectory.csv` and `summary.json` of a solve into `dir`.
+/// What `summary.json` holds: where it came from ([`crate::provenance`]), then the
+/// fields of the [`Outcome`].
+#[derive(Serialize)]
+struct Summary<'a> {
+    /// The skg-solve version that wrote the file.
+    skg_solve_version: &'static str,
+    /// The version of the file's layout.
+    schema_version: u32,
+    /// SHA-256 of the scene file's text (`sha256:<hex>`).
+    scene_hash: String,
+    #[serde(flatten)]
+    outcome: &'a Outcome,
+}
+
+/// Write `trajectory.csv` and `summary.json` of a solve of `scene` into `dir`.
 pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result<(PathBuf, PathBuf), OutputError> {
     let t = std::time::Instant::now();
     let csv_path = dir.join("trajectory.csv");
@@ -122,8 +156,21 @@ pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result
     let header = trajectory_header(scene);
     write_csv(&csv_path, None, &header, &trajectory_rows(&outcome.trajectory))?;
     outcome.timings.output_s = t.elapsed().as_secs_f64();
-    write_json(&json_path, outcome)?;
+    let summary = Summary {
+        skg_solve_version: provenance::VERSION,
+        schema_version: provenance::SCHEMA_VERSION,
+        scene_hash: scene.file.origin.content_hash(),
+        outcome,
+    };
+    write_json(&json_path, &summary)?;
     Ok((csv_path, json_path))
+}
+
+/// Write a reference as a trajectory CSV with its provenance ([`reference::provenance`])
+/// as `#` lines; `scene_path` is the scene file as the user named it.
+pub fn write_reference(path: &Path, scene: &Scene, scene_path: &str, r: &Reference) -> Result<(), OutputError> {
+    let comment = reference::provenance(scene, scene_path, r);
+    write_csv(path, Some(&comment), &trajectory_header(scene), &trajectory_rows(&r.trajectory))
 }
 
 #[cfg(test)]

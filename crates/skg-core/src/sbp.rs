@@ -28,8 +28,6 @@
 use std::fmt;
 use std::str::FromStr;
 
-use sprs::CsMat;
-
 /// A fraction `numerator / denominator` of two integers.
 pub type Frac = (i64, i64);
 
@@ -245,20 +243,47 @@ impl FromStr for OperatorKind {
 pub enum SbpError {
     /// The grid has fewer nodes than the operator's two boundary blocks need.
     #[error("{kind} needs at least {min} grid nodes, got {nodes}")]
-    TooFewNodes { kind: OperatorKind, nodes: usize, min: usize },
+    TooFewNodes {
+        /// The operator.
+        kind: OperatorKind,
+        /// The nodes asked for.
+        nodes: usize,
+        /// The operator's minimum ([`OperatorKind::min_nodes`]).
+        min: usize,
+    },
     /// The time step is not finite and positive.
     #[error("the time step must be finite and positive, got {0}")]
     BadStep(f64),
 }
 
-/// An SBP first-derivative operator on a uniform grid of `n` nodes with step `dt`.
+/// An SBP first-derivative operator on a uniform grid of `n` nodes with step `dt`,
+/// applied matrix-free (as SummationByPartsOperators.jl does): the left boundary
+/// closure rows, the interior stencil on every row in between, and the right closure,
+/// which mirrors the left one with the opposite sign
+/// (`D[N−1−i, N−1−j] = −D[i, j]`, 0-based). Only the nonzero coefficients of `D`
+/// (Δt included) are stored.
 #[derive(Debug, Clone)]
 pub struct SbpOperator {
     kind: OperatorKind,
     n: usize,
     dt: f64,
     h: Vec<f64>,
-    d: CsMat<f64>,
+    /// Nonzero entries `(column, D[i, column])` of each left boundary row `i`, columns ascending.
+    left: Vec<Vec<(usize, f64)>>,
+    /// Nonzero entries `(k, D[i, i − r + k])` of the interior stencil of half-width `r`.
+    interior: Vec<(usize, f64)>,
+    /// Half-width `r` of the interior stencil.
+    radius: usize,
+}
+
+/// Which part of the operator row `i` belongs to.
+enum Part {
+    /// A left boundary row (its index in the closure).
+    Left(usize),
+    /// An interior row.
+    Interior,
+    /// A right boundary row: the mirror of left boundary row `m`.
+    Right(usize),
 }
 
 impl SbpOperator {
@@ -272,51 +297,18 @@ impl SbpOperator {
             return Err(SbpError::TooFewNodes { kind, nodes: n, min });
         }
         let c = kind.coefficients();
-        let b = c.boundary.len();
-
         let mut h = vec![dt; n];
         for (i, &w) in c.norm.iter().enumerate() {
             h[i] = frac(w) * dt;
             h[n - 1 - i] = frac(w) * dt;
         }
-
-        // Assemble D row by row in CSR form, columns ascending, structural zeros left out.
-        let nnz_bound = 2 * c.boundary.iter().map(|r| r.len()).sum::<usize>() + (n - 2 * b) * c.interior.len();
-        let mut indptr = Vec::with_capacity(n + 1);
-        let mut indices = Vec::with_capacity(nnz_bound);
-        let mut data = Vec::with_capacity(nnz_bound);
-        indptr.push(0);
-        let r = c.interior.len() / 2;
-        for i in 0..n {
-            if i < b {
-                for (j, &v) in c.boundary[i].iter().enumerate() {
-                    if v.0 != 0 {
-                        indices.push(j);
-                        data.push(frac(v) / dt);
-                    }
-                }
-            } else if i >= n - b {
-                // Mirror of left row m = n-1-i: D[i, n-1-j] = -D[m, j]; columns ascend as j descends.
-                let row = c.boundary[n - 1 - i];
-                for (j, &v) in row.iter().enumerate().rev() {
-                    if v.0 != 0 {
-                        indices.push(n - 1 - j);
-                        data.push(-frac(v) / dt);
-                    }
-                }
-            } else {
-                for (k, &v) in c.interior.iter().enumerate() {
-                    if v.0 != 0 {
-                        indices.push(i + k - r);
-                        data.push(frac(v) / dt);
-                    }
-                }
-            }
-            indptr.push(indices.len());
-        }
-        // The structure is valid by construction (sorted, in-range columns).
-        let d = CsMat::new((n, n), indptr, indices, data);
-        Ok(SbpOperator { kind, n, dt, h, d })
+        // Structural zeros are left out, so that rows list exactly the nonzero entries.
+        let nonzero = |row: &[Frac]| -> Vec<(usize, f64)> {
+            row.iter().enumerate().filter(|(_, v)| v.0 != 0).map(|(j, &v)| (j, frac(v) / dt)).collect()
+        };
+        let left = c.boundary.iter().map(|row| nonzero(row)).collect();
+        let interior = nonzero(c.interior);
+        Ok(SbpOperator { kind, n, dt, h, left, interior, radius: c.interior.len() / 2 })
     }
 
     /// The operator kind.
@@ -344,18 +336,28 @@ impl SbpOperator {
         &self.h
     }
 
-    /// The derivative matrix `D = H⁻¹Q` in CSR form (structural zeros left out).
-    pub fn d(&self) -> &CsMat<f64> {
-        &self.d
+    fn part(&self, i: usize) -> Part {
+        let b = self.left.len();
+        if i < b {
+            Part::Left(i)
+        } else if i >= self.n - b {
+            Part::Right(self.n - 1 - i)
+        } else {
+            Part::Interior
+        }
     }
 
-    /// Column indices and coefficients of row `k` of `D`, sorted by column.
+    /// The nonzero entries `(column, D[i, column])` of row `i` of `D`, sorted by column.
     ///
     /// # Panics
-    /// If `k >= self.len()`.
-    pub fn row(&self, k: usize) -> (&[usize], &[f64]) {
-        let range = self.d.indptr().outer_inds_sz(k);
-        (&self.d.indices()[range.clone()], &self.d.data()[range])
+    /// If `i >= self.len()`.
+    pub fn row(&self, i: usize) -> Vec<(usize, f64)> {
+        assert!(i < self.n, "SbpOperator::row: row {i} of an operator on {} nodes", self.n);
+        match self.part(i) {
+            Part::Left(m) => self.left[m].clone(),
+            Part::Interior => self.interior.iter().map(|&(k, c)| (i + k - self.radius, c)).collect(),
+            Part::Right(m) => self.left[m].iter().rev().map(|&(j, c)| (self.n - 1 - j, -c)).collect(),
+        }
     }
 
     /// `out = D u` without allocating.
@@ -368,8 +370,9 @@ impl SbpOperator {
         self.apply_strided(u, 1, 0, out);
     }
 
-    /// `out[k] = Σ_j D[k, j] · u[offset + j·stride]`: `D` applied to one component of
-    /// node-major interleaved data (e.g. `stride` = number of coordinates).
+    /// `out[i] = Σ_j D[i, j] · u[offset + j·stride]`: `D` applied to one component of
+    /// node-major interleaved data (e.g. `stride` = number of coordinates). Each row sums
+    /// its nonzero entries in ascending column order.
     ///
     /// # Panics
     /// If `stride == 0`, `out.len() != self.len()`, or `u` is too short for the last node.
@@ -377,30 +380,14 @@ impl SbpOperator {
         assert!(stride > 0, "SbpOperator::apply_strided: stride must be positive");
         assert_eq!(out.len(), self.n, "SbpOperator::apply_strided: out has the wrong length");
         assert!(offset + (self.n - 1) * stride < u.len(), "SbpOperator::apply_strided: u is too short");
-        let indptr = self.d.indptr();
-        let indptr = indptr.raw_storage();
-        let indices = self.d.indices();
-        let data = self.d.data();
-        for (k, o) in out.iter_mut().enumerate() {
-            let mut acc = 0.0;
-            for p in indptr[k]..indptr[k + 1] {
-                acc += data[p] * u[offset + indices[p] * stride];
-            }
-            *o = acc;
+        let at = |j: usize| u[offset + j * stride];
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = match self.part(i) {
+                Part::Left(m) => self.left[m].iter().fold(0.0, |acc, &(j, c)| acc + c * at(j)),
+                Part::Interior => self.interior.iter().fold(0.0, |acc, &(k, c)| acc + c * at(i + k - self.radius)),
+                Part::Right(m) => self.left[m].iter().rev().fold(0.0, |acc, &(j, c)| acc + -c * at(self.n - 1 - j)),
+            };
         }
-    }
-
-    /// `Q = H D` (same sparsity as `D`); `Q + Qᵀ = diag(−1, 0, …, 0, 1)`.
-    pub fn q(&self) -> CsMat<f64> {
-        let indptr = self.d.indptr().raw_storage().to_vec();
-        let mut q = self.d.clone();
-        let data = q.data_mut();
-        for (k, &w) in self.h.iter().enumerate() {
-            for v in &mut data[indptr[k]..indptr[k + 1]] {
-                *v *= w;
-            }
-        }
-        q
     }
 }
 
@@ -410,11 +397,14 @@ mod tests {
     use super::*;
     use crate::convergence::fit_order;
 
-    /// Dense copy of a sparse matrix.
-    fn dense(m: &CsMat<f64>) -> Vec<Vec<f64>> {
-        let mut a = vec![vec![0.0; m.cols()]; m.rows()];
-        for (v, (i, j)) in m.iter() {
-            a[i][j] = *v;
+    /// Dense copy of `D`, assembled from its rows.
+    fn dense_d(op: &SbpOperator) -> Vec<Vec<f64>> {
+        let n = op.len();
+        let mut a = vec![vec![0.0; n]; n];
+        for (i, row) in a.iter_mut().enumerate() {
+            for (j, v) in op.row(i) {
+                row[j] = v;
+            }
         }
         a
     }
@@ -433,7 +423,6 @@ mod tests {
                     let op = SbpOperator::new(kind, n, dt).unwrap();
                     assert_eq!(op.len(), n);
                     assert_eq!(op.kind(), kind);
-                    assert!(op.d().is_csr(), "{ctx}");
 
                     // (d) H positive, symmetric, sums to the interval length.
                     let h = op.norm();
@@ -442,8 +431,9 @@ mod tests {
                         assert_eq!(h[i], h[n - 1 - i], "{ctx}");
                     }
 
-                    // (a) SBP identity Q + Qᵀ = B entrywise.
-                    let q = dense(&op.q());
+                    // (a) SBP identity Q + Qᵀ = B entrywise, Q = H D.
+                    let dd = dense_d(&op);
+                    let q: Vec<Vec<f64>> = dd.iter().zip(h).map(|(row, &w)| row.iter().map(|v| w * v).collect()).collect();
                     for i in 0..n {
                         for j in 0..n {
                             let bij = if i == 0 && j == 0 {
@@ -458,13 +448,21 @@ mod tests {
                         }
                     }
 
-                    // row() agrees with the sparse matrix and is sorted.
-                    let dd = dense(op.d());
+                    // row() lists nonzero entries sorted by column, and apply() is the
+                    // matrix with those rows: D e_j is column j.
                     for k in 0..n {
-                        let (cols, vals) = op.row(k);
-                        assert!(cols.windows(2).all(|w| w[0] < w[1]), "{ctx}");
-                        for (&c, &v) in cols.iter().zip(vals) {
-                            assert_eq!(dd[k][c], v);
+                        let row = op.row(k);
+                        assert!(row.windows(2).all(|w| w[0].0 < w[1].0), "{ctx}");
+                        assert!(row.iter().all(|&(_, v)| v != 0.0), "{ctx}: structural zero in row {k}");
+                    }
+                    let mut e = vec![0.0; n];
+                    let mut col = vec![0.0; n];
+                    for j in 0..n {
+                        e[j] = 1.0;
+                        op.apply(&e, &mut col);
+                        e[j] = 0.0;
+                        for k in 0..n {
+                            assert_eq!(col[k], dd[k][j], "{ctx}: D[{k},{j}]");
                         }
                     }
 

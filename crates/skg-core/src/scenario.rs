@@ -2,7 +2,7 @@
 //!
 //! A scene file is read in two steps. [`SceneFile::parse`] deserializes the TOML
 //! (unknown keys and type errors are reported with file, line and column by the
-//! `toml` crate). [`SceneFile::resolve`] then evaluates the parameters (numbers or
+//! `toml` crate, through [`parse_toml`], which sweep files use too). [`SceneFile::resolve`] then evaluates the parameters (numbers or
 //! expressions of other parameters), applies command-line overrides and checks
 //! every number a solve depends on. Expressions of the model itself (Lagrangian,
 //! constraints, forces, walls) are parsed later by [`crate::model`], which reports
@@ -25,23 +25,60 @@ use skg_expr::{Graph, ParseError, Symbol};
 /// the line and column.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
+    /// The scene file cannot be read.
     #[error("cannot read scene file {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file as given.
+        path: PathBuf,
+        /// Why it cannot be read.
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML, or has unknown keys or values of the wrong type.
     #[error("{location}: {message}")]
-    Toml { location: Location, message: String },
+    Toml {
+        /// Where.
+        location: Location,
+        /// The `toml` crate's message.
+        message: String,
+    },
+    /// An expression (Lagrangian, constraint, force, wall, parameter) does not parse or
+    /// names something unknown.
     #[error("{location}: in `{key}`: {error}\n{caret}")]
-    Expression { location: Location, key: String, error: Box<ParseError>, caret: String },
+    Expression {
+        /// Where the error is, inside the expression's string.
+        location: Location,
+        /// The key holding the expression, e.g. `constraints.g1.expression`.
+        key: String,
+        /// The parser's error.
+        error: Box<ParseError>,
+        /// The expression with a caret under the error's position.
+        caret: String,
+    },
+    /// A value is out of range, a name clashes, the initial state is inadmissible, ….
     #[error("{location}: {message}")]
-    Invalid { location: Location, message: String },
+    Invalid {
+        /// Where.
+        location: Location,
+        /// What is wrong.
+        message: String,
+    },
+    /// A `--set` (or sweep) assignment is malformed or names no parameter.
     #[error("--set {assignment}: {message}")]
-    Override { assignment: String, message: String },
+    Override {
+        /// The assignment as given.
+        assignment: String,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// A number or an expression of the scene's parameters, e.g. `0.5` or `"pi/6"`.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum NumOrExpr {
+    /// A number.
     Num(f64),
+    /// An expression of the parameters and `pi`.
     Expr(String),
 }
 
@@ -65,13 +102,23 @@ pub enum Formulation {
     Full,
 }
 
+/// Error of parsing a [`Formulation`] from a string.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown formulation `{input}` (expected `reduced` or `full`)")]
+pub struct ParseFormulationError {
+    /// The rejected input.
+    pub input: String,
+}
+
 impl std::str::FromStr for Formulation {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = ParseFormulationError;
+
+    /// Case-insensitive: `reduced` or `full`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s.to_ascii_lowercase().as_str() {
             "reduced" => Ok(Formulation::Reduced),
             "full" => Ok(Formulation::Full),
-            _ => Err(format!("unknown formulation `{s}` (expected `reduced` or `full`)")),
+            _ => Err(ParseFormulationError { input: s.to_string() }),
         }
     }
 }
@@ -98,19 +145,24 @@ pub enum HessianMode {
     Exact,
 }
 
+/// The `[scene]` table.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneMeta {
+    /// The scene's name (in summaries and provenance).
     pub name: String,
+    /// Free text.
     #[serde(default)]
     pub description: String,
     /// L(q, q̇) in terms of coordinates `x`, velocities `x_dot` and parameters.
     pub lagrangian: Spanned<String>,
 }
 
+/// One `[[coordinates]]` entry.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CoordinateSpec {
+    /// The coordinate's name; `<name>_dot` is its velocity in expressions.
     pub name: Spanned<String>,
     /// Initial value q_i(t_start).
     pub initial: Spanned<NumOrExpr>,
@@ -118,17 +170,21 @@ pub struct CoordinateSpec {
     pub velocity: Spanned<NumOrExpr>,
 }
 
+/// One `[[constraints]]` entry: a velocity constraint.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConstraintSpec {
+    /// The constraint's name (columns `lambda_<name>`, `residual_<name>`).
     pub name: Spanned<String>,
     /// g(q, q̇) = 0, linear or nonlinear in the velocities.
     pub expression: Spanned<String>,
 }
 
+/// One `[[walls]]` entry: a regularized wall with optional friction.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct WallSpec {
+    /// The wall's name (column `gap_<name>`, keys of per-wall diagnostics).
     pub name: Spanned<String>,
     /// h(q): the allowed side is h ≤ 0.
     pub h: Spanned<String>,
@@ -148,30 +204,43 @@ pub struct WallSpec {
     pub friction_velocity: Option<Spanned<NumOrExpr>>,
 }
 
+/// The `[time]` table: the time grid.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimeSpec {
+    /// Start time t_i (where the initial state is given).
     pub start: Spanned<NumOrExpr>,
+    /// End time t_f.
     pub end: Spanned<NumOrExpr>,
+    /// Number of grid nodes N.
     pub nodes: Spanned<i64>,
 }
 
+/// The `[discretization]` table.
 #[derive(Debug, Clone, Deserialize, Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct DiscretizationSpec {
+    /// The SBP operator's name (default SBP242).
     #[serde(default)]
     pub operator: Option<Spanned<String>>,
+    /// The formulation (default reduced).
     #[serde(default)]
     pub formulation: Option<Formulation>,
 }
 
+/// The `[solver]` table: Ipopt's settings.
 #[derive(Debug, Clone, Deserialize, Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
+    /// Ipopt's `tol` and `constr_viol_tol` (default 1e-11).
     pub tol: Option<f64>,
+    /// Ipopt's `max_iter` (default 100).
     pub max_iter: Option<u32>,
+    /// Ipopt's console `print_level` (default 0: silent).
     pub print_level: Option<i32>,
+    /// Ipopt's `linear_solver` (default: Ipopt's).
     pub linear_solver: Option<String>,
+    /// The Hessian given to Ipopt (default zero).
     pub hessian: Option<HessianMode>,
     /// Ipopt log file, relative to the output directory.
     pub log_file: Option<String>,
@@ -185,8 +254,11 @@ pub struct SolverSpec {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum IpoptValue {
+    /// An integer option.
     Int(i32),
+    /// A numeric option.
     Num(f64),
+    /// A string option.
     Str(String),
 }
 
@@ -194,20 +266,28 @@ pub enum IpoptValue {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
+    /// `[scene]`: name, description, Lagrangian.
     pub scene: SceneMeta,
+    /// `[parameters]`: named numbers or expressions of other parameters.
     #[serde(default)]
     pub parameters: IndexMap<String, Spanned<NumOrExpr>>,
+    /// `[[coordinates]]`, in order.
     pub coordinates: Vec<CoordinateSpec>,
+    /// `[[constraints]]`, in order.
     #[serde(default)]
     pub constraints: Vec<ConstraintSpec>,
     /// Generalized forces, one expression per coordinate name.
     #[serde(default)]
     pub forces: IndexMap<String, Spanned<String>>,
+    /// `[[walls]]`, in order.
     #[serde(default)]
     pub walls: Vec<WallSpec>,
+    /// `[time]`.
     pub time: TimeSpec,
+    /// `[discretization]`.
     #[serde(default)]
     pub discretization: DiscretizationSpec,
+    /// `[solver]`.
     #[serde(default)]
     pub solver: SolverSpec,
     /// Path and source text, for error positions.
@@ -219,8 +299,11 @@ pub struct SceneFile {
 /// 1-based, columns counted in characters). Displayed as `file:line:col`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Location {
+    /// The file, as the user named it.
     pub file: String,
+    /// 1-based line, if known.
     pub line: Option<usize>,
+    /// 1-based column in characters, if known.
     pub col: Option<usize>,
 }
 
@@ -247,7 +330,9 @@ impl fmt::Display for Location {
 /// Where a scene came from, to turn byte spans into `file:line:column`.
 #[derive(Debug, Clone, Default)]
 pub struct Origin {
+    /// The file, as the user named it.
     pub path: String,
+    /// Its whole text.
     pub text: String,
 }
 
@@ -292,10 +377,15 @@ impl Origin {
 pub struct Overrides {
     /// `name=value` parameter assignments (value: number or expression).
     pub set: Vec<(String, String)>,
+    /// Number of nodes N.
     pub nodes: Option<usize>,
+    /// SBP operator.
     pub operator: Option<OperatorKind>,
+    /// Formulation.
     pub formulation: Option<Formulation>,
+    /// Hessian given to Ipopt.
     pub hessian: Option<HessianMode>,
+    /// Ipopt's iteration limit.
     pub max_iter: Option<u32>,
 }
 
@@ -315,43 +405,69 @@ impl Overrides {
 /// Settings of the Ipopt solve, resolved.
 #[derive(Debug, Clone, Serialize)]
 pub struct SolverSettings {
+    /// Ipopt's `tol` and `constr_viol_tol`.
     pub tol: f64,
+    /// Ipopt's `max_iter`.
     pub max_iter: u32,
+    /// Ipopt's console `print_level`.
     pub print_level: i32,
+    /// Ipopt's `linear_solver`, if set.
     pub linear_solver: Option<String>,
+    /// The Hessian given to Ipopt.
     pub hessian: HessianMode,
     /// Ipopt's log file; the scene gives it relative to the output directory and the
     /// caller of the solve joins it to that directory.
     pub log_file: Option<PathBuf>,
+    /// Further Ipopt options, passed through verbatim.
     pub ipopt: IndexMap<String, IpoptValue>,
 }
 
-/// A wall, resolved to numbers (its `h` expression is parsed by the model).
+/// A wall, resolved to numbers (its `h` and friction direction expressions are parsed
+/// by the model).
 #[derive(Debug, Clone, Serialize)]
 pub struct Wall {
+    /// The wall's name.
     pub name: String,
+    /// A in F_N = −A δ_σ(h) ∇h (≥ 0).
     pub strength: f64,
+    /// σ, the width of the Gaussian δ_σ (> 0).
     pub width: f64,
+    /// Kinetic friction coefficient μ (≥ 0; 0 = no friction force).
     pub friction: f64,
+    /// ε in |v∥| ≈ sqrt(|v∥|² + ε²) (> 0; default 1e-3).
     pub friction_velocity: f64,
 }
 
 /// A validated scene: every number resolved, every name checked.
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// The file it was resolved from (expressions, spans, origin).
     pub file: SceneFile,
+    /// The scene's name.
     pub name: String,
+    /// Parameter values, in declaration order, overrides applied.
     pub parameters: IndexMap<String, f64>,
+    /// Coordinate names, in order.
     pub coordinates: Vec<String>,
+    /// Initial coordinates q(t_start).
     pub initial_q: Vec<f64>,
+    /// Initial velocities q̇(t_start).
     pub initial_v: Vec<f64>,
+    /// Constraint names, in order.
     pub constraints: Vec<String>,
+    /// Walls, in order.
     pub walls: Vec<Wall>,
+    /// Start time.
     pub t_start: f64,
+    /// End time (> start).
     pub t_end: f64,
+    /// Number of grid nodes N (at least the operator's minimum).
     pub nodes: usize,
+    /// The SBP operator.
     pub operator: OperatorKind,
+    /// The formulation.
     pub formulation: Formulation,
+    /// Ipopt's settings.
     pub solver: SolverSettings,
 }
 
@@ -361,23 +477,66 @@ pub const RESERVED: &[&str] = &["pi", "sin", "cos", "tan", "exp", "log", "sqrt",
 /// Suffix that turns a coordinate name into its velocity: `x` → `x_dot`.
 pub const VELOCITY_SUFFIX: &str = "_dot";
 
+/// Errors of reading a TOML input file ([`read_toml`], [`parse_toml`]).
+#[derive(Debug, thiserror::Error)]
+pub enum TomlError {
+    /// The file cannot be read.
+    #[error("cannot read {path}: {error}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        error: std::io::Error,
+    },
+    /// The text is not valid TOML or does not have the expected keys and types.
+    #[error("{location}: {message}")]
+    Parse {
+        /// Where, as precisely as the `toml` crate says.
+        location: Location,
+        /// The `toml` crate's message.
+        message: String,
+    },
+}
+
+/// Read a TOML file and deserialize it. Returns the value and its [`Origin`] (the path
+/// as given and the text), with which later errors can be located in the file.
+pub fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<(T, Origin), TomlError> {
+    let text = std::fs::read_to_string(path).map_err(|error| TomlError::Io { path: path.to_path_buf(), error })?;
+    parse_toml(&text, &path.display().to_string())
+}
+
+/// Deserialize TOML text; `path` only labels error locations (`file:line:col`).
+pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &str) -> Result<(T, Origin), TomlError> {
+    let origin = Origin { path: path.to_string(), text: text.to_string() };
+    match toml::from_str(text) {
+        Ok(value) => Ok((value, origin)),
+        Err(e) => {
+            let location = e.span().map_or_else(|| origin.whole(), |span| origin.locate(span.start));
+            Err(TomlError::Parse { location, message: e.message().trim_end().to_string() })
+        }
+    }
+}
+
+impl From<TomlError> for SceneError {
+    fn from(e: TomlError) -> Self {
+        match e {
+            TomlError::Io { path, error } => SceneError::Io { path, source: error },
+            TomlError::Parse { location, message } => SceneError::Toml { location, message },
+        }
+    }
+}
+
 impl SceneFile {
     /// Read and deserialize a scene file.
     pub fn load(path: &Path) -> Result<SceneFile, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
-        Self::parse(&text, &path.display().to_string())
+        let (mut file, origin): (SceneFile, Origin) = read_toml(path)?;
+        file.origin = origin;
+        Ok(file)
     }
 
     /// Deserialize a scene from its text; `path` only labels error messages.
     pub fn parse(text: &str, path: &str) -> Result<SceneFile, SceneError> {
-        let origin = Origin { path: path.to_string(), text: text.to_string() };
-        let mut file: SceneFile = toml::from_str(text).map_err(|e| {
-            let location = match e.span() {
-                Some(span) => origin.locate(span.start),
-                None => Location::file(path),
-            };
-            SceneError::Toml { location, message: e.message().trim_end().to_string() }
-        })?;
+        let (mut file, origin): (SceneFile, Origin) = parse_toml(text, path)?;
         file.origin = origin;
         Ok(file)
     }
@@ -422,7 +581,7 @@ impl SceneFile {
             seen.insert(r.to_string(), "a built-in name");
         }
         for p in params.keys() {
-            check_identifier(p).map_err(|m| self.toml_error(format!("parameter `{p}`: {m}")))?;
+            check_identifier(p).map_err(|e| self.toml_error(format!("parameter `{p}`: {e}")))?;
             if let Some(what) = seen.insert(p.clone(), "a parameter") {
                 return Err(self.toml_error(format!("parameter `{p}` clashes with {what}")));
             }
@@ -433,7 +592,7 @@ impl SceneFile {
         let mut coordinates = Vec::new();
         for c in &self.coordinates {
             let name = c.name.get_ref();
-            check_identifier(name).map_err(|m| self.invalid(&c.name, m))?;
+            check_identifier(name).map_err(|e| self.invalid(&c.name, e.to_string()))?;
             for key in [name.clone(), format!("{name}{VELOCITY_SUFFIX}")] {
                 if let Some(what) = seen.insert(key.clone(), "a coordinate or velocity") {
                     return Err(self.invalid(&c.name, format!("`{key}` clashes with {what}")));
@@ -451,7 +610,7 @@ impl SceneFile {
         let mut constraints = Vec::new();
         for c in &self.constraints {
             let name = c.name.get_ref();
-            check_identifier(name).map_err(|m| self.invalid(&c.name, m))?;
+            check_identifier(name).map_err(|e| self.invalid(&c.name, e.to_string()))?;
             if constraints.contains(name) {
                 return Err(self.invalid(&c.name, format!("constraint `{name}` declared twice")));
             }
@@ -467,7 +626,7 @@ impl SceneFile {
         let mut walls = Vec::new();
         for w in &self.walls {
             let name = w.name.get_ref().clone();
-            check_identifier(&name).map_err(|m| self.invalid(&w.name, m))?;
+            check_identifier(&name).map_err(|e| self.invalid(&w.name, e.to_string()))?;
             let strength = self.eval_value(&w.strength, &format!("walls.{name}.strength"), &params)?;
             if strength < 0.0 {
                 return Err(self.invalid(&w.strength, format!("wall `{name}`: strength must be ≥ 0, got {strength}")));
@@ -664,13 +823,23 @@ pub fn eval_constant(src: &str, params: &IndexMap<String, f64>) -> Result<f64, P
     Ok(g.eval(e, &[]))
 }
 
-fn check_identifier(name: &str) -> Result<(), String> {
+/// A name that cannot be a parameter, coordinate, constraint or wall.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("`{name}` is not a valid name (letters, digits and _, not starting with a digit)")]
+pub struct InvalidName {
+    /// The rejected name.
+    pub name: String,
+}
+
+/// Check that `name` is an identifier of the expression language: ASCII letters, digits
+/// and `_`, not starting with a digit.
+fn check_identifier(name: &str) -> Result<(), InvalidName> {
     let mut chars = name.chars();
     let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_') && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
     if ok {
         Ok(())
     } else {
-        Err(format!("`{name}` is not a valid name (letters, digits and _, not starting with a digit)"))
+        Err(InvalidName { name: name.to_string() })
     }
 }
 

@@ -9,9 +9,9 @@
 //! A = max |E_k − E_1| / max(max_k |E_k|, 1e-300)
 //! ```
 //!
-//! over the *free* nodes k: nodes where every wall's gap satisfies h < −6σ (the Gaussian
-//! force is below 1.5e-8 of its peak), not within 3 nodes of a node in contact (the SBP
-//! stencil of Dq reaches that far), and not among the last `skip_last` nodes (benign
+//! over the *free* nodes k: nodes in contact with no wall ([`contact::in_contact`]:
+//! every gap h ≤ −6σ, where the Gaussian force is below 1.5e-8 of its peak), not within
+//! 3 nodes of a node in contact (the SBP stencil of Dq reaches that far), and not among the last `skip_last` nodes (benign
 //! boundary nodes, docs/solver.md). A σ too small for N makes the discrete solution ring after
 //! each impact and A jumps by orders of magnitude (paper, fig. 3; docs/solver.md). A scene
 //! without walls uses every node but the last `skip_last`, so A is the relative energy
@@ -30,20 +30,22 @@
 
 use std::path::PathBuf;
 
+use crate::contact;
 use crate::scenario::{NumOrExpr, Overrides, Scene, SceneFile};
-use crate::solve::{self, Trajectory};
+use crate::solve::{self, SolveStatus};
+use crate::trajectory::Trajectory;
 
 /// Default tolerance on the relative energy artifact.
 pub const DEFAULT_ARTIFACT_TOL: f64 = 1e-5;
-/// A node is in contact when some wall's gap h > −CONTACT_WIDTHS·σ.
-pub const CONTACT_WIDTHS: f64 = 6.0;
 /// Nodes on each side of a contact node that are not counted as free.
 pub const CONTACT_GUARD: usize = 3;
 
 /// The energy artifact of a solution and how many nodes it was measured on.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Artifact {
+    /// The relative energy artifact A.
     pub value: f64,
+    /// The number of free nodes it was measured on.
     pub free_nodes: usize,
 }
 
@@ -53,7 +55,7 @@ pub fn energy_artifact(scene: &Scene, tr: &Trajectory, skip_last: usize) -> Arti
     let end = n.saturating_sub(skip_last);
     let mut contact = vec![false; n];
     for (k, h) in tr.h.iter().enumerate() {
-        if scene.walls.iter().zip(h).any(|(w, &hk)| hk > -CONTACT_WIDTHS * w.width) {
+        if scene.walls.iter().zip(h).any(|(w, &hk)| contact::in_contact(hk, w.width)) {
             let lo = k.saturating_sub(CONTACT_GUARD);
             let hi = (k + CONTACT_GUARD + 1).min(n);
             contact[lo..hi].iter_mut().for_each(|c| *c = true);
@@ -77,13 +79,15 @@ pub struct TuneOptions {
     pub param: Option<String>,
     /// Tolerance on the relative energy artifact.
     pub tol: f64,
-    /// Initial bracket; defaults: hi = the scene's value, lo = hi/8.
+    /// Lower end of the initial bracket (default: hi/8).
     pub lo: Option<f64>,
+    /// Upper end of the initial bracket (default: the scene's value).
     pub hi: Option<f64>,
     /// Stop when hi/lo < 1 + rel.
     pub rel: f64,
     /// Most solves in the bisection phase.
     pub max_solves: usize,
+    /// Last nodes left out of the artifact (the boundary closure).
     pub skip_last: usize,
 }
 
@@ -96,38 +100,85 @@ impl Default for TuneOptions {
 /// One solve of the search.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TuneStep {
+    /// The parameter's value.
     pub value: f64,
-    pub converged: bool,
-    pub status: String,
+    /// How the solve ended (serialized as `converged`, `status`, `status_text`,
+    /// `solve_status`).
+    #[serde(flatten)]
+    pub status: SolveStatus,
+    /// The energy artifact of the solution.
     pub artifact: f64,
     /// Converged and artifact ≤ tol.
     pub ok: bool,
+    /// Wall time of the solve, in seconds.
     pub wall_s: f64,
 }
 
 /// Result of [`tune_width`].
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TuneResult {
+    /// The tuned parameter.
     pub param: String,
+    /// The number of nodes N of every solve.
     pub nodes: usize,
+    /// The tolerance on the energy artifact.
     pub tol: f64,
     /// The smallest value found without artifacts.
     pub chosen: f64,
     /// The largest value found with artifacts (or failing), if any.
     pub failing: Option<f64>,
+    /// Every solve, in order.
     pub steps: Vec<TuneStep>,
     /// Notes (e.g. the lower end of the bracket had no artifacts either).
     pub notes: Vec<String>,
 }
 
+/// Why a width could not be tuned.
 #[derive(Debug, thiserror::Error)]
 pub enum TuneError {
+    /// The scene, or the scene with a trial value, is invalid.
     #[error(transparent)]
     Scene(#[from] crate::scenario::SceneError),
+    /// A solve could not be attempted.
     #[error(transparent)]
     Solve(#[from] crate::solve::SolveError),
-    #[error("{0}")]
-    Invalid(String),
+    /// No wall's width is written as a parameter, and none was named.
+    #[error("no wall's width is a parameter (write e.g. `width = \"sigma\"` with `sigma` under [parameters], or pass --param)")]
+    NoWidthParameter,
+    /// The walls' widths are several parameters, and none was named.
+    #[error("walls use several width parameters ({}): pass --param", .0.join(", "))]
+    SeveralWidthParameters(Vec<String>),
+    /// The tolerance on the artifact is not positive.
+    #[error("the tolerance must be positive, got {0}")]
+    BadTolerance(f64),
+    /// The parameter to tune is not one of the scene's.
+    #[error("the scene has no parameter `{param}` (parameters: {})", .known.join(", "))]
+    UnknownParameter {
+        /// The parameter asked for.
+        param: String,
+        /// The scene's parameters.
+        known: Vec<String>,
+    },
+    /// The starting value of the parameter is not positive.
+    #[error("`{param}` must be positive to be tuned, got {value}")]
+    NotPositive {
+        /// The parameter.
+        param: String,
+        /// Its value.
+        value: f64,
+    },
+    /// Even the largest value tried shows artifacts or fails.
+    #[error("even {param} = {value:.6e} shows energy artifacts above {tol:e} (or fails) at N = {nodes}: raise N or the tolerance")]
+    ArtifactsEverywhere {
+        /// The parameter.
+        param: String,
+        /// The largest value tried.
+        value: f64,
+        /// The tolerance on the artifact.
+        tol: f64,
+        /// The number of nodes.
+        nodes: usize,
+    },
 }
 
 /// The parameter a wall's width is written as (`width = "sigma"`), if exactly one.
@@ -143,10 +194,8 @@ pub fn width_parameter(file: &SceneFile) -> Result<String, TuneError> {
     }
     match names.len() {
         1 => Ok(names.remove(0)),
-        0 => Err(TuneError::Invalid(
-            "no wall's width is a parameter (write e.g. `width = \"sigma\"` with `sigma` under [parameters], or pass --param)".into(),
-        )),
-        _ => Err(TuneError::Invalid(format!("walls use several width parameters ({}): pass --param", names.join(", ")))),
+        0 => Err(TuneError::NoWidthParameter),
+        _ => Err(TuneError::SeveralWidthParameters(names)),
     }
 }
 
@@ -163,15 +212,13 @@ pub fn tune_width(
         None => width_parameter(file)?,
     };
     if opts.tol.is_nan() || opts.tol <= 0.0 {
-        return Err(TuneError::Invalid(format!("the tolerance must be positive, got {}", opts.tol)));
+        return Err(TuneError::BadTolerance(opts.tol));
     }
     let base = file.clone().resolve(ov)?;
-    let current = *base.parameters.get(&param).ok_or_else(|| {
-        TuneError::Invalid(format!(
-            "the scene has no parameter `{param}` (parameters: {})",
-            base.parameters.keys().cloned().collect::<Vec<_>>().join(", ")
-        ))
-    })?;
+    let current = *base
+        .parameters
+        .get(&param)
+        .ok_or_else(|| TuneError::UnknownParameter { param: param.clone(), known: base.parameters.keys().cloned().collect() })?;
     let mut steps = Vec::new();
     let mut notes = Vec::new();
     let mut eval = |value: f64, steps: &mut Vec<TuneStep>| -> Result<bool, TuneError> {
@@ -184,10 +231,9 @@ pub fn tune_width(
         let artifact = energy_artifact(&scene, &out.trajectory, opts.skip_last).value;
         let step = TuneStep {
             value,
-            converged: out.converged,
-            status: out.status.clone(),
+            status: out.status,
             artifact,
-            ok: out.converged && artifact <= opts.tol,
+            ok: out.converged() && artifact <= opts.tol,
             wall_s: t.elapsed().as_secs_f64(),
         };
         progress(&step);
@@ -197,16 +243,13 @@ pub fn tune_width(
     };
     let mut hi = opts.hi.unwrap_or(current);
     if hi.is_nan() || hi <= 0.0 {
-        return Err(TuneError::Invalid(format!("`{param}` must be positive to be tuned, got {hi}")));
+        return Err(TuneError::NotPositive { param, value: hi });
     }
     let mut grow = 0;
     while !eval(hi, &mut steps)? {
         grow += 1;
         if grow > 4 {
-            return Err(TuneError::Invalid(format!(
-                "even {param} = {hi:.6e} shows energy artifacts above {:e} (or fails) at N = {}: raise N or the tolerance",
-                opts.tol, base.nodes
-            )));
+            return Err(TuneError::ArtifactsEverywhere { param, value: hi, tol: opts.tol, nodes: base.nodes });
         }
         hi *= 2.0;
     }

@@ -82,6 +82,7 @@
 //! `x-x` and `x/x` are simplified even where `x` might be infinite, NaN or zero.
 //! Integer powers are kept as a separate node kind and evaluated by repeated
 //! multiplication.
+#![warn(missing_docs)]
 
 use std::borrow::Cow;
 use std::collections::HashMap;

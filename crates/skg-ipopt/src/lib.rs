@@ -60,7 +60,7 @@
 //!   the error is only recorded in [`Solution::first_eval_error`].
 //! * **A non-converged Ipopt status is not an `Err`**: it is a [`Solution`] whose
 //!   [`Solution::status`] tells what happened; the caller decides.
-#![warn(unsafe_op_in_unsafe_fn)]
+#![warn(missing_docs, unsafe_op_in_unsafe_fn)]
 
 pub mod ffi;
 

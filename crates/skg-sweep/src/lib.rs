@@ -75,7 +75,7 @@ use toml::Spanned;
 use skg_core::check::{self, CheckOptions, Comparison, Table};
 use skg_core::output;
 use skg_core::sbp::OperatorKind;
-use skg_core::scenario::{Formulation, HessianMode, Location, Origin, Overrides, Scene, SceneFile};
+use skg_core::scenario::{parse_toml, read_toml, Formulation, HessianMode, Location, Origin, Overrides, Scene, SceneFile, TomlError};
 
 /// Errors of a sweep file, a results file or the sweep driver.
 #[derive(Debug, thiserror::Error)]
@@ -317,7 +317,7 @@ impl Point {
             match k.as_str() {
                 "nodes" => ov.nodes = Some(v.parse().map_err(|_| format!("nodes = {v}: expected a whole number"))?),
                 "operator" => ov.operator = Some(v.parse::<OperatorKind>().map_err(|e| format!("operator = {v}: {e}"))?),
-                "formulation" => ov.formulation = Some(v.parse::<Formulation>()?),
+                "formulation" => ov.formulation = Some(v.parse::<Formulation>().map_err(|e| e.to_string())?),
                 "hessian" => {
                     ov.hessian = Some(match v.to_ascii_lowercase().as_str() {
                         "zero" => HessianMode::Zero,
@@ -407,23 +407,28 @@ fn evaluated_parameters(point: &Point, scene: &Scene) -> Vec<(String, f64)> {
 impl SweepFile {
     /// Read and deserialize a sweep file.
     pub fn load(path: &Path) -> Result<SweepFile, SweepError> {
-        let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        Self::parse(&text, &path.display().to_string())
+        Self::from_toml(read_toml(path))
     }
 
     /// Deserialize a sweep file; `path` labels error messages and anchors relative paths.
     pub fn parse(text: &str, path: &str) -> Result<SweepFile, SweepError> {
-        let origin = Origin { path: path.to_string(), text: text.to_string() };
-        let mut f: SweepFile = toml::from_str(text).map_err(|e| {
-            let location = e.span().map_or(Location::file(path), |s| origin.locate(s.start));
-            let mut message = e.message().trim_end().to_string();
-            if message.contains("expected a sequence") {
-                message.push_str(" (write each grid as `[[grid]]` and each explicit point as `[[points]]`)");
+        Self::from_toml(parse_toml(text, path))
+    }
+
+    fn from_toml(read: Result<(SweepFile, Origin), TomlError>) -> Result<SweepFile, SweepError> {
+        match read {
+            Ok((mut f, origin)) => {
+                f.origin = origin;
+                Ok(f)
             }
-            SweepError::Invalid { location, message }
-        })?;
-        f.origin = origin;
-        Ok(f)
+            Err(TomlError::Io { path, error }) => Err(SweepError::Io { path, source: error }),
+            Err(TomlError::Parse { location, mut message }) => {
+                if message.contains("expected a sequence") {
+                    message.push_str(" (write each grid as `[[grid]]` and each explicit point as `[[points]]`)");
+                }
+                Err(SweepError::Invalid { location, message })
+            }
+        }
     }
 
     fn dir(&self) -> PathBuf {
@@ -761,8 +766,8 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             rec.formulation = Some(scene.formulation.to_string());
             let mut outcome = skg_core::solve::solve_scene(&scene).map_err(|e| e.to_string())?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
-            rec.status = if outcome.converged { PointStatus::Converged } else { PointStatus::NotConverged };
-            rec.solver_status = outcome.status.clone();
+            rec.status = if outcome.converged() { PointStatus::Converged } else { PointStatus::NotConverged };
+            rec.solver_status = outcome.status.ipopt().name().to_string();
             rec.iterations = Some(outcome.iterations);
             let d = &outcome.diagnostics;
             rec.energy_drift = Some(d.energy_drift);

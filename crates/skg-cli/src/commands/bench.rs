@@ -61,7 +61,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
             o.sizes.variables,
             o.sizes.jacobian_nonzeros,
             o.iterations,
-            if o.converged { "yes" } else { "no" },
+            if o.converged() { "yes" } else { "no" },
             t.setup_s,
             t.initial_guess_s,
             t.evaluation_s,

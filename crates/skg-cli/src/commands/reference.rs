@@ -7,6 +7,7 @@ use anyhow::Result;
 use clap::Args;
 
 use skg_core::check::Table;
+use skg_core::output;
 use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scenario::Overrides;
 use skg_core::solve;
@@ -65,7 +66,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         let stem = args.scenario.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem).join(if args.hard_walls { "reference.hard.csv" } else { "reference.csv" })
     });
-    reference::write(&out, &scene, &args.scenario.display().to_string(), &r)?;
+    output::write_reference(&out, &scene, &args.scenario.display().to_string(), &r)?;
     if !args.quiet {
         println!(
             "{}: {} reference, {} samples, {} steps ({} rejected), max |g| {:.1e}, max |E - E0| {:.3e}{}",

@@ -47,14 +47,14 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
     }
     let t = &outcome.timings;
     let total = t.setup_s + t.initial_guess_s + t.ipopt_total_s + t.postprocess_s + t.output_s;
-    if outcome.converged {
+    if outcome.converged() {
         if !args.quiet {
             let d = &outcome.diagnostics;
             println!(
                 "{}: converged in {} Ipopt iterations ({}), {} {} N={} {}, {:.3} s",
                 outcome.scene,
                 outcome.iterations,
-                outcome.status_text,
+                outcome.status,
                 outcome.settings.operator,
                 outcome.settings.formulation,
                 outcome.settings.nodes,
@@ -70,7 +70,7 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         eprintln!(
             "error: {}: the solve did not converge: {} ({} iterations, residual {:.3e}); summary in {}",
             outcome.scene,
-            outcome.status_text,
+            outcome.status,
             outcome.iterations,
             outcome.diagnostics.max_residual,
             json.display()

@@ -56,7 +56,7 @@ pub fn run(args: TuneArgs) -> Result<ExitCode> {
         eprintln!(
             "  {:.6e}: {} artifact {:.3e} → {} ({:.2} s)",
             s.value,
-            if s.converged { "converged," } else { "not converged," },
+            if s.status.is_converged() { "converged," } else { "not converged," },
             s.artifact,
             if s.ok { "ok" } else { "artifacts" },
             s.wall_s

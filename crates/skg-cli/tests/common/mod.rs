@@ -38,7 +38,7 @@ pub fn load(name: &str, ov: &Overrides) -> Scene {
 pub fn solve(name: &str, ov: &Overrides) -> Outcome {
     let scene = load(name, ov);
     let o = solve::solve_scene(&scene).unwrap();
-    assert!(o.converged, "{name}: {} after {} iterations, residual {:e}", o.status_text, o.iterations, o.diagnostics.max_residual);
+    assert!(o.converged(), "{name}: {} after {} iterations, residual {:e}", o.status, o.iterations, o.diagnostics.max_residual);
     o
 }
 
