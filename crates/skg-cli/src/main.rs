@@ -20,8 +20,10 @@ action of the scene is discretized in time with summation-by-parts operators and
 — the whole trajectory at once — is found by Ipopt with exact sparse derivatives.\n\n\
 Writes DIR/trajectory.csv (t, each coordinate and its velocity Dq, each multiplier, the energy, the \
 walls' potential energy, each constraint residual, each wall gap) and DIR/summary.json (status, iterations, timings, sizes, \
-residuals). Exit status: 0 converged, 1 error in the input or while writing, 3 solve did not converge \
-(the summary is still written, marked \"converged\": false).",
+residuals).\n\n\
+Exit status, the same for every command: 0 success; 1 an error in the input or while reading or writing \
+files (the message names the file, line and column); 2 a command-line usage error; 3 the solve did not \
+converge (the summary is still written, marked \"converged\": false); 4 a tolerance was exceeded (check).",
     args_conflicts_with_subcommands = true,
     subcommand_negates_reqs = true
 )]
@@ -55,7 +57,7 @@ enum Command {
     /// Integrate the Lagrange–d'Alembert equations of a scene with a tight-tolerance
     /// adaptive integrator (DOP853) and write a reference CSV with the solver's columns.
     Reference(reference::ReferenceArgs),
-    /// Compare a trajectory CSV with a reference CSV column by column (exit status 2 when
+    /// Compare a trajectory CSV with a reference CSV column by column (exit status 4 when
     /// a tolerance is exceeded).
     Check(check::CheckArgs),
 }

@@ -97,6 +97,16 @@ fn help_explains_the_options() {
     }
 }
 
+/// A usage error (clap) exits 2, distinct from input errors (1), a solve that did not
+/// converge (3) and an exceeded tolerance (4), so a script can tell them apart.
+#[test]
+fn usage_errors_exit_2() {
+    for args in [&["--nodes"][..], &["check", "only-one.csv"], &["--no-such-option", "x.toml"], &["plot"]] {
+        let o = common::skg(args, Path::new("."));
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", common::text(&o));
+    }
+}
+
 #[test]
 fn toml_syntax_error_names_line_and_column() {
     let dir = tempfile::tempdir().unwrap();

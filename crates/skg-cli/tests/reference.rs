@@ -277,12 +277,12 @@ fn check_command_exit_codes_and_json() {
     let max = json["comparison"]["max_abs"].as_f64().unwrap();
     // The solver's own test pins this at 0.0152 (docs/errata.md, erratum 4); the reference agrees.
     assert!((max - 0.0152).abs() < 0.001, "{max}");
-    // Exceeded: exit 2, the column is named.
+    // Exceeded: exit 4 (2 is clap's usage error), the column is named.
     let o = common::skg(
         &["check", "run/trajectory.csv", &reference, "--skip-last", "2", "--tol", "1e-3", "--tol-column", "phi=1e-12", "--json", "c.json"],
         d,
     );
-    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
+    assert_eq!(o.status.code(), Some(4), "{}", common::text(&o));
     assert!(common::text(&o).contains("tolerance exceeded: x"), "{}", common::text(&o));
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("c.json")).unwrap()).unwrap();
     assert_eq!(json["passed"], false);

@@ -2,7 +2,7 @@
 //! regularized reference (discretization error, docs/validation.md), and the tumbler's model
 //! error against the hard-wall reference as σ shrinks (the paper's Fig. 3, centre).
 //!
-//! The tolerances come from the measured study in the README ("Convergence against the
+//! The tolerances come from the measured study in docs/validation.md ("Convergence against the
 //! references"): `cargo test --release --test regression -- --ignored --nocapture
 //! measure` prints that table again.
 
@@ -77,7 +77,7 @@ const STUDY: &[(&str, &[usize])] = &[
 ];
 const OPERATORS: &[&str] = &["SBP121", "SBP242", "SBP363"];
 
-/// Prints the README's convergence and σ-ladder tables.
+/// Prints the convergence and σ-ladder tables of docs/validation.md.
 #[test]
 #[ignore = "measurement, minutes; run with --ignored --nocapture"]
 fn measure() {
@@ -114,7 +114,7 @@ fn measure() {
 }
 
 /// Solve `name` with `op` on the ladder `ns`, compare with the regularized reference on
-/// each grid, and assert (a) every error within 1.5× the measured one (README table)
+/// each grid, and assert (a) every error within 1.5× the measured one (docs/validation.md)
 /// and (b) the fitted order (log-log, round-off plateau masked) at least `min_order`.
 fn assert_study(name: &str, op: &str, ns: &[usize], measured: &[f64], min_order: f64) {
     assert_eq!(ns.len(), measured.len());
@@ -145,7 +145,7 @@ fn free_fall_converges_and_is_exact_on_high_order_operators() {
 
 #[test]
 fn rolling_disk_converges_against_reference() {
-    // Measured orders 1.85 / 2.88 / 3.69 over N = 32…256 (README).
+    // Measured orders 1.85 / 2.88 / 3.69 over N = 32…256 (docs/validation.md).
     assert_study("rolling_disk", "SBP121", &[32, 64, 128], &[2.791e-1, 8.283e-2, 2.220e-2], 1.6);
     assert_study("rolling_disk", "SBP242", &[32, 64, 128], &[1.089e-1, 1.518e-2, 1.990e-3], 2.7);
     assert_study("rolling_disk", "SBP363", &[32, 64, 128], &[2.325e-1, 2.237e-2, 1.547e-3], 3.3);
@@ -160,7 +160,8 @@ fn tumbler_converges_against_reference() {
 
 #[test]
 fn inclines_converge_against_reference() {
-    // SBP121 does not converge at N = 64 (README) and is pre-asymptotic up to N = 512
+    // SBP121 at N = 64 has no usable solution (it converges to a spurious critical point
+    // with dozens of wall contacts, docs/validation.md) and is pre-asymptotic up to N = 512
     // (σ = 1/70 is resolved by few nodes): order ≈ 1.3 there.
     assert_study("incline_friction", "SBP121", &[128, 256, 512], &[9.121e-4, 4.322e-4, 1.490e-4], 1.1);
     assert_study("incline_friction", "SBP242", &[64, 128, 256], &[3.733e-4, 4.134e-5, 3.002e-6], 3.2);
@@ -173,7 +174,7 @@ fn inclines_converge_against_reference() {
 #[test]
 fn knife_edge_converges_against_reference() {
     assert_study("knife_edge", "SBP242", &[32, 64, 128], &[8.670e-1, 8.781e-2, 1.061e-2], 2.9);
-    // N = 128 ends in Solved_To_Acceptable_Level (README); 32 → 64 shows the order.
+    // 32 → 64 shows the order; N = 128 is pre-asymptotic (error 1.95e-2, docs/validation.md).
     assert_study("knife_edge", "SBP363", &[32, 64], &[1.736e0, 7.396e-2], 4.0);
 }
 

@@ -24,7 +24,7 @@ use skg_core::scenario::{Formulation, HessianMode, Overrides, Scene, SceneFile};
 /// Exit code of a solve that ran but did not converge.
 pub const EXIT_NOT_CONVERGED: u8 = 3;
 /// Exit code of `check` when a tolerance is exceeded.
-pub const EXIT_TOLERANCE_EXCEEDED: u8 = 2;
+pub const EXIT_TOLERANCE_EXCEEDED: u8 = 4;
 
 #[derive(Args, Clone)]
 pub struct SceneArgs {

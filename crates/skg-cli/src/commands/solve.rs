@@ -51,14 +51,14 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         if !args.quiet {
             let d = &outcome.diagnostics;
             println!(
-                "{}: converged in {} Ipopt iterations ({}), {} {} N={} {}, {:.3} s",
+                "{}: converged in {} Ipopt iterations ({}), {} {} N={}{}, {:.3} s",
                 outcome.scene,
                 outcome.iterations,
                 outcome.status,
                 outcome.settings.operator,
                 outcome.settings.formulation,
                 outcome.settings.nodes,
-                if scene.constraints.is_empty() { String::new() } else { format!("max |g| interior {:.1e}", d.max_constraint_interior) },
+                if scene.constraints.is_empty() { String::new() } else { format!(", max |g| interior {:.1e}", d.max_constraint_interior) },
                 total
             );
             println!("  residual {:.1e}, energy drift {:.3e} (last two nodes excluded)", d.max_residual, d.energy_drift);
