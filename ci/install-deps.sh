@@ -5,7 +5,9 @@
 #   pkg-config           finds Ipopt
 #   gcc, libc6-dev       the linker Rust uses
 # and, when no cargo is found, installs a Rust toolchain with rustup (minimal profile)
-# into ~/.cargo (callers then `source ~/.cargo/env`).
+# into ~/.cargo (callers then `source ~/.cargo/env`). When `cargo fmt` or `cargo clippy`
+# is missing (rustup's minimal profile has neither) and rustup is present, adds the
+# rustfmt and clippy components.
 #
 # Idempotent and quiet when everything is already installed: apt-get runs (once
 # `apt-get update`, then one `apt-get install`) only for missing packages. Uses sudo
@@ -56,4 +58,20 @@ fi
 if $need_rust; then
     echo "install-deps: no cargo found; installing Rust with rustup into ~/.cargo"
     curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y --profile minimal --no-modify-path >/dev/null
+fi
+
+# rustfmt and clippy (ci/test.sh checks formatting and lints).
+if ! command -v cargo >/dev/null 2>&1 && [[ -f "$HOME/.cargo/env" ]]; then
+    # shellcheck disable=SC1091
+    source "$HOME/.cargo/env"
+fi
+if ! cargo fmt --version >/dev/null 2>&1 || ! cargo clippy --version >/dev/null 2>&1; then
+    if command -v rustup >/dev/null 2>&1; then
+        echo "install-deps: adding the rustfmt and clippy components with rustup"
+        rustup component add rustfmt clippy >/dev/null
+    else
+        echo "install-deps: cargo fmt or cargo clippy is missing and rustup is not available;" >&2
+        echo "install rustfmt and clippy for this toolchain by other means." >&2
+        exit 1
+    fi
 fi

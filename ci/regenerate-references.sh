@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
-# Regenerate the reference CSVs in tests/reference/ from the shipped scenes:
+# Regenerate the reference CSVs in references/ from the shipped scenes:
 #   <scene>.csv       regularized reference (the scene as written, Gaussian walls)
 #   <scene>.hard.csv  hard-wall reference (ideal elastic walls), for scenes with walls
 # each sampled on the scene's own grid, DOP853 at rtol = atol = 1e-12, with a
-# provenance header. tests/reference.rs regenerates one of them and checks that it
+# provenance header. references.rs regenerates one of them and checks that it
 # matches the checked-in file. Run from anywhere: bash ci/regenerate-references.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --quiet
+cargo build --quiet -p skg-cli
 bin=./target/debug/skg-solve
-out=tests/reference
+out=references
 mkdir -p "$out"
 for scene in free_fall rolling_disk tumbler incline_friction incline_frictionless knife_edge; do
     "$bin" reference "scenarios/$scene.toml" -o "$out/$scene.csv" --rtol 1e-12 --quiet

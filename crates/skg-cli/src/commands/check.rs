@@ -1,0 +1,104 @@
+//! `skg-solve check`: compare a trajectory CSV with a reference CSV.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use skg_core::check::{self, CheckOptions, Table, Tolerances};
+use skg_core::output;
+
+use super::EXIT_TOLERANCE_EXCEEDED;
+
+#[derive(Args)]
+pub struct CheckArgs {
+    /// The trajectory to check (e.g. out/tumbler/trajectory.csv).
+    #[arg(value_name = "SOLUTION.csv")]
+    pub solution: PathBuf,
+    /// The reference (e.g. references/tumbler.csv).
+    #[arg(value_name = "REFERENCE.csv")]
+    pub reference: PathBuf,
+    /// Leave out the last K rows of the solution (e.g. 2 for the SBP end nodes).
+    #[arg(long, default_value_t = 0, value_name = "K")]
+    pub skip_last: usize,
+    /// Compare only these columns (comma-separated) [default: every shared column except t].
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    pub columns: Option<Vec<String>>,
+    /// Tolerance on every compared column's max |error|.
+    #[arg(long, value_name = "TOL")]
+    pub tol: Option<f64>,
+    /// Tolerance on every compared column's RMS error.
+    #[arg(long, value_name = "TOL")]
+    pub tol_rms: Option<f64>,
+    /// Tolerance on one column's max |error| (repeatable; overrides --tol for it).
+    #[arg(long, value_name = "COLUMN=TOL")]
+    pub tol_column: Vec<String>,
+    /// JSON report [default: <SOLUTION without .csv>.check.json].
+    #[arg(long, value_name = "FILE.json")]
+    pub json: Option<PathBuf>,
+    /// Print only errors and exceeded tolerances.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(serde::Serialize)]
+struct CheckReport<'a> {
+    solution: String,
+    reference: String,
+    options: &'a CheckOptions,
+    tolerances: &'a Tolerances,
+    passed: bool,
+    violations: Vec<String>,
+    comparison: &'a check::Comparison,
+}
+
+pub fn run(args: CheckArgs) -> Result<ExitCode> {
+    let solution = Table::read(&args.solution)?;
+    let reference = Table::read(&args.reference)?;
+    let opts = CheckOptions { skip_last: args.skip_last, columns: args.columns.clone() };
+    let mut per_column = Vec::new();
+    for a in &args.tol_column {
+        let (name, value) = a.split_once('=').with_context(|| format!("--tol-column `{a}`: expected COLUMN=TOL"))?;
+        let v: f64 = value.trim().parse().with_context(|| format!("--tol-column `{a}`: `{value}` is not a number"))?;
+        per_column.push((name.trim().to_string(), v));
+    }
+    let tol = Tolerances { max_abs: args.tol, rms: args.tol_rms, per_column };
+    let cmp = check::compare(&solution, &reference, &opts)
+        .with_context(|| format!("comparing {} with {}", args.solution.display(), args.reference.display()))?;
+    let violations = cmp.violations(&tol);
+    let json = args.json.clone().unwrap_or_else(|| args.solution.with_extension("check.json"));
+    let report = CheckReport {
+        solution: args.solution.display().to_string(),
+        reference: args.reference.display().to_string(),
+        options: &opts,
+        tolerances: &tol,
+        passed: violations.is_empty(),
+        violations: violations.clone(),
+        comparison: &cmp,
+    };
+    output::write_json(&json, &report)?;
+    if !args.quiet {
+        println!("| column | max abs error | at t | RMS error |");
+        println!("|---|---:|---:|---:|");
+        for c in &cmp.columns {
+            println!("| {} | {:.3e} | {} | {:.3e} |", c.column, c.max_abs, c.at_t, c.rms);
+        }
+        println!(
+            "{} rows compared ({} interpolated, last {} skipped); worst: {} {:.3e}",
+            cmp.rows_compared, cmp.rows_interpolated, cmp.skipped_last, cmp.worst_column, cmp.max_abs
+        );
+        if !cmp.missing_in_reference.is_empty() {
+            println!("not in the reference (not compared): {}", cmp.missing_in_reference.join(", "));
+        }
+        println!("wrote {}", json.display());
+    }
+    if violations.is_empty() {
+        Ok(ExitCode::SUCCESS)
+    } else {
+        for v in &violations {
+            eprintln!("tolerance exceeded: {v}");
+        }
+        Ok(ExitCode::from(EXIT_TOLERANCE_EXCEEDED))
+    }
+}

@@ -1,0 +1,77 @@
+//! One module per subcommand: its arguments (a clap `Args` struct) and its `run`
+//! function. `main.rs` only parses the command line and dispatches here.
+//!
+//! Exit codes, the same for every subcommand: 0 success, 1 an error in the input or
+//! while reading or writing files, 2 a command-line usage error (clap), 3 a solve that
+//! did not converge, 4 a tolerance exceeded (`check`).
+
+pub mod bench;
+pub mod check;
+pub mod plot;
+pub mod reference;
+pub mod solve;
+pub mod sweep;
+pub mod tune;
+
+use std::path::Path;
+
+use anyhow::Result;
+use clap::Args;
+
+use skg_core::sbp::OperatorKind;
+use skg_core::scenario::{Formulation, HessianMode, Overrides, Scene, SceneFile};
+
+/// Exit code of a solve that ran but did not converge.
+pub const EXIT_NOT_CONVERGED: u8 = 3;
+/// Exit code of `check` when a tolerance is exceeded.
+pub const EXIT_TOLERANCE_EXCEEDED: u8 = 4;
+
+#[derive(Args, Clone)]
+pub struct SceneArgs {
+    /// Set a scene parameter, e.g. `--set sigma=1/200` (repeatable; value: number or expression).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Override the SBP operator: SBP121, SBP242 (alias SBP424), SBP363.
+    #[arg(long, value_name = "NAME")]
+    pub operator: Option<OperatorKind>,
+    /// Formulation: `reduced` (physical limit, half the unknowns; default) or `full`
+    /// (the paper's doubled unknowns).
+    #[arg(long, value_name = "KIND")]
+    pub formulation: Option<Formulation>,
+    /// Hessian given to Ipopt: `zero` (default; the Newton step of a square system does
+    /// not depend on it) or `exact` (reduced formulation only).
+    #[arg(long, value_enum, value_name = "MODE")]
+    pub hessian: Option<HessianArg>,
+    /// Maximum number of Ipopt iterations.
+    #[arg(long, value_name = "N")]
+    pub max_iter: Option<u32>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum HessianArg {
+    Zero,
+    Exact,
+}
+
+impl SceneArgs {
+    /// The overrides these options describe, with an optional node count.
+    pub fn overrides(&self, nodes: Option<usize>) -> Result<Overrides> {
+        let set = self.set.iter().map(|s| Overrides::parse_assignment(s)).collect::<Result<Vec<_>, _>>()?;
+        Ok(Overrides {
+            set,
+            nodes,
+            operator: self.operator,
+            formulation: self.formulation,
+            hessian: self.hessian.map(|h| match h {
+                HessianArg::Zero => HessianMode::Zero,
+                HessianArg::Exact => HessianMode::Exact,
+            }),
+            max_iter: self.max_iter,
+        })
+    }
+}
+
+/// Load a scene file and resolve it with the overrides.
+pub fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
+    Ok(SceneFile::load(path)?.resolve(ov)?)
+}

@@ -1,0 +1,124 @@
+//! `skg-solve plot`: charts from sweep results and solutions.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::Result;
+use clap::{Args, Subcommand};
+
+use skg_core::check::Table;
+use skg_plot as plot;
+use skg_sweep as sweep;
+
+#[derive(Subcommand)]
+pub enum PlotKind {
+    /// Error against the reference versus wall time, one line per operator and
+    /// formulation, the reference integrator's tolerance ladder as the peer line.
+    WorkPrecision(ResultsPlotArgs),
+    /// Error versus N (log-log), the fitted order in the legend.
+    Convergence(ResultsPlotArgs),
+    /// Map over two grid axes: converged / failed / converged with energy artifacts.
+    Stability {
+        #[command(flatten)]
+        common: ResultsPlotArgs,
+        /// Column on the horizontal axis.
+        #[arg(long, default_value = "nodes")]
+        x: String,
+        /// Column on the vertical axis.
+        #[arg(long, default_value = "sigma")]
+        y: String,
+    },
+    /// Coordinates over time (reference overlaid as a thin black line) and the energy over time.
+    Trajectory {
+        /// Solutions: output directories, trajectory CSV files, or sweep directories
+        /// (their kept trajectories); several are overlaid.
+        #[arg(required = true, value_name = "SOLUTION")]
+        inputs: Vec<PathBuf>,
+        /// Reference CSV to overlay (e.g. from `skg-solve reference`).
+        #[arg(long, value_name = "FILE.csv")]
+        reference: Option<PathBuf>,
+        /// Legend label of each solution, in order [default: the directory or file name].
+        #[arg(long, value_name = "TEXT")]
+        label: Vec<String>,
+        /// Output path without extension (writes .svg and .png).
+        #[arg(short, long, value_name = "STEM")]
+        output: PathBuf,
+        /// Chart title.
+        #[arg(long, default_value = "trajectory and energy")]
+        title: String,
+    },
+}
+
+#[derive(Args)]
+pub struct ResultsPlotArgs {
+    /// A sweep's results.csv, or its output directory.
+    #[arg(value_name = "RESULTS")]
+    pub results: PathBuf,
+    /// Output path without extension (writes .svg and .png).
+    #[arg(short, long, value_name = "STEM")]
+    pub output: PathBuf,
+    /// Keep only rows whose column equals the value, e.g. `--where sigma=1/110` (repeatable):
+    /// equal as text, as the sweep file wrote it (the `<column>_expr` column), or as numbers
+    /// to a relative 1e-12 (the value may be a constant expression). Rows that leave the
+    /// column blank (the peer rows) are kept.
+    #[arg(long = "where", value_name = "COLUMN=VALUE")]
+    pub filters: Vec<String>,
+    /// Chart title [default: the kind of chart and the sweep directory].
+    #[arg(long)]
+    pub title: Option<String>,
+}
+
+pub fn run(kind: PlotKind) -> Result<ExitCode> {
+    let parse_filters = |f: &[String]| -> Result<Vec<(String, String)>> {
+        f.iter()
+            .map(|s| {
+                s.split_once('=')
+                    .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+                    .ok_or_else(|| anyhow::anyhow!("--where {s}: expected COLUMN=VALUE"))
+            })
+            .collect()
+    };
+    let title_for = |c: &ResultsPlotArgs, kind: &str| {
+        c.title.clone().unwrap_or_else(|| {
+            let dir = if c.results.is_dir() { c.results.clone() } else { c.results.parent().map(Path::to_path_buf).unwrap_or_default() };
+            let name = dir.file_name().map_or(String::new(), |n| format!(": {}", n.to_string_lossy()));
+            format!("{kind}{name}")
+        })
+    };
+    let written = match kind {
+        PlotKind::WorkPrecision(c) => {
+            let r = sweep::Results::read(&c.results)?;
+            plot::work_precision(&r, &parse_filters(&c.filters)?, &title_for(&c, "work-precision"), &c.output)?
+        }
+        PlotKind::Convergence(c) => {
+            let r = sweep::Results::read(&c.results)?;
+            plot::convergence(&r, &parse_filters(&c.filters)?, &title_for(&c, "convergence"), &c.output)?
+        }
+        PlotKind::Stability { common: c, x, y } => {
+            let r = sweep::Results::read(&c.results)?;
+            plot::stability(&r, &x, &y, &parse_filters(&c.filters)?, &title_for(&c, "stability"), &c.output)?
+        }
+        PlotKind::Trajectory { inputs, reference, label, output: out, title } => {
+            let mut sols = Vec::new();
+            for (k, p) in inputs.iter().enumerate() {
+                if p.is_dir() && p.join("results.csv").is_file() {
+                    sols.extend(plot::sweep_solutions(p)?);
+                    continue;
+                }
+                let file = if p.is_dir() { p.join("trajectory.csv") } else { p.clone() };
+                let t = Table::read(&file)?;
+                let name = label.get(k).cloned().unwrap_or_else(|| {
+                    let base = if p.is_dir() { p.as_path() } else { p.parent().unwrap_or(p) };
+                    base.file_name().map_or(file.display().to_string(), |n| n.to_string_lossy().into_owned())
+                });
+                sols.push((name, t));
+            }
+            let r = reference.as_deref().map(Table::read).transpose()?;
+            plot::trajectory(&sols, r.as_ref(), &title, &out)?
+        }
+    };
+    for w in written {
+        println!("wrote {}", w.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,80 @@
+//! The default command: solve one scene and write its trajectory and summary.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use skg_core::{output, solve};
+
+use super::{load, SceneArgs, EXIT_NOT_CONVERGED};
+
+#[derive(Args)]
+pub struct SolveArgs {
+    /// Scene file (TOML), e.g. scenarios/rolling_disk.toml.
+    #[arg(required = true, value_name = "SCENARIO.toml")]
+    pub scenario: Option<PathBuf>,
+    /// Output directory [default: out/<scene file name without .toml>].
+    #[arg(short, long, value_name = "DIR")]
+    pub output: Option<PathBuf>,
+    /// Number of time nodes N (overrides the scene's time.nodes).
+    #[arg(long, value_name = "N")]
+    pub nodes: Option<usize>,
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Print only errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn run(args: SolveArgs) -> Result<ExitCode> {
+    let path = args.scenario.expect("clap requires the scenario");
+    let ov = args.scene.overrides(args.nodes)?;
+    let mut scene = load(&path, &ov)?;
+    let dir = args.output.unwrap_or_else(|| {
+        let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from("out").join(stem)
+    });
+    if let Some(log) = &scene.solver.log_file {
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        scene.solver.log_file = Some(dir.join(log));
+    }
+    let mut outcome = solve::solve_scene(&scene)?;
+    let (csv, json) = output::write_outcome(&dir, &mut outcome, &scene).context("writing the results")?;
+    for w in &outcome.warnings {
+        eprintln!("warning: {w}");
+    }
+    let t = &outcome.timings;
+    let total = t.setup_s + t.initial_guess_s + t.ipopt_total_s + t.postprocess_s + t.output_s;
+    if outcome.converged() {
+        if !args.quiet {
+            let d = &outcome.diagnostics;
+            println!(
+                "{}: converged in {} Ipopt iterations ({}), {} {} N={}{}, {:.3} s",
+                outcome.scene,
+                outcome.iterations,
+                outcome.status,
+                outcome.settings.operator,
+                outcome.settings.formulation,
+                outcome.settings.nodes,
+                if scene.constraints.is_empty() { String::new() } else { format!(", max |g| interior {:.1e}", d.max_constraint_interior) },
+                total
+            );
+            println!("  residual {:.1e}, energy drift {:.3e} (last two nodes excluded)", d.max_residual, d.energy_drift);
+            println!("  wrote {}", csv.display());
+            println!("  wrote {}", json.display());
+        }
+        Ok(ExitCode::SUCCESS)
+    } else {
+        eprintln!(
+            "error: {}: the solve did not converge: {} ({} iterations, residual {:.3e}); summary in {}",
+            outcome.scene,
+            outcome.status,
+            outcome.iterations,
+            outcome.diagnostics.max_residual,
+            json.display()
+        );
+        Ok(ExitCode::from(EXIT_NOT_CONVERGED))
+    }
+}

@@ -1,0 +1,100 @@
+//! Command-line interface of skg-solve.
+
+mod commands;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use commands::{bench, check, plot, reference, solve, sweep, tune};
+
+#[derive(Parser)]
+#[command(
+    name = "skg-solve",
+    version,
+    about = "Motion of mechanical systems with velocity constraints, walls and friction \
+             from the critical point of the discretized Schwinger–Keldysh–Galley action",
+    long_about = "Solves a mechanical scene written in TOML: the classical Schwinger–Keldysh–Galley \
+action of the scene is discretized in time with summation-by-parts operators and its critical point \
+— the whole trajectory at once — is found by Ipopt with exact sparse derivatives.\n\n\
+Writes DIR/trajectory.csv (t, each coordinate and its velocity Dq, each multiplier, the energy, the \
+walls' potential energy, each constraint residual, each wall gap) and DIR/summary.json (status, iterations, timings, sizes, \
+residuals).\n\n\
+Exit status, the same for every command: 0 success; 1 an error in the input or while reading or writing \
+files (the message names the file, line and column); 2 a command-line usage error; 3 the solve did not \
+converge (the summary is still written, marked \"converged\": false); 4 a tolerance was exceeded (check).",
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    solve: solve::SolveArgs,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Time solves of one scene over a ladder of node counts and print a table
+    /// (wall time split into setup, initial guess, evaluations and Ipopt).
+    Bench(bench::BenchArgs),
+    /// Run a parameter sweep: every point of the sweep file's grid in its own worker
+    /// process, each finished point appended to DIR/results.csv. Rerunning resumes.
+    #[command(long_about = sweep::sweep_long_about())]
+    Sweep(sweep::SweepArgs),
+    /// Join the results of a sweep's shards into one results.csv.
+    Merge(sweep::MergeArgs),
+    /// Find the smallest wall width σ whose energy artifact stays below a tolerance
+    /// at the scene's N (bisection over solves).
+    Tune(tune::TuneArgs),
+    /// Charts (SVG and PNG) from a sweep's results.csv or from solutions.
+    #[command(subcommand)]
+    Plot(plot::PlotKind),
+    /// Worker process of a sweep (internal).
+    #[command(hide = true)]
+    SweepWorker { job: PathBuf, result: PathBuf },
+    /// Integrate the Lagrange–d'Alembert equations of a scene with a tight-tolerance
+    /// adaptive integrator (DOP853) and write a reference CSV with the solver's columns.
+    Reference(reference::ReferenceArgs),
+    /// Compare a trajectory CSV with a reference CSV column by column (exit status 4 when
+    /// a tolerance is exceeded).
+    Check(check::CheckArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Bench(a)) => bench::run(a),
+        Some(Command::Sweep(a)) => sweep::run(a),
+        Some(Command::Merge(a)) => sweep::run_merge(a),
+        Some(Command::Tune(a)) => tune::run(a),
+        Some(Command::Plot(k)) => plot::run(k),
+        Some(Command::SweepWorker { job, result }) => sweep::run_worker(&job, &result),
+        Some(Command::Reference(a)) => reference::run(a),
+        Some(Command::Check(a)) => check::run(a),
+        None => solve::run(cli.solve),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {}", describe(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The error and its causes, joined by `: ` like `{:#}`, each text once: many library
+/// errors already include their source's message in their own.
+fn describe(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain().map(ToString::to_string) {
+        if !text.contains(&cause) {
+            if !text.is_empty() {
+                text.push_str(": ");
+            }
+            text.push_str(&cause);
+        }
+    }
+    text
+}

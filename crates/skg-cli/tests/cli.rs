@@ -1,0 +1,212 @@
+//! The command line: outputs, exit codes and clear errors for bad input (never a panic).
+
+mod common;
+
+use std::path::Path;
+
+/// Write a variant of the free-fall scene with `from` replaced by `to`.
+fn variant(dir: &Path, name: &str, replacements: &[(&str, &str)]) -> String {
+    let mut s = std::fs::read_to_string(common::scenario(name)).unwrap();
+    for (from, to) in replacements {
+        assert!(s.contains(from), "{from} not in {name}");
+        s = s.replacen(from, to, 1);
+    }
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, s).unwrap();
+    p.display().to_string()
+}
+
+/// Run on a bad scene: exit code 1, no panic, message contains every `needle`.
+fn expect_error(dir: &Path, scene: &str, extra: &[&str], needles: &[&str]) {
+    let mut args = vec![scene];
+    args.extend_from_slice(extra);
+    let o = common::skg(&args, dir);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(!t.contains("panicked"), "{t}");
+    for n in needles {
+        assert!(t.contains(n), "expected `{n}` in:\n{t}");
+    }
+    assert!(!dir.join("out").exists(), "no output for a failed input");
+}
+
+#[test]
+fn solve_writes_csv_and_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scenario("rolling_disk");
+    let o = common::skg(&[scene.to_str().unwrap(), "-o", "res"], dir.path());
+    assert!(o.status.success(), "{}", common::text(&o));
+    let csv = std::fs::read_to_string(dir.path().join("res/trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next().unwrap(), "t,x,x_dot,y,y_dot,theta,theta_dot,phi,phi_dot,lambda_g1,lambda_g2,energy,residual_g1,residual_g2");
+    assert_eq!(lines.count(), 64);
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("res/summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["converged"], true);
+    assert_eq!(summary["status"], "Solve_Succeeded");
+    assert_eq!(summary["sizes"]["nodes"], 64);
+    assert!(summary["iterations"].as_u64().unwrap() > 0);
+    assert!(summary["timings"]["ipopt_total_s"].as_f64().unwrap() > 0.0);
+    assert!(summary["diagnostics"]["max_residual"].as_f64().unwrap() < 1e-8);
+    assert!(common::text(&o).contains("trajectory.csv"), "prints where the output went");
+}
+
+/// summary.json says which program and which scene produced it, and keys per-wall
+/// diagnostics by the wall's name.
+#[test]
+fn summary_carries_provenance_and_per_wall_entries_by_name() {
+    use sha2::{Digest, Sha256};
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scenario("tumbler");
+    let o = common::skg(&[scene.to_str().unwrap(), "-o", "res", "-q"], dir.path());
+    assert!(o.status.success(), "{}", common::text(&o));
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("res/summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["skg_solve_version"], skg_core::provenance::VERSION);
+    assert_eq!(summary["skg_solve_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(summary["schema_version"], skg_core::provenance::SCHEMA_VERSION);
+    let digest = Sha256::digest(std::fs::read(&scene).unwrap());
+    let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
+    assert_eq!(summary["scene_hash"], format!("sha256:{hex}"));
+    let d = &summary["diagnostics"];
+    assert!(d["max_wall_gap"]["drum"].as_f64().unwrap() < 0.0, "{d}");
+    assert_eq!(d["contact_episodes"], serde_json::json!({ "drum": 2 }));
+    assert_eq!(d["contact_episodes_time_stepping"], serde_json::json!({ "drum": 2 }));
+    assert_eq!(summary["solve_status"], "converged");
+    assert_eq!(summary["status_text"], "solved to the requested tolerance");
+}
+
+#[test]
+fn non_converged_solve_exits_3_and_marks_the_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scenario("rolling_disk");
+    let o = common::skg(&[scene.to_str().unwrap(), "-o", "res", "--max-iter", "1"], dir.path());
+    assert_eq!(o.status.code(), Some(3), "{}", common::text(&o));
+    assert!(common::text(&o).contains("did not converge"), "{}", common::text(&o));
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("res/summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["converged"], false);
+    assert_eq!(summary["status"], "Maximum_Iterations_Exceeded");
+    assert_eq!(summary["solve_status"], "not_converged");
+    assert_eq!(summary["status_text"], "maximum number of iterations exceeded");
+}
+
+#[test]
+fn help_explains_the_options() {
+    let o = common::skg(&["--help"], Path::new("."));
+    let t = common::text(&o);
+    for needle in ["SCENARIO.toml", "--set", "--operator", "--formulation", "--nodes", "trajectory.csv", "Exit status"] {
+        assert!(t.contains(needle), "--help lacks {needle}");
+    }
+}
+
+/// A usage error (clap) exits 2, distinct from input errors (1), a solve that did not
+/// converge (3) and an exceeded tolerance (4), so a script can tell them apart.
+#[test]
+fn usage_errors_exit_2() {
+    for args in [&["--nodes"][..], &["check", "only-one.csv"], &["--no-such-option", "x.toml"], &["plot"]] {
+        let o = common::skg(args, Path::new("."));
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", common::text(&o));
+    }
+}
+
+#[test]
+fn toml_syntax_error_names_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "free_fall", &[("m = 2", "m = = 2")]);
+    expect_error(dir.path(), &s, &[], &["scene.toml:11:5", "invalid string"]);
+}
+
+#[test]
+fn unknown_key_names_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "free_fall", &[("velocity = 3", "velocity = 3\nmass = 1")]);
+    expect_error(dir.path(), &s, &[], &["scene.toml:17:1", "mass"]);
+}
+
+#[test]
+fn unknown_symbol_in_expression_shows_expression_and_position() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "free_fall", &[("- m*g*x", "- m*gg*x")]);
+    expect_error(dir.path(), &s, &[], &["scene.lagrangian", "gg", "1/2*m*x_dot^2 - m*gg*x", "^", "known names"]);
+}
+
+#[test]
+fn expression_syntax_error_shows_position() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "rolling_disk", &[("x_dot*sin(phi) - y_dot*cos(phi)", "x_dot*sin(phi - y_dot*cos(phi)")]);
+    expect_error(dir.path(), &s, &[], &["constraints.g2.expression", "x_dot*sin(phi - y_dot*cos(phi)"]);
+}
+
+#[test]
+fn too_few_nodes_for_the_operator() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "free_fall", &[("nodes = 32", "nodes = 5")]);
+    expect_error(dir.path(), &s, &[], &["SBP242 needs at least", "got 5"]);
+    let s = common::scenario("free_fall");
+    expect_error(dir.path(), s.to_str().unwrap(), &["--nodes", "3", "--operator", "SBP363"], &["SBP363 needs at least"]);
+}
+
+#[test]
+fn non_positive_or_non_finite_time_span() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "free_fall", &[("end = 2", "end = 0")]);
+    expect_error(dir.path(), &s, &[], &["time span must be positive"]);
+    let s = variant(dir.path(), "free_fall", &[("end = 2", "end = \"1/0\"")]);
+    expect_error(dir.path(), &s, &[], &["not finite"]);
+}
+
+#[test]
+fn non_positive_wall_width_and_mass() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = common::scenario("tumbler");
+    expect_error(dir.path(), s.to_str().unwrap(), &["--set", "sigma=0"], &["width σ must be > 0"]);
+    expect_error(dir.path(), s.to_str().unwrap(), &["--set", "sigma=-1/100"], &["width σ must be > 0"]);
+    expect_error(dir.path(), s.to_str().unwrap(), &["--set", "m=-1"], &["not positive definite", "masses"]);
+    expect_error(dir.path(), s.to_str().unwrap(), &["--set", "m=0"], &["not positive definite"]);
+}
+
+#[test]
+fn initial_velocity_violating_a_constraint_says_by_how_much() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "rolling_disk", &[("initial = 0\nvelocity = 0", "initial = 0\nvelocity = 0.5")]);
+    // y_dot = 0.5: g1 = 25 + 0.25 − 25 = 0.25, g2 = −0.5 at φ = 0.
+    expect_error(dir.path(), &s, &[], &["violates constraint `g1`", "2.500000e-1"]);
+}
+
+#[test]
+fn bad_override_and_operator_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = common::scenario("free_fall");
+    expect_error(dir.path(), s.to_str().unwrap(), &["--set", "nope=1"], &["no parameter `nope`"]);
+    expect_error(dir.path(), s.to_str().unwrap(), &["--set", "g"], &["expected name=value"]);
+    let o = common::skg(&[s.to_str().unwrap(), "--operator", "SBP999"], dir.path());
+    assert_eq!(o.status.code(), Some(2), "clap usage error");
+    assert!(common::text(&o).contains("SBP242"), "lists the valid operators: {}", common::text(&o));
+    let o = common::skg(&["missing.toml"], dir.path());
+    assert_eq!(o.status.code(), Some(1));
+    let t = common::text(&o);
+    assert!(t.contains("cannot read scene file missing.toml"), "{t}");
+    assert_eq!(t.matches("No such file").count(), 1, "the cause is printed once: {t}");
+}
+
+#[test]
+fn ipopt_log_file_and_pass_through_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(
+        dir.path(),
+        "rolling_disk",
+        &[(
+            "[discretization]",
+            "[solver]\nlog_file = \"ipopt.log\"\n[solver.ipopt]\nmumps_pivtol = 1e-4\nprint_user_options = \"yes\"\n\n[discretization]",
+        )],
+    );
+    let o = common::skg(&[&s, "-o", "res"], dir.path());
+    assert!(o.status.success(), "{}", common::text(&o));
+    let log = std::fs::read_to_string(dir.path().join("res/ipopt.log")).unwrap();
+    assert!(log.contains("iter") && log.contains("EXIT: Optimal Solution Found"), "{log}");
+    assert!(log.contains("mumps_pivtol") && log.contains("0.0001"), "pass-through option not in the log's option list");
+    // An option Ipopt does not know is an error that names it, not a panic.
+    let s = variant(dir.path(), "free_fall", &[("[time]", "[solver.ipopt]\nno_such_option = 3\n\n[time]")]);
+    let o = common::skg(&[&s, "-o", "res2"], dir.path());
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("no_such_option") && !t.contains("panicked"), "{t}");
+}

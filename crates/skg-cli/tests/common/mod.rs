@@ -1,0 +1,72 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use skg_core::scenario::{Overrides, Scene, SceneFile};
+use skg_core::solve::{self, Outcome};
+
+/// The repository's root (this crate lives in `crates/skg-cli`).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("repository root")
+}
+
+/// Path of a shipped scenario.
+pub fn scenario(name: &str) -> PathBuf {
+    root().join("scenarios").join(format!("{name}.toml"))
+}
+
+/// Standard gravity of the shipped scenes (`g = 9.8`).
+pub const G: f64 = 9.8;
+
+/// Write `dir/sweep.toml` whose base scene is `scene`, followed by `body`.
+pub fn sweep_file(dir: &Path, scene: &Path, body: &str) -> PathBuf {
+    let p = dir.join("sweep.toml");
+    let text = format!("[sweep]\nscene = \"{}\"\n{body}", scene.display());
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Every shipped scene.
+pub const SHIPPED: &[&str] = &["free_fall", "rolling_disk", "tumbler", "incline_friction", "incline_frictionless", "knife_edge"];
+
+pub fn load(name: &str, ov: &Overrides) -> Scene {
+    SceneFile::load(&scenario(name)).unwrap().resolve(ov).unwrap()
+}
+
+pub fn solve(name: &str, ov: &Overrides) -> Outcome {
+    let scene = load(name, ov);
+    let o = solve::solve_scene(&scene).unwrap();
+    assert!(o.converged(), "{name}: {} after {} iterations, residual {:e}", o.status, o.iterations, o.diagnostics.max_residual);
+    o
+}
+
+/// Overrides with a node count and operator.
+pub fn grid(nodes: usize, operator: &str) -> Overrides {
+    Overrides { nodes: Some(nodes), operator: Some(operator.parse().unwrap()), ..Default::default() }
+}
+
+/// max over nodes 0..N-skip and the given coordinates of |q - exact(t)|.
+pub fn max_error(o: &Outcome, coords: &[usize], skip_last: usize, exact: impl Fn(f64) -> Vec<f64>) -> f64 {
+    let tr = &o.trajectory;
+    let n = tr.t.len() - skip_last;
+    let mut e = 0.0_f64;
+    for k in 0..n {
+        let ex = exact(tr.t[k]);
+        for &i in coords {
+            e = e.max((tr.q[k][i] - ex[i]).abs());
+        }
+    }
+    e
+}
+
+/// Run the `skg-solve` binary with `args` in the working directory `dir`.
+pub fn skg(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_skg-solve")).args(args).current_dir(dir).output().unwrap()
+}
+
+/// Everything a run printed: stdout, then stderr.
+pub fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}

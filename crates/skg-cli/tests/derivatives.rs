@@ -1,0 +1,180 @@
+//! Exact derivatives against central finite differences, on random points of every
+//! shipped scene, and the squareness / nonsingularity of the discrete systems.
+
+mod common;
+
+use nalgebra::DMatrix;
+use skg_core::action::{Action, Block};
+use skg_core::scenario::Overrides;
+use skg_core::solve::build_action;
+
+/// Deterministic pseudo-random numbers in [-1, 1) (xorshift), so failures reproduce.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+}
+
+/// A random point near the initial state: plus coordinates perturbed around the
+/// initial values, every other unknown random of order one.
+fn random_point(action: &Action, rng: &mut Rng) -> Vec<f64> {
+    let lay = &action.layout;
+    let mut z: Vec<f64> = (0..lay.len()).map(|_| rng.next()).collect();
+    for k in 0..lay.nodes {
+        for i in 0..lay.d {
+            z[lay.qp[k * lay.d + i] as usize] = action.q0[i] + 0.05 * rng.next();
+        }
+    }
+    z
+}
+
+/// Dense matrix from a planned block.
+fn dense(action: &Action, block: Block, z: &[f64], rows: usize, cols: usize) -> DMatrix<f64> {
+    let plan = action.plan(block);
+    let mut vals = vec![0.0; plan.structure.len()];
+    let mut ws = action.model.workspace();
+    action.matrix_values(&plan, z, &mut vals, &mut ws);
+    let mut m = DMatrix::zeros(rows, cols);
+    for (&(r, c), v) in plan.structure.iter().zip(&vals) {
+        m[(r as usize, c as usize)] += v;
+        if block == Block::ReducedHessian && r != c {
+            m[(c as usize, r as usize)] += v;
+        }
+    }
+    m
+}
+
+/// Scale rows, then columns, to unit max-norm: the rank is unchanged, and the
+/// singular values no longer mix the stiff wall rows with the mass rows.
+fn equilibrate(mut m: DMatrix<f64>) -> DMatrix<f64> {
+    for mut r in m.row_iter_mut() {
+        let s = r.amax();
+        if s > 0.0 {
+            r /= s;
+        }
+    }
+    for mut c in m.column_iter_mut() {
+        let s = c.amax();
+        if s > 0.0 {
+            c /= s;
+        }
+    }
+    m
+}
+
+fn small_action(name: &str) -> Action {
+    // Nodes: the smallest grid on which every operator of the test has interior rows.
+    let ov = Overrides { nodes: Some(12), ..Default::default() };
+    build_action(&common::load(name, &ov)).unwrap()
+}
+
+fn check_close(what: &str, exact: f64, fd: f64, scale: f64) {
+    let tol = 1e-6 * scale.max(1.0);
+    assert!((exact - fd).abs() <= tol, "{what}: exact {exact:e} vs finite difference {fd:e} (tol {tol:e})");
+}
+
+#[test]
+fn gradient_matches_finite_differences_of_the_action() {
+    for name in common::SHIPPED {
+        let action = small_action(name);
+        let mut rng = Rng(0x9e3779b97f4a7c15);
+        let mut ws = action.model.workspace();
+        let z = random_point(&action, &mut rng);
+        let mut grad = vec![0.0; z.len()];
+        action.gradient(&z, false, &mut grad, &mut ws);
+        let scale = grad.iter().fold(0.0_f64, |m, g| m.max(g.abs()));
+        for i in 0..z.len() {
+            let h = 1e-6 * (1.0 + z[i].abs());
+            let mut zp = z.clone();
+            zp[i] += h;
+            let mut zm = z.clone();
+            zm[i] -= h;
+            let fd = (action.value(&zp, &mut ws) - action.value(&zm, &mut ws)) / (2.0 * h);
+            check_close(&format!("{name}: dS/dz[{i}]"), grad[i], fd, scale);
+        }
+        // The reduced residual is the minus rows of the full gradient.
+        let mut r = vec![0.0; action.layout.n_m];
+        action.gradient(&z, true, &mut r, &mut ws);
+        assert_eq!(r, grad[action.layout.n_p..].to_vec(), "{name}: reduced residual");
+    }
+}
+
+#[test]
+fn jacobians_and_hessian_match_finite_differences_of_the_gradient() {
+    for name in common::SHIPPED {
+        let action = small_action(name);
+        let lay = &action.layout;
+        let (n_p, len) = (lay.n_p, lay.len());
+        let mut rng = Rng(0x2545f4914f6cdd1d);
+        let mut ws = action.model.workspace();
+        let z = random_point(&action, &mut rng);
+        let full = dense(&action, Block::FullJacobian, &z, len, len);
+        let mut fd = DMatrix::zeros(len, len);
+        for j in 0..len {
+            let h = 1e-6 * (1.0 + z[j].abs());
+            let (mut zp, mut zm) = (z.clone(), z.clone());
+            zp[j] += h;
+            zm[j] -= h;
+            let (mut gp, mut gm) = (vec![0.0; len], vec![0.0; len]);
+            action.gradient(&zp, false, &mut gp, &mut ws);
+            action.gradient(&zm, false, &mut gm, &mut ws);
+            for i in 0..len {
+                fd[(i, j)] = (gp[i] - gm[i]) / (2.0 * h);
+            }
+        }
+        let scale = fd.amax();
+        for i in 0..len {
+            for j in 0..len {
+                check_close(&format!("{name}: d2S/dz[{i}]dz[{j}]"), full[(i, j)], fd[(i, j)], scale);
+            }
+        }
+        // The full Jacobian is the Hessian of S: symmetric.
+        assert!((&full - full.transpose()).amax() <= 1e-12 * scale.max(1.0), "{name}: asymmetric Hessian");
+        // Reduced Jacobian = the (M, P) block; reduced Hessian = the (P, P) block at M = y.
+        let jac = dense(&action, Block::ReducedJacobian, &z, lay.n_m, n_p);
+        assert!((&jac - full.view((n_p, 0), (lay.n_m, n_p))).amax() <= 1e-12 * scale.max(1.0), "{name}: reduced Jacobian");
+        let hess = dense(&action, Block::ReducedHessian, &z, n_p, n_p);
+        assert!((&hess - full.view((0, 0), (n_p, n_p))).amax() <= 1e-12 * scale.max(1.0), "{name}: reduced Hessian");
+    }
+}
+
+#[test]
+fn discrete_systems_are_square_and_nonsingular_at_small_n() {
+    for name in common::SHIPPED {
+        for op in ["SBP121", "SBP242", "SBP363"] {
+            let nodes = if op == "SBP363" { 12 } else { 8 };
+            let scene = common::load(name, &common::grid(nodes, op));
+            let action = build_action(&scene).unwrap();
+            let lay = &action.layout;
+            assert_eq!(lay.n_p, lay.n_m, "{name} {op}: not square");
+            assert_eq!(lay.n_p, nodes * lay.d + nodes * lay.n + 2 * lay.d);
+            // At the time-stepping solution (a point near the critical point).
+            let (times, _) = skg_core::solve::grid(&scene);
+            let (states, _) =
+                skg_core::time_stepping::integrate_model(&action.model, &action.q0, &action.v0, &times, &Default::default()).unwrap();
+            let (q, lam) = (states.q, states.lambda);
+            let mut z = vec![0.0; lay.len()];
+            for k in 0..nodes {
+                for i in 0..lay.d {
+                    z[lay.qp[k * lay.d + i] as usize] = q[k][i];
+                }
+                for a in 0..lay.n {
+                    if lay.lp[k * lay.n + a] != u32::MAX {
+                        z[lay.lp[k * lay.n + a] as usize] = lam[k][a];
+                    }
+                }
+            }
+            let jac = equilibrate(dense(&action, Block::ReducedJacobian, &z, lay.n_m, lay.n_p));
+            let sv = jac.singular_values();
+            let (smax, smin) = (sv.max(), sv.min());
+            assert!(smin > 1e-10 * smax, "{name} {op}: reduced Jacobian singular (σ_min/σ_max = {:e})", smin / smax);
+            let full = equilibrate(dense(&action, Block::FullJacobian, &z, lay.len(), lay.len()));
+            let sv = full.singular_values();
+            assert!(sv.min() > 1e-10 * sv.max(), "{name} {op}: full Jacobian singular");
+        }
+    }
+}

@@ -1,0 +1,90 @@
+//! Charts: every kind is produced as SVG and PNG from a real (small) sweep and a solve,
+//! and bad requests are clear errors.
+
+mod common;
+
+use std::path::Path;
+
+/// Both files exist, are well-formed and non-trivial; the SVG contains `needle`.
+fn check_chart(stem: &Path, needle: &str) {
+    let png = std::fs::read(stem.with_extension("png")).unwrap();
+    assert!(png.len() > 5_000, "{} is {} bytes", stem.display(), png.len());
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("</svg>"));
+    assert!(svg.contains(needle), "`{needle}` not in {}", stem.display());
+}
+
+#[test]
+fn every_chart_is_written_as_svg_and_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = common::sweep_file(
+        dir.path(),
+        &common::scenario("tumbler"),
+        "reference = \"integrate\"\nkeep_trajectories = true\n\
+         [[grid]]\noperator = [\"SBP121\", \"SBP242\"]\nnodes = [128, 256]\nsigma = [\"1/80\", \"1/140\"]\n\
+         [peer]\ntolerances = [1e-6, 1e-9]\n",
+    );
+    let out = dir.path().join("out");
+    let o = common::skg(&["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    let img = dir.path().join("img");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let out_s = s(&out);
+
+    let stem = img.join("wp");
+    let o = common::skg(&["plot", "work-precision", &out_s, "-o", &s(&stem), "--where", "sigma=1/80"], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    check_chart(&stem, "time stepping");
+
+    let stem = img.join("conv");
+    let o = common::skg(&["plot", "convergence", &out_s, "-o", &s(&stem), "--where", "sigma=0.0125"], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    check_chart(&stem, "order");
+
+    let stem = img.join("stab");
+    let o = common::skg(
+        &["plot", "stability", &out_s, "-o", &s(&stem), "--x", "nodes", "--y", "sigma", "--where", "operator=SBP242"],
+        Path::new("."),
+    );
+    assert!(o.status.success(), "{}", common::text(&o));
+    check_chart(&stem, "1/140");
+
+    // A solve with its reference overlaid, and a sweep's kept trajectories overlaid.
+    let sol = dir.path().join("sol");
+    assert!(common::skg(&[common::scenario("tumbler").to_str().unwrap(), "-o", &s(&sol), "-q"], Path::new(".")).status.success());
+    let reference = dir.path().join("ref.csv");
+    let o = common::skg(
+        &["reference", common::scenario("tumbler").to_str().unwrap(), "-o", &s(&reference), "--nodes", "512", "-q"],
+        Path::new("."),
+    );
+    assert!(o.status.success(), "{}", common::text(&o));
+    let stem = img.join("traj");
+    let o = common::skg(&["plot", "trajectory", &s(&sol), "--reference", &s(&reference), "-o", &s(&stem)], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    check_chart(&stem, "energy");
+    let stem = img.join("ladder");
+    let o = common::skg(&["plot", "trajectory", &out_s, "-o", &s(&stem), "--title", "sigma ladder"], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    check_chart(&stem, "sigma=1/140");
+
+    // No temporary files are left next to the charts.
+    let names: Vec<String> = std::fs::read_dir(&img).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names.len(), 10, "{names:?}");
+    assert!(names.iter().all(|n| !n.contains("tmp")), "{names:?}");
+
+    // Bad requests: exit status 1, a message, no panic.
+    for args in [
+        vec!["plot", "stability", out_s.as_str(), "-o", "x", "--y", "colour"],
+        vec!["plot", "convergence", out_s.as_str(), "-o", "x", "--where", "sigma"],
+        vec!["plot", "work-precision", "/nonexistent/results.csv", "-o", "x"],
+    ] {
+        let o = common::skg(&args, Path::new("."));
+        assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+        assert!(common::text(&o).contains("error:") && !common::text(&o).contains("panicked"), "{}", common::text(&o));
+    }
+    // The stability map refuses to put two points in one cell.
+    let o = common::skg(&["plot", "stability", &out_s, "-o", &s(&img.join("x")), "--x", "nodes", "--y", "sigma"], Path::new("."));
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    assert!(common::text(&o).contains("--where"), "{}", common::text(&o));
+}

@@ -1,0 +1,89 @@
+//! The rolling-spinning disk against its closed form (docs/scenes.md), with the numbers of
+//! the independent CasADi + Ipopt implementation of the same discretization (docs/errata.md, erratum 4).
+
+mod common;
+
+use common::G;
+
+use skg_core::convergence::fit_order;
+use skg_core::scenario::Overrides;
+
+const K: f64 = G * 0.5 / 1.5; // g sin α / (1 + I_S / (M R²))
+
+fn exact(t: f64) -> Vec<f64> {
+    vec![
+        5.0 * t.sin() + K * t.sin().powi(2) / 2.0,
+        5.0 * (1.0 - t.cos()) + K * (t / 2.0 - (2.0 * t).sin() / 4.0),
+        5.0 * t + K * (1.0 - t.cos()),
+        t,
+    ]
+}
+
+/// Max error of x, y, θ, last two nodes excluded (as the reference numbers are measured).
+fn disk_error(n: usize, op: &str) -> f64 {
+    let o = common::solve("rolling_disk", &common::grid(n, op));
+    common::max_error(&o, &[0, 1, 2], 2, exact)
+}
+
+#[test]
+fn paper_grid_matches_closed_form_and_constraints_hold() {
+    let o = common::solve("rolling_disk", &Overrides::default());
+    assert_eq!(o.settings.nodes, 64);
+    assert_eq!(o.settings.operator, "SBP242");
+    let err = common::max_error(&o, &[0, 1, 2], 2, exact);
+    // Independent implementation: 0.0152 at N = 64.
+    assert!((err - 0.0152).abs() < 0.0152 * 0.05, "max error {err}");
+    // φ = t exactly solves φ'' = 0 with φ(0)=0, φ'(0)=1: exact to round-off on SBP242.
+    assert!(common::max_error(&o, &[3], 0, exact) < 1e-10);
+    let d = &o.diagnostics;
+    assert!(d.max_constraint_interior < 1e-10, "g at interior nodes {:e}", d.max_constraint_interior);
+    assert!(o.iterations <= 8, "{} Ipopt iterations", o.iterations);
+    // Energy (kinetic − M g x sin α) is conserved to the discretization error: compare
+    // with the position error scale (energy ~ 25 J, positions ~ 10 m).
+    assert!(d.energy_drift < 0.05, "energy drift {}", d.energy_drift);
+}
+
+/// Errors on a ladder within 5 % of the independent implementation's, and the fitted
+/// order within `tol` of `order`.
+fn assert_matches_independent(op: &str, ns: &[usize], reference: &[f64], order: f64, tol: f64) {
+    let errors: Vec<f64> = ns.iter().map(|&n| disk_error(n, op)).collect();
+    for ((n, e), r) in ns.iter().zip(&errors).zip(reference) {
+        assert!((e - r).abs() < 0.05 * r, "{op} N={n}: error {e}, independent implementation {r}");
+    }
+    let h: Vec<f64> = ns.iter().map(|&n| 1.0 / (n as f64 - 1.0)).collect();
+    let fit = fit_order(&h, &errors, 1e-12).unwrap();
+    assert!((fit.order - order).abs() < tol, "{op}: order {}", fit.order);
+}
+
+#[test]
+fn sbp242_error_and_order_match_the_independent_implementation() {
+    assert_matches_independent("SBP242", &[32, 64, 128], &[0.109, 0.0152, 0.00199], 2.9, 0.2);
+}
+
+#[test]
+fn sbp121_error_and_order_match_the_independent_implementation() {
+    assert_matches_independent("SBP121", &[64, 128, 256], &[0.083, 0.022, 0.0057], 1.9, 0.15);
+}
+
+#[test]
+fn sbp363_converges_faster_than_sbp242() {
+    let e242 = disk_error(128, "SBP242");
+    let e363 = disk_error(128, "SBP363");
+    assert!(e363 < e242, "SBP363 {e363} vs SBP242 {e242}");
+}
+
+/// The disk conserves E = ½M(ẋ²+ẏ²) + ½I_S θ̇² + ½I_D φ̇² − M g x sin α (the
+/// constraints do no work). The discrete drift (last two nodes excluded) must vanish
+/// under refinement at the operator's observed order. Measured (N = 64/128/256):
+/// SBP121 0.163/0.0410/0.0103 (order 2.0), SBP242 0.0232/0.00301/0.000383 (2.96),
+/// SBP363 0.0399/0.00254/0.000156 (4.0).
+#[test]
+fn energy_drift_vanishes_at_the_operators_order() {
+    let ns = [64, 128, 256];
+    for (op, expected, tol) in [("SBP121", 2.0, 0.1), ("SBP242", 2.95, 0.1), ("SBP363", 4.0, 0.2)] {
+        let drift: Vec<f64> = ns.iter().map(|&n| common::solve("rolling_disk", &common::grid(n, op)).diagnostics.energy_drift).collect();
+        let h: Vec<f64> = ns.iter().map(|&n| 1.0 / (n as f64 - 1.0)).collect();
+        let fit = fit_order(&h, &drift, 1e-12).unwrap();
+        assert!((fit.order - expected).abs() < tol, "{op}: energy drift {drift:?}, order {}", fit.order);
+    }
+}

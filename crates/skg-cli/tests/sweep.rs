@@ -1,0 +1,408 @@
+//! Sweeps: grid expansion, clear errors on bad sweep files, sharding and merge, resume
+//! after a killed run, and the σ auto-selection.
+
+mod common;
+
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use skg_core::scenario::{Overrides, SceneFile};
+use skg_core::tune::{self, TuneOptions};
+use skg_sweep::{Method, PointStatus, Results, Shard, SweepFile};
+
+/// Write a sweep file into `dir` whose base scene is the shipped `scene`.
+fn sweep_file(dir: &Path, scene: &str, body: &str) -> PathBuf {
+    common::sweep_file(dir, &common::scenario(scene), body)
+}
+
+#[test]
+fn grid_expansion_products_points_and_peer() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = sweep_file(
+        dir.path(),
+        "tumbler",
+        r#"
+[[grid]]
+nodes = [64, 128]
+operator = ["SBP121", "SBP242", "SBP363"]
+sigma = "1/80"
+
+[[grid]]
+sigma = ["1/110", 0.005]
+
+[[points]]
+nodes = 256
+sigma = "1/200"
+
+[[points]]     # the same point as the first of the first grid: dropped
+sigma = "1/80"
+operator = "SBP121"
+nodes = 64
+
+[peer]
+tolerances = [1e-6, 1e-9]
+"#,
+    );
+    let f = SweepFile::load(&p).unwrap();
+    let e = f.expand().unwrap();
+    assert_eq!(e.points.len(), 6 + 2 + 1 + 2);
+    assert_eq!(e.duplicates, 1);
+    assert_eq!(e.axes, vec!["nodes", "operator", "sigma"]);
+    // The first axis varies slowest.
+    let first: Vec<(&str, &str)> = e.points[..3].iter().map(|p| (p.value("nodes").unwrap(), p.value("operator").unwrap())).collect();
+    assert_eq!(first, vec![("64", "SBP121"), ("64", "SBP242"), ("64", "SBP363")]);
+    assert_eq!(e.points[3].value("nodes"), Some("128"));
+    assert_eq!(e.points[7].value("sigma"), Some("0.005"));
+    assert_eq!(e.points[8].value("sigma"), Some("1/200"));
+    assert_eq!(e.points[9].method, Method::Ode { rtol: 1e-6 });
+    // Indices are positions; ids are unique and stable.
+    for (k, p) in e.points.iter().enumerate() {
+        assert_eq!(p.index, k);
+    }
+    let ids: HashSet<String> = e.points.iter().map(|p| p.id()).collect();
+    assert_eq!(ids.len(), e.points.len());
+    assert_eq!(f.expand().unwrap().points[4].id(), e.points[4].id());
+}
+
+#[test]
+fn bad_sweep_files_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: &[(&str, &[&str])] = &[
+        ("[[grid]]\nnodes = [64]\nbogus = 1\n", &["`bogus`", "sigma", "sweep.toml:5:1"]),
+        ("colour = 1\n[[grid]]\nnodes = [64]\n", &["sweep.toml:3:1", "colour"]),
+        ("[[grid]]\noperator = [\"SBP999\"]\n", &["SBP999"]),
+        ("[[grid]]\nnodes = [1]\n", &["nodes"]),
+        ("[[grid]]\nsigma = [\"1/\"]\n", &["sigma"]),
+        ("[grid]\nnodes = [64]\n", &["[[grid]]"]),
+        ("", &["no points"]),
+        ("[peer]\ntolerances = [2.0]\n", &["tolerances"]),
+    ];
+    for (body, needles) in cases {
+        let p = sweep_file(dir.path(), "tumbler", body);
+        let err = SweepFile::load(&p).and_then(|f| f.expand()).unwrap_err().to_string();
+        for n in *needles {
+            assert!(err.contains(n), "expected `{n}` in the error for\n{body}\ngot: {err}");
+        }
+        // The CLI reports it with exit status 1 and no panic.
+        let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", dir.path().join("out").to_str().unwrap()], Path::new("."));
+        assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+        assert!(!common::text(&o).contains("panicked"), "{}", common::text(&o));
+    }
+    // A missing base scene names the sweep file's line.
+    let p = dir.path().join("missing.toml");
+    std::fs::write(&p, "[sweep]\nscene = \"nope.toml\"\n[[grid]]\nnodes = [64]\n").unwrap();
+    let err = SweepFile::load(&p).unwrap().expand().unwrap_err().to_string();
+    assert!(err.contains("missing.toml:2:9") && err.contains("nope.toml"), "{err}");
+}
+
+/// Rows of a results.csv by id; every line must have the header's field count.
+fn rows_by_id(dir: &Path) -> (Results, HashMap<String, usize>) {
+    let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    assert!(text.ends_with('\n'), "results.csv ends with a complete line");
+    let r = Results::read(dir).unwrap();
+    let id = r.column_index("id").unwrap();
+    let mut count = HashMap::new();
+    for row in &r.rows {
+        assert_eq!(row.len(), r.header.len());
+        *count.entry(row[id].clone()).or_insert(0) += 1;
+    }
+    (r, count)
+}
+
+#[test]
+fn shards_partition_the_grid_and_merge_joins_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = sweep_file(
+        dir.path(),
+        "free_fall",
+        "[[grid]]\nnodes = [16, 20, 24, 28, 32]\noperator = [\"SBP121\", \"SBP242\"]\n[peer]\ntolerances = [1e-6]\n",
+    );
+    let f = SweepFile::load(&p).unwrap();
+    let all = f.expand().unwrap().points;
+    assert_eq!(all.len(), 11);
+    for n in 1..=4 {
+        let mut seen = HashSet::new();
+        for k in 1..=n {
+            let s: Shard = format!("{k}/{n}").parse().unwrap();
+            for pt in all.iter().filter(|pt| s.contains(pt.index)) {
+                assert!(seen.insert(pt.id()), "point {} in two shards of {n}", pt.index);
+            }
+        }
+        assert_eq!(seen.len(), all.len(), "the shards of {n} cover the grid");
+    }
+    // Run two shards through the CLI and merge them.
+    let mut dirs = Vec::new();
+    for k in 1..=2 {
+        let d = dir.path().join(format!("shard{k}"));
+        let o = common::skg(
+            &["sweep", p.to_str().unwrap(), "-o", d.to_str().unwrap(), "--shard", &format!("{k}/2"), "-j", "2"],
+            Path::new("."),
+        );
+        assert!(o.status.success(), "{}", common::text(&o));
+        let (_, ids) = rows_by_id(&d);
+        assert_eq!(ids.len(), if k == 1 { 6 } else { 5 });
+        dirs.push(d);
+    }
+    let merged = dir.path().join("merged");
+    let mut args = vec!["merge", "-o", merged.to_str().unwrap()];
+    args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
+    let o = common::skg(&args, Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    assert!(common::text(&o).contains("every point of the sweep is present"), "{}", common::text(&o));
+    let (r, ids) = rows_by_id(&merged);
+    assert_eq!(ids.len(), all.len());
+    assert!(ids.values().all(|&c| c == 1));
+    let idx = r.column_index("index").unwrap();
+    let order: Vec<usize> = r.rows.iter().map(|row| row[idx].parse().unwrap()).collect();
+    assert_eq!(order, (0..all.len()).collect::<Vec<_>>(), "merged rows are in point order");
+    // Free fall is exact on SBP242; the peer row is the time-stepping integrator.
+    let (conv, m) = (r.column_index("converged").unwrap(), r.column_index("method").unwrap());
+    assert!(r.rows.iter().all(|row| row[conv] == "true"));
+    assert_eq!(r.rows.iter().filter(|row| row[m] == "ode").count(), 1);
+    // Merging shards of different sweeps is refused.
+    let other = sweep_file(dir.path(), "tumbler", "[[grid]]\nsigma = [\"1/80\"]\nnodes = [64]\n");
+    let d3 = dir.path().join("other");
+    assert!(common::skg(&["sweep", other.to_str().unwrap(), "-o", d3.to_str().unwrap(), "-q"], Path::new(".")).status.success());
+    let o = common::skg(
+        &["merge", "-o", dir.path().join("bad").to_str().unwrap(), dirs[0].to_str().unwrap(), d3.to_str().unwrap()],
+        Path::new("."),
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    assert!(common::text(&o).contains("not shards of one sweep"), "{}", common::text(&o));
+}
+
+#[test]
+fn killed_sweep_resumes_without_lost_or_duplicated_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = sweep_file(
+        dir.path(),
+        "tumbler",
+        "[[grid]]\noperator = [\"SBP242\", \"SBP363\"]\nsigma = [\"1/60\", \"1/80\", \"1/110\"]\nnodes = [128, 160, 192, 224, 256]\n",
+    );
+    let total = SweepFile::load(&p).unwrap().expand().unwrap().points.len();
+    assert_eq!(total, 30);
+    let out = dir.path().join("out");
+    let results = out.join("results.csv");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_skg-solve"))
+        .args(["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "1", "-q"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let rows = |path: &Path| std::fs::read_to_string(path).map_or(0, |t| t.lines().count().saturating_sub(1));
+    while rows(&results) < 4 {
+        assert!(start.elapsed() < Duration::from_secs(60), "no rows appeared");
+        assert!(child.try_wait().unwrap().is_none(), "the sweep finished before it could be killed");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let before = rows(&results);
+    assert!(before < total, "killed part-way ({before} of {total} rows)");
+    // Simulate a kill in the middle of a write: a trailing partial line.
+    let mut f = std::fs::OpenOptions::new().append(true).open(&results).unwrap();
+    std::io::Write::write_all(&mut f, b"0123456789abcdef,3,skg,,12").unwrap();
+    drop(f);
+    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "2"], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    let t = common::text(&o);
+    assert!(t.contains(&format!("{before} already done")), "{t}");
+    let (r, ids) = rows_by_id(&out);
+    assert_eq!(r.rows.len(), total, "one row per point");
+    assert_eq!(ids.len(), total);
+    assert!(ids.values().all(|&c| c == 1), "no duplicated rows");
+    let expected: HashSet<String> = SweepFile::load(&p).unwrap().expand().unwrap().points.iter().map(|p| p.id()).collect();
+    assert_eq!(ids.keys().cloned().collect::<HashSet<_>>(), expected);
+    // A third run has nothing to do.
+    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap()], Path::new("."));
+    assert!(common::text(&o).contains(&format!("{total} already done, 0 run")), "{}", common::text(&o));
+    assert!(!out.join(".work").exists(), "worker files are cleaned up");
+}
+
+#[test]
+fn failed_points_are_recorded_and_the_sweep_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    // max_iter = 1 cannot converge the tumbler; the other point does.
+    let p = sweep_file(dir.path(), "tumbler", "[[grid]]\nnodes = [256]\nmax_iter = [1, 100]\n");
+    let out = dir.path().join("out");
+    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap()], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    assert!(common::text(&o).contains("(1 failed)"), "{}", common::text(&o));
+    let r = Results::read(&out).unwrap();
+    let (c, s, ss) = (r.column_index("converged").unwrap(), r.column_index("status").unwrap(), r.column_index("solver_status").unwrap());
+    let mut states: Vec<(&str, &str, &str)> = r.rows.iter().map(|row| (row[c].as_str(), row[s].as_str(), row[ss].as_str())).collect();
+    states.sort();
+    assert_eq!(states[0], ("false", "not_converged", "Maximum_Iterations_Exceeded"));
+    assert_eq!(states[1], ("true", "converged", "Solve_Succeeded"));
+    assert_eq!(r.status(&r.rows[0]).unwrap().is_converged(), r.rows[0][c] == "true");
+    // A point over the time limit is killed and recorded as such.
+    let p = sweep_file(dir.path(), "tumbler", "timeout = 0.01\n[[grid]]\nnodes = [1024]\n");
+    let out = dir.path().join("timeout");
+    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap()], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    let r = Results::read(&out).unwrap();
+    assert_eq!(r.rows.len(), 1);
+    assert_eq!(r.rows[0][r.column_index("status").unwrap()], "timeout");
+    assert_eq!(r.rows[0][r.column_index("converged").unwrap()], "false");
+}
+
+/// `sha256:<hex>` of a file's bytes, computed here with the `sha2` crate.
+fn sha256_of(path: &Path) -> String {
+    use sha2::{Digest, Sha256};
+    let hex: String = Sha256::digest(std::fs::read(path).unwrap()).iter().map(|b| format!("{b:02x}")).collect();
+    format!("sha256:{hex}")
+}
+
+/// The cells of column `name` in every row.
+fn column<'a>(r: &'a Results, name: &str) -> Vec<&'a str> {
+    let i = r.column_index(name).unwrap_or_else(|| panic!("no column {name} in {:?}", r.header));
+    r.rows.iter().map(|row| row[i].as_str()).collect()
+}
+
+#[test]
+fn results_hold_axis_numbers_expressions_and_provenance() {
+    let dir = tempfile::tempdir().unwrap();
+    // A copy of the tumbler (R = 1), so that its content can change below.
+    let scene = dir.path().join("tumbler.toml");
+    std::fs::copy(common::scenario("tumbler"), &scene).unwrap();
+    let p = common::sweep_file(dir.path(), &scene, "[[grid]]\nnodes = 128\nsigma = [\"1/110\", 0.005, \"R/100\"]\nV0 = [10, 12]\n");
+    let out = dir.path().join("out");
+    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    let r = Results::read(&out).unwrap();
+    assert_eq!(r.rows.len(), 6);
+    // The expressions' column follows its axis; an axis of plain numbers has none.
+    let sigma = r.column_index("sigma").unwrap();
+    assert_eq!(r.header[sigma + 1], "sigma_expr");
+    assert!(r.column_index("V0").is_some() && r.column_index("V0_expr").is_none(), "{:?}", r.header);
+    // Each sigma cell is the double the expression denotes (R = 1 in the scene).
+    for (cell, written) in column(&r, "sigma").into_iter().zip(column(&r, "sigma_expr")) {
+        let expected = match written {
+            "1/110" => 1.0 / 110.0,
+            "0.005" => 0.005,
+            "R/100" => 1.0 / 100.0,
+            other => panic!("sigma_expr {other}"),
+        };
+        assert_eq!(cell.parse::<f64>().unwrap(), expected, "sigma {cell} for {written}");
+    }
+    for cell in column(&r, "V0") {
+        assert!([10.0, 12.0].contains(&cell.parse::<f64>().unwrap()), "V0 {cell}");
+    }
+    // Statuses are stable names; `converged` says the same.
+    for (status, converged) in column(&r, "status").into_iter().zip(column(&r, "converged")) {
+        assert_eq!(status.parse::<PointStatus>().unwrap().is_converged().to_string(), converged);
+    }
+    // Provenance: this build's version and schema, and the SHA-256 of the scene's bytes.
+    let hash = sha256_of(&scene);
+    assert!(column(&r, "scene_hash").iter().all(|h| *h == hash), "{:?} vs {hash}", column(&r, "scene_hash"));
+    assert!(column(&r, "skg_solve_version").iter().all(|v| *v == env!("CARGO_PKG_VERSION")));
+    let schema = skg_core::provenance::SCHEMA_VERSION.to_string();
+    assert!(column(&r, "schema_version").iter().all(|v| *v == schema));
+    let info: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(info["scene_hash"], hash.as_str());
+    assert_eq!(info["skg_solve_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(info["schema_version"].as_u64(), Some(skg_core::provenance::SCHEMA_VERSION as u64));
+
+    // Charts filter by value: the expression, the number, or an expression of scene
+    // parameters (matched as written) each select one sigma, so each (N, V0) cell has one point.
+    let stem = dir.path().join("map");
+    let map = |filter: &str| {
+        let mut args = vec!["plot", "stability", out.to_str().unwrap(), "-o", stem.to_str().unwrap(), "--x", "nodes", "--y", "V0"];
+        if !filter.is_empty() {
+            args.extend(["--where", filter]);
+        }
+        common::skg(&args, Path::new("."))
+    };
+    for filter in ["sigma=1/110", "sigma=0.00909090909090909", "sigma=R/100", "sigma=1/200", "sigma=1/300"] {
+        let o = map(filter);
+        let found = filter != "sigma=1/300"; // 1/200 is the point written 0.005
+        assert_eq!(o.status.success(), found, "--where {filter}: {}", common::text(&o));
+    }
+    let o = map("");
+    assert!(!o.status.success() && common::text(&o).contains("several points share"), "{}", common::text(&o));
+
+    // A rerun after the base scene changed refuses to mix its rows with the old ones.
+    std::fs::write(&scene, std::fs::read_to_string(&scene).unwrap() + "# edited\n").unwrap();
+    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"], Path::new("."));
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("results.csv") && t.contains(&hash) && t.contains(&sha256_of(&scene)), "{t}");
+    // Nor does merge join the rows of the two scene contents.
+    let edited = dir.path().join("edited");
+    assert!(common::skg(&["sweep", p.to_str().unwrap(), "-o", edited.to_str().unwrap(), "-q"], Path::new(".")).status.success());
+    let merged = dir.path().join("merged");
+    let o = common::skg(&["merge", "-o", merged.to_str().unwrap(), out.to_str().unwrap(), edited.to_str().unwrap()], Path::new("."));
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("not shards of one sweep") && t.contains(&hash) && t.contains(&sha256_of(&scene)), "{t}");
+}
+
+#[test]
+fn results_of_another_schema_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let old = dir.path().join("results.csv");
+    // The layout before schema versions: Ipopt's status names, no provenance columns.
+    std::fs::write(
+        &old,
+        "id,index,method,rtol,nodes,operator,formulation,sigma,converged,status,iterations,wall_s,error_max\n\
+         0123456789abcdef,0,skg,,128,SBP242,reduced,1/110,true,Solve_Succeeded,6,0.01,1e-3\n",
+    )
+    .unwrap();
+    let o = common::skg(&["plot", "convergence", old.to_str().unwrap(), "-o", dir.path().join("c").to_str().unwrap()], Path::new("."));
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains(old.to_str().unwrap()) && t.contains("schema_version") && t.contains("schema 1"), "{t}");
+    let e = merge_error(dir.path(), &old);
+    assert!(e.contains("schema 1"), "{e}");
+}
+
+/// The error of merging one results file.
+fn merge_error(dir: &Path, input: &Path) -> String {
+    let o = common::skg(&["merge", "-o", dir.join("merged").to_str().unwrap(), input.to_str().unwrap()], Path::new("."));
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    common::text(&o)
+}
+
+#[test]
+fn sigma_auto_selection_reproduces_the_papers_choice() {
+    // Tumbler at N = 256: artifacts appear between sigma = 1/120 and 1/110 (docs/solver.md),
+    // so the smallest artifact-free width at the default tolerance lies in between.
+    let file = SceneFile::load(&common::scenario("tumbler")).unwrap();
+    let opts = TuneOptions { lo: Some(1.0 / 160.0), hi: Some(1.0 / 90.0), rel: 0.03, ..TuneOptions::default() };
+    let mut seen = 0;
+    let r = tune::tune_width(&file, &Overrides::default(), &opts, |_| seen += 1).unwrap();
+    assert_eq!(r.param, "sigma");
+    assert_eq!(seen, r.steps.len());
+    assert!(r.chosen > 1.0 / 120.0 && r.chosen <= 1.0 / 108.0, "chosen 1/{:.1}", 1.0 / r.chosen);
+    let failing = r.failing.unwrap();
+    assert!(r.chosen / failing < 1.0 + opts.rel + 1e-12);
+    // Every step is consistent with the choice (monotone artifact).
+    for s in &r.steps {
+        assert_eq!(s.ok, s.value >= r.chosen, "{s:?}");
+    }
+    // The CLI reports the choice.
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("tune.json");
+    let o = common::skg(
+        &[
+            "tune",
+            common::scenario("tumbler").to_str().unwrap(),
+            "--lo",
+            "0.00625",
+            "--hi",
+            "0.0111",
+            "--rel",
+            "0.1",
+            "-o",
+            json.to_str().unwrap(),
+        ],
+        Path::new("."),
+    );
+    assert!(o.status.success(), "{}", common::text(&o));
+    assert!(common::text(&o).contains("sigma = "), "{}", common::text(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(v["chosen"].as_f64().unwrap() > 1.0 / 125.0);
+}

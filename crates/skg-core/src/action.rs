@@ -1,0 +1,382 @@
+//! The SBP-discretized SKG action and its exact derivatives on the whole time grid.
+//!
+//! Unknowns (docs/mathematics.md, docs/errata.md). The *plus* block `P` holds, node by node, `q+[k]` and
+//! `λ+[k]` (only at interior nodes: `λ+[1]` and `λ+[N]` enter no equation and are
+//! pinned to 0), followed by the multipliers of the boundary conditions on minus
+//! variables `ν_q1, ν_qN` (`q-[1] = q-[N] = 0`) and `ν_λ1, ν_λN` (`λ-[1] = λ-[N] = 0`).
+//! The *minus* block `M` holds, node by node, `q-[k]`, `λ-[k]`, then the multipliers
+//! of the initial conditions `ν_x` (`q+[1] = q_i`) and `ν_v` (`(Dq+)[1] = q̇_i`).
+//! Both blocks have `N d + N n + 2d` entries: the system is square.
+//!
+//! The action is `S(Z) = Σ_k H_kk s(T_k Z) + ½ Zᵀ K Z + lᵀ Z` with `Z = [P, M]`, the
+//! node density `s` of [`crate::model`], `T_k` the linear map from `Z` to the local
+//! variables of node `k` (the SBP derivative `D` supplies `v = Dq+` and `dw = Dq-`),
+//! and `K`, `l` the boundary terms. `S` is linear in `M`, so
+//!
+//! * the reduced system is `R(P) = ∂S/∂M = 0` with Jacobian `∂²S/∂M∂P`, and the
+//!   Hessian of Ipopt's Lagrangian with multipliers `y` is `∂²S/∂P²` at `M = y`;
+//! * the full system is `∇S(Z) = 0` with Jacobian `∇²S(Z)`.
+//!
+//! All are assembled from the node tapes by precomputed scatter plans: the sparsity
+//! structure is computed once, values are filled in place.
+
+use std::collections::HashMap;
+
+use crate::model::{LocalKind, Model, PairTape, Workspace};
+use crate::sbp::SbpOperator;
+
+const NONE: u32 = u32::MAX;
+
+/// Index bookkeeping of the global unknown vector `Z = [P, M]`.
+#[derive(Debug, Clone)]
+pub struct GlobalLayout {
+    /// Coordinates per node.
+    pub d: usize,
+    /// Constraints per node.
+    pub n: usize,
+    /// Grid nodes N.
+    pub nodes: usize,
+    /// Z index of `q+[k][i]` at `k*d + i`.
+    pub qp: Vec<u32>,
+    /// Z index of `λ+[k][a]` at `k*n + a` (NONE at the pinned end nodes).
+    pub lp: Vec<u32>,
+    /// Z index of the multiplier of `q-[1] = 0`, per coordinate.
+    pub nu_q1: Vec<u32>,
+    /// Z index of the multiplier of `q-[N] = 0`, per coordinate.
+    pub nu_qn: Vec<u32>,
+    /// Z index of the multiplier of `λ-[1] = 0`, per constraint.
+    pub nu_l1: Vec<u32>,
+    /// Z index of the multiplier of `λ-[N] = 0`, per constraint.
+    pub nu_ln: Vec<u32>,
+    /// Z index of `q-[k][i]`.
+    pub qm: Vec<u32>,
+    /// Z index of `λ-[k][a]`.
+    pub lm: Vec<u32>,
+    /// Z index of the multiplier of the initial condition `q+[1] = q_i`, per coordinate.
+    pub nu_x: Vec<u32>,
+    /// Z index of the multiplier of the initial condition `(Dq+)[1] = q̇_i`, per coordinate.
+    pub nu_v: Vec<u32>,
+    /// Size of P (= size of M).
+    pub n_p: usize,
+    /// Size of M.
+    pub n_m: usize,
+}
+
+impl GlobalLayout {
+    /// The layout for `d` coordinates and `n` constraints on `nodes` nodes: P first
+    /// (node by node, then the boundary multipliers on minus variables), then M.
+    pub fn new(d: usize, n: usize, nodes: usize) -> Self {
+        let next = std::cell::Cell::new(0u32);
+        let take = || {
+            let i = next.get();
+            next.set(i + 1);
+            i
+        };
+        let mut qp = vec![NONE; nodes * d];
+        let mut lp = vec![NONE; nodes * n];
+        for k in 0..nodes {
+            for i in 0..d {
+                qp[k * d + i] = take();
+            }
+            if k > 0 && k + 1 < nodes {
+                for a in 0..n {
+                    lp[k * n + a] = take();
+                }
+            }
+        }
+        let nu_q1: Vec<u32> = (0..d).map(|_| take()).collect();
+        let nu_qn: Vec<u32> = (0..d).map(|_| take()).collect();
+        let nu_l1: Vec<u32> = (0..n).map(|_| take()).collect();
+        let nu_ln: Vec<u32> = (0..n).map(|_| take()).collect();
+        let n_p = next.get() as usize;
+        let mut qm = vec![NONE; nodes * d];
+        let mut lm = vec![NONE; nodes * n];
+        for k in 0..nodes {
+            for i in 0..d {
+                qm[k * d + i] = take();
+            }
+            for a in 0..n {
+                lm[k * n + a] = take();
+            }
+        }
+        let nu_x: Vec<u32> = (0..d).map(|_| take()).collect();
+        let nu_v: Vec<u32> = (0..d).map(|_| take()).collect();
+        let n_m = next.get() as usize - n_p;
+        GlobalLayout { d, n, nodes, qp, lp, nu_q1, nu_qn, nu_l1, nu_ln, qm, lm, nu_x, nu_v, n_p, n_m }
+    }
+
+    /// Total size of Z.
+    pub fn len(&self) -> usize {
+        self.n_p + self.n_m
+    }
+
+    /// Never true for a built layout (it always has node values); for API symmetry.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Whether Z index `z` belongs to the plus block P.
+    pub fn is_plus(&self, z: u32) -> bool {
+        (z as usize) < self.n_p
+    }
+}
+
+/// Which system a residual or matrix belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Block {
+    /// Reduced residual rows / Jacobian: rows M (numbered from 0), columns P.
+    ReducedJacobian,
+    /// Reduced Lagrangian Hessian: P × P, lower triangle.
+    ReducedHessian,
+    /// Full Jacobian: Z × Z, every entry.
+    FullJacobian,
+}
+
+/// A sparse matrix's structure and the recipe to fill its values.
+pub struct MatrixPlan {
+    /// The block it fills.
+    pub block: Block,
+    /// (row, col) of each nonzero in the target's numbering.
+    pub structure: Vec<(u32, u32)>,
+    /// Slot for every product visited by the assembly loop (NONE = not in this block).
+    slots: Vec<u32>,
+    /// Constant contributions of the boundary terms.
+    constants: Vec<(u32, f64)>,
+}
+
+/// The discrete action of one scene on one grid.
+pub struct Action {
+    /// The scene's model (the node density and its derivatives).
+    pub model: Model,
+    /// The SBP operator on the grid.
+    pub op: SbpOperator,
+    /// Where each unknown lives in Z.
+    pub layout: GlobalLayout,
+    /// Initial coordinates q_i.
+    pub q0: Vec<f64>,
+    /// Initial velocities q̇_i.
+    pub v0: Vec<f64>,
+    /// Node map T: for node k and local variable a, entries `map[offsets[k*m+a]..offsets[k*m+a+1]]`.
+    offsets: Vec<u32>,
+    map: Vec<(u32, f64)>,
+    /// Boundary terms: bilinear `c z_a z_b` (a ≠ b) and linear `l z_a`.
+    bilinear: Vec<(u32, u32, f64)>,
+    linear: Vec<(u32, f64)>,
+    /// Local variables whose gradient the residual tapes compute, in tape output order.
+    minus_locals: Vec<usize>,
+    all_locals: Vec<usize>,
+}
+
+impl Action {
+    /// The discrete action of `model` on the grid of `op` with initial state (q0, v0):
+    /// the node map T and the boundary terms.
+    pub fn new(model: Model, op: SbpOperator, q0: Vec<f64>, v0: Vec<f64>) -> Action {
+        let (d, n) = (model.layout.d, model.layout.n);
+        let nodes = op.len();
+        let layout = GlobalLayout::new(d, n, nodes);
+        let m = model.layout.len();
+        let mut offsets = Vec::with_capacity(nodes * m + 1);
+        let mut map = Vec::new();
+        offsets.push(0u32);
+        for k in 0..nodes {
+            let row = op.row(k);
+            for a in 0..m {
+                let (kind, c) = model.layout.kind(a);
+                match kind {
+                    LocalKind::Q => map.push((layout.qp[k * d + c], 1.0)),
+                    LocalKind::W => map.push((layout.qm[k * d + c], 1.0)),
+                    LocalKind::V => map.extend(row.iter().map(|&(j, cf)| (layout.qp[j * d + c], cf))),
+                    LocalKind::Dw => map.extend(row.iter().map(|&(j, cf)| (layout.qm[j * d + c], cf))),
+                    LocalKind::Lambda => {
+                        let z = layout.lp[k * n + c];
+                        if z != NONE {
+                            map.push((z, 1.0));
+                        }
+                    }
+                    LocalKind::Mu => map.push((layout.lm[k * n + c], 1.0)),
+                }
+                offsets.push(map.len() as u32);
+            }
+        }
+        let last = nodes - 1;
+        let mut bilinear = Vec::new();
+        let mut linear = Vec::new();
+        for i in 0..d {
+            bilinear.push((layout.nu_q1[i], layout.qm[i], 1.0));
+            bilinear.push((layout.nu_qn[i], layout.qm[last * d + i], 1.0));
+            bilinear.push((layout.nu_x[i], layout.qp[i], 1.0));
+            linear.push((layout.nu_x[i], -q0[i]));
+            for (j, cf) in op.row(0) {
+                bilinear.push((layout.nu_v[i], layout.qp[j * d + i], cf));
+            }
+            linear.push((layout.nu_v[i], -v0[i]));
+        }
+        for a in 0..n {
+            bilinear.push((layout.nu_l1[a], layout.lm[a], 1.0));
+            bilinear.push((layout.nu_ln[a], layout.lm[last * n + a], 1.0));
+        }
+        let minus_locals = (0..m).filter(|&a| !model.layout.kind(a).0.is_plus()).collect();
+        Action { model, op, layout, q0, v0, offsets, map, bilinear, linear, minus_locals, all_locals: (0..m).collect() }
+    }
+
+    fn entries(&self, k: usize, a: usize) -> &[(u32, f64)] {
+        let m = self.model.layout.len();
+        let i = k * m + a;
+        &self.map[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// Local variables of node k from Z.
+    fn gather(&self, k: usize, z: &[f64], u: &mut [f64]) {
+        for (a, ua) in u.iter_mut().enumerate() {
+            *ua = self.entries(k, a).iter().map(|&(i, c)| c * z[i as usize]).sum();
+        }
+    }
+
+    /// The discrete action S(Z).
+    pub fn value(&self, z: &[f64], ws: &mut Workspace) -> f64 {
+        let h = self.op.norm();
+        let mut s = 0.0;
+        for k in 0..self.layout.nodes {
+            self.gather(k, z, &mut ws.u);
+            self.model.density.eval(&ws.u, &mut ws.scratch, &mut ws.out[..1]);
+            s += h[k] * ws.out[0];
+        }
+        s += self.bilinear.iter().map(|&(a, b, c)| c * z[a as usize] * z[b as usize]).sum::<f64>();
+        s + self.linear.iter().map(|&(a, l)| l * z[a as usize]).sum::<f64>()
+    }
+
+    /// ∂S/∂Z. With `minus_only`, only the rows of M are computed (the reduced residual),
+    /// written to `out[0..n_m]`; otherwise all rows of Z into `out[0..len]`.
+    pub fn gradient(&self, z: &[f64], minus_only: bool, out: &mut [f64], ws: &mut Workspace) {
+        let offset = if minus_only { self.layout.n_p } else { 0 };
+        out.iter_mut().for_each(|x| *x = 0.0);
+        let tape = if minus_only { &self.model.minus_gradient } else { &self.model.gradient };
+        let locals = if minus_only { &self.minus_locals } else { &self.all_locals };
+        let h = self.op.norm();
+        for k in 0..self.layout.nodes {
+            self.gather(k, z, &mut ws.u);
+            tape.eval(&ws.u, &mut ws.scratch, &mut ws.out[..tape.n_outputs()]);
+            for (o, &a) in locals.iter().enumerate() {
+                let val = h[k] * ws.out[o];
+                for &(i, c) in self.entries(k, a) {
+                    out[i as usize - offset] += c * val;
+                }
+            }
+        }
+        let in_rows = |i: u32| !minus_only || !self.layout.is_plus(i);
+        for &(a, b, c) in &self.bilinear {
+            if in_rows(a) {
+                out[a as usize - offset] += c * z[b as usize];
+            }
+            if in_rows(b) {
+                out[b as usize - offset] += c * z[a as usize];
+            }
+        }
+        for &(a, l) in &self.linear {
+            if in_rows(a) {
+                out[a as usize - offset] += l;
+            }
+        }
+    }
+
+    fn pair_tape(&self, block: Block) -> &PairTape {
+        match block {
+            Block::ReducedJacobian => &self.model.mixed,
+            Block::ReducedHessian => &self.model.plus_plus,
+            Block::FullJacobian => &self.model.all_pairs,
+        }
+    }
+
+    /// Target (row, col) of the global entry (zr, zc), or None if not in the block.
+    fn target(&self, block: Block, zr: u32, zc: u32) -> Option<(u32, u32)> {
+        let n_p = self.layout.n_p as u32;
+        let (pr, pc) = (zr < n_p, zc < n_p);
+        match block {
+            Block::ReducedJacobian => (!pr && pc).then(|| (zr - n_p, zc)),
+            Block::ReducedHessian => (pr && pc && zr >= zc).then_some((zr, zc)),
+            Block::FullJacobian => Some((zr, zc)),
+        }
+    }
+
+    /// Visit every product of the assembly loop in a fixed order: `f(node, output, row, col, coefficient)`.
+    fn for_each_product(&self, block: Block, mut f: impl FnMut(usize, usize, u32, u32, f64)) {
+        let pt = self.pair_tape(block);
+        let lay = &self.model.layout;
+        let h = self.op.norm();
+        for k in 0..self.layout.nodes {
+            for (e, &(a, b)) in pt.pairs.iter().enumerate() {
+                let orientations: &[(usize, usize)] = if a == b { &[(a, b)] } else { &[(a, b), (b, a)] };
+                for &(r, c) in orientations {
+                    // Cheap block test on the kinds before the per-entry test.
+                    let (rk, ck) = (lay.kind(r).0.is_plus(), lay.kind(c).0.is_plus());
+                    let possible = match block {
+                        Block::ReducedJacobian => !rk && ck,
+                        Block::ReducedHessian => rk && ck,
+                        Block::FullJacobian => true,
+                    };
+                    if !possible {
+                        continue;
+                    }
+                    for &(ir, cr) in self.entries(k, r) {
+                        for &(ic, cc) in self.entries(k, c) {
+                            f(k, e, ir, ic, h[k] * cr * cc);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Compute the sparsity structure of a block once.
+    pub fn plan(&self, block: Block) -> MatrixPlan {
+        let mut index: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut structure = Vec::new();
+        let mut slot_of = |t: (u32, u32), structure: &mut Vec<(u32, u32)>| -> u32 {
+            *index.entry(t).or_insert_with(|| {
+                structure.push(t);
+                (structure.len() - 1) as u32
+            })
+        };
+        let mut slots = Vec::new();
+        self.for_each_product(block, |_, _, zr, zc, _| {
+            slots.push(match self.target(block, zr, zc) {
+                Some(t) => slot_of(t, &mut structure),
+                None => NONE,
+            });
+        });
+        let mut constants = Vec::new();
+        for &(a, b, c) in &self.bilinear {
+            for (r, col) in [(a, b), (b, a)] {
+                if let Some(t) = self.target(block, r, col) {
+                    constants.push((slot_of(t, &mut structure), c));
+                }
+            }
+        }
+        MatrixPlan { block, structure, slots, constants }
+    }
+
+    /// Fill the values of a planned block at Z.
+    pub fn matrix_values(&self, plan: &MatrixPlan, z: &[f64], values: &mut [f64], ws: &mut Workspace) {
+        values.iter_mut().for_each(|v| *v = 0.0);
+        let pt = self.pair_tape(plan.block);
+        let n_out = pt.tape.n_outputs();
+        let mut pos = 0usize;
+        let mut current = usize::MAX;
+        // The product loop visits nodes in order; evaluate each node's tape on entry.
+        self.for_each_product(plan.block, |k, e, _, _, coef| {
+            if k != current {
+                current = k;
+                self.gather(k, z, &mut ws.u);
+                pt.tape.eval(&ws.u, &mut ws.scratch, &mut ws.out[..n_out]);
+            }
+            let slot = plan.slots[pos];
+            pos += 1;
+            if slot != NONE {
+                values[slot as usize] += coef * ws.out[e];
+            }
+        });
+        for &(slot, c) in &plan.constants {
+            values[slot as usize] += c;
+        }
+    }
+}

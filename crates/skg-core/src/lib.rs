@@ -1,0 +1,45 @@
+//! skg-solve: the motion of mechanical systems with velocity constraints, walls and
+//! friction from the critical point of the discretized Schwinger–Keldysh–Galley action.
+//!
+//! Data flows one way through the modules; each uses only modules listed before it:
+//!
+//! 1. [`provenance`] (version, schema version, content hash), [`sbp`] (the
+//!    summation-by-parts operators) and [`scenario`]: the TOML scene, validated and
+//!    resolved to numbers ([`scenario::Scene`]).
+//! 2. [`model`]: the scene's expressions, their exact derivatives compiled into tapes
+//!    ([`expr`]), and the walls' geometry; [`contact`]: when a node is in contact with
+//!    a wall.
+//! 3. [`action`]: the SBP-discretized action on the time grid and its derivatives.
+//! 4. [`trajectory`]: the states at the nodes with their physical columns, the common
+//!    result type; [`ode`] (DOP853) and [`time_stepping`]: the index-reduced
+//!    Lagrange–d'Alembert equations of a model integrated in time.
+//! 5. [`solve`]: the square system ∇S = 0 handed to Ipopt ([`ipopt`]) from a
+//!    time-stepping initial guess, and its diagnostics ([`solve::Outcome`]);
+//!    [`reference`](mod@reference): reference solutions by time stepping, regularized
+//!    or with hard walls.
+//! 6. [`output`]: writes what solve and reference produced (CSV, JSON), atomically.
+//! 7. Consumers of results: [`check`] (a trajectory against a reference),
+//!    [`convergence`] (observed orders), [`tune`] (the wall width σ).
+#![warn(missing_docs)]
+// Numerical kernels index several arrays by the same node/coordinate index; the
+// index loops say that more plainly than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
+pub mod action;
+pub mod check;
+pub mod contact;
+pub mod convergence;
+pub mod model;
+pub mod ode;
+pub mod output;
+pub mod provenance;
+pub mod reference;
+pub mod sbp;
+pub mod scenario;
+pub mod solve;
+pub mod time_stepping;
+pub mod trajectory;
+pub mod tune;
+
+pub use skg_expr as expr;
+pub use skg_ipopt as ipopt;

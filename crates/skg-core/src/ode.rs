@@ -1,0 +1,1079 @@
+//! Adaptive high-order time stepping with output at requested times.
+//!
+//! Used (a) to build a physical initial guess for the global-in-time Newton solve and
+//! (b) as the tight-tolerance reference integrator of the Lagrange–d'Alembert equations.
+//!
+//! # Method
+//! [`integrate`] is an explicit Runge–Kutta method of order 8 with embedded 5th- and
+//! 3rd-order error estimators and a 7th-order continuous extension: DOP853 of
+//! E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
+//! 2nd ed., Springer (1993), Sec. II.10, following the structure of Hairer's Fortran code
+//! `dop853.f` (step-size control with safety factor 0.9, step ratio limited to [1/3, 6],
+//! the combined 5th/3rd-order error norm, the automatic initial step of `hinit`, and the
+//! dense output `contd8`). Requested sample times inside a step are filled from the dense
+//! output (three extra right-hand-side evaluations in a step that contains one); the final
+//! time is hit exactly by the last step.
+//!
+//! # Why not a crate
+//! The two maintained Rust crates with DOP853 were evaluated (`cargo info`, their sources):
+//! * `ode_solvers` 0.6: the right-hand side is `fn system(&self, x, &y, &mut dy)` with no
+//!   way to report an error; output only at a fixed spacing `dx` or at the solver's own
+//!   steps; it depends on nalgebra 0.34 (this crate uses 0.33, so two nalgebras would be
+//!   built).
+//! * `differential-equations` 0.7: the right-hand side is `fn diff(&self, t, &y, &mut dy)`,
+//!   again without an error path; the crate is edition 2024 (Rust ≥ 1.85, this crate
+//!   declares 1.80) and brings a large dependency tree.
+//!
+//! Re-checked for the reference solutions (issue 3): `differential-equations` 0.7 builds
+//! here (rustc 1.95, 17 s) and has dense output and Brent event location, but its
+//! right-hand side is still infallible (`diff(&self, …)`, so our model's workspace would
+//! need a `RefCell` and failures a NaN convention), and it pulls simba 0.10 beside this
+//! crate's nalgebra 0.33 / simba 0.9. Event location ([`integrate_to_event`]) was the only
+//! missing piece and is ~40 lines on top of the dense output below, so one integrator
+//! (this one) serves the initial guess, the regularized and the hard-wall references.
+//!
+//! A failing right-hand side (e.g. a singular mass matrix) must come back as an error, not
+//! a panic or a silently wrong NaN; threading that through either crate would need interior
+//! mutability plus NaN poisoning of the state, whose handling by the step-size controller
+//! is unspecified. The method itself is ~200 lines, so it is implemented here.
+//!
+//! # Failures of the right-hand side
+//! `f` may return `Err(RhsError)`, and a non-finite derivative counts as a failure too. A
+//! failure at the very first evaluation (the initial state) is returned at once as
+//! [`OdeError::Rhs`]. A failure in a trial stage of a step rejects the step and retries it
+//! with half the step size (a trial stage may leave the region where `f` is defined while
+//! the true solution does not); once the step size has shrunk below the round-off limit
+//! the last failure is returned as [`OdeError::Rhs`], whose `t` is then the time where the
+//! right-hand side stops being defined along the solution (to about `1e-14` relative).
+
+/// Name of the method reported in [`OdeSolution::method`].
+pub const METHOD: &str = "DOP853 (Hairer-Norsett-Wanner 8(5,3) with 7th-order dense output; built-in implementation)";
+
+/// Options of [`integrate`].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct OdeOptions {
+    /// Relative tolerance (per component, scaled by `max(|y_old|, |y_new|)`). Default `1e-10`.
+    pub rtol: f64,
+    /// Absolute tolerance (per component). Default `1e-12`.
+    pub atol: f64,
+    /// Maximum number of step attempts (accepted + rejected). Default `1_000_000`.
+    pub max_steps: usize,
+    /// First trial step; `None` picks one automatically (Hairer's `hinit`).
+    pub initial_step: Option<f64>,
+    /// Largest step. An error estimate cannot see a force it steps over: in free flight
+    /// (a parabola, integrated exactly) the step grows until it jumps across a thin
+    /// Gaussian wall. Callers that sample on a grid cap the step at the grid spacing.
+    pub max_step: Option<f64>,
+}
+
+impl Default for OdeOptions {
+    fn default() -> Self {
+        OdeOptions { rtol: 1e-10, atol: 1e-12, max_steps: 1_000_000, initial_step: None, max_step: None }
+    }
+}
+
+/// Work statistics of one [`integrate`] call.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct OdeStats {
+    /// Accepted steps.
+    pub accepted: usize,
+    /// Rejected steps (error too large, or a failing right-hand side in a trial stage).
+    pub rejected: usize,
+    /// Evaluations of the right-hand side, failed ones included.
+    pub rhs_evals: usize,
+}
+
+/// Why the right-hand side `f(t, y)` could not be evaluated: the caller's message (e.g.
+/// "the constrained mass matrix is singular"), or a non-finite derivative.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct RhsError(pub String);
+
+impl From<&str> for RhsError {
+    fn from(message: &str) -> Self {
+        RhsError(message.to_string())
+    }
+}
+
+impl From<String> for RhsError {
+    fn from(message: String) -> Self {
+        RhsError(message)
+    }
+}
+
+/// Failure of [`integrate`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OdeError {
+    /// The right-hand side returned an error (or a non-finite value) at time `t`, and
+    /// shrinking the step did not get past it.
+    #[error("the right-hand side failed at t = {t}: {error}")]
+    Rhs {
+        /// Where the right-hand side failed.
+        t: f64,
+        /// Why.
+        error: RhsError,
+    },
+    /// The step size fell below the round-off limit at time `t` (stiffness or a
+    /// singularity of the solution).
+    #[error("step size underflow at t = {t}")]
+    StepTooSmall {
+        /// Where the step size underflowed.
+        t: f64,
+    },
+    /// `max_steps` step attempts were used up at time `t`.
+    #[error("maximum number of steps ({steps}) reached at t = {t}")]
+    MaxSteps {
+        /// Where the integration stopped.
+        t: f64,
+        /// The step attempts made.
+        steps: usize,
+    },
+    /// Invalid arguments (times, initial state, options).
+    #[error("bad input: {0}")]
+    BadInput(String),
+}
+
+/// Result of [`integrate`]: the state at every requested time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OdeSolution {
+    /// The requested times (a copy of the `times` argument).
+    pub times: Vec<f64>,
+    /// `states[i]` is the state at `times[i]`.
+    pub states: Vec<Vec<f64>>,
+    /// Work statistics.
+    pub stats: OdeStats,
+    /// The method used ([`METHOD`]).
+    pub method: &'static str,
+}
+
+/// Integrate `y' = f(t, y)` from `times[0]` with `y(times[0]) = y0` and return the state
+/// at every requested time.
+///
+/// `times` must be finite and sorted ascending (repeated values are allowed); the first
+/// entry is the start time and the last one the end time, which the integration hits
+/// exactly. Intermediate times are filled from the 7th-order dense output, so requesting
+/// many of them costs little. `f(t, y, dy)` writes the derivative into `dy` (zero-filled
+/// before each call) and may fail with an [`RhsError`]; see the module documentation for
+/// how failures are handled.
+pub fn integrate<F>(f: F, y0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<OdeSolution, OdeError>
+where
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+{
+    run(f, y0, times, opts, None::<fn(f64, &[f64]) -> f64>).map(|(sol, _)| sol)
+}
+
+/// A terminal event located by [`integrate_to_event`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventHit {
+    /// Time of the zero crossing.
+    pub t: f64,
+    /// State at `t` (from the dense output).
+    pub y: Vec<f64>,
+}
+
+/// Like [`integrate`], but stops at the first time where `event(t, y)` crosses zero
+/// upwards (from `< 0` to `≥ 0`).
+///
+/// The event function is evaluated at the end of every accepted step and at three
+/// interior points of it (on the 7th-order dense output, so an excursion that goes out
+/// and back within one step is caught if it lasts longer than about a quarter of the
+/// step; shorter grazes can be missed); a sign change is bracketed and
+/// the crossing located by bisection on the dense output down to a bracket of a few
+/// units in the last place of `t`. The crossing is then as accurate as the dense output
+/// (for a transversal crossing, the time error is about the position error divided by
+/// the crossing speed). A crossing at the very start (event value `≥ 0` at `times[0]`)
+/// is not reported.
+///
+/// Returns the states at the requested times before the event (`states.len()` may be
+/// shorter than `times.len()`) and the event, or every requested state and `None` if
+/// no crossing happens before the last time.
+pub fn integrate_to_event<F, E>(
+    f: F,
+    y0: &[f64],
+    times: &[f64],
+    opts: &OdeOptions,
+    event: E,
+) -> Result<(OdeSolution, Option<EventHit>), OdeError>
+where
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+    E: FnMut(f64, &[f64]) -> f64,
+{
+    run(f, y0, times, opts, Some(event))
+}
+
+/// Interior points (fractions of a step) where the event function is sampled.
+const EVENT_SAMPLES: [f64; 4] = [0.25, 0.5, 0.75, 1.0];
+
+fn run<F, E>(f: F, y0: &[f64], times: &[f64], opts: &OdeOptions, mut event: Option<E>) -> Result<(OdeSolution, Option<EventHit>), OdeError>
+where
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+    E: FnMut(f64, &[f64]) -> f64,
+{
+    validate(y0, times, opts)?;
+    let t0 = times[0];
+    let t_end = times[times.len() - 1];
+    let mut out =
+        OdeSolution { times: times.to_vec(), states: Vec::with_capacity(times.len()), stats: OdeStats::default(), method: METHOD };
+    let mut next = times.iter().take_while(|&&t| t == t0).count();
+    out.states.resize(next, y0.to_vec());
+    if next == times.len() || y0.is_empty() {
+        // Nothing to integrate: no time span, or an empty state.
+        out.states.resize(times.len(), y0.to_vec());
+        return Ok((out, None));
+    }
+
+    let mut s = Dop853::new(f, y0, opts);
+    let mut t = t0;
+    s.eval(t, Stage::Y, 0).map_err(|error| OdeError::Rhs { t, error })?;
+    let hmax = opts.max_step.unwrap_or(f64::INFINITY).min(t_end - t0);
+    let mut h = match opts.initial_step {
+        Some(h0) => h0.min(hmax),
+        None => s.hinit(t, hmax),
+    };
+    let mut reject = false;
+    let mut last_failure: Option<(f64, RhsError)> = None;
+    let mut attempts = 0usize;
+
+    loop {
+        if attempts >= opts.max_steps {
+            return Err(OdeError::MaxSteps { t, steps: attempts });
+        }
+        let hmin = 10.0 * f64::EPSILON * t.abs().max(t_end.abs());
+        if h.is_nan() || h <= hmin {
+            return Err(match last_failure.take() {
+                Some((t, error)) => OdeError::Rhs { t, error },
+                None => OdeError::StepTooSmall { t },
+            });
+        }
+        let mut last = false;
+        if t + 1.01 * h >= t_end {
+            h = t_end - t;
+            last = true;
+        }
+        attempts += 1;
+
+        // Stages 1..=11, the new solution and its error.
+        if let Err(fail) = s.main_stages(t, h) {
+            s.stats.rejected += 1;
+            last_failure = Some(fail);
+            h *= 0.5;
+            reject = true;
+            continue;
+        }
+        let err = s.error_norm(h);
+        let fac11 = err.powf(0.125);
+        if err <= 1.0 {
+            let t_new = if last { t_end } else { t + h };
+            // First stage of the next step, and the dense output if a sample lies inside.
+            let needs_dense = times[next] < t_new || event.is_some();
+            let extra = s.eval(t_new, Stage::YNew, 12).map_err(|error| (t_new, error)).and_then(|()| {
+                if needs_dense {
+                    s.dense_stages(t, h)
+                } else {
+                    Ok(())
+                }
+            });
+            if let Err(fail) = extra {
+                s.stats.rejected += 1;
+                last_failure = Some(fail);
+                h *= 0.5;
+                reject = true;
+                continue;
+            }
+            s.stats.accepted += 1;
+            last_failure = None;
+            // Terminal event inside this step?
+            let mut hit: Option<EventHit> = None;
+            if let Some(ev) = event.as_mut() {
+                let mut e_prev = ev(t, &s.y);
+                let mut th_prev = 0.0;
+                for &th in &EVENT_SAMPLES {
+                    let y_th = if th == 1.0 { s.ynew.clone() } else { s.dense(th) };
+                    let e_th = ev(t + th * h, &y_th);
+                    if e_prev < 0.0 && e_th >= 0.0 {
+                        let (mut a, mut b) = (th_prev, th);
+                        // Bisection on the dense output (its bracket shrinks to round-off).
+                        for _ in 0..200 {
+                            let m = 0.5 * (a + b);
+                            if m <= a || m >= b || (b - a) * h.abs() <= 4.0 * f64::EPSILON * t.abs().max(t_new.abs()) {
+                                break;
+                            }
+                            if ev(t + m * h, &s.dense(m)) < 0.0 {
+                                a = m;
+                            } else {
+                                b = m;
+                            }
+                        }
+                        let te = if b == 1.0 { t_new } else { t + b * h };
+                        let ye = if b == 1.0 { s.ynew.clone() } else { s.dense(b) };
+                        hit = Some(EventHit { t: te, y: ye });
+                        break;
+                    }
+                    e_prev = e_th;
+                    th_prev = th;
+                }
+            }
+            if let Some(hit) = hit {
+                while next < times.len() && times[next] < hit.t {
+                    out.states.push(s.dense((times[next] - t) / h));
+                    next += 1;
+                }
+                out.stats = s.stats;
+                return Ok((out, Some(hit)));
+            }
+            while next < times.len() && times[next] <= t_new {
+                let ts = times[next];
+                out.states.push(if ts == t_new { s.ynew.clone() } else { s.dense((ts - t) / h) });
+                next += 1;
+            }
+            s.commit();
+            t = t_new;
+            if next == times.len() {
+                break;
+            }
+            let fac = (fac11 / SAFE).clamp(FAC_MIN, FAC_MAX);
+            let mut hnew = (h / fac).min(hmax);
+            if reject {
+                hnew = hnew.min(h);
+            }
+            reject = false;
+            h = hnew;
+        } else {
+            s.stats.rejected += 1;
+            h /= FAC_MAX.min(fac11 / SAFE);
+            reject = true;
+        }
+    }
+    out.stats = s.stats;
+    Ok((out, None))
+}
+
+/// Safety factor of the step-size controller.
+const SAFE: f64 = 0.9;
+/// Largest step reduction factor `h_old / h_new` (step may shrink to 1/3).
+const FAC_MAX: f64 = 1.0 / 0.333;
+/// Smallest `h_old / h_new` (step may grow by 6).
+const FAC_MIN: f64 = 1.0 / 6.0;
+
+fn validate(y0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<(), OdeError> {
+    let bad = |m: String| Err(OdeError::BadInput(m));
+    if times.is_empty() {
+        return bad("no output times given (the first one is the start time)".into());
+    }
+    if let Some(i) = times.iter().position(|t| !t.is_finite()) {
+        return bad(format!("output time {i} is not finite ({})", times[i]));
+    }
+    if let Some(i) = times.windows(2).position(|w| w[1] < w[0]) {
+        return bad(format!("output times must be sorted ascending: times[{}] = {} > times[{}] = {}", i, times[i], i + 1, times[i + 1]));
+    }
+    if let Some(i) = y0.iter().position(|y| !y.is_finite()) {
+        return bad(format!("initial state component {i} is not finite ({})", y0[i]));
+    }
+    if !(opts.rtol.is_finite() && opts.rtol >= 0.0 && opts.atol.is_finite() && opts.atol >= 0.0) {
+        return bad(format!("tolerances must be finite and non-negative (rtol = {}, atol = {})", opts.rtol, opts.atol));
+    }
+    if opts.rtol == 0.0 && opts.atol == 0.0 {
+        return bad("rtol and atol are both zero".into());
+    }
+    if let Some(h0) = opts.initial_step {
+        if !(h0.is_finite() && h0 > 0.0) {
+            return bad(format!("initial step must be finite and positive, got {h0}"));
+        }
+    }
+    if let Some(hm) = opts.max_step {
+        if !(hm.is_finite() && hm > 0.0) {
+            return bad(format!("maximum step must be finite and positive, got {hm}"));
+        }
+    }
+    Ok(())
+}
+
+/// Which state a stage evaluation reads.
+#[derive(Clone, Copy)]
+enum Stage {
+    /// The current accepted state `y`.
+    Y,
+    /// The new solution `y_new`.
+    YNew,
+    /// The scratch stage state.
+    Tmp,
+}
+
+/// Work space of the DOP853 stepper.
+struct Dop853<F> {
+    f: F,
+    n: usize,
+    rtol: f64,
+    atol: f64,
+    /// Stage derivatives `k_0..k_15`.
+    k: Vec<Vec<f64>>,
+    y: Vec<f64>,
+    ynew: Vec<f64>,
+    tmp: Vec<f64>,
+    /// `Σ b_j k_j` of the current step.
+    bk: Vec<f64>,
+    /// Coefficients of the dense output polynomial of the current step.
+    rcont: Vec<Vec<f64>>,
+    stats: OdeStats,
+}
+
+impl<F> Dop853<F>
+where
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+{
+    fn new(f: F, y0: &[f64], opts: &OdeOptions) -> Self {
+        let n = y0.len();
+        Dop853 {
+            f,
+            n,
+            rtol: opts.rtol,
+            atol: opts.atol,
+            k: vec![vec![0.0; n]; 16],
+            y: y0.to_vec(),
+            ynew: vec![0.0; n],
+            tmp: vec![0.0; n],
+            bk: vec![0.0; n],
+            rcont: vec![vec![0.0; n]; 8],
+            stats: OdeStats::default(),
+        }
+    }
+
+    /// `k[stage] = f(t, state)`; a non-finite derivative counts as a failure.
+    fn eval(&mut self, t: f64, state: Stage, stage: usize) -> Result<(), RhsError> {
+        self.stats.rhs_evals += 1;
+        let y = match state {
+            Stage::Y => &self.y,
+            Stage::YNew => &self.ynew,
+            Stage::Tmp => &self.tmp,
+        };
+        let dy = &mut self.k[stage];
+        dy.fill(0.0);
+        (self.f)(t, y, dy)?;
+        if let Some(i) = dy.iter().position(|v| !v.is_finite()) {
+            return Err(RhsError(format!("the right-hand side returned a non-finite value in component {i}")));
+        }
+        Ok(())
+    }
+
+    /// Stage `i`: `tmp = y + h Σ_j a_ij k_j`, `k_i = f(t + c_i h, tmp)`.
+    fn stage(&mut self, t: f64, h: f64, i: usize) -> Result<(), (f64, RhsError)> {
+        self.tmp.copy_from_slice(&self.y);
+        for (j, &a) in tableau::A[i].iter().enumerate() {
+            if a != 0.0 {
+                let ha = h * a;
+                for (o, kj) in self.tmp.iter_mut().zip(&self.k[j]) {
+                    *o += ha * kj;
+                }
+            }
+        }
+        let ti = t + tableau::C[i] * h;
+        self.eval(ti, Stage::Tmp, i).map_err(|error| (ti, error))
+    }
+
+    /// Stages 1..=11 and the new solution `ynew = y + h Σ b_j k_j`.
+    fn main_stages(&mut self, t: f64, h: f64) -> Result<(), (f64, RhsError)> {
+        for i in 1..12 {
+            self.stage(t, h, i)?;
+        }
+        self.bk.fill(0.0);
+        for (j, &b) in tableau::A[12].iter().enumerate() {
+            if b != 0.0 {
+                for (o, kj) in self.bk.iter_mut().zip(&self.k[j]) {
+                    *o += b * kj;
+                }
+            }
+        }
+        for ((yn, y), bk) in self.ynew.iter_mut().zip(&self.y).zip(&self.bk) {
+            *yn = y + h * bk;
+        }
+        Ok(())
+    }
+
+    /// Scaled error of the step (≤ 1: accept), Hairer's combination of the 5th- and
+    /// 3rd-order estimators. Non-finite values map to `+∞` (reject).
+    fn error_norm(&self, h: f64) -> f64 {
+        let (mut err, mut err2) = (0.0, 0.0);
+        for i in 0..self.n {
+            let sk = (self.atol + self.rtol * self.y[i].abs().max(self.ynew[i].abs())).max(f64::MIN_POSITIVE);
+            let k = |j: usize| self.k[j][i];
+            let e3 = self.bk[i] - tableau::BHH[0] * k(0) - tableau::BHH[1] * k(8) - tableau::BHH[2] * k(11);
+            let e5: f64 = tableau::ER.iter().enumerate().map(|(j, &e)| e * k(j)).sum();
+            err2 += (e3 / sk).powi(2);
+            err += (e5 / sk).powi(2);
+        }
+        let mut deno = err + 0.01 * err2;
+        if deno <= 0.0 {
+            deno = 1.0;
+        }
+        let e = h.abs() * err / (self.n as f64 * deno).sqrt();
+        if e.is_finite() {
+            e
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The three extra stages of the dense output and the interpolation coefficients
+    /// (needs `k[12] = f(t + h, ynew)`).
+    fn dense_stages(&mut self, t: f64, h: f64) -> Result<(), (f64, RhsError)> {
+        for i in 13..16 {
+            self.stage(t, h, i)?;
+        }
+        for i in 0..self.n {
+            let ydiff = self.ynew[i] - self.y[i];
+            let bspl = h * self.k[0][i] - ydiff;
+            self.rcont[0][i] = self.y[i];
+            self.rcont[1][i] = ydiff;
+            self.rcont[2][i] = bspl;
+            self.rcont[3][i] = ydiff - h * self.k[12][i] - bspl;
+            for (r, d) in tableau::DENSE.iter().enumerate() {
+                let mut acc = 0.0;
+                for (j, &dj) in d.iter().enumerate() {
+                    if dj != 0.0 {
+                        acc += dj * self.k[j][i];
+                    }
+                }
+                self.rcont[4 + r][i] = h * acc;
+            }
+        }
+        Ok(())
+    }
+
+    /// Dense output at `θ = (t − t_old)/h ∈ [0, 1]` (Hairer's `contd8`).
+    fn dense(&self, theta: f64) -> Vec<f64> {
+        let s = theta;
+        let s1 = 1.0 - s;
+        let r = &self.rcont;
+        (0..self.n)
+            .map(|i| {
+                let conpar = r[4][i] + s * (r[5][i] + s1 * (r[6][i] + s * r[7][i]));
+                r[0][i] + s * (r[1][i] + s1 * (r[2][i] + s * (r[3][i] + s1 * conpar)))
+            })
+            .collect()
+    }
+
+    /// Accept the step: `y ← ynew`, `k_0 ← k_12`.
+    fn commit(&mut self) {
+        std::mem::swap(&mut self.y, &mut self.ynew);
+        self.k.swap(0, 12);
+    }
+
+    /// Initial step size guess (Hairer's `hinit` for order 8); needs `k[0] = f(t, y)`.
+    fn hinit(&mut self, t: f64, hmax: f64) -> f64 {
+        let sk: Vec<f64> = self.y.iter().map(|y| (self.atol + self.rtol * y.abs()).max(f64::MIN_POSITIVE)).collect();
+        let dnf: f64 = self.k[0].iter().zip(&sk).map(|(f, s)| (f / s).powi(2)).sum();
+        let dny: f64 = self.y.iter().zip(&sk).map(|(y, s)| (y / s).powi(2)).sum();
+        let mut h = if dnf <= 1e-10 || dny <= 1e-10 { 1e-6 } else { (dny / dnf).sqrt() * 0.01 };
+        if !(h.is_finite() && h > 0.0) {
+            h = 1e-6;
+        }
+        h = h.min(hmax);
+        // One explicit Euler step to estimate the second derivative.
+        for i in 0..self.n {
+            self.tmp[i] = self.y[i] + h * self.k[0][i];
+        }
+        if self.eval(t + h, Stage::Tmp, 1).is_err() {
+            return h;
+        }
+        let der2 = self.k[1].iter().zip(&self.k[0]).zip(&sk).map(|((f1, f0), s)| ((f1 - f0) / s).powi(2)).sum::<f64>().sqrt() / h;
+        let der12 = der2.max(dnf.sqrt());
+        let h1 = if der12 <= 1e-15 { (h * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / 8.0) };
+        let h_new = (100.0 * h).min(h1).min(hmax);
+        if h_new.is_finite() && h_new > 0.0 {
+            h_new
+        } else {
+            h
+        }
+    }
+}
+
+/// Coefficients of DOP853 (Hairer, Nørsett & Wanner, *Solving ODEs I*, Sec. II.10, and
+/// Hairer's `dop853.f`), stage indices 0-based (stage `i` here is stage `i+1` there).
+#[allow(clippy::excessive_precision, clippy::unreadable_literal)]
+mod tableau {
+    /// Nodes `c_i` of the 16 stages.
+    pub(super) const C: [f64; 16] = [
+        0.0,
+        0.05260015195876773,
+        0.0789002279381516,
+        0.1183503419072274,
+        0.2816496580927726,
+        0.3333333333333333,
+        0.25,
+        0.3076923076923077,
+        0.6512820512820513,
+        0.6,
+        0.8571428571428571,
+        1.0,
+        1.0,
+        0.1,
+        0.2,
+        0.7777777777777778,
+    ];
+    /// Stage coefficients `a_ij`, row `i` holding `j = 0..i`. Row 12 is the solution weight
+    /// vector `b` (stage 12 is `f(t + h, y_{n+1})`, the first stage of the next step);
+    /// rows 13–15 are the three extra stages of the dense output.
+    pub(super) const A: [&[f64]; 16] = [
+        &[],
+        &[0.05260015195876773],
+        &[0.0197250569845379, 0.0591751709536137],
+        &[0.02958758547680685, 0.0, 0.08876275643042054],
+        &[0.2413651341592667, 0.0, -0.8845494793282861, 0.924834003261792],
+        &[0.037037037037037035, 0.0, 0.0, 0.17082860872947386, 0.12546768756682242],
+        &[0.037109375, 0.0, 0.0, 0.17025221101954405, 0.06021653898045596, -0.017578125],
+        &[0.03709200011850479, 0.0, 0.0, 0.17038392571223998, 0.10726203044637328, -0.015319437748624402, 0.008273789163814023],
+        &[0.6241109587160757, 0.0, 0.0, -3.3608926294469414, -0.868219346841726, 27.59209969944671, 20.154067550477894, -43.48988418106996],
+        &[
+            0.47766253643826434,
+            0.0,
+            0.0,
+            -2.4881146199716677,
+            -0.590290826836843,
+            21.230051448181193,
+            15.279233632882423,
+            -33.28821096898486,
+            -0.020331201708508627,
+        ],
+        &[
+            -0.9371424300859873,
+            0.0,
+            0.0,
+            5.186372428844064,
+            1.0914373489967295,
+            -8.149787010746927,
+            -18.52006565999696,
+            22.739487099350505,
+            2.4936055526796523,
+            -3.0467644718982196,
+        ],
+        &[
+            2.273310147516538,
+            0.0,
+            0.0,
+            -10.53449546673725,
+            -2.0008720582248625,
+            -17.9589318631188,
+            27.94888452941996,
+            -2.8589982771350235,
+            -8.87285693353063,
+            12.360567175794303,
+            0.6433927460157636,
+        ],
+        &[
+            0.054293734116568765,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            4.450312892752409,
+            1.8915178993145003,
+            -5.801203960010585,
+            0.3111643669578199,
+            -0.1521609496625161,
+            0.20136540080403034,
+            0.04471061572777259,
+        ],
+        &[
+            0.056167502283047954,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.25350021021662483,
+            -0.2462390374708025,
+            -0.12419142326381637,
+            0.15329179827876568,
+            0.00820105229563469,
+            0.007567897660545699,
+            -0.008298,
+        ],
+        &[
+            0.03183464816350214,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.028300909672366776,
+            0.053541988307438566,
+            -0.05492374857139099,
+            0.0,
+            0.0,
+            -0.00010834732869724932,
+            0.0003825710908356584,
+            -0.00034046500868740456,
+            0.1413124436746325,
+        ],
+        &[
+            -0.42889630158379194,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            -4.697621415361164,
+            7.683421196062599,
+            4.06898981839711,
+            0.3567271874552811,
+            0.0,
+            0.0,
+            0.0,
+            -0.0013990241651590145,
+            2.9475147891527724,
+            -9.15095847217987,
+        ],
+    ];
+    /// Coefficients of the fifth-order error estimator (stages 0..12).
+    pub(super) const ER: [f64; 12] = [
+        0.01312004499419488,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        -1.2251564463762044,
+        -0.4957589496572502,
+        1.6643771824549864,
+        -0.35032884874997366,
+        0.3341791187130175,
+        0.08192320648511571,
+        -0.022355307863886294,
+    ];
+    /// Weights of the third-order error estimator, applied to stages 0, 8 and 11.
+    pub(super) const BHH: [f64; 3] = [0.2440944881889764, 0.7338466882816118, 0.022058823529411766];
+    /// Dense-output coefficients (rows `d4..d7` of Hairer's code, stages 0..16).
+    pub(super) const DENSE: [[f64; 16]; 4] = [
+        [
+            -8.428938276109013,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.5667149535193777,
+            -3.0689499459498917,
+            2.38466765651207,
+            2.117034582445028,
+            -0.871391583777973,
+            2.2404374302607883,
+            0.6315787787694688,
+            -0.08899033645133331,
+            18.148505520854727,
+            -9.194632392478356,
+            -4.436036387594894,
+        ],
+        [
+            10.427508642579134,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            242.28349177525817,
+            165.20045171727028,
+            -374.5467547226902,
+            -22.113666853125306,
+            7.733432668472264,
+            -30.674084731089398,
+            -9.332130526430229,
+            15.697238121770845,
+            -31.139403219565178,
+            -9.35292435884448,
+            35.81684148639408,
+        ],
+        [
+            19.985053242002433,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            -387.0373087493518,
+            -189.17813819516758,
+            527.8081592054236,
+            -11.57390253995963,
+            6.8812326946963,
+            -1.0006050966910838,
+            0.7777137798053443,
+            -2.778205752353508,
+            -60.19669523126412,
+            84.32040550667716,
+            11.99229113618279,
+        ],
+        [
+            -25.69393346270375,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            -154.18974869023643,
+            -231.5293791760455,
+            357.6391179106141,
+            93.40532418362432,
+            -37.45832313645163,
+            104.0996495089623,
+            29.8402934266605,
+            -43.53345659001114,
+            96.32455395918828,
+            -39.17726167561544,
+            -149.72683625798564,
+        ],
+    ];
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tight() -> OdeOptions {
+        OdeOptions { rtol: 1e-12, atol: 1e-14, ..OdeOptions::default() }
+    }
+
+    fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
+        (0..n).map(|i| a + (b - a) * i as f64 / (n - 1) as f64).collect()
+    }
+
+    #[test]
+    fn tableau_consistency() {
+        use tableau::*;
+        for i in 1..16 {
+            let s: f64 = A[i].iter().sum();
+            assert!((s - C[i]).abs() < 1e-13, "row {i}: Σa = {s}, c = {}", C[i]);
+            assert_eq!(A[i].len(), i);
+        }
+        // Quadrature conditions of the 8th-order weights: Σ b_j c_j^q = 1/(q+1), q ≤ 7.
+        for q in 0..8 {
+            let s: f64 = A[12].iter().zip(&C).map(|(b, c)| b * c.powi(q)).sum();
+            assert!((s - 1.0 / (q + 1) as f64).abs() < 1e-13, "q = {q}: {s}");
+        }
+        // The error estimators vanish on constants.
+        assert!(ER.iter().sum::<f64>().abs() < 1e-14);
+        assert!((BHH.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn exponential_decay() {
+        let times = linspace(0.0, 5.0, 37);
+        let y0 = [1.0, -2.0];
+        let lam = [-1.0, -0.3];
+        let sol = integrate(
+            |_t, y, dy| {
+                dy[0] = lam[0] * y[0];
+                dy[1] = lam[1] * y[1];
+                Ok(())
+            },
+            &y0,
+            &times,
+            &tight(),
+        )
+        .unwrap();
+        assert_eq!(sol.method, METHOD);
+        for (t, y) in sol.times.iter().zip(&sol.states) {
+            for c in 0..2 {
+                let exact = y0[c] * (lam[c] * t).exp();
+                assert!((y[c] - exact).abs() <= 1e-10, "t = {t}: {} vs {exact}", y[c]);
+            }
+        }
+        assert!(sol.stats.accepted > 0 && sol.stats.rhs_evals >= 12 * sol.stats.accepted);
+    }
+
+    #[test]
+    fn harmonic_oscillator_dense_samples() {
+        let w = 2.0;
+        let times = linspace(0.0, 10.0, 1001);
+        let sol = integrate(
+            |_t, y, dy| {
+                dy[0] = y[1];
+                dy[1] = -w * w * y[0];
+                Ok(())
+            },
+            &[1.0, 0.0],
+            &times,
+            &tight(),
+        )
+        .unwrap();
+        assert_eq!(sol.states.len(), times.len());
+        let mut worst: f64 = 0.0;
+        for (t, y) in sol.times.iter().zip(&sol.states) {
+            worst = worst.max((y[0] - (w * t).cos()).abs());
+            worst = worst.max((y[1] + w * (w * t).sin()).abs());
+        }
+        assert!(worst <= 1e-10, "max error {worst:e}");
+        // Far fewer steps than samples: the samples come from the dense output.
+        assert!(sol.stats.accepted < 500, "{:?}", sol.stats);
+    }
+
+    #[test]
+    fn sample_times_hit_exactly() {
+        let times = vec![0.25, 0.25, 0.3, 1.0 / 3.0, 0.7, 0.7, 1.9, 2.0];
+        let sol = integrate(
+            |t, y, dy| {
+                dy[0] = t.cos() * y[0];
+                Ok(())
+            },
+            &[1.5],
+            &times,
+            &OdeOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(sol.times, times);
+        assert_eq!(sol.states.len(), times.len());
+        assert_eq!(sol.states[0], vec![1.5]);
+        assert_eq!(sol.states[1], vec![1.5]);
+        assert_eq!(sol.states[4], sol.states[5]);
+        for (t, y) in times.iter().zip(&sol.states) {
+            let exact = 1.5 * (t.sin() - 0.25f64.sin()).exp();
+            assert!((y[0] - exact).abs() < 1e-9, "t = {t}");
+        }
+        // Only the start time: nothing to do.
+        let sol = integrate(|_, _, _| Err("never called".into()), &[1.0], &[3.0], &OdeOptions::default()).unwrap();
+        assert_eq!(sol.states, vec![vec![1.0]]);
+        assert_eq!(sol.stats.rhs_evals, 0);
+    }
+
+    #[test]
+    fn failing_rhs_reports_time() {
+        let res = integrate(
+            |t, y, dy| {
+                if t > 0.5 {
+                    return Err("mass matrix is singular".into());
+                }
+                dy[0] = -y[0];
+                Ok(())
+            },
+            &[1.0],
+            &[0.0, 0.2, 1.0],
+            &OdeOptions::default(),
+        );
+        match res {
+            Err(OdeError::Rhs { t, error }) => {
+                assert!((t - 0.5).abs() < 1e-9, "t = {t}");
+                assert_eq!(error, RhsError::from("mass matrix is singular"));
+            }
+            other => panic!("expected OdeError::Rhs, got {other:?}"),
+        }
+        // A non-finite derivative is a failure too.
+        let res = integrate(
+            |t, _y, dy| {
+                dy[0] = if t > 0.5 { f64::NAN } else { 1.0 };
+                Ok(())
+            },
+            &[0.0],
+            &[0.0, 1.0],
+            &OdeOptions::default(),
+        );
+        assert!(matches!(res, Err(OdeError::Rhs { t, .. }) if (t - 0.5).abs() < 1e-9), "{res:?}");
+        // Failing at the initial state: reported at once.
+        let mut calls = 0;
+        let res = integrate(
+            |_t, _y, _dy| {
+                calls += 1;
+                Err("bad state".into())
+            },
+            &[1.0],
+            &[0.0, 1.0],
+            &OdeOptions::default(),
+        );
+        assert!(matches!(res, Err(OdeError::Rhs { t, .. }) if t == 0.0));
+        assert_eq!(calls, 1);
+    }
+
+    #[test]
+    fn van_der_pol_mu_1() {
+        let vdp = |_t: f64, y: &[f64], dy: &mut [f64]| {
+            dy[0] = y[1];
+            dy[1] = (1.0 - y[0] * y[0]) * y[1] - y[0];
+            Ok(())
+        };
+        let times = linspace(0.0, 20.0, 201);
+        let fine = integrate(vdp, &[2.0, 0.0], &times, &tight()).unwrap();
+        let coarse = integrate(vdp, &[2.0, 0.0], &times, &OdeOptions { rtol: 1e-7, atol: 1e-9, ..OdeOptions::default() }).unwrap();
+        let diff =
+            fine.states.iter().zip(&coarse.states).flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs())).fold(0.0, f64::max);
+        assert!(diff < 1e-4, "coarse vs fine: {diff:e}");
+        assert!(coarse.stats.rhs_evals < fine.stats.rhs_evals);
+        // The limit cycle has amplitude ≈ 2.
+        let amp = fine.states.iter().map(|y| y[0].abs()).fold(0.0, f64::max);
+        assert!((amp - 2.0).abs() < 0.05, "amplitude {amp}");
+    }
+
+    #[test]
+    fn bad_input_and_limits() {
+        let f = |_t: f64, y: &[f64], dy: &mut [f64]| {
+            dy[0] = y[0];
+            Ok(())
+        };
+        let o = OdeOptions::default();
+        let bad = |r: Result<OdeSolution, OdeError>| matches!(r, Err(OdeError::BadInput(_)));
+        assert!(bad(integrate(f, &[1.0], &[], &o)));
+        assert!(bad(integrate(f, &[1.0], &[0.0, 1.0, 0.5], &o)));
+        assert!(bad(integrate(f, &[1.0], &[0.0, f64::NAN], &o)));
+        assert!(bad(integrate(f, &[f64::INFINITY], &[0.0, 1.0], &o)));
+        assert!(bad(integrate(f, &[1.0], &[0.0, 1.0], &OdeOptions { rtol: -1.0, ..o })));
+        assert!(bad(integrate(f, &[1.0], &[0.0, 1.0], &OdeOptions { rtol: 0.0, atol: 0.0, ..o })));
+        assert!(bad(integrate(f, &[1.0], &[0.0, 1.0], &OdeOptions { initial_step: Some(0.0), ..o })));
+        let e = integrate(f, &[1.0], &[0.0, 100.0], &OdeOptions { max_steps: 5, ..o });
+        assert!(matches!(e, Err(OdeError::MaxSteps { steps: 5, .. })), "{e:?}");
+        // A given initial step is used (and the result is still accurate).
+        let sol = integrate(f, &[1.0], &[0.0, 1.0], &OdeOptions { initial_step: Some(1e-3), ..o }).unwrap();
+        assert!((sol.states[1][0] - 1f64.exp()).abs() < 1e-9);
+        // Finite-time blow-up y' = y², y(0) = 1 at t = 1: the step size underflows.
+        let e = integrate(
+            |_t, y, dy| {
+                dy[0] = y[0] * y[0];
+                Ok(())
+            },
+            &[1.0],
+            &[0.0, 2.0],
+            &o,
+        );
+        match e {
+            Err(OdeError::StepTooSmall { t }) | Err(OdeError::Rhs { t, .. }) => {
+                assert!((t - 1.0).abs() < 1e-3, "t = {t}")
+            }
+            other => panic!("expected a failure near t = 1, got {other:?}"),
+        }
+        // An empty state is integrated trivially.
+        let sol = integrate(f, &[], &[0.0, 1.0], &o).unwrap();
+        assert_eq!(sol.states, vec![Vec::<f64>::new(); 2]);
+    }
+
+    #[test]
+    fn event_location() {
+        // Drop from y = 1 with v = 0.5 under g: the floor y = 0 is reached at the root of
+        // 1 + 0.5 t - g t²/2, event function -y (crossing upwards).
+        let g = 9.8;
+        let f = |_: f64, y: &[f64], dy: &mut [f64]| {
+            dy[0] = y[1];
+            dy[1] = -g;
+            Ok(())
+        };
+        let times = linspace(0.0, 2.0, 21);
+        let (sol, hit) = integrate_to_event(f, &[1.0, 0.5], &times, &tight(), |_, y| -y[0]).unwrap();
+        let hit = hit.expect("the floor is reached");
+        let exact = (0.5 + (0.25 + 2.0 * g).sqrt()) / g;
+        assert!((hit.t - exact).abs() < 1e-13, "{} vs {exact}", hit.t);
+        assert!(hit.y[0].abs() < 1e-13);
+        assert!((hit.y[1] - (0.5 - g * exact)).abs() < 1e-12);
+        let before = times.iter().filter(|&&t| t < hit.t).count();
+        assert_eq!(sol.states.len(), before);
+        for (t, y) in times.iter().zip(&sol.states) {
+            assert!((y[0] - (1.0 + 0.5 * t - 0.5 * g * t * t)).abs() < 1e-12);
+        }
+        // No crossing: every state, no event.
+        let (sol, hit) = integrate_to_event(f, &[1.0, 20.0], &times, &tight(), |_, y| -y[0]).unwrap();
+        assert!(hit.is_none());
+        assert_eq!(sol.states.len(), times.len());
+        // A short excursion inside one long step is still found: -y = sin t exceeds 0.99
+        // for 0.28 s around π/2, shorter than the steps taken at rtol 1e-6.
+        let osc = |_: f64, y: &[f64], dy: &mut [f64]| {
+            dy[0] = y[1];
+            dy[1] = -y[0];
+            Ok(())
+        };
+        let (_, hit) =
+            integrate_to_event(osc, &[0.0, -1.0], &[0.0, 10.0], &OdeOptions { rtol: 1e-6, atol: 1e-8, ..OdeOptions::default() }, |_, y| {
+                -y[0] - 0.99
+            })
+            .unwrap();
+        let hit = hit.expect("graze found");
+        let exact = std::f64::consts::PI / 2.0 - 0.99f64.acos();
+        assert!((hit.t - exact).abs() < 1e-5, "{} vs {exact}", hit.t);
+    }
+}

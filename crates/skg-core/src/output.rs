@@ -1,0 +1,208 @@
+//! Output files: the trajectory CSV and the JSON summary of a solve, the CSV of a
+//! reference, each written atomically (a temporary file in the target directory,
+//! flushed, then renamed over the target), so an interrupted or failed run never leaves
+//! a half-written file. The end of the data flow: it reads what [`crate::solve`] and
+//! [`crate::reference`] produced and writes it.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::provenance;
+use crate::reference::{self, Reference};
+use crate::scenario::Scene;
+use crate::solve::Outcome;
+use crate::trajectory::Trajectory;
+
+/// Why an output file could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// Creating, writing or renaming the file failed.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The target file or directory.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The value could not be serialized.
+    #[error("cannot write {path}: {message}")]
+    Format {
+        /// The target file.
+        path: PathBuf,
+        /// The serializer's message.
+        message: String,
+    },
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
+    move |source| OutputError::Io { path: path.to_path_buf(), source }
+}
+
+/// Write `path` atomically with the bytes produced by `fill`.
+pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<(), OutputError> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".skg-tmp-");
+    // Like any new file (0666 minus the umask), not tempfile's private 0600.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder.tempfile_in(&dir).map_err(io_err(path))?;
+    {
+        let mut w = std::io::BufWriter::new(tmp.as_file_mut());
+        fill(&mut w).map_err(io_err(path))?;
+        w.flush().map_err(io_err(path))?;
+    }
+    tmp.as_file().sync_all().map_err(io_err(path))?;
+    tmp.persist(path).map_err(|e| OutputError::Io { path: path.to_path_buf(), source: e.error })?;
+    Ok(())
+}
+
+/// Column names of a scene's trajectory CSV.
+pub fn trajectory_header(scene: &Scene) -> Vec<String> {
+    let mut h = vec!["t".to_string()];
+    for c in &scene.coordinates {
+        h.push(c.clone());
+        h.push(format!("{c}_dot"));
+    }
+    for c in &scene.constraints {
+        h.push(format!("lambda_{c}"));
+    }
+    h.push("energy".into());
+    if !scene.walls.is_empty() {
+        h.push("wall_energy".into());
+    }
+    for c in &scene.constraints {
+        h.push(format!("residual_{c}"));
+    }
+    for w in &scene.walls {
+        h.push(format!("gap_{}", w.name));
+    }
+    h
+}
+
+/// Rows of the trajectory CSV, matching [`trajectory_header`].
+pub fn trajectory_rows(tr: &Trajectory) -> Vec<Vec<f64>> {
+    (0..tr.t.len())
+        .map(|k| {
+            let mut row = vec![tr.t[k]];
+            for i in 0..tr.q[k].len() {
+                row.push(tr.q[k][i]);
+                row.push(tr.v[k][i]);
+            }
+            row.extend(&tr.lambda[k]);
+            row.push(tr.energy[k]);
+            if !tr.h[k].is_empty() {
+                row.push(tr.wall_energy[k]);
+            }
+            row.extend(&tr.g[k]);
+            row.extend(&tr.h[k]);
+            row
+        })
+        .collect()
+}
+
+/// Write a numeric table as CSV, full precision (shortest round-trip representation).
+pub fn write_csv(path: &Path, comment: Option<&str>, header: &[String], rows: &[Vec<f64>]) -> Result<(), OutputError> {
+    write_atomic(path, |w| {
+        if let Some(c) = comment {
+            for line in c.lines() {
+                writeln!(w, "# {line}")?;
+            }
+        }
+        let mut csv = csv::Writer::from_writer(w);
+        csv.write_record(header).map_err(std::io::Error::other)?;
+        for row in rows {
+            csv.write_record(row.iter().map(|x| format!("{x:?}"))).map_err(std::io::Error::other)?;
+        }
+        csv.flush()?;
+        Ok(())
+    })
+}
+
+/// Write a value as pretty JSON.
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), OutputError> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| OutputError::Format { path: path.to_path_buf(), message: e.to_string() })?;
+    write_atomic(path, |w| {
+        w.write_all(text.as_bytes())?;
+        w.write_all(b"\n")
+    })
+}
+
+/// What `summary.json` holds: where it came from ([`crate::provenance`]), then the
+/// fields of the [`Outcome`].
+#[derive(Serialize)]
+struct Summary<'a> {
+    /// The skg-solve version that wrote the file.
+    skg_solve_version: &'static str,
+    /// The version of the file's layout.
+    schema_version: u32,
+    /// SHA-256 of the scene file's text (`sha256:<hex>`).
+    scene_hash: String,
+    #[serde(flatten)]
+    outcome: &'a Outcome,
+}
+
+/// Write `trajectory.csv` and `summary.json` of a solve of `scene` into `dir`.
+pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result<(PathBuf, PathBuf), OutputError> {
+    let t = std::time::Instant::now();
+    let csv_path = dir.join("trajectory.csv");
+    let json_path = dir.join("summary.json");
+    let header = trajectory_header(scene);
+    write_csv(&csv_path, None, &header, &trajectory_rows(&outcome.trajectory))?;
+    outcome.timings.output_s = t.elapsed().as_secs_f64();
+    let summary = Summary {
+        skg_solve_version: provenance::VERSION,
+        schema_version: provenance::SCHEMA_VERSION,
+        scene_hash: scene.file.origin.content_hash(),
+        outcome,
+    };
+    write_json(&json_path, &summary)?;
+    Ok((csv_path, json_path))
+}
+
+/// Write a reference as a trajectory CSV with its provenance ([`reference::provenance`])
+/// as `#` lines; `scene_path` is the scene file as the user named it.
+pub fn write_reference(path: &Path, scene: &Scene, scene_path: &str, r: &Reference) -> Result<(), OutputError> {
+    let comment = reference::provenance(scene, scene_path, r);
+    write_csv(path, Some(&comment), &trajectory_header(scene), &trajectory_rows(&r.trajectory))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_leaves_old_file_when_writer_fails() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.txt");
+        std::fs::write(&p, "old").unwrap();
+        let r = write_atomic(&p, |w| {
+            w.write_all(b"partial")?;
+            Err(std::io::Error::other("boom"))
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "old");
+        // No temporary file is left behind.
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+    }
+
+    #[test]
+    fn csv_round_trips_full_precision() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        let x = 0.1 + 0.2;
+        write_csv(&p, Some("provenance"), &["t".into(), "x".into()], &[vec![1.0, x]]).unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.starts_with("# provenance\nt,x\n"), "{text}");
+        let last = text.lines().last().unwrap();
+        let v: f64 = last.split(',').nth(1).unwrap().parse().unwrap();
+        assert_eq!(v, x);
+    }
+}

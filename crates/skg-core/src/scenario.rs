@@ -1,0 +1,910 @@
+//! Scene files: the TOML a user writes, its validation, and the resolved scene.
+//!
+//! A scene file is read in two steps. [`SceneFile::parse`] deserializes the TOML
+//! (unknown keys and type errors are reported with file, line and column by the
+//! `toml` crate, through [`parse_toml`], which sweep files use too). [`SceneFile::resolve`] then evaluates the parameters (numbers or
+//! expressions of other parameters), applies command-line overrides and checks
+//! every number a solve depends on. Expressions of the model itself (Lagrangian,
+//! constraints, forces, walls) are parsed later by [`crate::model`], which reports
+//! errors through [`SceneError::Expression`] with the position in the file.
+//!
+//! The format is documented key by key in the README ("The scene file, key by key").
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use indexmap::IndexMap;
+use serde::{Deserialize, Serialize};
+use toml::Spanned;
+
+use crate::sbp::OperatorKind;
+use skg_expr::{Graph, ParseError, Symbol};
+
+/// Errors in a scene file or its overrides. Each names the file and, where it can,
+/// the line and column.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The scene file cannot be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Io {
+        /// The file as given.
+        path: PathBuf,
+        /// Why it cannot be read.
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML, or has unknown keys or values of the wrong type.
+    #[error("{location}: {message}")]
+    Toml {
+        /// Where.
+        location: Location,
+        /// The `toml` crate's message.
+        message: String,
+    },
+    /// An expression (Lagrangian, constraint, force, wall, parameter) does not parse or
+    /// names something unknown.
+    #[error("{location}: in `{key}`: {error}\n{caret}")]
+    Expression {
+        /// Where the error is, inside the expression's string.
+        location: Location,
+        /// The key holding the expression, e.g. `constraints.g1.expression`.
+        key: String,
+        /// The parser's error.
+        error: Box<ParseError>,
+        /// The expression with a caret under the error's position.
+        caret: String,
+    },
+    /// A value is out of range, a name clashes, the initial state is inadmissible, ….
+    #[error("{location}: {message}")]
+    Invalid {
+        /// Where.
+        location: Location,
+        /// What is wrong.
+        message: String,
+    },
+    /// A `--set` (or sweep) assignment is malformed or names no parameter.
+    #[error("--set {assignment}: {message}")]
+    Override {
+        /// The assignment as given.
+        assignment: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// A number or an expression of the scene's parameters, e.g. `0.5` or `"pi/6"`.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum NumOrExpr {
+    /// A number.
+    Num(f64),
+    /// An expression of the parameters and `pi`.
+    Expr(String),
+}
+
+impl fmt::Display for NumOrExpr {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            NumOrExpr::Num(x) => write!(f, "{x}"),
+            NumOrExpr::Expr(s) => write!(f, "{s}"),
+        }
+    }
+}
+
+/// How the discrete action is posed to Ipopt (docs/mathematics.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Formulation {
+    /// Only the equations ∂S/∂(q-, λ-) = 0 in the unknowns (q+, λ+): half the size.
+    #[default]
+    Reduced,
+    /// The paper's formulation: all doubled unknowns, the square system ∇S = 0.
+    Full,
+}
+
+/// Error of parsing a [`Formulation`] from a string.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown formulation `{input}` (expected `reduced` or `full`)")]
+pub struct ParseFormulationError {
+    /// The rejected input.
+    pub input: String,
+}
+
+impl std::str::FromStr for Formulation {
+    type Err = ParseFormulationError;
+
+    /// Case-insensitive: `reduced` or `full`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_lowercase().as_str() {
+            "reduced" => Ok(Formulation::Reduced),
+            "full" => Ok(Formulation::Full),
+            _ => Err(ParseFormulationError { input: s.to_string() }),
+        }
+    }
+}
+
+impl fmt::Display for Formulation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Formulation::Reduced => "reduced",
+            Formulation::Full => "full",
+        })
+    }
+}
+
+/// What Ipopt is given as the Hessian of its Lagrangian. For the square systems
+/// solved here the Newton step does not depend on it (docs/mathematics.md, docs/solver.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum HessianMode {
+    /// No Hessian entries (nele_hess = 0): the step is the plain Newton step.
+    #[default]
+    Zero,
+    /// The exact Hessian (reduced formulation only: it is the (q+,λ+) block of ∇²S
+    /// evaluated with the minus variables set to Ipopt's multipliers).
+    Exact,
+}
+
+/// The `[scene]` table.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneMeta {
+    /// The scene's name (in summaries and provenance).
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// L(q, q̇) in terms of coordinates `x`, velocities `x_dot` and parameters.
+    pub lagrangian: Spanned<String>,
+}
+
+/// One `[[coordinates]]` entry.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoordinateSpec {
+    /// The coordinate's name; `<name>_dot` is its velocity in expressions.
+    pub name: Spanned<String>,
+    /// Initial value q_i(t_start).
+    pub initial: Spanned<NumOrExpr>,
+    /// Initial velocity q̇_i(t_start).
+    pub velocity: Spanned<NumOrExpr>,
+}
+
+/// One `[[constraints]]` entry: a velocity constraint.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConstraintSpec {
+    /// The constraint's name (columns `lambda_<name>`, `residual_<name>`).
+    pub name: Spanned<String>,
+    /// g(q, q̇) = 0, linear or nonlinear in the velocities.
+    pub expression: Spanned<String>,
+}
+
+/// One `[[walls]]` entry: a regularized wall with optional friction.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSpec {
+    /// The wall's name (column `gap_<name>`, keys of per-wall diagnostics).
+    pub name: Spanned<String>,
+    /// h(q): the allowed side is h ≤ 0.
+    pub h: Spanned<String>,
+    /// A in F_N = -A δ_σ(h) ∇h.
+    pub strength: Spanned<NumOrExpr>,
+    /// σ, the width of the Gaussian δ_σ.
+    pub width: Spanned<NumOrExpr>,
+    /// Kinetic friction coefficient μ (0 = no friction term at all).
+    #[serde(default)]
+    pub friction: Option<Spanned<NumOrExpr>>,
+    /// Fixed friction direction (expressions, normalized by the tool); when absent the
+    /// friction opposes the tangential velocity.
+    #[serde(default)]
+    pub friction_direction: Option<Vec<Spanned<String>>>,
+    /// ε in |v∥| ≈ sqrt(|v∥|² + ε²), which keeps friction differentiable at rest.
+    #[serde(default)]
+    pub friction_velocity: Option<Spanned<NumOrExpr>>,
+}
+
+/// The `[time]` table: the time grid.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// Start time t_i (where the initial state is given).
+    pub start: Spanned<NumOrExpr>,
+    /// End time t_f.
+    pub end: Spanned<NumOrExpr>,
+    /// Number of grid nodes N.
+    pub nodes: Spanned<i64>,
+}
+
+/// The `[discretization]` table.
+#[derive(Debug, Clone, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct DiscretizationSpec {
+    /// The SBP operator's name (default SBP242).
+    #[serde(default)]
+    pub operator: Option<Spanned<String>>,
+    /// The formulation (default reduced).
+    #[serde(default)]
+    pub formulation: Option<Formulation>,
+}
+
+/// The `[solver]` table: Ipopt's settings.
+#[derive(Debug, Clone, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// Ipopt's `tol` and `constr_viol_tol` (default 1e-11).
+    pub tol: Option<f64>,
+    /// Ipopt's `max_iter` (default 100).
+    pub max_iter: Option<u32>,
+    /// Ipopt's console `print_level` (default 0: silent).
+    pub print_level: Option<i32>,
+    /// Ipopt's `linear_solver` (default: Ipopt's).
+    pub linear_solver: Option<String>,
+    /// The Hessian given to Ipopt (default zero).
+    pub hessian: Option<HessianMode>,
+    /// Ipopt log file, relative to the output directory.
+    pub log_file: Option<String>,
+    /// Further Ipopt options passed through verbatim, e.g. `mumps_pivot_order = 0`.
+    #[serde(default)]
+    pub ipopt: IndexMap<String, IpoptValue>,
+}
+
+/// The value of a pass-through Ipopt option: integer, number or string, as Ipopt's
+/// option has that type.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum IpoptValue {
+    /// An integer option.
+    Int(i32),
+    /// A numeric option.
+    Num(f64),
+    /// A string option.
+    Str(String),
+}
+
+/// The TOML document as written.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// `[scene]`: name, description, Lagrangian.
+    pub scene: SceneMeta,
+    /// `[parameters]`: named numbers or expressions of other parameters.
+    #[serde(default)]
+    pub parameters: IndexMap<String, Spanned<NumOrExpr>>,
+    /// `[[coordinates]]`, in order.
+    pub coordinates: Vec<CoordinateSpec>,
+    /// `[[constraints]]`, in order.
+    #[serde(default)]
+    pub constraints: Vec<ConstraintSpec>,
+    /// Generalized forces, one expression per coordinate name.
+    #[serde(default)]
+    pub forces: IndexMap<String, Spanned<String>>,
+    /// `[[walls]]`, in order.
+    #[serde(default)]
+    pub walls: Vec<WallSpec>,
+    /// `[time]`.
+    pub time: TimeSpec,
+    /// `[discretization]`.
+    #[serde(default)]
+    pub discretization: DiscretizationSpec,
+    /// `[solver]`.
+    #[serde(default)]
+    pub solver: SolverSpec,
+    /// Path and source text, for error positions.
+    #[serde(skip)]
+    pub origin: Origin,
+}
+
+/// A place in an input file: the file and, where known, the line and column (both
+/// 1-based, columns counted in characters). Displayed as `file:line:col`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Location {
+    /// The file, as the user named it.
+    pub file: String,
+    /// 1-based line, if known.
+    pub line: Option<usize>,
+    /// 1-based column in characters, if known.
+    pub col: Option<usize>,
+}
+
+impl Location {
+    /// The file as a whole (no line or column).
+    pub fn file(path: impl Into<String>) -> Location {
+        Location { file: path.into(), line: None, col: None }
+    }
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file)?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+            if let Some(col) = self.col {
+                write!(f, ":{col}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Where a scene came from, to turn byte spans into `file:line:column`.
+#[derive(Debug, Clone, Default)]
+pub struct Origin {
+    /// The file, as the user named it.
+    pub path: String,
+    /// Its whole text.
+    pub text: String,
+}
+
+impl Origin {
+    /// `file:line:column` of a byte offset (1-based line and column, columns in chars).
+    pub fn locate(&self, offset: usize) -> Location {
+        let offset = offset.min(self.text.len());
+        let before = &self.text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        Location { file: self.path.clone(), line: Some(line), col: Some(col) }
+    }
+
+    /// The file as a whole, for errors that belong to no single key.
+    pub fn whole(&self) -> Location {
+        Location::file(self.path.clone())
+    }
+
+    /// Hash of the scene file's text ([`crate::provenance::content_hash`]).
+    pub fn content_hash(&self) -> String {
+        crate::provenance::content_hash(self.text.as_bytes())
+    }
+
+    /// Location of a spanned value. For a string value the span starts at the opening
+    /// quote; `inner` is a char offset inside the string.
+    pub fn locate_in<T>(&self, v: &Spanned<T>, inner: Option<usize>) -> Location {
+        let start = v.span().start;
+        match inner {
+            Some(k) => {
+                let quote = self.text[start..].chars().next().map_or(0, |c| c.len_utf8());
+                let body = &self.text[(start + quote).min(self.text.len())..];
+                let byte: usize = body.chars().take(k).map(char::len_utf8).sum();
+                self.locate(start + quote + byte)
+            }
+            None => self.locate(start),
+        }
+    }
+}
+
+/// Command-line and sweep overrides applied on top of a scene file.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Overrides {
+    /// `name=value` parameter assignments (value: number or expression).
+    pub set: Vec<(String, String)>,
+    /// Number of nodes N.
+    pub nodes: Option<usize>,
+    /// SBP operator.
+    pub operator: Option<OperatorKind>,
+    /// Formulation.
+    pub formulation: Option<Formulation>,
+    /// Hessian given to Ipopt.
+    pub hessian: Option<HessianMode>,
+    /// Ipopt's iteration limit.
+    pub max_iter: Option<u32>,
+}
+
+impl Overrides {
+    /// Parse one `name=value` assignment of `--set`.
+    pub fn parse_assignment(s: &str) -> Result<(String, String), SceneError> {
+        let bad = |m: &str| SceneError::Override { assignment: s.to_string(), message: m.to_string() };
+        let (name, value) = s.split_once('=').ok_or_else(|| bad("expected name=value"))?;
+        let name = name.trim();
+        if name.is_empty() || value.trim().is_empty() {
+            return Err(bad("expected name=value"));
+        }
+        Ok((name.to_string(), value.trim().to_string()))
+    }
+}
+
+/// Settings of the Ipopt solve, resolved.
+#[derive(Debug, Clone, Serialize)]
+pub struct SolverSettings {
+    /// Ipopt's `tol` and `constr_viol_tol`.
+    pub tol: f64,
+    /// Ipopt's `max_iter`.
+    pub max_iter: u32,
+    /// Ipopt's console `print_level`.
+    pub print_level: i32,
+    /// Ipopt's `linear_solver`, if set.
+    pub linear_solver: Option<String>,
+    /// The Hessian given to Ipopt.
+    pub hessian: HessianMode,
+    /// Ipopt's log file; the scene gives it relative to the output directory and the
+    /// caller of the solve joins it to that directory.
+    pub log_file: Option<PathBuf>,
+    /// Further Ipopt options, passed through verbatim.
+    pub ipopt: IndexMap<String, IpoptValue>,
+}
+
+/// A wall, resolved to numbers (its `h` and friction direction expressions are parsed
+/// by the model).
+#[derive(Debug, Clone, Serialize)]
+pub struct Wall {
+    /// The wall's name.
+    pub name: String,
+    /// A in F_N = −A δ_σ(h) ∇h (≥ 0).
+    pub strength: f64,
+    /// σ, the width of the Gaussian δ_σ (> 0).
+    pub width: f64,
+    /// Kinetic friction coefficient μ (≥ 0; 0 = no friction force).
+    pub friction: f64,
+    /// ε in |v∥| ≈ sqrt(|v∥|² + ε²) (> 0; default 1e-3).
+    pub friction_velocity: f64,
+}
+
+/// A validated scene: every number resolved, every name checked.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The file it was resolved from (expressions, spans, origin).
+    pub file: SceneFile,
+    /// The scene's name.
+    pub name: String,
+    /// Parameter values, in declaration order, overrides applied.
+    pub parameters: IndexMap<String, f64>,
+    /// Coordinate names, in order.
+    pub coordinates: Vec<String>,
+    /// Initial coordinates q(t_start).
+    pub initial_q: Vec<f64>,
+    /// Initial velocities q̇(t_start).
+    pub initial_v: Vec<f64>,
+    /// Constraint names, in order.
+    pub constraints: Vec<String>,
+    /// Walls, in order.
+    pub walls: Vec<Wall>,
+    /// Start time.
+    pub t_start: f64,
+    /// End time (> start).
+    pub t_end: f64,
+    /// Number of grid nodes N (at least the operator's minimum).
+    pub nodes: usize,
+    /// The SBP operator.
+    pub operator: OperatorKind,
+    /// The formulation.
+    pub formulation: Formulation,
+    /// Ipopt's settings.
+    pub solver: SolverSettings,
+}
+
+/// Names the expression language reserves.
+pub const RESERVED: &[&str] = &["pi", "sin", "cos", "tan", "exp", "log", "sqrt", "abs", "sinh", "cosh", "tanh", "atan"];
+
+/// Suffix that turns a coordinate name into its velocity: `x` → `x_dot`.
+pub const VELOCITY_SUFFIX: &str = "_dot";
+
+/// Errors of reading a TOML input file ([`read_toml`], [`parse_toml`]).
+#[derive(Debug, thiserror::Error)]
+pub enum TomlError {
+    /// The file cannot be read.
+    #[error("cannot read {path}: {error}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        error: std::io::Error,
+    },
+    /// The text is not valid TOML or does not have the expected keys and types.
+    #[error("{location}: {message}")]
+    Parse {
+        /// Where, as precisely as the `toml` crate says.
+        location: Location,
+        /// The `toml` crate's message.
+        message: String,
+    },
+}
+
+/// Read a TOML file and deserialize it. Returns the value and its [`Origin`] (the path
+/// as given and the text), with which later errors can be located in the file.
+pub fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<(T, Origin), TomlError> {
+    let text = std::fs::read_to_string(path).map_err(|error| TomlError::Io { path: path.to_path_buf(), error })?;
+    parse_toml(&text, &path.display().to_string())
+}
+
+/// Deserialize TOML text; `path` only labels error locations (`file:line:col`).
+pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &str) -> Result<(T, Origin), TomlError> {
+    let origin = Origin { path: path.to_string(), text: text.to_string() };
+    match toml::from_str(text) {
+        Ok(value) => Ok((value, origin)),
+        Err(e) => {
+            let location = e.span().map_or_else(|| origin.whole(), |span| origin.locate(span.start));
+            Err(TomlError::Parse { location, message: e.message().trim_end().to_string() })
+        }
+    }
+}
+
+impl From<TomlError> for SceneError {
+    fn from(e: TomlError) -> Self {
+        match e {
+            TomlError::Io { path, error } => SceneError::Io { path, source: error },
+            TomlError::Parse { location, message } => SceneError::Toml { location, message },
+        }
+    }
+}
+
+impl SceneFile {
+    /// Read and deserialize a scene file.
+    pub fn load(path: &Path) -> Result<SceneFile, SceneError> {
+        let (mut file, origin): (SceneFile, Origin) = read_toml(path)?;
+        file.origin = origin;
+        Ok(file)
+    }
+
+    /// Deserialize a scene from its text; `path` only labels error messages.
+    pub fn parse(text: &str, path: &str) -> Result<SceneFile, SceneError> {
+        let (mut file, origin): (SceneFile, Origin) = parse_toml(text, path)?;
+        file.origin = origin;
+        Ok(file)
+    }
+
+    fn invalid<T>(&self, v: &Spanned<T>, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid { location: self.origin.locate_in(v, None), message: message.into() }
+    }
+
+    /// Error for an expression at a spanned string value.
+    pub fn expression_error(&self, v: &Spanned<String>, key: &str, error: ParseError) -> SceneError {
+        let caret = error.caret_line();
+        SceneError::Expression {
+            location: self.origin.locate_in(v, Some(error.position)),
+            key: key.to_string(),
+            error: Box::new(error),
+            caret,
+        }
+    }
+
+    /// Evaluate a number-or-expression in terms of resolved parameters.
+    pub fn eval_value(&self, v: &Spanned<NumOrExpr>, key: &str, params: &IndexMap<String, f64>) -> Result<f64, SceneError> {
+        let value = match v.get_ref() {
+            NumOrExpr::Num(x) => *x,
+            NumOrExpr::Expr(s) => {
+                let spanned = Spanned::new(v.span(), s.clone());
+                eval_constant(s, params).map_err(|e| self.expression_error(&spanned, key, e))?
+            }
+        };
+        if !value.is_finite() {
+            return Err(self.invalid(v, format!("`{key}` is not finite ({value})")));
+        }
+        Ok(value)
+    }
+
+    /// Resolve parameters, overrides and every number; check names and ranges.
+    pub fn resolve(self, ov: &Overrides) -> Result<Scene, SceneError> {
+        let params = self.resolve_parameters(&ov.set)?;
+
+        // Names: coordinates, velocities, parameters and built-ins must not collide.
+        let mut seen: BTreeMap<String, &str> = BTreeMap::new();
+        for r in RESERVED {
+            seen.insert(r.to_string(), "a built-in name");
+        }
+        for p in params.keys() {
+            check_identifier(p).map_err(|e| self.toml_error(format!("parameter `{p}`: {e}")))?;
+            if let Some(what) = seen.insert(p.clone(), "a parameter") {
+                return Err(self.toml_error(format!("parameter `{p}` clashes with {what}")));
+            }
+        }
+        if self.coordinates.is_empty() {
+            return Err(self.toml_error("the scene declares no coordinates".into()));
+        }
+        let mut coordinates = Vec::new();
+        for c in &self.coordinates {
+            let name = c.name.get_ref();
+            check_identifier(name).map_err(|e| self.invalid(&c.name, e.to_string()))?;
+            for key in [name.clone(), format!("{name}{VELOCITY_SUFFIX}")] {
+                if let Some(what) = seen.insert(key.clone(), "a coordinate or velocity") {
+                    return Err(self.invalid(&c.name, format!("`{key}` clashes with {what}")));
+                }
+            }
+            coordinates.push(name.clone());
+        }
+        let mut initial_q = Vec::new();
+        let mut initial_v = Vec::new();
+        for c in &self.coordinates {
+            let n = c.name.get_ref();
+            initial_q.push(self.eval_value(&c.initial, &format!("coordinates.{n}.initial"), &params)?);
+            initial_v.push(self.eval_value(&c.velocity, &format!("coordinates.{n}.velocity"), &params)?);
+        }
+        let mut constraints = Vec::new();
+        for c in &self.constraints {
+            let name = c.name.get_ref();
+            check_identifier(name).map_err(|e| self.invalid(&c.name, e.to_string()))?;
+            if constraints.contains(name) {
+                return Err(self.invalid(&c.name, format!("constraint `{name}` declared twice")));
+            }
+            constraints.push(name.clone());
+        }
+        for (name, v) in &self.forces {
+            if !coordinates.contains(name) {
+                return Err(
+                    self.invalid(v, format!("force on `{name}`, which is not a coordinate (coordinates: {})", coordinates.join(", ")))
+                );
+            }
+        }
+        let mut walls = Vec::new();
+        for w in &self.walls {
+            let name = w.name.get_ref().clone();
+            check_identifier(&name).map_err(|e| self.invalid(&w.name, e.to_string()))?;
+            let strength = self.eval_value(&w.strength, &format!("walls.{name}.strength"), &params)?;
+            if strength < 0.0 {
+                return Err(self.invalid(&w.strength, format!("wall `{name}`: strength must be ≥ 0, got {strength}")));
+            }
+            let width = self.eval_value(&w.width, &format!("walls.{name}.width"), &params)?;
+            if width <= 0.0 {
+                return Err(self.invalid(&w.width, format!("wall `{name}`: width σ must be > 0, got {width}")));
+            }
+            let friction = match &w.friction {
+                Some(v) => self.eval_value(v, &format!("walls.{name}.friction"), &params)?,
+                None => 0.0,
+            };
+            if friction < 0.0 {
+                let v = w.friction.as_ref().expect("friction present when negative");
+                return Err(self.invalid(v, format!("wall `{name}`: friction μ must be ≥ 0, got {friction}")));
+            }
+            let friction_velocity = match &w.friction_velocity {
+                Some(v) => {
+                    let e = self.eval_value(v, &format!("walls.{name}.friction_velocity"), &params)?;
+                    if e <= 0.0 {
+                        return Err(self.invalid(v, format!("wall `{name}`: friction_velocity must be > 0, got {e}")));
+                    }
+                    e
+                }
+                None => 1e-3,
+            };
+            if let Some(dir) = &w.friction_direction {
+                if dir.len() != coordinates.len() {
+                    return Err(self.toml_error(format!(
+                        "wall `{name}`: friction_direction has {} components, the scene has {} coordinates",
+                        dir.len(),
+                        coordinates.len()
+                    )));
+                }
+            }
+            walls.push(Wall { name, strength, width, friction, friction_velocity });
+        }
+
+        let t_start = self.eval_value(&self.time.start, "time.start", &params)?;
+        let t_end = self.eval_value(&self.time.end, "time.end", &params)?;
+        if t_end <= t_start {
+            return Err(self.invalid(&self.time.end, format!("the time span must be positive: end ({t_end}) ≤ start ({t_start})")));
+        }
+        let operator = match (&ov.operator, &self.discretization.operator) {
+            (Some(k), _) => *k,
+            (None, Some(s)) => s.get_ref().parse::<OperatorKind>().map_err(|e| self.invalid(s, e.to_string()))?,
+            (None, None) => OperatorKind::Sbp242,
+        };
+        let nodes_raw = match ov.nodes {
+            Some(n) => n as i64,
+            None => *self.time.nodes.get_ref(),
+        };
+        if nodes_raw < operator.min_nodes() as i64 {
+            return Err(self.invalid(
+                &self.time.nodes,
+                format!("{} needs at least {} nodes, got {}", operator.name(), operator.min_nodes(), nodes_raw),
+            ));
+        }
+        let formulation = ov.formulation.or(self.discretization.formulation).unwrap_or_default();
+        let s = &self.solver;
+        let tol = s.tol.unwrap_or(1e-11);
+        if !(tol > 0.0 && tol.is_finite()) {
+            return Err(self.toml_error(format!("solver.tol must be a positive number, got {tol}")));
+        }
+        let hessian = ov.hessian.or(s.hessian).unwrap_or_default();
+        if hessian == HessianMode::Exact && formulation == Formulation::Full {
+            return Err(self.toml_error(
+                "solver.hessian = \"exact\" is available for the reduced formulation only \
+                 (the full formulation's Lagrangian Hessian would need fourth derivatives of L; \
+                 for a square system Ipopt's step does not depend on it)"
+                    .into(),
+            ));
+        }
+        let solver = SolverSettings {
+            tol,
+            max_iter: ov.max_iter.or(s.max_iter).unwrap_or(100),
+            print_level: s.print_level.unwrap_or(0),
+            linear_solver: s.linear_solver.clone(),
+            hessian,
+            log_file: s.log_file.as_ref().map(PathBuf::from),
+            ipopt: s.ipopt.clone(),
+        };
+        Ok(Scene {
+            name: self.scene.name.clone(),
+            parameters: params,
+            coordinates,
+            initial_q,
+            initial_v,
+            constraints,
+            walls,
+            t_start,
+            t_end,
+            nodes: nodes_raw as usize,
+            operator,
+            formulation,
+            solver,
+            file: self,
+        })
+    }
+
+    fn toml_error(&self, message: String) -> SceneError {
+        SceneError::Invalid { location: self.origin.whole(), message }
+    }
+
+    /// Evaluate parameters in dependency order (each may use the others); overrides
+    /// replace a declared parameter's definition.
+    fn resolve_parameters(&self, set: &[(String, String)]) -> Result<IndexMap<String, f64>, SceneError> {
+        let mut defs: IndexMap<String, (NumOrExpr, Option<&Spanned<NumOrExpr>>)> =
+            self.parameters.iter().map(|(k, v)| (k.clone(), (v.get_ref().clone(), Some(v)))).collect();
+        for (name, value) in set {
+            if !defs.contains_key(name) {
+                let known: Vec<&str> = self.parameters.keys().map(String::as_str).collect();
+                return Err(SceneError::Override {
+                    assignment: format!("{name}={value}"),
+                    message: format!(
+                        "the scene has no parameter `{name}` (parameters: {})",
+                        if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                    ),
+                });
+            }
+            let v = match value.parse::<f64>() {
+                Ok(x) => NumOrExpr::Num(x),
+                Err(_) => NumOrExpr::Expr(value.clone()),
+            };
+            defs.insert(name.clone(), (v, None));
+        }
+        let mut values: IndexMap<String, f64> = IndexMap::new();
+        let mut pending: Vec<&String> = defs.keys().collect();
+        while !pending.is_empty() {
+            let mut progressed = false;
+            let mut still = Vec::new();
+            for name in pending {
+                let (def, spanned) = &defs[name];
+                let result = match def {
+                    NumOrExpr::Num(x) => Ok(*x),
+                    NumOrExpr::Expr(s) => eval_constant(s, &values),
+                };
+                match result {
+                    Ok(x) => {
+                        if !x.is_finite() {
+                            return Err(self.param_error(name, spanned, format!("parameter `{name}` is not finite ({x})")));
+                        }
+                        values.insert(name.clone(), x);
+                        progressed = true;
+                    }
+                    Err(_) => still.push(name),
+                }
+            }
+            if !progressed {
+                // Report the first failing one with its real error (unknown name or syntax).
+                let name = still[0];
+                let (def, spanned) = &defs[name];
+                let NumOrExpr::Expr(s) = def else { unreachable!("numbers always resolve") };
+                let mut err = match eval_constant(s, &values) {
+                    Err(e) => e,
+                    Ok(_) => unreachable!("expression failed a moment ago"),
+                };
+                let names: Vec<&str> = defs.keys().map(String::as_str).collect();
+                if err.message.contains("unknown") && still.iter().any(|n| s.contains(n.as_str())) {
+                    err.message = format!(
+                        "{} (parameters that depend on each other in a cycle: {})",
+                        err.message,
+                        still.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
+                    );
+                } else if err.message.contains("unknown") {
+                    err.message = format!("{} (parameters: {})", err.message, names.join(", "));
+                }
+                return Err(match spanned {
+                    Some(v) => {
+                        let sp = Spanned::new(v.span(), s.clone());
+                        self.expression_error(&sp, &format!("parameters.{name}"), err)
+                    }
+                    None => SceneError::Override { assignment: format!("{name}={s}"), message: format!("{}\n{}", err, err.caret_line()) },
+                });
+            }
+            pending = still;
+        }
+        // Keep the declaration order.
+        Ok(defs.keys().map(|k| (k.clone(), values[k])).collect())
+    }
+
+    fn param_error(&self, name: &str, spanned: &Option<&Spanned<NumOrExpr>>, message: String) -> SceneError {
+        match spanned {
+            Some(v) => self.invalid(v, message),
+            None => SceneError::Override { assignment: name.to_string(), message },
+        }
+    }
+}
+
+/// Evaluate an expression that may use only parameters (already resolved) and `pi`.
+pub fn eval_constant(src: &str, params: &IndexMap<String, f64>) -> Result<f64, ParseError> {
+    let mut g = Graph::new();
+    let e = g.parse(src, &mut |name| params.get(name).map(|v| Symbol::Const(*v)))?;
+    Ok(g.eval(e, &[]))
+}
+
+/// A name that cannot be a parameter, coordinate, constraint or wall.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("`{name}` is not a valid name (letters, digits and _, not starting with a digit)")]
+pub struct InvalidName {
+    /// The rejected name.
+    pub name: String,
+}
+
+/// Check that `name` is an identifier of the expression language: ASCII letters, digits
+/// and `_`, not starting with a digit.
+fn check_identifier(name: &str) -> Result<(), InvalidName> {
+    let mut chars = name.chars();
+    let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_') && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
+    if ok {
+        Ok(())
+    } else {
+        Err(InvalidName { name: name.to_string() })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+[scene]
+name = "free fall"
+lagrangian = "1/2*m*x_dot^2 - m*g*x"
+
+[parameters]
+m = 1
+g = 9.8
+h0 = "2*g"
+
+[[coordinates]]
+name = "x"
+initial = "h0"
+velocity = 0
+
+[time]
+start = 0
+end = 1
+nodes = 16
+"#;
+
+    #[test]
+    fn parameters_resolve_in_dependency_order_and_overrides_apply() {
+        let f = SceneFile::parse(MINIMAL, "mem.toml").unwrap();
+        let s = f.clone().resolve(&Overrides::default()).unwrap();
+        assert_eq!(s.initial_q, vec![19.6]);
+        let ov = Overrides { set: vec![("g".into(), "pi".into())], ..Default::default() };
+        let s = f.resolve(&ov).unwrap();
+        assert!((s.initial_q[0] - 2.0 * std::f64::consts::PI).abs() < 1e-15);
+        assert_eq!(s.operator, OperatorKind::Sbp242);
+        assert_eq!(s.formulation, Formulation::Reduced);
+    }
+
+    #[test]
+    fn unknown_key_reports_line_and_column() {
+        let text = MINIMAL.replace("velocity = 0", "velocity = 0\nmass = 3");
+        let err = SceneFile::parse(&text, "mem.toml").unwrap_err().to_string();
+        assert!(err.contains("mem.toml:15:1"), "{err}");
+        assert!(err.contains("mass"), "{err}");
+    }
+
+    #[test]
+    fn cyclic_and_unknown_parameters_are_errors() {
+        let text = MINIMAL.replace("h0 = \"2*g\"", "h0 = \"2*k\"\nk = \"h0\"");
+        let err = SceneFile::parse(&text, "mem.toml").unwrap().resolve(&Overrides::default()).unwrap_err();
+        assert!(err.to_string().contains("cycle"), "{err}");
+        let text = MINIMAL.replace("h0 = \"2*g\"", "h0 = \"2*gg\"");
+        let err = SceneFile::parse(&text, "mem.toml").unwrap().resolve(&Overrides::default()).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("mem.toml:9:"), "{msg}");
+        assert!(msg.contains("gg"), "{msg}");
+    }
+
+    #[test]
+    fn override_of_unknown_parameter_is_an_error() {
+        let f = SceneFile::parse(MINIMAL, "mem.toml").unwrap();
+        let ov = Overrides { set: vec![("nope".into(), "1".into())], ..Default::default() };
+        let msg = f.resolve(&ov).unwrap_err().to_string();
+        assert!(msg.contains("no parameter `nope`") && msg.contains("m, g, h0"), "{msg}");
+    }
+}

@@ -1,0 +1,756 @@
+//! Solving one scene: build the discrete action, make a physical initial guess, hand
+//! the square system to Ipopt, and turn the critical point into a trajectory.
+//!
+//! Initial guess: the Lagrange–d'Alembert equations of the same scene are integrated
+//! by [`crate::time_stepping`] (adaptive high-order Runge–Kutta, index-reduced:
+//! accelerations and multipliers from `[W Gᵀ; G 0]`, see [`Model::accelerations`]) at a
+//! moderate tolerance and sampled at the nodes; the minus variables start at zero and the
+//! boundary multipliers at the values that make their rows vanish. A global-in-time
+//! Newton solve started there converges in a few iterations (docs/solver.md: constant
+//! velocity extrapolation did not converge on the disk). If time stepping fails, the
+//! guess falls back to constant-velocity extrapolation and the summary says so.
+
+use std::fmt;
+use std::time::Instant;
+
+use indexmap::IndexMap;
+use serde::Serialize;
+
+use crate::action::{Action, Block, MatrixPlan};
+use crate::contact;
+use crate::model::{Model, Workspace};
+use crate::ode::OdeOptions;
+use crate::sbp::{SbpError, SbpOperator};
+use crate::scenario::{Formulation, HessianMode, IpoptValue, Scene, SceneError, Wall};
+use crate::time_stepping::{integrate_model, min_spacing};
+use crate::trajectory::{NodeSeries, States, Trajectory};
+use skg_ipopt::{self as ipopt, EvalError, Problem};
+
+/// A solution farther than this fraction of the coordinates' range from the
+/// time-stepping solution gets a warning. Discretization errors of usable grids are
+/// below 1 % (disk N=32 SBP242: 0.4 %); the spurious solutions seen were 35 % (tumbler
+/// N=48) and 100 %+ (knife edge on SBP121, an odd-even mode).
+const FAR_FROM_TIME_STEPPING: f64 = 0.1;
+
+/// Why a solve could not be attempted or completed (a non-converged Ipopt run is not
+/// an error: it is an [`Outcome`] whose [`SolveStatus`] says so).
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    /// The scene's model cannot be built (an expression, the initial state).
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The SBP operator cannot be built on the scene's grid.
+    #[error(transparent)]
+    Sbp(#[from] SbpError),
+    /// Ipopt could not be run (options, sizes, a callback error it did not recover from).
+    #[error(transparent)]
+    Ipopt(#[from] ipopt::SolveError),
+}
+
+/// Where a solve's wall time went, in seconds.
+#[derive(Debug, Clone, Serialize)]
+pub struct Timings {
+    /// Parsing, symbolic derivatives, tapes, sparsity structure.
+    pub setup_s: f64,
+    /// Time stepping for the initial guess.
+    pub initial_guess_s: f64,
+    /// Wall time of the Ipopt call, split into time in our callbacks and inside Ipopt.
+    pub ipopt_total_s: f64,
+    /// Time in our callbacks (residual, Jacobian, Hessian).
+    pub evaluation_s: f64,
+    /// Time inside Ipopt (mostly the linear solver).
+    pub ipopt_internal_s: f64,
+    /// Trajectory, end multipliers and diagnostics from the solution.
+    pub postprocess_s: f64,
+    /// Writing files (filled in by the output module).
+    pub output_s: f64,
+}
+
+/// The sizes of the problem handed to Ipopt.
+#[derive(Debug, Clone, Serialize)]
+pub struct Sizes {
+    /// Grid nodes N.
+    pub nodes: usize,
+    /// Coordinates d.
+    pub coordinates: usize,
+    /// Velocity constraints n.
+    pub constraints: usize,
+    /// Walls.
+    pub walls: usize,
+    /// Unknowns of the system (P for the reduced formulation, Z for the full one).
+    pub variables: usize,
+    /// Equations (as many as unknowns: the system is square).
+    pub equations: usize,
+    /// Nonzeros of the Jacobian's structure.
+    pub jacobian_nonzeros: usize,
+    /// Nonzeros of the Hessian's structure (0 unless the exact Hessian is used).
+    pub hessian_nonzeros: usize,
+    /// Instructions of the residual and Jacobian tapes.
+    pub tape_instructions: usize,
+}
+
+/// Checks of the solution: residuals, energy, walls, distance from time stepping.
+#[derive(Debug, Clone, Serialize)]
+pub struct Diagnostics {
+    /// max |c| of the system handed to Ipopt (unscaled), at the returned point.
+    pub max_residual: f64,
+    /// max |equation of motion| at interior nodes, unweighted (force units).
+    pub max_eom_residual: f64,
+    /// max |g^a| over interior nodes.
+    pub max_constraint_interior: f64,
+    /// max |g^a| at the last node, where the constraints are not enforced.
+    pub constraint_last_node: f64,
+    /// max |E_k − E_1| of the total energy E = energy + wall_energy over nodes 1..N−2
+    /// (the last two excluded: their equations are the boundary closure). Conserved up
+    /// to the discretization error unless friction or other non-conservative forces act.
+    pub energy_drift: f64,
+    /// The same over all nodes.
+    pub energy_drift_all: f64,
+    /// Largest wall gap h (positive = penetration), per wall (keyed by the wall's name).
+    pub max_wall_gap: IndexMap<String, f64>,
+    /// max over nodes and coordinates of |q − q_time-stepping|: a large value hints at a
+    /// spurious critical point or a too coarse grid.
+    pub distance_from_time_stepping: Option<f64>,
+    /// Contact episodes per wall (maximal runs of nodes in contact, [`contact`]; keyed by
+    /// the wall's name) in the solution. A difference from the time-stepping solution
+    /// means an extra or a missing bounce: a spurious critical point (docs/solver.md) or
+    /// a too coarse grid; the solve then adds a warning.
+    pub contact_episodes: IndexMap<String, usize>,
+    /// The same for the time-stepping solution on the same nodes (if time stepping
+    /// succeeded).
+    pub contact_episodes_time_stepping: Option<IndexMap<String, usize>>,
+    /// max |q-|, |λ-| of the full formulation's solution (0 in the physical limit).
+    pub max_minus_variable: Option<f64>,
+}
+
+/// The settings a solve ran with.
+#[derive(Debug, Clone, Serialize)]
+pub struct Settings {
+    /// The SBP operator's name.
+    pub operator: String,
+    /// Grid nodes N.
+    pub nodes: usize,
+    /// Start time.
+    pub t_start: f64,
+    /// End time.
+    pub t_end: f64,
+    /// The formulation.
+    pub formulation: Formulation,
+    /// The Hessian given to Ipopt.
+    pub hessian: HessianMode,
+    /// Ipopt's tolerance.
+    pub tol: f64,
+    /// Ipopt's iteration limit.
+    pub max_iter: u32,
+    /// The scene's parameter values.
+    pub parameters: IndexMap<String, f64>,
+    /// How the initial guess was made.
+    pub initial_guess: String,
+}
+
+/// The largest unscaled residual max |c| of the discrete system at which a solve counts
+/// as converged (Ipopt's own tolerance applies to its possibly scaled problem).
+pub const CONVERGED_RESIDUAL: f64 = 1e-8;
+
+/// How a solve ended: Ipopt's verdict, checked against the unscaled residual.
+///
+/// `Display` gives readable text; [`SolveStatus::name`] a stable name. Serialized (into
+/// `summary.json`) as four fields: `"converged"` (true or false), `"status"` (Ipopt's
+/// status name, e.g. `"Solve_Succeeded"`), `"status_text"` (the readable text) and
+/// `"solve_status"` (the stable name).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SolveStatus {
+    /// Ipopt succeeded and the unscaled residual is at most [`CONVERGED_RESIDUAL`].
+    Converged {
+        /// Ipopt's status (`Solve_Succeeded` or `Solved_To_Acceptable_Level`).
+        ipopt: ipopt::Status,
+    },
+    /// Ipopt reported success, but the unscaled residual exceeds [`CONVERGED_RESIDUAL`]
+    /// (or is not a number): not counted as converged.
+    ResidualTooLarge {
+        /// Ipopt's status (a success).
+        ipopt: ipopt::Status,
+        /// The unscaled residual max |c|.
+        residual: f64,
+    },
+    /// Ipopt stopped without success.
+    NotConverged {
+        /// Ipopt's status, which says why.
+        ipopt: ipopt::Status,
+    },
+}
+
+impl SolveStatus {
+    /// The status of a solve that ended with Ipopt's status `ipopt` at an unscaled
+    /// residual `residual`.
+    pub fn classify(ipopt: ipopt::Status, residual: f64) -> SolveStatus {
+        match (ipopt.is_success(), residual <= CONVERGED_RESIDUAL) {
+            (true, true) => SolveStatus::Converged { ipopt },
+            (true, false) => SolveStatus::ResidualTooLarge { ipopt, residual },
+            (false, _) => SolveStatus::NotConverged { ipopt },
+        }
+    }
+
+    /// Whether the solve converged.
+    pub fn is_converged(&self) -> bool {
+        matches!(self, SolveStatus::Converged { .. })
+    }
+
+    /// Ipopt's status.
+    pub fn ipopt(&self) -> ipopt::Status {
+        match *self {
+            SolveStatus::Converged { ipopt } | SolveStatus::ResidualTooLarge { ipopt, .. } | SolveStatus::NotConverged { ipopt } => ipopt,
+        }
+    }
+
+    /// A stable name: `"converged"`, `"residual_too_large"` or `"not_converged"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SolveStatus::Converged { .. } => "converged",
+            SolveStatus::ResidualTooLarge { .. } => "residual_too_large",
+            SolveStatus::NotConverged { .. } => "not_converged",
+        }
+    }
+}
+
+impl fmt::Display for SolveStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SolveStatus::Converged { ipopt } | SolveStatus::NotConverged { ipopt } => write!(f, "{ipopt}"),
+            SolveStatus::ResidualTooLarge { ipopt, residual } => {
+                write!(f, "Ipopt reported success ({ipopt}) but the unscaled residual {residual:.3e} exceeds {CONVERGED_RESIDUAL:e}")
+            }
+        }
+    }
+}
+
+impl Serialize for SolveStatus {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(4))?;
+        map.serialize_entry("converged", &self.is_converged())?;
+        map.serialize_entry("status", &self.ipopt())?;
+        map.serialize_entry("status_text", &self.to_string())?;
+        map.serialize_entry("solve_status", self.name())?;
+        map.end()
+    }
+}
+
+/// Everything a solve produced.
+#[derive(Debug, Clone, Serialize)]
+pub struct Outcome {
+    /// The scene's name.
+    pub scene: String,
+    /// How the solve ended (serialized as the fields `converged`, `status`,
+    /// `status_text` and `solve_status`).
+    #[serde(flatten)]
+    pub status: SolveStatus,
+    /// The Ipopt version the tool was built against.
+    pub ipopt_version: String,
+    /// Ipopt's iterations.
+    pub iterations: usize,
+    /// The settings the solve ran with.
+    pub settings: Settings,
+    /// The sizes of the problem.
+    pub sizes: Sizes,
+    /// Where the time went.
+    pub timings: Timings,
+    /// Checks of the solution.
+    pub diagnostics: Diagnostics,
+    /// Suspicions about the solution (spurious critical point, residual too large, …).
+    pub warnings: Vec<String>,
+    /// Ipopt's iteration table.
+    pub history: Vec<ipopt::IterationStat>,
+    /// The solution at the nodes (written as trajectory.csv, not into the summary).
+    #[serde(skip)]
+    pub trajectory: Trajectory,
+}
+
+impl Outcome {
+    /// Whether the solve converged ([`SolveStatus::is_converged`]).
+    pub fn converged(&self) -> bool {
+        self.status.is_converged()
+    }
+}
+
+/// Ipopt's view of the reduced system R(P) = ∂S/∂M = 0.
+struct Reduced<'a> {
+    action: &'a Action,
+    z: Vec<f64>,
+    ws: Workspace,
+    jac: MatrixPlan,
+    hess: Option<MatrixPlan>,
+}
+
+impl Reduced<'_> {
+    fn set(&mut self, x: &[f64], minus: Option<&[f64]>) {
+        let n_p = self.action.layout.n_p;
+        self.z[..n_p].copy_from_slice(x);
+        match minus {
+            Some(y) => self.z[n_p..].copy_from_slice(y),
+            None => self.z[n_p..].iter_mut().for_each(|v| *v = 0.0),
+        }
+    }
+}
+
+impl Problem for Reduced<'_> {
+    fn num_variables(&self) -> usize {
+        self.action.layout.n_p
+    }
+    fn num_constraints(&self) -> usize {
+        self.action.layout.n_m
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.set(x, None);
+        self.action.gradient(&self.z, true, c, &mut self.ws);
+        Ok(())
+    }
+    fn jacobian_structure(&self) -> &[(u32, u32)] {
+        &self.jac.structure
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.set(x, None);
+        self.action.matrix_values(&self.jac, &self.z, values, &mut self.ws);
+        Ok(())
+    }
+    fn hessian_structure(&self) -> &[(u32, u32)] {
+        self.hess.as_ref().map_or(&[], |h| &h.structure)
+    }
+    fn hessian_values(&mut self, x: &[f64], _obj: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        if self.hess.is_some() {
+            self.set(x, Some(lambda));
+            let plan = self.hess.as_ref().expect("checked");
+            self.action.matrix_values(plan, &self.z, values, &mut self.ws);
+        }
+        Ok(())
+    }
+}
+
+/// Ipopt's view of the full system ∇S(Z) = 0.
+struct Full<'a> {
+    action: &'a Action,
+    ws: Workspace,
+    jac: MatrixPlan,
+}
+
+impl Problem for Full<'_> {
+    fn num_variables(&self) -> usize {
+        self.action.layout.len()
+    }
+    fn num_constraints(&self) -> usize {
+        self.action.layout.len()
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.action.gradient(x, false, c, &mut self.ws);
+        Ok(())
+    }
+    fn jacobian_structure(&self) -> &[(u32, u32)] {
+        &self.jac.structure
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.action.matrix_values(&self.jac, x, values, &mut self.ws);
+        Ok(())
+    }
+}
+
+/// Node times of a scene's grid.
+pub fn grid(scene: &Scene) -> (Vec<f64>, f64) {
+    let n = scene.nodes;
+    let dt = (scene.t_end - scene.t_start) / (n as f64 - 1.0);
+    ((0..n).map(|k| scene.t_start + k as f64 * dt).collect(), dt)
+}
+
+/// Build the discrete action of a resolved scene.
+pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
+    let model = Model::build(scene)?;
+    let (_, dt) = grid(scene);
+    let op = SbpOperator::new(scene.operator, scene.nodes, dt)?;
+    Ok(Action::new(model, op, scene.initial_q.clone(), scene.initial_v.clone()))
+}
+
+/// Initial point Z0 and a description of how it was made; also the time-stepping
+/// coordinates when available (for the spurious-solution check).
+fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> (Vec<f64>, String, Option<Vec<Vec<f64>>>) {
+    let lay = &action.layout;
+    let (d, n) = (lay.d, lay.n);
+    let mut z = vec![0.0; lay.len()];
+    // Steps at most the node spacing: a larger step can jump across a thin wall that
+    // the error estimate never sees (free flight is integrated exactly).
+    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step: min_spacing(times), ..OdeOptions::default() };
+    let (q, lam, desc, reference) = match integrate_model(&action.model, &action.q0, &action.v0, times, &opts) {
+        Ok((States { q, lambda, .. }, _)) => (
+            q.clone(),
+            lambda,
+            "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
+            Some(q),
+        ),
+        Err(e) => {
+            warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
+            let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| action.q0[i] + action.v0[i] * (t - times[0])).collect()).collect();
+            (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
+        }
+    };
+    for k in 0..lay.nodes {
+        for i in 0..d {
+            z[lay.qp[k * d + i] as usize] = q[k][i];
+        }
+        for a in 0..n {
+            let zi = lay.lp[k * n + a];
+            if zi != u32::MAX {
+                z[zi as usize] = lam[k][a];
+            }
+        }
+    }
+    // Boundary multipliers: the values that make their rows vanish.
+    let mut ws = action.model.workspace();
+    let mut r = vec![0.0; lay.n_m];
+    action.gradient(&z, true, &mut r, &mut ws);
+    let last = lay.nodes - 1;
+    let row = |zi: u32| zi as usize - lay.n_p;
+    for i in 0..d {
+        z[lay.nu_q1[i] as usize] = -r[row(lay.qm[i])];
+        z[lay.nu_qn[i] as usize] = -r[row(lay.qm[last * d + i])];
+    }
+    for a in 0..n {
+        z[lay.nu_l1[a] as usize] = -r[row(lay.lm[a])];
+        z[lay.nu_ln[a] as usize] = -r[row(lay.lm[last * n + a])];
+    }
+    (z, desc, reference)
+}
+
+/// Solve a resolved scene.
+pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    let t_setup = Instant::now();
+    let action = build_action(scene)?;
+    solve_action(scene, &action, t_setup)
+}
+
+/// Solve with an already built action (`started` marks the beginning of setup).
+pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<Outcome, SolveError> {
+    let (times, _) = grid(scene);
+    let (jac, hess) = matrix_plans(scene, action);
+    let setup_s = started.elapsed().as_secs_f64();
+    let sizes = sizes(scene, action, &jac, hess.as_ref());
+
+    let t_guess = Instant::now();
+    let mut warnings = Vec::new();
+    let (z0, guess_desc, ts_q) = initial_guess(action, &times, &mut warnings);
+    let initial_guess_s = t_guess.elapsed().as_secs_f64();
+
+    let (solution, z) = run_ipopt(scene.formulation, action, jac, hess, &z0, &ipopt_options(scene))?;
+
+    let t_post = Instant::now();
+    let (trajectory, max_eom) = evaluate(action, &times, &z);
+    let diagnostics = diagnose(action, &trajectory, max_eom, &z, solution.max_constraint_violation, scene.formulation, ts_q.as_deref());
+    let postprocess_s = t_post.elapsed().as_secs_f64();
+
+    let status = SolveStatus::classify(solution.status, diagnostics.max_residual);
+    warnings.extend(suspicions(&diagnostics, ts_q.as_deref(), status));
+    Ok(Outcome {
+        scene: scene.name.clone(),
+        status,
+        ipopt_version: ipopt::ipopt_version().to_string(),
+        iterations: solution.iterations,
+        settings: settings(scene, guess_desc),
+        sizes,
+        timings: Timings {
+            setup_s,
+            initial_guess_s,
+            ipopt_total_s: solution.total_seconds,
+            evaluation_s: solution.total_seconds - solution.ipopt_seconds,
+            ipopt_internal_s: solution.ipopt_seconds,
+            postprocess_s,
+            output_s: 0.0,
+        },
+        diagnostics,
+        warnings,
+        history: solution.history,
+        trajectory,
+    })
+}
+
+/// The sparsity plans of the Jacobian of the scene's formulation and, for the reduced
+/// formulation with the exact Hessian, of the Hessian.
+fn matrix_plans(scene: &Scene, action: &Action) -> (MatrixPlan, Option<MatrixPlan>) {
+    let jac_block = match scene.formulation {
+        Formulation::Reduced => Block::ReducedJacobian,
+        Formulation::Full => Block::FullJacobian,
+    };
+    let exact_hessian = scene.formulation == Formulation::Reduced && scene.solver.hessian == HessianMode::Exact;
+    (action.plan(jac_block), exact_hessian.then(|| action.plan(Block::ReducedHessian)))
+}
+
+/// Ipopt's options for a scene: its `[solver]` settings, then the pass-through options.
+fn ipopt_options(scene: &Scene) -> ipopt::Options {
+    let solver = &scene.solver;
+    let pass_through = solver.ipopt.iter().map(|(k, v)| {
+        let v = match v {
+            IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
+            IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
+            IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
+        };
+        (k.clone(), v)
+    });
+    ipopt::Options {
+        tol: solver.tol,
+        constr_viol_tol: solver.tol,
+        max_iter: solver.max_iter,
+        print_level: solver.print_level,
+        linear_solver: solver.linear_solver.clone(),
+        output_file: solver.log_file.clone(),
+        // MUMPS's default scaling (77, automatic) made the very first factorization of
+        // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
+        // on Debian's MUMPS 5.5). The scene's own [solver.ipopt] options come after and
+        // override it.
+        extra: std::iter::once(("mumps_scaling".to_string(), ipopt::OptionValue::Int(0))).chain(pass_through).collect(),
+        ..ipopt::Options::default()
+    }
+}
+
+/// Solve the formulation's square system with Ipopt from `z0`; returns Ipopt's solution
+/// and the whole unknown vector Z (the minus block zero for the reduced formulation).
+fn run_ipopt(
+    formulation: Formulation,
+    action: &Action,
+    jac: MatrixPlan,
+    hess: Option<MatrixPlan>,
+    z0: &[f64],
+    options: &ipopt::Options,
+) -> Result<(ipopt::Solution, Vec<f64>), SolveError> {
+    let lay = &action.layout;
+    Ok(match formulation {
+        Formulation::Reduced => {
+            let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac, hess };
+            let sol = ipopt::solve(&mut p, &z0[..lay.n_p], options)?;
+            let mut z = vec![0.0; lay.len()];
+            z[..lay.n_p].copy_from_slice(&sol.x);
+            (sol, z)
+        }
+        Formulation::Full => {
+            let mut p = Full { action, ws: action.model.workspace(), jac };
+            let sol = ipopt::solve(&mut p, z0, options)?;
+            let z = sol.x.clone();
+            (sol, z)
+        }
+    })
+}
+
+/// The settings a scene is solved with.
+fn settings(scene: &Scene, initial_guess: String) -> Settings {
+    Settings {
+        operator: scene.operator.name().to_string(),
+        nodes: scene.nodes,
+        t_start: scene.t_start,
+        t_end: scene.t_end,
+        formulation: scene.formulation,
+        hessian: scene.solver.hessian,
+        tol: scene.solver.tol,
+        max_iter: scene.solver.max_iter,
+        parameters: scene.parameters.clone(),
+        initial_guess,
+    }
+}
+
+/// The sizes of the system handed to Ipopt.
+fn sizes(scene: &Scene, action: &Action, jac: &MatrixPlan, hess: Option<&MatrixPlan>) -> Sizes {
+    let (lay, model) = (&action.layout, &action.model);
+    let (variables, equations) = match scene.formulation {
+        Formulation::Reduced => (lay.n_p, lay.n_m),
+        Formulation::Full => (lay.len(), lay.len()),
+    };
+    Sizes {
+        nodes: scene.nodes,
+        coordinates: lay.d,
+        constraints: lay.n,
+        walls: model.walls.len(),
+        variables,
+        equations,
+        jacobian_nonzeros: jac.structure.len(),
+        hessian_nonzeros: hess.map_or(0, |h| h.structure.len()),
+        tape_instructions: model.minus_gradient.len() + model.mixed.tape.len(),
+    }
+}
+
+/// Warnings about a solution: far from time stepping, a contact episode more or less
+/// than time stepping (a spurious critical point or a grid too coarse), or Ipopt's
+/// success contradicted by the unscaled residual.
+fn suspicions(diagnostics: &Diagnostics, ts_q: Option<&[Vec<f64>]>, status: SolveStatus) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if let (Some(dist), Some(ts)) = (diagnostics.distance_from_time_stepping, ts_q) {
+        // Scale: the largest range of a coordinate over the time-stepping trajectory.
+        let d = ts.first().map_or(0, Vec::len);
+        let scale = (0..d)
+            .map(|i| {
+                let (lo, hi) = ts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| (lo.min(q[i]), hi.max(q[i])));
+                hi - lo
+            })
+            .fold(0.0_f64, f64::max);
+        if dist > FAR_FROM_TIME_STEPPING * scale {
+            warnings.push(format!(
+                "the solution is {dist:.3e} away from time stepping of the same scene ({:.0} % of the coordinates' range): \
+                 a spurious critical point, an odd-even mode of the operator, or a grid too coarse (refine N or change the operator)",
+                100.0 * dist / scale
+            ));
+        }
+    }
+    if let Some(ts) = &diagnostics.contact_episodes_time_stepping {
+        for ((wall, a), b) in diagnostics.contact_episodes.iter().zip(ts.values()) {
+            if a != b {
+                warnings.push(format!(
+                    "wall `{wall}`: the solution has {a} contact episode(s), time stepping of the same scene has {b}: \
+                     possibly a spurious critical point or a grid too coarse for the wall width (refine N)"
+                ));
+            }
+        }
+    }
+    if let SolveStatus::ResidualTooLarge { residual, .. } = status {
+        warnings.push(format!("Ipopt reported success but the unscaled residual is {residual:.3e} (> 1e-8): not counted as converged"));
+    }
+    warnings
+}
+
+/// The trajectory and the largest equation-of-motion residual
+/// |f + F − Dp − Gᵀλ| over interior nodes (force units).
+fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
+    let lay = &action.layout;
+    let (d, n, nodes) = (lay.d, lay.n, lay.nodes);
+    let model = &action.model;
+    let mut ws = model.workspace();
+    let q: Vec<Vec<f64>> = (0..nodes).map(|k| (0..d).map(|i| z[lay.qp[k * d + i] as usize]).collect()).collect();
+    let v = apply_d(&action.op, &q);
+    let phys: Vec<_> = (0..nodes).map(|k| model.physical(&q[k], &v[k], &mut ws)).collect();
+    let p: Vec<Vec<f64>> = phys.iter().map(|ph| ph.p.clone()).collect();
+    let dp = apply_d(&action.op, &p);
+    let mut lambda = vec![vec![0.0; n]; nodes];
+    let mut max_eom = 0.0_f64;
+    for k in 0..nodes {
+        if k == 0 || k + 1 == nodes {
+            if n > 0 {
+                lambda[k] = end_multipliers(&phys[k], &dp[k]);
+            }
+            continue;
+        }
+        for a in 0..n {
+            lambda[k][a] = z[lay.lp[k * n + a] as usize];
+        }
+        for i in 0..d {
+            let gl: f64 = (0..n).map(|a| lambda[k][a] * phys[k].gv[(a, i)]).sum();
+            max_eom = max_eom.max((phys[k].force[i] - dp[k][i] - gl).abs());
+        }
+    }
+    (Trajectory::from_physical(times, States { q, v, lambda }, &phys), max_eom)
+}
+
+/// D applied to each component of a node-major series.
+fn apply_d(op: &SbpOperator, series: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let nodes = series.len();
+    let d = series.first().map_or(0, Vec::len);
+    let mut out = vec![vec![0.0; d]; nodes];
+    let mut col = vec![0.0; nodes];
+    let mut dcol = vec![0.0; nodes];
+    for i in 0..d {
+        for k in 0..nodes {
+            col[k] = series[k][i];
+        }
+        op.apply(&col, &mut dcol);
+        for k in 0..nodes {
+            out[k][i] = dcol[k];
+        }
+    }
+    out
+}
+
+/// λ at an end node: least-squares solution of that node's equation of motion
+/// `Gᵀ λ = f + F − (Dp)` (its row of ∂S/∂q- was absorbed by a boundary multiplier).
+fn end_multipliers(ph: &crate::model::Physical, dp: &[f64]) -> Vec<f64> {
+    let rhs = nalgebra::DVector::from_iterator(dp.len(), ph.force.iter().zip(dp).map(|(f, d)| f - d));
+    let g = &ph.gv; // n×d
+    let normal = g * g.transpose();
+    match normal.lu().solve(&(g * rhs)) {
+        Some(l) => l.iter().copied().collect(),
+        None => vec![f64::NAN; g.nrows()],
+    }
+}
+
+fn diagnose(
+    action: &Action,
+    tr: &Trajectory,
+    max_eom_residual: f64,
+    z: &[f64],
+    max_residual: f64,
+    formulation: Formulation,
+    ts_q: Option<&[Vec<f64>]>,
+) -> Diagnostics {
+    let lay = &action.layout;
+    let nodes = lay.nodes;
+    let max_abs = |rows: &[Vec<f64>]| rows.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let max_constraint_interior = if nodes > 2 { max_abs(&tr.g[1..nodes - 1]) } else { 0.0 };
+    let constraint_last_node = max_abs(&tr.g[nodes - 1..]);
+    let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
+    let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - total[0]).abs()));
+    let model = &action.model;
+    let max_wall_gap = per_wall(model, |j, _| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max));
+    let episodes = contact_episodes(model, &tr.h);
+    let contact_episodes_time_stepping = ts_q.map(|qs| {
+        let h: Vec<Vec<f64>> = qs.iter().map(|q| model.wall_gaps(q)).collect();
+        contact_episodes(model, &h)
+    });
+    let distance_from_time_stepping =
+        ts_q.map(|qs| qs.iter().zip(&tr.q).flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs())).fold(0.0_f64, f64::max));
+    let max_minus_variable =
+        (formulation == Formulation::Full).then(|| lay.qm.iter().chain(&lay.lm).map(|&i| z[i as usize].abs()).fold(0.0_f64, f64::max));
+    Diagnostics {
+        max_residual,
+        max_eom_residual,
+        max_constraint_interior,
+        constraint_last_node,
+        energy_drift: drift(&total[..nodes.saturating_sub(2).max(1)]),
+        energy_drift_all: drift(&total),
+        max_wall_gap,
+        distance_from_time_stepping,
+        contact_episodes: episodes,
+        contact_episodes_time_stepping,
+        max_minus_variable,
+    }
+}
+
+/// `value(j, wall)` for every wall of the model, keyed by the wall's name in the scene's order.
+fn per_wall<T>(model: &Model, mut value: impl FnMut(usize, &Wall) -> T) -> IndexMap<String, T> {
+    model.walls.iter().enumerate().map(|(j, w)| (w.name.clone(), value(j, w))).collect()
+}
+
+/// Number of contact episodes ([`contact::episodes`]) per wall, given the gaps `h[k][j]`.
+fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> IndexMap<String, usize> {
+    per_wall(model, |j, w| contact::episodes(h.iter().map(|hk| hk[j]), w.width).len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ipopt::Status;
+
+    #[test]
+    fn solve_status_from_ipopt_and_residual() {
+        let ok = SolveStatus::classify(Status::SolveSucceeded, 1e-12);
+        assert_eq!(ok, SolveStatus::Converged { ipopt: Status::SolveSucceeded });
+        assert!(ok.is_converged());
+        assert_eq!((ok.name(), ok.to_string().as_str()), ("converged", "solved to the requested tolerance"));
+
+        let loose = SolveStatus::classify(Status::SolvedToAcceptableLevel, 2e-5);
+        assert!(!loose.is_converged());
+        assert_eq!(loose.ipopt(), Status::SolvedToAcceptableLevel);
+        assert_eq!(loose.name(), "residual_too_large");
+        assert!(loose.to_string().contains("2.000e-5") && loose.to_string().contains("exceeds 1e-8"), "{loose}");
+        assert!(!SolveStatus::classify(Status::SolveSucceeded, f64::NAN).is_converged());
+
+        let failed = SolveStatus::classify(Status::MaximumIterationsExceeded, 1e-12);
+        assert_eq!(failed, SolveStatus::NotConverged { ipopt: Status::MaximumIterationsExceeded });
+        assert_eq!(failed.to_string(), "maximum number of iterations exceeded");
+
+        let json = serde_json::to_value(loose).unwrap();
+        assert_eq!(json["converged"], false);
+        assert_eq!(json["status"], "Solved_To_Acceptable_Level");
+        assert_eq!(json["solve_status"], "residual_too_large");
+        assert_eq!(json["status_text"], loose.to_string());
+    }
+}

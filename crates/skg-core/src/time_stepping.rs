@@ -1,0 +1,60 @@
+//! Time stepping of the Lagrange–d'Alembert equations of a model, independent of the SBP
+//! discretization: used for the solver's initial guess ([`crate::solve`]) and for the
+//! reference solutions ([`crate::reference`]).
+//!
+//! The equations are integrated index-reduced: at each state (q, v) the accelerations
+//! and multipliers solve `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v; −(∂g/∂q) v]`
+//! ([`Model::accelerations`]), and the state `y = (q, v)` is advanced by the DOP853 of
+//! [`crate::ode`] and sampled at the requested times from its dense output. The
+//! constraints `g = 0` then hold only up to the integrator's drift.
+
+use crate::model::{DynamicsError, Model, Workspace};
+use crate::ode::{self, OdeError, OdeOptions, OdeStats, RhsError};
+use crate::trajectory::States;
+
+/// Smallest spacing of increasing sample times (None for fewer than two samples).
+pub fn min_spacing(times: &[f64]) -> Option<f64> {
+    times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).reduce(f64::min)
+}
+
+/// Integrate the index-reduced Lagrange–d'Alembert equations of `model` from `(q0, v0)`
+/// and sample `(q, v, λ)` at `times`.
+pub fn integrate_model(model: &Model, q0: &[f64], v0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<(States, OdeStats), OdeError> {
+    let y0: Vec<f64> = q0.iter().chain(v0).copied().collect();
+    let sol = ode::integrate(rhs(model, &mut model.workspace()), &y0, times, opts)?;
+    let states = split_states(model, &sol.states, times, &mut model.workspace())?;
+    Ok((states, sol.stats))
+}
+
+/// The right-hand side `(q, v) ↦ (v, q̈)` of the index-reduced equations.
+pub fn rhs<'a>(model: &'a Model, ws: &'a mut Workspace) -> impl FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError> + 'a {
+    let d = model.layout.d;
+    move |_, y, dy| {
+        let (a, _) = model.accelerations(&y[..d], &y[d..], ws)?;
+        dy[..d].copy_from_slice(&y[d..]);
+        dy[d..].copy_from_slice(&a);
+        Ok(())
+    }
+}
+
+/// Split integrator states `y = (q, v)` sampled at `times` into coordinates and
+/// velocities, and compute the multipliers λ of the index-reduced equations at each.
+pub fn split_states(model: &Model, states: &[Vec<f64>], times: &[f64], ws: &mut Workspace) -> Result<States, OdeError> {
+    let d = model.layout.d;
+    let mut out =
+        States { q: Vec::with_capacity(states.len()), v: Vec::with_capacity(states.len()), lambda: Vec::with_capacity(states.len()) };
+    for (y, &t) in states.iter().zip(times) {
+        let (_, lambda) = model.accelerations(&y[..d], &y[d..], ws).map_err(|e| OdeError::Rhs { t, error: e.into() })?;
+        out.q.push(y[..d].to_vec());
+        out.v.push(y[d..].to_vec());
+        out.lambda.push(lambda);
+    }
+    Ok(out)
+}
+
+/// A failure of the model's dynamics is a failure of the integrator's right-hand side.
+impl From<DynamicsError> for RhsError {
+    fn from(e: DynamicsError) -> Self {
+        RhsError(e.to_string())
+    }
+}

@@ -1,0 +1,74 @@
+//! The trajectory at the nodes: what a solve ([`crate::solve`]) and a reference
+//! ([`crate::reference`]) produce, in one layout (the columns of the trajectory CSV,
+//! [`crate::output::trajectory_header`]).
+//!
+//! A trajectory is the states `(q, v, λ)` at the sample times plus their physical
+//! columns — energy, the walls' potential, constraint residuals and wall gaps — which
+//! the model computes at each state ([`Model::physical`]).
+
+use serde::Serialize;
+
+use crate::model::{Model, Physical};
+
+/// Values per node: `series[k][i]` is component i at node k.
+pub type NodeSeries = Vec<Vec<f64>>;
+
+/// States at the nodes: coordinates, velocities and multipliers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct States {
+    /// `q[k][i]`: coordinate i at node k.
+    pub q: NodeSeries,
+    /// `v[k][i]`: velocity of coordinate i at node k.
+    pub v: NodeSeries,
+    /// `λ[k][a]`: multiplier of constraint a at node k.
+    pub lambda: NodeSeries,
+}
+
+/// The trajectory at the nodes.
+#[derive(Debug, Clone, Serialize)]
+pub struct Trajectory {
+    /// Node times.
+    pub t: Vec<f64>,
+    /// `q[k][i]`: coordinate i at node k.
+    pub q: NodeSeries,
+    /// `v[k][i]`: velocity i at node k (for a solve, the SBP derivative Dq of the solution).
+    pub v: NodeSeries,
+    /// `λ[k][a]`; for a solve, interior nodes from the solve, end nodes from a
+    /// least-squares solve of the node's equation of motion.
+    pub lambda: NodeSeries,
+    /// v·∂L/∂v − L (without the walls' potential, nonzero only in contact).
+    pub energy: Vec<f64>,
+    /// The walls' potential Σ A Φ(h/σ); `energy + wall_energy` is conserved when no
+    /// friction or other non-conservative force acts.
+    pub wall_energy: Vec<f64>,
+    /// Constraint residuals g^a at each node.
+    pub g: NodeSeries,
+    /// Wall gaps h_j at each node (≤ 0 on the allowed side).
+    pub h: NodeSeries,
+}
+
+impl Trajectory {
+    /// The trajectory of `states` at `times`, its physical columns taken from the
+    /// physical quantities of each node (`phys[k]` at node k).
+    pub fn from_physical(times: &[f64], states: States, phys: &[Physical]) -> Trajectory {
+        let States { q, v, lambda } = states;
+        Trajectory {
+            t: times.to_vec(),
+            q,
+            v,
+            lambda,
+            energy: phys.iter().map(|ph| ph.energy).collect(),
+            wall_energy: phys.iter().map(|ph| ph.wall_energy).collect(),
+            g: phys.iter().map(|ph| ph.g.clone()).collect(),
+            h: phys.iter().map(|ph| ph.h.clone()).collect(),
+        }
+    }
+
+    /// The trajectory of `states` at `times` with its physical columns evaluated by
+    /// `model` at each node.
+    pub fn with_physical_columns(model: &Model, times: &[f64], states: States) -> Trajectory {
+        let mut ws = model.workspace();
+        let phys: Vec<Physical> = states.q.iter().zip(&states.v).map(|(q, v)| model.physical(q, v, &mut ws)).collect();
+        Trajectory::from_physical(times, states, &phys)
+    }
+}

@@ -1,0 +1,1173 @@
+//! Parameter sweeps: a sweep file (TOML) names a base scene and a grid of values; every
+//! point of the grid is solved in its own worker process and appended to `results.csv`
+//! as soon as it finishes.
+//!
+//! * **Grid expansion** ([`SweepFile::expand`]): each `[[grid]]` table is a Cartesian
+//!   product of its axes (the first axis varies slowest); `[[points]]` tables are explicit
+//!   points; `[peer]` adds the time-stepping reference integrator at a ladder of
+//!   tolerances (the peer line of the work-precision chart). Points are numbered in that
+//!   order; a point's **id** is a hash of its canonical string (axis names sorted,
+//!   `name=value` joined by `;`), so it does not depend on the order of the file.
+//! * **Workers**: Debian's Ipopt/MUMPS is not thread-safe (docs/solver.md), so each point runs
+//!   in a child process (`skg-solve sweep-worker JOB.json`), at most `jobs` at once, the
+//!   points with the largest [`estimated_cost`] first. A
+//!   child dies with the driver (`PR_SET_PDEATHSIG`), and Ctrl-C reaches the whole
+//!   process group.
+//! * **Results**: the driver alone appends to `results.csv`, one whole line per
+//!   finished point, flushed and fsync'd. On a rerun a trailing partial line (from a
+//!   kill in the middle of a write) is cut off and points whose id is present are skipped:
+//!   no row is lost or duplicated. A rerun refuses a `results.csv` whose rows come from a
+//!   base scene with other content (their `scene_hash`).
+//! * **Shards**: `--shard k/n` keeps the points whose index is `k−1 mod n`; [`merge`]
+//!   joins the shards' `results.csv` files (of one base scene and one schema).
+//!
+//! **`results.csv`** is a plain CSV (one header line, no comments: `pd.read_csv` reads
+//! it). Its columns ([`results_columns`]), in order:
+//!
+//! * `id`, `index`, `method` (`skg` or `ode`), `rtol` (the peer's tolerance), `nodes`,
+//!   `operator`, `formulation`: the point and its resolved settings;
+//! * one column per grid axis. A scene parameter's column holds the **number** the
+//!   resolved scene has (`sigma = "1/110"` gives `0.00909090909090909`, the shortest text
+//!   that reads back to the same double, as in every numeric column); a setting's column
+//!   (`max_iter`, `hessian`) holds the value as written. A parameter axis with at least
+//!   one value written as an expression also gets the column **`<axis>_expr`**, right
+//!   after it, with every value as written in the sweep file (`1/110`, and `0.005` for a
+//!   plain number); an axis whose values are all plain numbers gets none;
+//! * `converged` (`true`/`false`), `status` (the stable name of the [`PointStatus`]:
+//!   `converged`, `not_converged`, `error`, `crashed`, `timeout`), `solver_status`
+//!   (Ipopt's status name, `ODE_Succeeded` for a peer point, empty when the solver did
+//!   not finish), then `iterations`, `wall_s`, `error_max`, `error_rms`, `error_column`,
+//!   `energy_drift`, `energy_artifact`, `artifacts`, `max_residual`, `message`;
+//! * the provenance ([`Provenance`]): `skg_solve_version`, `schema_version` and
+//!   `scene_hash` (`sha256:…` of the base scene file's content, as the worker read it).
+//!
+//! [`Results::read`] refuses a file of another schema version (or one without the
+//! `schema_version` column, written before it existed) with a message naming the file.
+//!
+//! **`sweep.json`**, beside `results.csv` ([`SweepInfo`]): the sweep's name, the sweep
+//! file, the base scene, `skg_solve_version`, `schema_version`, `scene_hash`, the number
+//! of points of the whole sweep, the shard and the ids of this run's points.
+
+#![warn(missing_docs)]
+// Errors carry file:line:column text, as in the core modules.
+#![allow(clippy::result_large_err)]
+
+mod results;
+mod status;
+
+pub use results::{
+    csv_line, header_names, results_columns, results_row, Column, Provenance, Results, EXPR_SUFFIX, LEADING_COLUMNS, PROVENANCE_COLUMNS,
+    RESULT_COLUMNS,
+};
+pub use status::{PointStatus, UnknownStatus};
+
+use std::collections::{BTreeMap, HashSet, VecDeque};
+use std::fmt;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use indexmap::IndexMap;
+use serde::{Deserialize, Serialize};
+use toml::Spanned;
+
+use skg_core::check::{self, CheckOptions, Comparison, Table};
+use skg_core::output;
+use skg_core::sbp::OperatorKind;
+use skg_core::scenario::{parse_toml, read_toml, Formulation, HessianMode, Location, Origin, Overrides, Scene, SceneFile, TomlError};
+
+/// Errors of a sweep file, a results file or the sweep driver.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    /// A file could not be read or written.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// Bad input at a place in a file (sweep file, or a row of a results file).
+    #[error("{location}: {message}")]
+    Invalid {
+        /// File, line and column where known.
+        location: Location,
+        /// What is wrong.
+        message: String,
+    },
+    /// A results file that cannot be used as asked (layout, schema, other sweep).
+    #[error("{path}: {message}")]
+    Results {
+        /// The results file (or output directory).
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A worker process could not be started or waited for.
+    #[error("cannot start a worker process ({exe}): {source}")]
+    Spawn {
+        /// The worker executable.
+        exe: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// Writing `sweep.json`, a job file or `results.csv` failed.
+    #[error(transparent)]
+    Output(#[from] output::OutputError),
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
+    move |source| SweepError::Io { path: path.to_path_buf(), source }
+}
+
+/// One value in a grid: a number, an integer or a string (an expression, an operator
+/// or formulation name).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum AxisValue {
+    /// A whole number (`nodes = 64`).
+    Int(i64),
+    /// A number (`sigma = 0.005`).
+    Num(f64),
+    /// A string: an expression (`"1/110"`), an operator or formulation name.
+    Str(String),
+}
+
+impl fmt::Display for AxisValue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AxisValue::Int(i) => write!(f, "{i}"),
+            AxisValue::Num(x) => write!(f, "{x:?}"),
+            AxisValue::Str(s) => f.write_str(s.trim()),
+        }
+    }
+}
+
+/// A grid axis: one value or a list of values.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum AxisValues {
+    /// A single value (`sigma = "1/110"`).
+    One(AxisValue),
+    /// A list of values (`nodes = [64, 128]`).
+    Many(Vec<AxisValue>),
+}
+
+impl AxisValues {
+    fn values(&self) -> Vec<AxisValue> {
+        match self {
+            AxisValues::One(v) => vec![v.clone()],
+            AxisValues::Many(v) => v.clone(),
+        }
+    }
+}
+
+/// Where the errors of a point are measured against.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub enum ReferenceSpec {
+    /// A reference CSV (`skg-solve reference`), compared by time.
+    File(PathBuf),
+    /// The scene's Lagrange–d'Alembert equations integrated on the point's own grid at
+    /// a tight tolerance ([`skg_core::reference::regularized`], rtol = atol = 1e-12).
+    Integrate,
+}
+
+/// `[sweep]`: what is swept and how results are judged.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepMeta {
+    /// Base scene file, relative to the sweep file.
+    pub scene: Spanned<String>,
+    /// Name (default: the sweep file's name).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Reference to measure errors against: a CSV path relative to the sweep file, or
+    /// `"integrate"`. Without it the error columns stay empty.
+    #[serde(default)]
+    pub reference: Option<Spanned<String>>,
+    /// Columns compared with the reference (default: the scene's coordinates).
+    #[serde(default)]
+    pub compare: Option<Vec<String>>,
+    /// Nodes at the end excluded from errors and the energy artifact (default 2: the
+    /// benign boundary nodes, docs/solver.md).
+    #[serde(default)]
+    pub skip_last: Option<usize>,
+    /// Tolerance on the energy artifact: above it a converged point counts as
+    /// "converged with energy artifacts" (default 1e-5, relative; see [`skg_core::tune`]).
+    #[serde(default)]
+    pub artifact_tol: Option<f64>,
+    /// Keep each point's `trajectory.csv` and `summary.json` under `points/<id>/`.
+    #[serde(default)]
+    pub keep_trajectories: bool,
+    /// Wall-time limit of one point in seconds: a worker still running then is killed and
+    /// the point recorded as [`PointStatus::TimedOut`] (default: no limit).
+    #[serde(default)]
+    pub timeout: Option<f64>,
+}
+
+/// `[peer]`: the time-stepping reference integrator at a ladder of tolerances.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PeerSpec {
+    /// Relative tolerances (the absolute tolerance is the same).
+    pub tolerances: Vec<f64>,
+    /// Output grid of the peer runs (default: the base scene's nodes).
+    #[serde(default)]
+    pub nodes: Option<usize>,
+}
+
+/// The sweep file as written.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    /// `[sweep]`.
+    pub sweep: SweepMeta,
+    /// Cartesian products (one per `[[grid]]` table).
+    #[serde(default)]
+    pub grid: Vec<Spanned<IndexMap<String, AxisValues>>>,
+    /// Explicit points (one per `[[points]]` table).
+    #[serde(default)]
+    pub points: Vec<Spanned<IndexMap<String, AxisValue>>>,
+    /// `[peer]`, the time-stepping ladder.
+    #[serde(default)]
+    pub peer: Option<Spanned<PeerSpec>>,
+    /// Path and text of the sweep file, for error positions.
+    #[serde(skip)]
+    pub origin: Origin,
+}
+
+/// Axes that are not scene parameters.
+pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "hessian", "max_iter"];
+
+/// How a point is computed.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub enum Method {
+    /// The SKG action solved by Ipopt.
+    Skg,
+    /// The time-stepping reference integrator (DOP853, [`skg_core::reference::regularized`])
+    /// at a relative tolerance (absolute tolerance the same).
+    Ode {
+        /// Relative (and absolute) tolerance.
+        rtol: f64,
+    },
+}
+
+impl Method {
+    /// The `method` column: `skg` or `ode`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Skg => "skg",
+            Method::Ode { .. } => "ode",
+        }
+    }
+}
+
+/// One point of a sweep.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Point {
+    /// Position in the expanded sweep (0-based).
+    pub index: usize,
+    /// Axis name → value as written (canonical text).
+    pub values: Vec<(String, String)>,
+    /// Axis name → value in the resolved scene, for the scene-parameter axes (`1/110` →
+    /// 0.00909…), filled by [`SweepFile::expand`]. Not part of the id.
+    #[serde(default)]
+    pub evaluated: Vec<(String, f64)>,
+    /// How the point is computed.
+    pub method: Method,
+}
+
+impl Point {
+    /// Canonical text: `method` first, then the axes sorted by name.
+    pub fn canonical(&self) -> String {
+        let mut parts = vec![match &self.method {
+            Method::Skg => format!("method={}", self.method.name()),
+            Method::Ode { rtol } => format!("method={};rtol={rtol:?}", self.method.name()),
+        }];
+        let sorted: BTreeMap<&str, &str> = self.values.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+        parts.extend(sorted.iter().map(|(k, v)| format!("{k}={v}")));
+        parts.join(";")
+    }
+
+    /// Stable id: FNV-1a 64 of the canonical text, as 16 hex digits.
+    pub fn id(&self) -> String {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in self.canonical().bytes() {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+
+    /// The value of an axis as written, if the point sets it.
+    pub fn value(&self, axis: &str) -> Option<&str> {
+        self.values.iter().find(|(k, _)| k == axis).map(|(_, v)| v.as_str())
+    }
+
+    /// The value of a scene-parameter axis in the resolved scene (see [`Point::evaluated`]).
+    pub fn evaluated(&self, axis: &str) -> Option<f64> {
+        self.evaluated.iter().find(|(k, _)| k == axis).map(|&(_, v)| v)
+    }
+
+    /// The scene overrides this point stands for.
+    pub fn overrides(&self) -> Result<Overrides, String> {
+        let mut ov = Overrides::default();
+        for (k, v) in &self.values {
+            match k.as_str() {
+                "nodes" => ov.nodes = Some(v.parse().map_err(|_| format!("nodes = {v}: expected a whole number"))?),
+                "operator" => ov.operator = Some(v.parse::<OperatorKind>().map_err(|e| format!("operator = {v}: {e}"))?),
+                "formulation" => ov.formulation = Some(v.parse::<Formulation>().map_err(|e| e.to_string())?),
+                "hessian" => {
+                    ov.hessian = Some(match v.to_ascii_lowercase().as_str() {
+                        "zero" => HessianMode::Zero,
+                        "exact" => HessianMode::Exact,
+                        _ => return Err(format!("hessian = {v}: expected `zero` or `exact`")),
+                    })
+                }
+                "max_iter" => ov.max_iter = Some(v.parse().map_err(|_| format!("max_iter = {v}: expected a whole number"))?),
+                _ => ov.set.push((k.clone(), v.clone())),
+            }
+        }
+        Ok(ov)
+    }
+}
+
+/// A shard `k/n` (1-based k).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard's number, 1 ≤ k ≤ n.
+    pub k: usize,
+    /// The number of shards.
+    pub n: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("bad shard `{s}`: expected k/n with 1 ≤ k ≤ n, e.g. 2/8");
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let (k, n): (usize, usize) = (k.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+        if n == 0 || k == 0 || k > n {
+            return Err(bad());
+        }
+        Ok(Shard { k, n })
+    }
+}
+
+impl Shard {
+    /// Whether the point with this index belongs to the shard.
+    pub fn contains(&self, index: usize) -> bool {
+        index % self.n == self.k - 1
+    }
+}
+
+/// The expanded sweep.
+#[derive(Debug, Clone)]
+pub struct Expanded {
+    /// The points, in order (grids, explicit points, peer ladder).
+    pub points: Vec<Point>,
+    /// Rough relative cost of each point (see [`estimated_cost`]), by index.
+    pub costs: Vec<f64>,
+    /// Grid axes in order of first appearance.
+    pub axes: Vec<String>,
+    /// The scene-parameter axes with some value written as an expression (they get an
+    /// `<axis>_expr` column), in the order of `axes`.
+    pub expression_axes: Vec<String>,
+    /// Identical points given twice (their later copies were dropped).
+    pub duplicates: usize,
+    /// SHA-256 of the base scene file's content (`sha256:…`).
+    pub scene_hash: String,
+}
+
+impl Expanded {
+    /// The columns of this sweep's `results.csv`.
+    pub fn columns(&self) -> Vec<Column> {
+        results_columns(&self.axes, &self.expression_axes)
+    }
+}
+
+/// Whether an axis value as written is a plain number (not an expression).
+fn is_plain_number(written: &str) -> bool {
+    written.trim().parse::<f64>().is_ok()
+}
+
+/// The scene-parameter axes (in `axes` order) with some value that is not a plain number.
+fn expression_axes(axes: &[String], points: &[Point]) -> Vec<String> {
+    let written_as_expression =
+        |axis: &str| points.iter().any(|p| p.evaluated(axis).is_some() && p.value(axis).is_some_and(|v| !is_plain_number(v)));
+    axes.iter().filter(|a| written_as_expression(a)).cloned().collect()
+}
+
+/// Values of the scene-parameter axes of `point` in its resolved scene.
+fn evaluated_parameters(point: &Point, scene: &Scene) -> Vec<(String, f64)> {
+    point.values.iter().filter_map(|(axis, _)| scene.parameters.get(axis).map(|&v| (axis.clone(), v))).collect()
+}
+
+impl SweepFile {
+    /// Read and deserialize a sweep file.
+    pub fn load(path: &Path) -> Result<SweepFile, SweepError> {
+        Self::from_toml(read_toml(path))
+    }
+
+    /// Deserialize a sweep file; `path` labels error messages and anchors relative paths.
+    pub fn parse(text: &str, path: &str) -> Result<SweepFile, SweepError> {
+        Self::from_toml(parse_toml(text, path))
+    }
+
+    fn from_toml(read: Result<(SweepFile, Origin), TomlError>) -> Result<SweepFile, SweepError> {
+        match read {
+            Ok((mut f, origin)) => {
+                f.origin = origin;
+                Ok(f)
+            }
+            Err(TomlError::Io { path, error }) => Err(SweepError::Io { path, source: error }),
+            Err(TomlError::Parse { location, mut message }) => {
+                if message.contains("expected a sequence") {
+                    message.push_str(" (write each grid as `[[grid]]` and each explicit point as `[[points]]`)");
+                }
+                Err(SweepError::Invalid { location, message })
+            }
+        }
+    }
+
+    fn dir(&self) -> PathBuf {
+        Path::new(&self.origin.path).parent().map_or(PathBuf::from("."), Path::to_path_buf)
+    }
+
+    fn invalid<T>(&self, v: &Spanned<T>, message: impl Into<String>) -> SweepError {
+        SweepError::Invalid { location: self.origin.locate_in(v, None), message: message.into() }
+    }
+
+    /// Location of `key = …` inside the table spanned by `table` (falls back to the
+    /// table's own location).
+    fn locate_key<T>(&self, table: &Spanned<T>, key: &str) -> Location {
+        let start = table.span().start.min(self.origin.text.len());
+        let end = table.span().end.min(self.origin.text.len()).max(start);
+        let body = &self.origin.text[start..end];
+        let mut offset = 0;
+        for line in body.split_inclusive('\n') {
+            let t = line.trim_start();
+            let bare = t.strip_prefix(key).is_some_and(|r| r.trim_start().starts_with('='));
+            let quoted = t.strip_prefix(&format!("\"{key}\"")).is_some_and(|r| r.trim_start().starts_with('='));
+            if bare || quoted {
+                return self.origin.locate(start + offset + (line.len() - t.len()));
+            }
+            offset += line.len();
+        }
+        self.origin.locate_in(table, None)
+    }
+
+    /// Path of the base scene.
+    pub fn scene_path(&self) -> PathBuf {
+        self.dir().join(self.sweep.scene.get_ref())
+    }
+
+    /// The sweep's name: `[sweep] name`, else the sweep file's name without `.toml`.
+    pub fn name(&self) -> String {
+        self.sweep
+            .name
+            .clone()
+            .unwrap_or_else(|| Path::new(&self.origin.path).file_stem().map_or("sweep".into(), |s| s.to_string_lossy().into_owned()))
+    }
+
+    /// Where errors are measured against, if anywhere (`[sweep] reference`).
+    pub fn reference(&self) -> Option<ReferenceSpec> {
+        self.sweep.reference.as_ref().map(|r| {
+            if r.get_ref().eq_ignore_ascii_case("integrate") {
+                ReferenceSpec::Integrate
+            } else {
+                ReferenceSpec::File(self.dir().join(r.get_ref()))
+            }
+        })
+    }
+
+    /// End nodes left out of errors and the energy artifact (default 2).
+    pub fn skip_last(&self) -> usize {
+        self.sweep.skip_last.unwrap_or(2)
+    }
+
+    /// Tolerance on the energy artifact (default [`skg_core::tune::DEFAULT_ARTIFACT_TOL`]).
+    pub fn artifact_tol(&self) -> f64 {
+        self.sweep.artifact_tol.unwrap_or(skg_core::tune::DEFAULT_ARTIFACT_TOL)
+    }
+
+    /// Expand the grids, explicit points and peer ladder, and check every point against
+    /// the base scene (parameter names, values, node counts) before anything runs.
+    pub fn expand(&self) -> Result<Expanded, SweepError> {
+        let base = SceneFile::load(&self.scene_path()).map_err(|e| SweepError::Invalid {
+            location: self.origin.locate_in(&self.sweep.scene, None),
+            message: format!("base scene: {e}"),
+        })?;
+        if let Some(tol) = self.sweep.artifact_tol {
+            if !(tol > 0.0 && tol.is_finite()) {
+                return Err(SweepError::Invalid {
+                    location: self.origin.whole(),
+                    message: format!("sweep.artifact_tol must be a positive number, got {tol}"),
+                });
+            }
+        }
+        if let Some(t) = self.sweep.timeout {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(SweepError::Invalid {
+                    location: self.origin.whole(),
+                    message: format!("sweep.timeout must be a positive number of seconds, got {t}"),
+                });
+            }
+        }
+        if let Some(ReferenceSpec::File(p)) = self.reference() {
+            if !p.is_file() {
+                let r = self.sweep.reference.as_ref().expect("reference given");
+                return Err(self.invalid(
+                    r,
+                    format!(
+                        "reference file {} does not exist (give a CSV written by `skg-solve reference`, or \"integrate\")",
+                        p.display()
+                    ),
+                ));
+            }
+        }
+        // (axis values, method, location in the sweep file) of each point, in order.
+        type Raw = (Vec<(String, String)>, Method, Location);
+        let mut raw: Vec<Raw> = Vec::new();
+        let mut axes: Vec<String> = Vec::new();
+        let check_axis = |name: &str, at: &dyn Fn(String) -> SweepError| -> Result<(), SweepError> {
+            if SETTING_AXES.contains(&name) || base.parameters.contains_key(name) {
+                Ok(())
+            } else {
+                let params: Vec<&str> = base.parameters.keys().map(String::as_str).collect();
+                Err(at(format!(
+                    "`{name}` is neither a setting ({}) nor a parameter of the base scene (parameters: {})",
+                    SETTING_AXES.join(", "),
+                    if params.is_empty() { "none".into() } else { params.join(", ") }
+                )))
+            }
+        };
+        for g in &self.grid {
+            let mut combos: Vec<Vec<(String, String)>> = vec![Vec::new()];
+            for (axis, values) in g.get_ref() {
+                let at = |m: String| SweepError::Invalid { location: self.locate_key(g, axis), message: format!("[[grid]]: {m}") };
+                check_axis(axis, &at)?;
+                let vals = values.values();
+                if vals.is_empty() {
+                    return Err(at(format!("axis `{axis}` has no values")));
+                }
+                if !axes.contains(axis) {
+                    axes.push(axis.clone());
+                }
+                combos = combos
+                    .into_iter()
+                    .flat_map(|c| {
+                        vals.iter().map(move |v| {
+                            let mut c = c.clone();
+                            c.push((axis.clone(), v.to_string()));
+                            c
+                        })
+                    })
+                    .collect();
+            }
+            let loc = self.origin.locate_in(g, None);
+            raw.extend(combos.into_iter().map(|c| (c, Method::Skg, loc.clone())));
+        }
+        for p in &self.points {
+            let mut c = Vec::new();
+            for (axis, v) in p.get_ref() {
+                let at = |m: String| SweepError::Invalid { location: self.locate_key(p, axis), message: format!("[[points]]: {m}") };
+                check_axis(axis, &at)?;
+                if !axes.contains(axis) {
+                    axes.push(axis.clone());
+                }
+                c.push((axis.clone(), v.to_string()));
+            }
+            raw.push((c, Method::Skg, self.origin.locate_in(p, None)));
+        }
+        if let Some(spanned) = &self.peer {
+            let peer = spanned.get_ref();
+            for &rtol in &peer.tolerances {
+                if !(rtol > 0.0 && rtol < 1.0) {
+                    return Err(SweepError::Invalid {
+                        location: self.origin.whole(),
+                        message: format!("peer.tolerances: {rtol} is not in (0, 1)"),
+                    });
+                }
+                let mut c = Vec::new();
+                if let Some(n) = peer.nodes {
+                    c.push(("nodes".to_string(), n.to_string()));
+                }
+                raw.push((c, Method::Ode { rtol }, self.origin.locate_in(spanned, None)));
+            }
+        }
+        if raw.is_empty() {
+            return Err(SweepError::Invalid {
+                location: self.origin.whole(),
+                message: "the sweep has no points: add a [[grid]], [[points]] or [peer] table".into(),
+            });
+        }
+        let mut points = Vec::new();
+        let mut costs = Vec::new();
+        let mut seen = HashSet::new();
+        let mut duplicates = 0;
+        for (values, method, loc) in raw {
+            let mut p = Point { index: points.len(), values, evaluated: Vec::new(), method };
+            // Validate by resolving the scene with the point's overrides (cheap: no model).
+            let ov = p.overrides().map_err(|m| SweepError::Invalid { location: loc.clone(), message: m })?;
+            let scene = base
+                .clone()
+                .resolve(&ov)
+                .map_err(|e| SweepError::Invalid { location: loc.clone(), message: format!("point {}: {e}", p.canonical()) })?;
+            if seen.insert(p.id()) {
+                p.evaluated = evaluated_parameters(&p, &scene);
+                costs.push(estimated_cost(&scene, &p.method));
+                points.push(p);
+            } else {
+                duplicates += 1;
+            }
+        }
+        let expression_axes = expression_axes(&axes, &points);
+        let expanded = Expanded { points, costs, axes, expression_axes, duplicates, scene_hash: base.origin.content_hash() };
+        self.check_column_names(&expanded.columns())?;
+        Ok(expanded)
+    }
+
+    /// Refuse axes whose column would share its name with another column of
+    /// results.csv (e.g. a parameter `sigma_expr` beside the expressions of `sigma`).
+    fn check_column_names(&self, columns: &[Column]) -> Result<(), SweepError> {
+        let mut seen = HashSet::new();
+        for name in header_names(columns) {
+            if !seen.insert(name.clone()) {
+                return Err(SweepError::Invalid {
+                    location: self.origin.whole(),
+                    message: format!("two columns of results.csv would be called `{name}`: rename that scene parameter"),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Rough relative cost of a point, used only to start the expensive points first (so
+/// that a sweep does not end with one long point running alone): N × the operator's
+/// stencil width × 2 for the full formulation; a time-stepping peer point counts N/10.
+pub fn estimated_cost(scene: &Scene, method: &Method) -> f64 {
+    let n = scene.nodes as f64;
+    match method {
+        Method::Ode { .. } => n / 10.0,
+        Method::Skg => {
+            let width = match scene.operator {
+                OperatorKind::Sbp121 => 1.0,
+                OperatorKind::Sbp242 => 2.0,
+                _ => 3.0,
+            };
+            let full = if scene.formulation == Formulation::Full { 2.0 } else { 1.0 };
+            n * width * full
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Worker side.
+
+/// What a worker process is asked to do.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Job {
+    /// The base scene file (absolute path).
+    pub scene: PathBuf,
+    /// The point to compute.
+    pub point: Point,
+    /// Where errors are measured against, if anywhere.
+    pub reference: Option<ReferenceSpec>,
+    /// Columns compared with the reference (None: the scene's coordinates).
+    pub compare: Option<Vec<String>>,
+    /// End nodes left out of errors and the energy artifact.
+    pub skip_last: usize,
+    /// Where to keep trajectory.csv and summary.json (None: not kept).
+    pub keep_dir: Option<PathBuf>,
+}
+
+/// What a worker reports about one point (the columns of its row in results.csv).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Record {
+    /// How the point ended.
+    pub status: PointStatus,
+    /// The solver's own status name: Ipopt's (`Solve_Succeeded`,
+    /// `Maximum_Iterations_Exceeded`, …) or `ODE_Succeeded` for the time-stepping peer;
+    /// empty when the solver did not finish.
+    pub solver_status: String,
+    /// Ipopt iterations.
+    pub iterations: Option<usize>,
+    /// Wall time of the computation inside the worker (scene setup, guess, solve).
+    pub wall_s: Option<f64>,
+    /// Node count of the resolved scene.
+    pub nodes: Option<usize>,
+    /// SBP operator of the resolved scene (SKG points).
+    pub operator: Option<String>,
+    /// Formulation of the resolved scene (SKG points).
+    pub formulation: Option<String>,
+    /// Largest max-abs error against the reference over the compared columns.
+    pub error_max: Option<f64>,
+    /// RMS error of that column.
+    pub error_rms: Option<f64>,
+    /// The column with the largest error.
+    pub error_column: Option<String>,
+    /// max |E_k − E_1| over all but the last two nodes.
+    pub energy_drift: Option<f64>,
+    /// The relative energy artifact ([`skg_core::tune::energy_artifact`]).
+    pub energy_artifact: Option<f64>,
+    /// Unscaled max residual of the square system.
+    pub max_residual: Option<f64>,
+    /// SHA-256 of the base scene file as the worker read it (None: not read).
+    pub scene_hash: Option<String>,
+    /// Warnings and errors.
+    pub message: String,
+}
+
+impl Record {
+    /// A record with this status and nothing measured yet.
+    pub fn new(status: PointStatus, message: String) -> Record {
+        Record {
+            status,
+            solver_status: String::new(),
+            iterations: None,
+            wall_s: None,
+            nodes: None,
+            operator: None,
+            formulation: None,
+            error_max: None,
+            error_rms: None,
+            error_column: None,
+            energy_drift: None,
+            energy_artifact: None,
+            max_residual: None,
+            scene_hash: None,
+            message,
+        }
+    }
+}
+
+/// Run one point in this process (the body of `skg-solve sweep-worker`).
+pub fn run_job(job: &Job) -> Record {
+    match run_job_inner(job) {
+        Ok(r) => r,
+        Err(message) => Record::new(PointStatus::Error, message),
+    }
+}
+
+fn run_job_inner(job: &Job) -> Result<Record, String> {
+    let ov = job.point.overrides()?;
+    let start = Instant::now();
+    let file = SceneFile::load(&job.scene).map_err(|e| e.to_string())?;
+    let scene_hash = file.origin.content_hash();
+    let scene = file.resolve(&ov).map_err(|e| e.to_string())?;
+    let mut rec = Record { nodes: Some(scene.nodes), scene_hash: Some(scene_hash), ..Record::new(PointStatus::Error, String::new()) };
+    let compare_cols = job.compare.clone().unwrap_or_else(|| scene.coordinates.clone());
+    let (trajectory, ode_csv) = match job.point.method {
+        Method::Skg => {
+            rec.operator = Some(scene.operator.name().to_string());
+            rec.formulation = Some(scene.formulation.to_string());
+            let mut outcome = skg_core::solve::solve_scene(&scene).map_err(|e| e.to_string())?;
+            rec.wall_s = Some(start.elapsed().as_secs_f64());
+            rec.status = if outcome.converged() { PointStatus::Converged } else { PointStatus::NotConverged };
+            rec.solver_status = outcome.status.ipopt().name().to_string();
+            rec.iterations = Some(outcome.iterations);
+            let d = &outcome.diagnostics;
+            rec.energy_drift = Some(d.energy_drift);
+            rec.max_residual = Some(d.max_residual);
+            rec.message = outcome.warnings.join(" | ");
+            if let Some(dir) = &job.keep_dir {
+                output::write_outcome(dir, &mut outcome, &scene).map_err(|e| e.to_string())?;
+            }
+            (outcome.trajectory, None)
+        }
+        Method::Ode { rtol } => {
+            let (times, _) = skg_core::solve::grid(&scene);
+            let opts = skg_core::reference::ReferenceOptions { rtol, atol: rtol };
+            let r = skg_core::reference::regularized(&scene, &times, &opts).map_err(|e| e.to_string())?;
+            rec.wall_s = Some(start.elapsed().as_secs_f64());
+            rec.status = PointStatus::Converged;
+            rec.solver_status = "ODE_Succeeded".into();
+            (r.trajectory, Some(format!("time stepping, rtol {rtol:e}")))
+        }
+    };
+    rec.energy_artifact = Some(skg_core::tune::energy_artifact(&scene, &trajectory, job.skip_last).value);
+    let solution = Table::of_trajectory(&scene, &trajectory);
+    if let Some(r) = &job.reference {
+        match reference_errors(&scene, r, &solution, &compare_cols, job.skip_last) {
+            Ok(c) => {
+                rec.error_max = Some(c.max_abs);
+                rec.error_rms = c.columns.iter().find(|e| e.column == c.worst_column).map(|e| e.rms);
+                rec.error_column = Some(c.worst_column);
+            }
+            Err(m) => {
+                if !rec.message.is_empty() {
+                    rec.message.push_str(" | ");
+                }
+                rec.message.push_str(&format!("reference comparison failed: {m}"));
+            }
+        }
+    }
+    if let (Some(dir), Some(comment)) = (&job.keep_dir, ode_csv) {
+        output::write_csv(&dir.join("trajectory.csv"), Some(&comment), &solution.columns, &solution.rows).map_err(|e| e.to_string())?;
+    }
+    Ok(rec)
+}
+
+/// Errors of a solution against the sweep's reference on `columns`, the last
+/// `skip_last` nodes excluded (errors go into the record's message, never abort the
+/// point).
+fn reference_errors(
+    scene: &Scene,
+    reference: &ReferenceSpec,
+    solution: &Table,
+    columns: &[String],
+    skip_last: usize,
+) -> Result<Comparison, String> {
+    let reference = match reference {
+        ReferenceSpec::File(p) => Table::read(p).map_err(|e| e.to_string())?,
+        ReferenceSpec::Integrate => {
+            let r = skg_core::reference::regularized(scene, &solution.times(), &skg_core::reference::ReferenceOptions::default())
+                .map_err(|e| e.to_string())?;
+            Table::of_trajectory(scene, &r.trajectory)
+        }
+    };
+    let opts = CheckOptions { skip_last, columns: Some(columns.to_vec()) };
+    check::compare(solution, &reference, &opts).map_err(|e| e.to_string())
+}
+
+// ---------------------------------------------------------------------------------------
+// Driver.
+
+/// Options of [`run_sweep`].
+#[derive(Debug, Clone)]
+pub struct SweepOptions {
+    /// Output directory (results.csv, sweep.json, points/).
+    pub out_dir: PathBuf,
+    /// Worker processes at once.
+    pub jobs: usize,
+    /// Run only this shard's points.
+    pub shard: Option<Shard>,
+    /// The executable that runs `sweep-worker JOB.json` (the skg-solve binary).
+    pub worker_exe: PathBuf,
+    /// Show a progress bar (hidden anyway when stderr is not a terminal).
+    pub progress: bool,
+}
+
+/// Summary of a sweep run.
+#[derive(Debug, Clone, Default)]
+pub struct SweepReport {
+    /// Points of the whole sweep.
+    pub total: usize,
+    /// Points of this shard (all points without a shard).
+    pub in_shard: usize,
+    /// Already in results.csv when the run started.
+    pub skipped: usize,
+    /// Points computed by this run.
+    pub ran: usize,
+    /// Points of this run that did not converge (any status but converged).
+    pub failed: usize,
+    /// Identical points given twice in the sweep file (run once).
+    pub duplicates: usize,
+    /// The results file.
+    pub results: PathBuf,
+    /// Wall time of the run in seconds.
+    pub wall_s: f64,
+}
+
+struct Running {
+    child: Child,
+    started: Instant,
+    point: Point,
+    job_path: PathBuf,
+    result_path: PathBuf,
+    err_path: PathBuf,
+}
+
+/// `sweep.json`, written beside results.csv: what was swept, from which scene content,
+/// by which skg-solve (read by [`merge`] to find missing points).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SweepInfo {
+    /// The sweep's name.
+    pub name: String,
+    /// The sweep file as given.
+    pub sweep_file: String,
+    /// The base scene file.
+    pub scene: String,
+    /// skg-solve version, schema version and the base scene's content hash.
+    #[serde(flatten)]
+    pub provenance: Provenance,
+    /// Points of the whole sweep.
+    pub total_points: usize,
+    /// `k/n` when run as a shard.
+    pub shard: Option<String>,
+    /// Ids of this run's points (the shard's, or all).
+    pub ids: Vec<String>,
+}
+
+/// Run (or resume) a sweep.
+pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, SweepError> {
+    let started = Instant::now();
+    let expanded = file.expand()?;
+    let columns = expanded.columns();
+    let provenance = Provenance::current(expanded.scene_hash.clone());
+    let dir = &opts.out_dir;
+    std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+    // Worker files left by an interrupted run are stale: start from an empty .work.
+    let work = dir.join(".work");
+    let _ = std::fs::remove_dir_all(&work);
+    std::fs::create_dir_all(&work).map_err(io_err(&work))?;
+    let results_path = dir.join("results.csv");
+    let (mut results, done) = results::open_results(&results_path, &header_names(&columns), &provenance.scene_hash)?;
+
+    let mine: Vec<Point> = expanded.points.iter().filter(|p| opts.shard.map_or(true, |s| s.contains(p.index))).cloned().collect();
+    let info = SweepInfo {
+        name: file.name(),
+        sweep_file: file.origin.path.clone(),
+        scene: file.scene_path().display().to_string(),
+        provenance: provenance.clone(),
+        total_points: expanded.points.len(),
+        shard: opts.shard.map(|s| format!("{}/{}", s.k, s.n)),
+        ids: mine.iter().map(Point::id).collect(),
+    };
+    output::write_json(&dir.join("sweep.json"), &info)?;
+    // Largest first (stable: equal costs keep the file's order); rows carry their index.
+    let mut todo: Vec<Point> = mine.iter().filter(|p| !done.contains(&p.id())).cloned().collect();
+    todo.sort_by(|a, b| expanded.costs[b.index].total_cmp(&expanded.costs[a.index]));
+    let mut queue: VecDeque<Point> = todo.into();
+    let mut report = SweepReport {
+        total: expanded.points.len(),
+        in_shard: mine.len(),
+        skipped: mine.len() - queue.len(),
+        duplicates: expanded.duplicates,
+        results: results_path.clone(),
+        ..SweepReport::default()
+    };
+
+    let bar = progress_bar(opts.progress, mine.len(), report.skipped);
+    let jobs = opts.jobs.max(1);
+    let mut running: Vec<Running> = Vec::new();
+    let artifact_tol = file.artifact_tol();
+    let timeout = file.sweep.timeout;
+    let reference = file.reference();
+    let scene_path = std::path::absolute(file.scene_path()).unwrap_or(file.scene_path());
+    while !queue.is_empty() || !running.is_empty() {
+        while running.len() < jobs {
+            let Some(point) = queue.pop_front() else { break };
+            let id = point.id();
+            let job = Job {
+                scene: scene_path.clone(),
+                point,
+                reference: reference.clone(),
+                compare: file.sweep.compare.clone(),
+                skip_last: file.skip_last(),
+                keep_dir: file.sweep.keep_trajectories.then(|| dir.join("points").join(&id)),
+            };
+            running.push(start_worker(&opts.worker_exe, &work, job)?);
+        }
+        std::thread::sleep(Duration::from_millis(5));
+        let mut k = 0;
+        while k < running.len() {
+            let exit = running[k].child.try_wait().map_err(|e| SweepError::Spawn { exe: opts.worker_exe.clone(), source: e })?;
+            let rec = match (exit, timeout) {
+                (Some(exit), _) => finished_record(&running[k], exit),
+                (None, Some(t)) if running[k].started.elapsed().as_secs_f64() > t => timed_out_record(&mut running[k], t),
+                (None, _) => {
+                    k += 1;
+                    continue;
+                }
+            };
+            let r = running.swap_remove(k);
+            let line = csv_line(&results_row(&columns, &r.point, &rec, artifact_tol, &provenance));
+            results.write_all(&line).map_err(io_err(&results_path))?;
+            results.sync_data().map_err(io_err(&results_path))?;
+            for p in [&r.job_path, &r.result_path, &r.err_path] {
+                let _ = std::fs::remove_file(p);
+            }
+            report.ran += 1;
+            if !rec.status.is_converged() {
+                report.failed += 1;
+                bar.set_message(format!("{} failed", report.failed));
+            }
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    let _ = std::fs::remove_dir(&work);
+    report.wall_s = started.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// The progress bar of a run over `len` points of which `done` are already done.
+fn progress_bar(visible: bool, len: usize, done: usize) -> indicatif::ProgressBar {
+    let bar = if visible { indicatif::ProgressBar::new(len as u64) } else { indicatif::ProgressBar::hidden() };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} points, {msg}, {elapsed} elapsed, ETA {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_position(done as u64);
+    bar.reset_eta();
+    bar.set_message("0 failed");
+    bar
+}
+
+/// Write the job file into `work` and start a worker on it.
+fn start_worker(exe: &Path, work: &Path, job: Job) -> Result<Running, SweepError> {
+    let id = job.point.id();
+    let job_path = work.join(format!("{id}.job.json"));
+    let result_path = work.join(format!("{id}.result.json"));
+    let err_path = work.join(format!("{id}.stderr"));
+    let _ = std::fs::remove_file(&result_path);
+    output::write_json(&job_path, &job)?;
+    let child = spawn_worker(exe, &job_path, &result_path, &err_path)?;
+    Ok(Running { child, started: Instant::now(), point: job.point, job_path, result_path, err_path })
+}
+
+/// The record of a worker that exited: its result file, or a crash with the last lines
+/// of its stderr.
+fn finished_record(r: &Running, exit: std::process::ExitStatus) -> Record {
+    match std::fs::read_to_string(&r.result_path).ok().and_then(|t| serde_json::from_str::<Record>(&t).ok()) {
+        Some(rec) => rec,
+        None => {
+            let stderr = std::fs::read_to_string(&r.err_path).unwrap_or_default();
+            let tail: Vec<&str> = stderr.lines().rev().take(3).collect::<Vec<_>>().into_iter().rev().collect();
+            Record::new(PointStatus::Crashed, format!("worker exited with {exit} without a result: {}", tail.join(" | ")))
+        }
+    }
+}
+
+/// Kill a worker that ran past the sweep's timeout of `limit_s` seconds; its record.
+fn timed_out_record(r: &mut Running, limit_s: f64) -> Record {
+    let _ = r.child.kill();
+    let _ = r.child.wait();
+    let message = format!("killed after the sweep's timeout of {limit_s} s");
+    Record { wall_s: Some(r.started.elapsed().as_secs_f64()), ..Record::new(PointStatus::TimedOut, message) }
+}
+
+fn spawn_worker(exe: &Path, job: &Path, result: &Path, err: &Path) -> Result<Child, SweepError> {
+    let spawn_err = |source| SweepError::Spawn { exe: exe.to_path_buf(), source };
+    let stderr = std::fs::File::create(err).map_err(spawn_err)?;
+    let mut cmd = Command::new(exe);
+    cmd.arg("sweep-worker").arg(job).arg(result).stdin(Stdio::null()).stdout(Stdio::null()).stderr(stderr);
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: prctl is async-signal-safe; the closure allocates nothing.
+        unsafe {
+            cmd.pre_exec(|| {
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+    }
+    cmd.spawn().map_err(spawn_err)
+}
+
+// ---------------------------------------------------------------------------------------
+// Merge.
+
+/// Summary of [`merge`].
+#[derive(Debug, Clone, Default)]
+pub struct MergeReport {
+    /// Rows written.
+    pub rows: usize,
+    /// Rows whose id appeared in an earlier input (dropped).
+    pub duplicates: usize,
+    /// Points of the sweep (from the shards' sweep.json) with no row, when known.
+    pub missing: Option<usize>,
+}
+
+/// Join shards' results (each a results.csv or a directory holding one) into
+/// `output` (a directory: writes `output/results.csv`), sorted by point index. The
+/// inputs must have the same columns and come from the same base scene content.
+pub fn merge(inputs: &[PathBuf], output_dir: &Path) -> Result<MergeReport, SweepError> {
+    let mut header: Option<Vec<String>> = None;
+    let mut scene_hash: Option<String> = None;
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    let mut ids = HashSet::new();
+    let mut report = MergeReport::default();
+    let mut all_ids: Option<HashSet<String>> = None;
+    for input in inputs {
+        let res = Results::read(input)?;
+        let path = res.path.clone();
+        for hash in res.scene_hashes() {
+            match &scene_hash {
+                None => scene_hash = Some(hash),
+                Some(first) if *first != hash => {
+                    return Err(SweepError::Results {
+                        path,
+                        message: format!(
+                            "has rows of a base scene with content {hash}, the first rows' is {first}: not shards of one sweep"
+                        ),
+                    })
+                }
+                Some(_) => {}
+            }
+        }
+        match &header {
+            None => header = Some(res.header.clone()),
+            Some(h) if *h != res.header => {
+                return Err(SweepError::Results {
+                    path,
+                    message: "its columns differ from the first input's: not shards of one sweep".into(),
+                })
+            }
+            Some(_) => {}
+        }
+        let id_col = res.require_column("id")?;
+        for row in res.rows {
+            if ids.insert(row[id_col].clone()) {
+                rows.push(row);
+            } else {
+                report.duplicates += 1;
+            }
+        }
+        let info_path = path.parent().unwrap_or(Path::new(".")).join("sweep.json");
+        if let Some(info) = std::fs::read_to_string(&info_path).ok().and_then(|t| serde_json::from_str::<SweepInfo>(&t).ok()) {
+            all_ids.get_or_insert_with(HashSet::new).extend(info.ids);
+        }
+    }
+    let header = header.ok_or_else(|| SweepError::Results { path: output_dir.to_path_buf(), message: "nothing to merge".into() })?;
+    let idx = header.iter().position(|h| h == "index");
+    if let Some(i) = idx {
+        rows.sort_by_key(|r| r[i].parse::<usize>().unwrap_or(usize::MAX));
+    }
+    report.rows = rows.len();
+    report.missing = all_ids.map(|all| all.difference(&ids).count());
+    let out = output_dir.join("results.csv");
+    output::write_atomic(&out, |w| {
+        w.write_all(&csv_line(&header))?;
+        for r in &rows {
+            w.write_all(&csv_line(r))?;
+        }
+        Ok(())
+    })?;
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shard_parsing() {
+        assert_eq!("2/8".parse::<Shard>(), Ok(Shard { k: 2, n: 8 }));
+        for bad in ["0/3", "4/3", "1/0", "x/2", "3"] {
+            assert!(bad.parse::<Shard>().is_err(), "{bad}");
+        }
+        let s = Shard { k: 2, n: 3 };
+        assert!(s.contains(1) && s.contains(4) && !s.contains(0));
+    }
+
+    #[test]
+    fn id_ignores_axis_order_and_csv_line_is_one_line() {
+        let values = vec![("nodes".into(), "64".into()), ("sigma".into(), "1/110".into())];
+        let a = Point { index: 0, values, evaluated: vec![("sigma".into(), 1.0 / 110.0)], method: Method::Skg };
+        let mut b = a.clone();
+        b.values.reverse();
+        b.index = 7;
+        assert_eq!(a.id(), b.id());
+        assert_eq!(a.canonical(), "method=skg;nodes=64;sigma=1/110");
+        let line = csv_line(&["a,b".into(), "x\"y".into(), "".into()]);
+        assert_eq!(String::from_utf8(line).unwrap(), "\"a,b\",\"x\"\"y\",\n");
+    }
+}

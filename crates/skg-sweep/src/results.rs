@@ -1,0 +1,364 @@
+//! The results file, `results.csv`: its columns, one row per point, and reading it back
+//! (with its schema version checked).
+
+use std::collections::{BTreeSet, HashSet};
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use skg_core::provenance;
+use skg_core::scenario::Location;
+
+use crate::{io_err, Method, Point, PointStatus, Record, SweepError};
+
+/// Where a sweep's rows come from. Every row of `results.csv` carries these three
+/// columns, and `sweep.json` records them too.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The skg-solve version that computed the row ([`provenance::VERSION`]).
+    pub skg_solve_version: String,
+    /// Layout version of `results.csv` and `sweep.json` ([`provenance::SCHEMA_VERSION`]).
+    pub schema_version: u32,
+    /// SHA-256 of the base scene file's content, `sha256:<64 hex digits>`.
+    pub scene_hash: String,
+}
+
+impl Provenance {
+    /// This skg-solve's version and schema, with the hash of a base scene's content.
+    pub fn current(scene_hash: String) -> Provenance {
+        Provenance { skg_solve_version: provenance::VERSION.to_string(), schema_version: provenance::SCHEMA_VERSION, scene_hash }
+    }
+}
+
+/// Columns before the axes: the point's identity and its resolved settings.
+pub const LEADING_COLUMNS: &[&str] = &["id", "index", "method", "rtol", "nodes", "operator", "formulation"];
+
+/// Result columns after the axes.
+pub const RESULT_COLUMNS: &[&str] = &[
+    "converged",
+    "status",
+    "solver_status",
+    "iterations",
+    "wall_s",
+    "error_max",
+    "error_rms",
+    "error_column",
+    "energy_drift",
+    "energy_artifact",
+    "artifacts",
+    "max_residual",
+    "message",
+];
+
+/// Provenance columns, last in every row (see [`Provenance`]).
+pub const PROVENANCE_COLUMNS: &[&str] = &["skg_solve_version", "schema_version", "scene_hash"];
+
+/// Suffix of the column that keeps an axis's values as written: `sigma` → `sigma_expr`.
+pub const EXPR_SUFFIX: &str = "_expr";
+
+/// A column of `results.csv`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Column {
+    /// One of [`LEADING_COLUMNS`], [`RESULT_COLUMNS`] or [`PROVENANCE_COLUMNS`].
+    Fixed(&'static str),
+    /// A grid axis: for a scene parameter the value the resolved scene has (a number),
+    /// for a setting (`max_iter`, `hessian`, …) the value as written.
+    Axis(String),
+    /// `<axis>_expr`: a parameter axis's value as written in the sweep file (`1/110`).
+    AxisExpr(String),
+}
+
+impl Column {
+    /// The column's name in the header.
+    pub fn name(&self) -> String {
+        match self {
+            Column::Fixed(name) => name.to_string(),
+            Column::Axis(axis) => axis.clone(),
+            Column::AxisExpr(axis) => format!("{axis}{EXPR_SUFFIX}"),
+        }
+    }
+}
+
+/// The columns of `results.csv` for a sweep with these grid axes, of which
+/// `expression_axes` have some value written as an expression: the leading columns,
+/// each axis (followed by its `_expr` column if it has one), the results, the provenance.
+pub fn results_columns(axes: &[String], expression_axes: &[String]) -> Vec<Column> {
+    let mut columns: Vec<Column> = LEADING_COLUMNS.iter().map(|c| Column::Fixed(c)).collect();
+    for axis in axes.iter().filter(|a| !LEADING_COLUMNS.contains(&a.as_str())) {
+        columns.push(Column::Axis(axis.clone()));
+        if expression_axes.contains(axis) {
+            columns.push(Column::AxisExpr(axis.clone()));
+        }
+    }
+    columns.extend(RESULT_COLUMNS.iter().chain(PROVENANCE_COLUMNS).map(|c| Column::Fixed(c)));
+    columns
+}
+
+/// The header line's names of `columns`.
+pub fn header_names(columns: &[Column]) -> Vec<String> {
+    columns.iter().map(Column::name).collect()
+}
+
+/// A number as every numeric cell of results.csv writes it: the shortest text that
+/// reads back to the same double.
+fn number_text(x: f64) -> String {
+    format!("{x:?}")
+}
+
+fn optional_number(x: Option<f64>) -> String {
+    x.map_or(String::new(), number_text)
+}
+
+/// Text of an axis cell: the evaluated number for a parameter axis, else as written.
+fn axis_text(point: &Point, axis: &str) -> String {
+    match point.evaluated(axis) {
+        Some(x) => number_text(x),
+        None => point.value(axis).unwrap_or("").to_string(),
+    }
+}
+
+/// One row of `results.csv` (one line: newlines in messages are replaced).
+pub fn results_row(columns: &[Column], point: &Point, rec: &Record, artifact_tol: f64, provenance: &Provenance) -> Vec<String> {
+    columns
+        .iter()
+        .map(|col| match col {
+            Column::Axis(axis) => axis_text(point, axis),
+            Column::AxisExpr(axis) => point.value(axis).unwrap_or("").to_string(),
+            Column::Fixed(name) => fixed_cell(name, point, rec, artifact_tol, provenance),
+        })
+        .collect()
+}
+
+fn fixed_cell(name: &str, point: &Point, rec: &Record, artifact_tol: f64, provenance: &Provenance) -> String {
+    let written = |axis: &str| point.value(axis).unwrap_or("").to_string();
+    match name {
+        "id" => point.id(),
+        "index" => point.index.to_string(),
+        "method" => point.method.name().to_string(),
+        "rtol" => match point.method {
+            Method::Ode { rtol } => number_text(rtol),
+            Method::Skg => String::new(),
+        },
+        "nodes" => rec.nodes.map_or_else(|| written("nodes"), |n| n.to_string()),
+        "operator" => rec.operator.clone().unwrap_or_else(|| written("operator")),
+        "formulation" => rec.formulation.clone().unwrap_or_else(|| written("formulation")),
+        "converged" => rec.status.is_converged().to_string(),
+        "status" => rec.status.name().to_string(),
+        "solver_status" => rec.solver_status.clone(),
+        "iterations" => rec.iterations.map_or(String::new(), |i| i.to_string()),
+        "wall_s" => optional_number(rec.wall_s),
+        "error_max" => optional_number(rec.error_max),
+        "error_rms" => optional_number(rec.error_rms),
+        "error_column" => rec.error_column.clone().unwrap_or_default(),
+        "energy_drift" => optional_number(rec.energy_drift),
+        "energy_artifact" => optional_number(rec.energy_artifact),
+        "artifacts" => match rec.energy_artifact {
+            Some(a) if rec.status.is_converged() => (a > artifact_tol).to_string(),
+            _ => String::new(),
+        },
+        "max_residual" => optional_number(rec.max_residual),
+        "message" => rec.message.replace(['\n', '\r'], " | "),
+        "skg_solve_version" => provenance.skg_solve_version.clone(),
+        "schema_version" => provenance.schema_version.to_string(),
+        "scene_hash" => rec.scene_hash.clone().unwrap_or_else(|| provenance.scene_hash.clone()),
+        other => unreachable!("`{other}` is not a fixed column of results.csv"),
+    }
+}
+
+/// Encode one CSV record as a single line ending in `\n`.
+pub fn csv_line(fields: &[String]) -> Vec<u8> {
+    let mut w = csv::WriterBuilder::new().terminator(csv::Terminator::Any(b'\n')).from_writer(Vec::new());
+    // Writing to a Vec cannot fail.
+    let _ = w.write_record(fields);
+    w.into_inner().unwrap_or_default()
+}
+
+/// A results file read back: header and rows of text fields. Reading checks the schema
+/// version and every row's status, so [`Results::status`] of a row read from a file
+/// cannot fail.
+#[derive(Debug, Clone, Default)]
+pub struct Results {
+    /// The file read (for messages).
+    pub path: PathBuf,
+    /// Column names.
+    pub header: Vec<String>,
+    /// Rows, each with one field per column.
+    pub rows: Vec<Vec<String>>,
+}
+
+impl Results {
+    /// Position of the column `name`.
+    pub fn column_index(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    /// Read a results.csv (or a directory holding one).
+    pub fn read(path: &Path) -> Result<Results, SweepError> {
+        let path = if path.is_dir() { path.join("results.csv") } else { path.to_path_buf() };
+        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        Self::parse(&text, &path)
+    }
+
+    /// Parse the text of a results file; `path` labels error messages.
+    pub fn parse(text: &str, path: &Path) -> Result<Results, SweepError> {
+        let bad = |m: String| SweepError::Results { path: path.to_path_buf(), message: m };
+        let mut r = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text.as_bytes());
+        let header: Vec<String> = r.headers().map_err(|e| bad(e.to_string()))?.iter().map(str::to_string).collect();
+        let (schema, status) = schema_and_status_columns(&header).map_err(bad)?;
+        let mut rows = Vec::new();
+        for rec in r.records() {
+            let rec = rec.map_err(|e| bad(e.to_string()))?;
+            let location = Location { file: path.display().to_string(), line: rec.position().map(|p| p.line() as usize), col: None };
+            let at = |message: String| SweepError::Invalid { location: location.clone(), message };
+            check_schema_version(&rec[schema]).map_err(at)?;
+            rec[status].parse::<PointStatus>().map_err(|e| at(e.to_string()))?;
+            rows.push(rec.iter().map(str::to_string).collect());
+        }
+        Ok(Results { path: path.to_path_buf(), header, rows })
+    }
+
+    /// The column `name`, or an error naming the file.
+    pub fn require_column(&self, name: &str) -> Result<usize, SweepError> {
+        self.column_index(name).ok_or_else(|| SweepError::Results {
+            path: self.path.clone(),
+            message: format!("no `{name}` column (columns: {})", self.header.join(", ")),
+        })
+    }
+
+    /// How the point of a row ended (its `status` cell).
+    pub fn status(&self, row: &[String]) -> Result<PointStatus, SweepError> {
+        let i = self.require_column("status")?;
+        row[i].parse().map_err(|e: crate::status::UnknownStatus| SweepError::Results { path: self.path.clone(), message: e.to_string() })
+    }
+
+    /// The `<column>_expr` column that keeps `column`'s values as written, if any.
+    pub fn expr_column(&self, column: &str) -> Option<usize> {
+        self.column_index(&format!("{column}{EXPR_SUFFIX}"))
+    }
+
+    /// Whether `column` is the `_expr` column of another column.
+    pub fn is_expr_column(&self, column: usize) -> bool {
+        self.header[column].strip_suffix(EXPR_SUFFIX).is_some_and(|axis| self.column_index(axis).is_some())
+    }
+
+    /// A cell as the sweep file wrote it: the `_expr` cell where there is one (`1/110`),
+    /// else the cell itself.
+    pub fn written<'a>(&self, row: &'a [String], column: usize) -> &'a str {
+        match self.expr_column(&self.header[column]) {
+            Some(e) if !row[e].is_empty() => &row[e],
+            _ => &row[column],
+        }
+    }
+
+    /// Ids present (column `id`).
+    pub fn ids(&self) -> HashSet<String> {
+        match self.column_index("id") {
+            Some(i) => self.rows.iter().map(|r| r[i].clone()).collect(),
+            None => HashSet::new(),
+        }
+    }
+
+    /// The base-scene hashes the rows carry (column `scene_hash`).
+    pub fn scene_hashes(&self) -> BTreeSet<String> {
+        match self.column_index("scene_hash") {
+            Some(i) => self.rows.iter().map(|r| r[i].clone()).collect(),
+            None => BTreeSet::new(),
+        }
+    }
+}
+
+/// Positions of the `schema_version` and `status` columns; a file without them predates
+/// the schema versions of results.csv.
+fn schema_and_status_columns(header: &[String]) -> Result<(usize, usize), String> {
+    let find = |name: &str| header.iter().position(|h| h == name);
+    match (find("schema_version"), find("status")) {
+        (Some(schema), Some(status)) => Ok((schema, status)),
+        (None, Some(_)) => Err(format!(
+            "has no `schema_version` column: it was written before results.csv had a schema version (results schema 1), \
+             and this skg-solve {} reads results schema {} only: run the sweep again into a new directory",
+            provenance::VERSION,
+            provenance::SCHEMA_VERSION
+        )),
+        _ => Err(format!("no `status` column (columns: {}): not a sweep's results.csv", header.join(", "))),
+    }
+}
+
+fn check_schema_version(cell: &str) -> Result<(), String> {
+    if cell == provenance::SCHEMA_VERSION.to_string() {
+        Ok(())
+    } else {
+        Err(format!(
+            "row of results schema {cell}; this skg-solve {} reads results schema {} only: run the sweep again into a new \
+             directory, or read it with the skg-solve that wrote it",
+            provenance::VERSION,
+            provenance::SCHEMA_VERSION
+        ))
+    }
+}
+
+/// Open `results.csv` for appending, recovering from an interrupted run: a trailing
+/// partial line is cut off; the header must match and every row must come from the
+/// same base scene. Returns the file and the ids already present.
+pub(crate) fn open_results(path: &Path, header: &[String], scene_hash: &str) -> Result<(std::fs::File, HashSet<String>), SweepError> {
+    let mut f = std::fs::OpenOptions::new().read(true).append(true).create(true).open(path).map_err(io_err(path))?;
+    let mut text = Vec::new();
+    f.read_to_end(&mut text).map_err(io_err(path))?;
+    let complete = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+    if complete < text.len() {
+        f.set_len(complete as u64).map_err(io_err(path))?;
+        f.seek(SeekFrom::End(0)).map_err(io_err(path))?;
+        text.truncate(complete);
+    }
+    if text.is_empty() {
+        f.write_all(&csv_line(header)).map_err(io_err(path))?;
+        f.sync_data().map_err(io_err(path))?;
+        return Ok((f, HashSet::new()));
+    }
+    let text = String::from_utf8_lossy(&text);
+    let existing = Results::parse(&text, path)?;
+    if existing.header != header {
+        return Err(SweepError::Results {
+            path: path.to_path_buf(),
+            message: format!(
+                "was written by a different sweep (columns {}; this sweep writes {}): use another output directory",
+                existing.header.join(","),
+                header.join(",")
+            ),
+        });
+    }
+    if let Some(other) = existing.scene_hashes().into_iter().find(|h| h != scene_hash) {
+        return Err(SweepError::Results {
+            path: path.to_path_buf(),
+            message: format!(
+                "holds points of a base scene with content {other}, but the base scene is now {scene_hash}: \
+                 use another output directory (or restore the scene)"
+            ),
+        });
+    }
+    Ok((f, existing.ids()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_of_another_schema_or_with_unknown_statuses_are_refused_with_their_line() {
+        let now = provenance::SCHEMA_VERSION;
+        let good = format!("id,sigma,sigma_expr,status,schema_version\na,0.5,1/2,converged,{now}\n");
+        let r = Results::parse(&good, Path::new("r.csv")).unwrap();
+        assert_eq!(r.status(&r.rows[0]).unwrap(), PointStatus::Converged);
+        assert_eq!(r.written(&r.rows[0], 1), "1/2");
+        assert_eq!(r.written(&r.rows[0], 0), "a");
+        let cases = [
+            (format!("{good}b,1.0,1,converged,{}\n", now + 1), format!("r.csv:3: row of results schema {}", now + 1)),
+            (format!("{good}b,1.0,1,Solve_Succeeded,{now}\n"), "r.csv:3: unknown point status `Solve_Succeeded`".to_string()),
+            ("id,sigma,status\na,1/2,converged\n".to_string(), "r.csv: has no `schema_version` column".to_string()),
+        ];
+        for (text, expected) in cases {
+            let e = Results::parse(&text, Path::new("r.csv")).unwrap_err().to_string();
+            assert!(e.starts_with(&expected), "expected `{expected}…`, got: {e}");
+        }
+    }
+}
