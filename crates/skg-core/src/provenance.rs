@@ -10,7 +10,7 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// Version of the layout of `summary.json`, `results.csv` and `sweep.json`. Raised
 /// whenever a field is renamed, removed or changes meaning (adding one does not).
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// The hash of a file's content, written as `sha256:<64 hex digits>`.
 pub fn content_hash(bytes: &[u8]) -> String {

@@ -1,5 +1,6 @@
 //! Solving one scene: build the discrete action, make a physical initial guess, hand
-//! the square system to Ipopt, and turn the critical point into a trajectory.
+//! the square system to the backend ([`crate::backend`]: Ipopt, or Newton with a
+//! sparse LU), and turn the critical point into a trajectory.
 //!
 //! Initial guess: the Lagrange–d'Alembert equations of the same scene are integrated
 //! by [`crate::time_stepping`] (adaptive high-order Runge–Kutta, index-reduced:
@@ -16,15 +17,16 @@ use std::time::Instant;
 use indexmap::IndexMap;
 use serde::Serialize;
 
-use crate::action::{Action, Block, MatrixPlan};
+use crate::action::{Action, MatrixPlan};
+use crate::backend::{BackendError, BackendReport, SolverStatus, SquareSolver};
 use crate::contact;
-use crate::model::{Model, Workspace};
+use crate::model::Model;
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
-use crate::scenario::{Formulation, HessianMode, IpoptValue, Scene, SceneError, Wall};
+use crate::scenario::{Backend, Formulation, HessianMode, Scene, SceneError, Wall};
 use crate::time_stepping::{integrate_model, min_spacing};
 use crate::trajectory::{NodeSeries, States, Trajectory};
-use skg_ipopt::{self as ipopt, EvalError, Problem};
+use skg_ipopt as ipopt;
 
 /// A solution farther than this fraction of the coordinates' range from the
 /// time-stepping solution gets a warning. Discretization errors of usable grids are
@@ -32,8 +34,8 @@ use skg_ipopt::{self as ipopt, EvalError, Problem};
 /// N=48) and 100 %+ (knife edge on SBP121, an odd-even mode).
 const FAR_FROM_TIME_STEPPING: f64 = 0.1;
 
-/// Why a solve could not be attempted or completed (a non-converged Ipopt run is not
-/// an error: it is an [`Outcome`] whose [`SolveStatus`] says so).
+/// Why a solve could not be attempted or completed (a non-converged run is not an
+/// error: it is an [`Outcome`] whose [`SolveStatus`] says so).
 #[derive(Debug, thiserror::Error)]
 pub enum SolveError {
     /// The scene's model cannot be built (an expression, the initial state).
@@ -42,9 +44,10 @@ pub enum SolveError {
     /// The SBP operator cannot be built on the scene's grid.
     #[error(transparent)]
     Sbp(#[from] SbpError),
-    /// Ipopt could not be run (options, sizes, a callback error it did not recover from).
+    /// The backend could not be run (Ipopt's options, sizes, a callback error it did not
+    /// recover from; Newton's structure).
     #[error(transparent)]
-    Ipopt(#[from] ipopt::SolveError),
+    Backend(#[from] BackendError),
 }
 
 /// Where a solve's wall time went, in seconds.
@@ -54,19 +57,21 @@ pub struct Timings {
     pub setup_s: f64,
     /// Time stepping for the initial guess.
     pub initial_guess_s: f64,
-    /// Wall time of the Ipopt call, split into time in our callbacks and inside Ipopt.
-    pub ipopt_total_s: f64,
+    /// Wall time of the backend (Ipopt, or Newton and Ipopt after a hand-over), split
+    /// into time in our callbacks and inside the solver.
+    pub solver_s: f64,
     /// Time in our callbacks (residual, Jacobian, Hessian).
     pub evaluation_s: f64,
-    /// Time inside Ipopt (mostly the linear solver).
-    pub ipopt_internal_s: f64,
+    /// Time inside the solver: Ipopt's own time (mostly MUMPS), Newton's LU analysis,
+    /// factorizations and solves.
+    pub solver_internal_s: f64,
     /// Trajectory, end multipliers and diagnostics from the solution.
     pub postprocess_s: f64,
     /// Writing files (filled in by the output module).
     pub output_s: f64,
 }
 
-/// The sizes of the problem handed to Ipopt.
+/// The sizes of the problem handed to the backend.
 #[derive(Debug, Clone, Serialize)]
 pub struct Sizes {
     /// Grid nodes N.
@@ -136,11 +141,13 @@ pub struct Settings {
     pub t_end: f64,
     /// The formulation.
     pub formulation: Formulation,
+    /// The backend asked for (what ran: [`Outcome::backend`]).
+    pub backend: Backend,
     /// The Hessian given to Ipopt.
     pub hessian: HessianMode,
-    /// Ipopt's tolerance.
+    /// The tolerance on max |c| (Ipopt's `tol` and `constr_viol_tol`, Newton's stop).
     pub tol: f64,
-    /// Ipopt's iteration limit.
+    /// The iteration limit (Ipopt's, and Newton's).
     pub max_iter: u32,
     /// The scene's parameter values.
     pub parameters: IndexMap<String, f64>,
@@ -152,42 +159,44 @@ pub struct Settings {
 /// as converged (Ipopt's own tolerance applies to its possibly scaled problem).
 pub const CONVERGED_RESIDUAL: f64 = 1e-8;
 
-/// How a solve ended: Ipopt's verdict, checked against the unscaled residual.
+/// How a solve ended: the backend's verdict, checked against the unscaled residual.
 ///
 /// `Display` gives readable text; [`SolveStatus::name`] a stable name. Serialized (into
-/// `summary.json`) as four fields: `"converged"` (true or false), `"status"` (Ipopt's
-/// status name, e.g. `"Solve_Succeeded"`), `"status_text"` (the readable text) and
-/// `"solve_status"` (the stable name).
+/// `summary.json`) as four fields: `"converged"` (true or false), `"status"` (the
+/// status name of the backend that finished, e.g. Ipopt's `"Solve_Succeeded"` or
+/// `"Newton_Converged"`), `"status_text"` (the readable text) and `"solve_status"` (the
+/// stable name).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SolveStatus {
-    /// Ipopt succeeded and the unscaled residual is at most [`CONVERGED_RESIDUAL`].
+    /// The backend succeeded and the unscaled residual is at most [`CONVERGED_RESIDUAL`].
     Converged {
-        /// Ipopt's status (`Solve_Succeeded` or `Solved_To_Acceptable_Level`).
-        ipopt: ipopt::Status,
+        /// The backend's status (Ipopt's `Solve_Succeeded` or
+        /// `Solved_To_Acceptable_Level`, or `Newton_Converged`).
+        solver: SolverStatus,
     },
-    /// Ipopt reported success, but the unscaled residual exceeds [`CONVERGED_RESIDUAL`]
-    /// (or is not a number): not counted as converged.
+    /// The backend reported success, but the unscaled residual exceeds
+    /// [`CONVERGED_RESIDUAL`] (or is not a number): not counted as converged.
     ResidualTooLarge {
-        /// Ipopt's status (a success).
-        ipopt: ipopt::Status,
+        /// The backend's status (a success).
+        solver: SolverStatus,
         /// The unscaled residual max |c|.
         residual: f64,
     },
-    /// Ipopt stopped without success.
+    /// The backend stopped without success.
     NotConverged {
-        /// Ipopt's status, which says why.
-        ipopt: ipopt::Status,
+        /// The backend's status, which says why.
+        solver: SolverStatus,
     },
 }
 
 impl SolveStatus {
-    /// The status of a solve that ended with Ipopt's status `ipopt` at an unscaled
-    /// residual `residual`.
-    pub fn classify(ipopt: ipopt::Status, residual: f64) -> SolveStatus {
-        match (ipopt.is_success(), residual <= CONVERGED_RESIDUAL) {
-            (true, true) => SolveStatus::Converged { ipopt },
-            (true, false) => SolveStatus::ResidualTooLarge { ipopt, residual },
-            (false, _) => SolveStatus::NotConverged { ipopt },
+    /// The status of a solve that ended with the backend's status `solver` at an
+    /// unscaled residual `residual`.
+    pub fn classify(solver: SolverStatus, residual: f64) -> SolveStatus {
+        match (solver.is_success(), residual <= CONVERGED_RESIDUAL) {
+            (true, true) => SolveStatus::Converged { solver },
+            (true, false) => SolveStatus::ResidualTooLarge { solver, residual },
+            (false, _) => SolveStatus::NotConverged { solver },
         }
     }
 
@@ -196,10 +205,12 @@ impl SolveStatus {
         matches!(self, SolveStatus::Converged { .. })
     }
 
-    /// Ipopt's status.
-    pub fn ipopt(&self) -> ipopt::Status {
+    /// The status of the backend that finished.
+    pub fn solver(&self) -> SolverStatus {
         match *self {
-            SolveStatus::Converged { ipopt } | SolveStatus::ResidualTooLarge { ipopt, .. } | SolveStatus::NotConverged { ipopt } => ipopt,
+            SolveStatus::Converged { solver } | SolveStatus::ResidualTooLarge { solver, .. } | SolveStatus::NotConverged { solver } => {
+                solver
+            }
         }
     }
 
@@ -216,9 +227,9 @@ impl SolveStatus {
 impl fmt::Display for SolveStatus {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SolveStatus::Converged { ipopt } | SolveStatus::NotConverged { ipopt } => write!(f, "{ipopt}"),
-            SolveStatus::ResidualTooLarge { ipopt, residual } => {
-                write!(f, "Ipopt reported success ({ipopt}) but the unscaled residual {residual:.3e} exceeds {CONVERGED_RESIDUAL:e}")
+            SolveStatus::Converged { solver } | SolveStatus::NotConverged { solver } => write!(f, "{solver}"),
+            SolveStatus::ResidualTooLarge { solver, residual } => {
+                write!(f, "the solver reported success ({solver}) but the unscaled residual {residual:.3e} exceeds {CONVERGED_RESIDUAL:e}")
             }
         }
     }
@@ -229,7 +240,7 @@ impl Serialize for SolveStatus {
         use serde::ser::SerializeMap;
         let mut map = serializer.serialize_map(Some(4))?;
         map.serialize_entry("converged", &self.is_converged())?;
-        map.serialize_entry("status", &self.ipopt())?;
+        map.serialize_entry("status", &self.solver())?;
         map.serialize_entry("status_text", &self.to_string())?;
         map.serialize_entry("solve_status", self.name())?;
         map.end()
@@ -247,7 +258,9 @@ pub struct Outcome {
     pub status: SolveStatus,
     /// The Ipopt version the tool was built against.
     pub ipopt_version: String,
-    /// Ipopt's iterations.
+    /// Which backend ran: the one asked for, Newton's own outcome, a hand-over to Ipopt.
+    pub backend: BackendReport,
+    /// Iterations of the backend that finished.
     pub iterations: usize,
     /// The settings the solve ran with.
     pub settings: Settings,
@@ -259,7 +272,8 @@ pub struct Outcome {
     pub diagnostics: Diagnostics,
     /// Suspicions about the solution (spurious critical point, residual too large, …).
     pub warnings: Vec<String>,
-    /// Ipopt's iteration table.
+    /// The iteration table of the backend that finished (Ipopt's, or Newton's in the
+    /// same layout, [`crate::newton::NewtonSolution::history`]).
     pub history: Vec<ipopt::IterationStat>,
     /// The solution at the nodes (written as trajectory.csv, not into the summary).
     #[serde(skip)]
@@ -270,86 +284,6 @@ impl Outcome {
     /// Whether the solve converged ([`SolveStatus::is_converged`]).
     pub fn converged(&self) -> bool {
         self.status.is_converged()
-    }
-}
-
-/// Ipopt's view of the reduced system R(P) = ∂S/∂M = 0.
-struct Reduced<'a> {
-    action: &'a Action,
-    z: Vec<f64>,
-    ws: Workspace,
-    jac: MatrixPlan,
-    hess: Option<MatrixPlan>,
-}
-
-impl Reduced<'_> {
-    fn set(&mut self, x: &[f64], minus: Option<&[f64]>) {
-        let n_p = self.action.layout.n_p;
-        self.z[..n_p].copy_from_slice(x);
-        match minus {
-            Some(y) => self.z[n_p..].copy_from_slice(y),
-            None => self.z[n_p..].iter_mut().for_each(|v| *v = 0.0),
-        }
-    }
-}
-
-impl Problem for Reduced<'_> {
-    fn num_variables(&self) -> usize {
-        self.action.layout.n_p
-    }
-    fn num_constraints(&self) -> usize {
-        self.action.layout.n_m
-    }
-    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-        self.set(x, None);
-        self.action.gradient(&self.z, true, c, &mut self.ws);
-        Ok(())
-    }
-    fn jacobian_structure(&self) -> &[(u32, u32)] {
-        &self.jac.structure
-    }
-    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.set(x, None);
-        self.action.matrix_values(&self.jac, &self.z, values, &mut self.ws);
-        Ok(())
-    }
-    fn hessian_structure(&self) -> &[(u32, u32)] {
-        self.hess.as_ref().map_or(&[], |h| &h.structure)
-    }
-    fn hessian_values(&mut self, x: &[f64], _obj: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        if self.hess.is_some() {
-            self.set(x, Some(lambda));
-            let plan = self.hess.as_ref().expect("checked");
-            self.action.matrix_values(plan, &self.z, values, &mut self.ws);
-        }
-        Ok(())
-    }
-}
-
-/// Ipopt's view of the full system ∇S(Z) = 0.
-struct Full<'a> {
-    action: &'a Action,
-    ws: Workspace,
-    jac: MatrixPlan,
-}
-
-impl Problem for Full<'_> {
-    fn num_variables(&self) -> usize {
-        self.action.layout.len()
-    }
-    fn num_constraints(&self) -> usize {
-        self.action.layout.len()
-    }
-    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-        self.action.gradient(x, false, c, &mut self.ws);
-        Ok(())
-    }
-    fn jacobian_structure(&self) -> &[(u32, u32)] {
-        &self.jac.structure
-    }
-    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.action.matrix_values(&self.jac, x, values, &mut self.ws);
-        Ok(())
     }
 }
 
@@ -428,20 +362,29 @@ pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
 /// Solve with an already built action (`started` marks the beginning of setup).
 pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<Outcome, SolveError> {
     let (times, _) = grid(scene);
-    let (jac, hess) = matrix_plans(scene, action);
+    let mut solver = SquareSolver::new(scene, action);
     let setup_s = started.elapsed().as_secs_f64();
-    let sizes = sizes(scene, action, &jac, hess.as_ref());
+    let sizes = sizes(scene, action, solver.jacobian_plan(), solver.hessian_plan());
 
     let t_guess = Instant::now();
     let mut warnings = Vec::new();
     let (z0, guess_desc, ts_q) = initial_guess(action, &times, &mut warnings);
     let initial_guess_s = t_guess.elapsed().as_secs_f64();
 
-    let (solution, z) = run_ipopt(scene.formulation, action, jac, hess, &z0, &ipopt_options(scene))?;
+    let solution = solver.solve(action, &z0)?;
+    let z = &solution.z;
+    if let Some(newton) = solution.report.newton.as_ref().filter(|_| solution.report.handed_over_to_ipopt) {
+        warnings.push(format!(
+            "Newton's method did not converge ({}, {} iterations, residual {:.3e}); Ipopt solved the system from the same initial guess",
+            newton.status.name(),
+            newton.iterations,
+            newton.max_residual
+        ));
+    }
 
     let t_post = Instant::now();
-    let (trajectory, max_eom) = evaluate(action, &times, &z);
-    let diagnostics = diagnose(action, &trajectory, max_eom, &z, solution.max_constraint_violation, scene.formulation, ts_q.as_deref());
+    let (trajectory, max_eom) = evaluate(action, &times, z);
+    let diagnostics = diagnose(action, &trajectory, max_eom, z, solution.max_residual, scene.formulation, ts_q.as_deref());
     let postprocess_s = t_post.elapsed().as_secs_f64();
 
     let status = SolveStatus::classify(solution.status, diagnostics.max_residual);
@@ -450,15 +393,16 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
         scene: scene.name.clone(),
         status,
         ipopt_version: ipopt::ipopt_version().to_string(),
+        backend: solution.report,
         iterations: solution.iterations,
         settings: settings(scene, guess_desc),
         sizes,
         timings: Timings {
             setup_s,
             initial_guess_s,
-            ipopt_total_s: solution.total_seconds,
-            evaluation_s: solution.total_seconds - solution.ipopt_seconds,
-            ipopt_internal_s: solution.ipopt_seconds,
+            solver_s: solution.total_s,
+            evaluation_s: solution.evaluation_s,
+            solver_internal_s: solution.total_s - solution.evaluation_s,
             postprocess_s,
             output_s: 0.0,
         },
@@ -466,72 +410,6 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
         warnings,
         history: solution.history,
         trajectory,
-    })
-}
-
-/// The sparsity plans of the Jacobian of the scene's formulation and, for the reduced
-/// formulation with the exact Hessian, of the Hessian.
-fn matrix_plans(scene: &Scene, action: &Action) -> (MatrixPlan, Option<MatrixPlan>) {
-    let jac_block = match scene.formulation {
-        Formulation::Reduced => Block::ReducedJacobian,
-        Formulation::Full => Block::FullJacobian,
-    };
-    let exact_hessian = scene.formulation == Formulation::Reduced && scene.solver.hessian == HessianMode::Exact;
-    (action.plan(jac_block), exact_hessian.then(|| action.plan(Block::ReducedHessian)))
-}
-
-/// Ipopt's options for a scene: its `[solver]` settings, then the pass-through options.
-fn ipopt_options(scene: &Scene) -> ipopt::Options {
-    let solver = &scene.solver;
-    let pass_through = solver.ipopt.iter().map(|(k, v)| {
-        let v = match v {
-            IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
-            IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
-            IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
-        };
-        (k.clone(), v)
-    });
-    ipopt::Options {
-        tol: solver.tol,
-        constr_viol_tol: solver.tol,
-        max_iter: solver.max_iter,
-        print_level: solver.print_level,
-        linear_solver: solver.linear_solver.clone(),
-        output_file: solver.log_file.clone(),
-        // MUMPS's default scaling (77, automatic) made the very first factorization of
-        // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
-        // on Debian's MUMPS 5.5). The scene's own [solver.ipopt] options come after and
-        // override it.
-        extra: std::iter::once(("mumps_scaling".to_string(), ipopt::OptionValue::Int(0))).chain(pass_through).collect(),
-        ..ipopt::Options::default()
-    }
-}
-
-/// Solve the formulation's square system with Ipopt from `z0`; returns Ipopt's solution
-/// and the whole unknown vector Z (the minus block zero for the reduced formulation).
-fn run_ipopt(
-    formulation: Formulation,
-    action: &Action,
-    jac: MatrixPlan,
-    hess: Option<MatrixPlan>,
-    z0: &[f64],
-    options: &ipopt::Options,
-) -> Result<(ipopt::Solution, Vec<f64>), SolveError> {
-    let lay = &action.layout;
-    Ok(match formulation {
-        Formulation::Reduced => {
-            let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac, hess };
-            let sol = ipopt::solve(&mut p, &z0[..lay.n_p], options)?;
-            let mut z = vec![0.0; lay.len()];
-            z[..lay.n_p].copy_from_slice(&sol.x);
-            (sol, z)
-        }
-        Formulation::Full => {
-            let mut p = Full { action, ws: action.model.workspace(), jac };
-            let sol = ipopt::solve(&mut p, z0, options)?;
-            let z = sol.x.clone();
-            (sol, z)
-        }
     })
 }
 
@@ -543,6 +421,7 @@ fn settings(scene: &Scene, initial_guess: String) -> Settings {
         t_start: scene.t_start,
         t_end: scene.t_end,
         formulation: scene.formulation,
+        backend: scene.solver.backend,
         hessian: scene.solver.hessian,
         tol: scene.solver.tol,
         max_iter: scene.solver.max_iter,
@@ -551,7 +430,7 @@ fn settings(scene: &Scene, initial_guess: String) -> Settings {
     }
 }
 
-/// The sizes of the system handed to Ipopt.
+/// The sizes of the system handed to the backend.
 fn sizes(scene: &Scene, action: &Action, jac: &MatrixPlan, hess: Option<&MatrixPlan>) -> Sizes {
     let (lay, model) = (&action.layout, &action.model);
     let (variables, equations) = match scene.formulation {
@@ -604,7 +483,8 @@ fn suspicions(diagnostics: &Diagnostics, ts_q: Option<&[Vec<f64>]>, status: Solv
         }
     }
     if let SolveStatus::ResidualTooLarge { residual, .. } = status {
-        warnings.push(format!("Ipopt reported success but the unscaled residual is {residual:.3e} (> 1e-8): not counted as converged"));
+        warnings
+            .push(format!("the solver reported success but the unscaled residual is {residual:.3e} (> 1e-8): not counted as converged"));
     }
     warnings
 }
@@ -727,24 +607,25 @@ fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> IndexMap<String, usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::newton::NewtonStatus;
     use ipopt::Status;
 
     #[test]
     fn solve_status_from_ipopt_and_residual() {
-        let ok = SolveStatus::classify(Status::SolveSucceeded, 1e-12);
-        assert_eq!(ok, SolveStatus::Converged { ipopt: Status::SolveSucceeded });
+        let ok = SolveStatus::classify(SolverStatus::Ipopt(Status::SolveSucceeded), 1e-12);
+        assert_eq!(ok, SolveStatus::Converged { solver: SolverStatus::Ipopt(Status::SolveSucceeded) });
         assert!(ok.is_converged());
         assert_eq!((ok.name(), ok.to_string().as_str()), ("converged", "solved to the requested tolerance"));
 
-        let loose = SolveStatus::classify(Status::SolvedToAcceptableLevel, 2e-5);
+        let loose = SolveStatus::classify(SolverStatus::Ipopt(Status::SolvedToAcceptableLevel), 2e-5);
         assert!(!loose.is_converged());
-        assert_eq!(loose.ipopt(), Status::SolvedToAcceptableLevel);
+        assert_eq!(loose.solver(), SolverStatus::Ipopt(Status::SolvedToAcceptableLevel));
         assert_eq!(loose.name(), "residual_too_large");
         assert!(loose.to_string().contains("2.000e-5") && loose.to_string().contains("exceeds 1e-8"), "{loose}");
-        assert!(!SolveStatus::classify(Status::SolveSucceeded, f64::NAN).is_converged());
+        assert!(!SolveStatus::classify(SolverStatus::Ipopt(Status::SolveSucceeded), f64::NAN).is_converged());
 
-        let failed = SolveStatus::classify(Status::MaximumIterationsExceeded, 1e-12);
-        assert_eq!(failed, SolveStatus::NotConverged { ipopt: Status::MaximumIterationsExceeded });
+        let failed = SolveStatus::classify(SolverStatus::Ipopt(Status::MaximumIterationsExceeded), 1e-12);
+        assert_eq!(failed, SolveStatus::NotConverged { solver: SolverStatus::Ipopt(Status::MaximumIterationsExceeded) });
         assert_eq!(failed.to_string(), "maximum number of iterations exceeded");
 
         let json = serde_json::to_value(loose).unwrap();
@@ -752,5 +633,12 @@ mod tests {
         assert_eq!(json["status"], "Solved_To_Acceptable_Level");
         assert_eq!(json["solve_status"], "residual_too_large");
         assert_eq!(json["status_text"], loose.to_string());
+
+        // Newton's own statuses classify the same way and keep their names.
+        let newton = SolveStatus::classify(SolverStatus::Newton(NewtonStatus::Converged), 1e-12);
+        assert!(newton.is_converged());
+        assert_eq!(serde_json::to_value(newton).unwrap()["status"], "Newton_Converged");
+        let stuck = SolveStatus::classify(SolverStatus::Newton(NewtonStatus::LineSearchFailed), 1e-12);
+        assert_eq!((stuck.name(), stuck.solver().name()), ("not_converged", "Newton_Line_Search_Failed"));
     }
 }

@@ -767,7 +767,7 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             let mut outcome = skg_core::solve::solve_scene(&scene).map_err(|e| e.to_string())?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
             rec.status = if outcome.converged() { PointStatus::Converged } else { PointStatus::NotConverged };
-            rec.solver_status = outcome.status.ipopt().name().to_string();
+            rec.solver_status = outcome.status.solver().name().to_string();
             rec.iterations = Some(outcome.iterations);
             let d = &outcome.diagnostics;
             rec.energy_drift = Some(d.energy_drift);
@@ -917,7 +917,7 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
     let results_path = dir.join("results.csv");
     let (mut results, done) = results::open_results(&results_path, &header_names(&columns), &provenance.scene_hash)?;
 
-    let mine: Vec<Point> = expanded.points.iter().filter(|p| opts.shard.map_or(true, |s| s.contains(p.index))).cloned().collect();
+    let mine: Vec<Point> = expanded.points.iter().filter(|p| opts.shard.is_none_or(|s| s.contains(p.index))).cloned().collect();
     let info = SweepInfo {
         name: file.name(),
         sweep_file: file.origin.path.clone(),

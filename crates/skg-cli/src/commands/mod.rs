@@ -19,7 +19,7 @@ use anyhow::Result;
 use clap::Args;
 
 use skg_core::sbp::OperatorKind;
-use skg_core::scenario::{Formulation, HessianMode, Overrides, Scene, SceneFile};
+use skg_core::scenario::{Backend, Formulation, HessianMode, Overrides, Scene, SceneFile};
 
 /// Exit code of a solve that ran but did not converge.
 pub const EXIT_NOT_CONVERGED: u8 = 3;
@@ -42,9 +42,14 @@ pub struct SceneArgs {
     /// not depend on it) or `exact` (reduced formulation only).
     #[arg(long, value_enum, value_name = "MODE")]
     pub hessian: Option<HessianArg>,
-    /// Maximum number of Ipopt iterations.
+    /// Maximum number of iterations (Ipopt's, or Newton's).
     #[arg(long, value_name = "N")]
     pub max_iter: Option<u32>,
+    /// Solver of the square system: `ipopt` (default; Ipopt with MUMPS) or `newton`
+    /// (Newton's method with a sparse LU of the Jacobian and a line search on the
+    /// residual; hands over to Ipopt if it fails). Overrides `[solver] backend`.
+    #[arg(long, value_name = "NAME")]
+    pub backend: Option<Backend>,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -67,6 +72,7 @@ impl SceneArgs {
                 HessianArg::Exact => HessianMode::Exact,
             }),
             max_iter: self.max_iter,
+            backend: self.backend,
         })
     }
 }

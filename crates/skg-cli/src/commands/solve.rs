@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Args;
 
+use skg_core::backend::SolverStatus;
 use skg_core::{output, solve};
 
 use super::{load, SceneArgs, EXIT_NOT_CONVERGED};
@@ -28,6 +29,16 @@ pub struct SolveArgs {
     pub quiet: bool,
 }
 
+/// The backend that finished, for the summary line: `Ipopt`, `Newton`, or
+/// `Ipopt (after Newton failed)`.
+fn solver_name(outcome: &solve::Outcome) -> &'static str {
+    match (outcome.status.solver(), outcome.backend.handed_over_to_ipopt) {
+        (SolverStatus::Newton(_), _) => "Newton",
+        (SolverStatus::Ipopt(_), false) => "Ipopt",
+        (SolverStatus::Ipopt(_), true) => "Ipopt (after Newton failed)",
+    }
+}
+
 pub fn run(args: SolveArgs) -> Result<ExitCode> {
     let path = args.scenario.expect("clap requires the scenario");
     let ov = args.scene.overrides(args.nodes)?;
@@ -46,14 +57,15 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         eprintln!("warning: {w}");
     }
     let t = &outcome.timings;
-    let total = t.setup_s + t.initial_guess_s + t.ipopt_total_s + t.postprocess_s + t.output_s;
+    let total = t.setup_s + t.initial_guess_s + t.solver_s + t.postprocess_s + t.output_s;
     if outcome.converged() {
         if !args.quiet {
             let d = &outcome.diagnostics;
             println!(
-                "{}: converged in {} Ipopt iterations ({}), {} {} N={}{}, {:.3} s",
+                "{}: converged in {} {} iterations ({}), {} {} N={}{}, {:.3} s",
                 outcome.scene,
                 outcome.iterations,
+                solver_name(&outcome),
                 outcome.status,
                 outcome.settings.operator,
                 outcome.settings.formulation,
