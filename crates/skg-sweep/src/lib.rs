@@ -29,7 +29,7 @@
 //! * one column per grid axis. A scene parameter's column holds the **number** the
 //!   resolved scene has (`sigma = "1/110"` gives `0.00909090909090909`, the shortest text
 //!   that reads back to the same double, as in every numeric column); a setting's column
-//!   (`max_iter`, `hessian`) holds the value as written. A parameter axis with at least
+//!   (`max_iter`, `hessian`, `backend`) holds the value as written. A parameter axis with at least
 //!   one value written as an expression also gets the column **`<axis>_expr`**, right
 //!   after it, with every value as written in the sweep file (`1/110`, and `0.005` for a
 //!   plain number); an axis whose values are all plain numbers gets none;
@@ -75,7 +75,9 @@ use toml::Spanned;
 use skg_core::check::{self, CheckOptions, Comparison, Table};
 use skg_core::output;
 use skg_core::sbp::OperatorKind;
-use skg_core::scenario::{parse_toml, read_toml, Formulation, HessianMode, Location, Origin, Overrides, Scene, SceneFile, TomlError};
+use skg_core::scenario::{
+    parse_toml, read_toml, Backend, Formulation, HessianMode, Location, Origin, Overrides, Scene, SceneFile, TomlError,
+};
 
 /// Errors of a sweep file, a results file or the sweep driver.
 #[derive(Debug, thiserror::Error)]
@@ -238,7 +240,7 @@ pub struct SweepFile {
 }
 
 /// Axes that are not scene parameters.
-pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "hessian", "max_iter"];
+pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "hessian", "max_iter", "backend"];
 
 /// How a point is computed.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -326,6 +328,7 @@ impl Point {
                     })
                 }
                 "max_iter" => ov.max_iter = Some(v.parse().map_err(|_| format!("max_iter = {v}: expected a whole number"))?),
+                "backend" => ov.backend = Some(v.parse::<Backend>().map_err(|e| e.to_string())?),
                 _ => ov.set.push((k.clone(), v.clone())),
             }
         }
