@@ -31,7 +31,7 @@ pub struct SceneArgs {
     /// Set a scene parameter, e.g. `--set sigma=1/200` (repeatable; value: number or expression).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Override the SBP operator: SBP121, SBP242 (alias SBP424), SBP363.
+    /// Override the SBP operator: SBP121, SBP242 (alias SBP424), SBP363, SBP484.
     #[arg(long, value_name = "NAME")]
     pub operator: Option<OperatorKind>,
     /// Formulation: `reduced` (physical limit, half the unknowns; default) or `full`

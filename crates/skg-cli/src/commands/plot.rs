@@ -29,7 +29,8 @@ pub enum PlotKind {
         y: String,
     },
     /// Solve time versus N (log-log) from `skg-solve bench --csv` files, one line per
-    /// file, with a line of slope 1 (cost proportional to N).
+    /// file, with a line of slope 1 (cost proportional to N) through the last file's
+    /// largest N.
     Scaling {
         /// CSV files written by `skg-solve bench --csv`.
         #[arg(required = true, value_name = "BENCH.csv")]

@@ -23,8 +23,8 @@ pub fn sweep_long_about() -> String {
          appended to DIR/results.csv. Rerunning resumes (points already in results.csv are skipped; rows of a base \
          scene whose content has changed since are refused).\n\n\
          results.csv is a plain CSV, one row per point, with the columns {}; one column per grid axis; {}; and the \
-         provenance {}. status is one of {} (converged is true exactly for `converged`); solver_status is Ipopt's \
-         status name (ODE_Succeeded for a peer point); scene_hash is the SHA-256 of the base scene file's content.\n\n\
+         provenance {}. status is one of {} (converged is true exactly for `converged`); solver_status is the \
+         finishing backend's status name (Ipopt's, Newton_..., ODE_Succeeded for a peer point); scene_hash is the SHA-256 of the base scene file's content.\n\n\
          A grid axis that is a scene parameter holds the number the point's scene has (sigma = \"1/110\" gives \
          0.00909090909090909, the shortest text that reads back to the same double). If any of its values is \
          written as an expression, the column <axis>{} follows it with every value as written (1/110); an axis of \
