@@ -219,6 +219,22 @@ impl Action {
         Action { model, op, layout, q0, v0, offsets, map, bilinear, linear, minus_locals, all_locals: (0..m).collect() }
     }
 
+    /// Change the initial state `(q+[1], (Dq+)[1]) = (q0, v0)` the action imposes, keeping
+    /// everything else (a window of a windowed solve starts from the state the previous
+    /// window reached, on a grid of the same size).
+    pub fn set_initial_state(&mut self, q0: &[f64], v0: &[f64]) {
+        let (nu_x, nu_v) = (&self.layout.nu_x, &self.layout.nu_v);
+        for (z, l) in &mut self.linear {
+            if let Some(i) = nu_x.iter().position(|n| n == z) {
+                *l = -q0[i];
+            } else if let Some(i) = nu_v.iter().position(|n| n == z) {
+                *l = -v0[i];
+            }
+        }
+        self.q0 = q0.to_vec();
+        self.v0 = v0.to_vec();
+    }
+
     fn entries(&self, k: usize, a: usize) -> &[(u32, f64)] {
         let m = self.model.layout.len();
         let i = k * m + a;

@@ -29,6 +29,7 @@ pub mod action;
 pub mod check;
 pub mod contact;
 pub mod convergence;
+pub mod ladder;
 pub mod model;
 pub mod ode;
 pub mod output;
@@ -40,6 +41,8 @@ pub mod solve;
 pub mod time_stepping;
 pub mod trajectory;
 pub mod tune;
+pub mod verify;
+pub mod window;
 
 pub use skg_expr as expr;
 pub use skg_ipopt as ipopt;
