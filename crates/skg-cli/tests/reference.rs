@@ -7,7 +7,6 @@ mod common;
 use common::G;
 
 use skg_core::check::Table;
-use skg_core::output;
 use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scenario::Overrides;
 use skg_core::solve;
