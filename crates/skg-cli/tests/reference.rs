@@ -20,9 +20,10 @@ fn col(t: &Table, name: &str) -> Vec<f64> {
     t.column(name).unwrap_or_else(|| panic!("no column {name} in {:?}", t.columns))
 }
 
-/// Scenes with walls get a hard-wall reference too.
+/// Scenes with fixed walls get a hard-wall reference too (it refuses moving walls).
 fn has_walls(name: &str) -> bool {
-    !common::load(name, &Overrides::default()).walls.is_empty()
+    let model = skg_core::model::Model::build(&common::load(name, &Overrides::default())).unwrap();
+    !model.walls.is_empty() && (0..model.walls.len()).all(|j| !model.wall_moves(j))
 }
 
 #[test]
@@ -253,6 +254,15 @@ fn hard_walls_refuse_what_they_do_not_model() {
     let (times, _) = solve::grid(&disk);
     let e = reference::hard_wall(&disk, &times, &ReferenceOptions::default()).unwrap_err().to_string();
     assert!(e.contains("no walls"), "{e}");
+    let plate = common::load("vibrating_plate", &Overrides::default());
+    let (times, _) = solve::grid(&plate);
+    let e = reference::hard_wall(&plate, &times, &ReferenceOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("wall `plate` moves") && e.contains("regularized reference"), "{e}");
+    let mut text = std::fs::read_to_string(common::scenario("pendulum")).unwrap();
+    text.push_str("\n[[walls]]\nname = \"floor\"\nh = \"-y - 2\"\nstrength = 10\nwidth = 0.01\n");
+    let with_wall = skg_core::scenario::SceneFile::parse(&text, "pendulum+floor.toml").unwrap().resolve(&Overrides::default()).unwrap();
+    let e = reference::hard_wall(&with_wall, &solve::grid(&with_wall).0, &ReferenceOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("walls and constraints"), "{e}");
     let tumbler = common::load("tumbler", &Overrides::default());
     let e = reference::regularized(&tumbler, &[0.1, 0.2], &ReferenceOptions::default()).unwrap_err().to_string();
     assert!(e.contains("start time"), "{e}");

@@ -433,9 +433,10 @@ pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
     solve_action(scene, &action, t_setup)
 }
 
-/// Solve with an already built action (`started` marks the beginning of setup).
+/// Solve with an already built action (`started` marks the beginning of setup), on the
+/// action's own grid and initial state ([`Action::set_window`]).
 pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<Outcome, SolveError> {
-    let (times, _) = grid(scene);
+    let times = action.times();
     let (jac, hess) = matrix_plans(scene, action);
     let setup_s = started.elapsed().as_secs_f64();
     let sizes = sizes(scene, action, &jac, hess.as_ref());
@@ -459,7 +460,7 @@ pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<
         status,
         ipopt_version: ipopt::ipopt_version().to_string(),
         iterations: solution.iterations,
-        settings: settings(scene, guess_desc),
+        settings: settings(scene, &times, guess_desc),
         sizes,
         timings: Timings {
             setup_s,
@@ -543,13 +544,13 @@ fn run_ipopt(
     })
 }
 
-/// The settings a scene is solved with.
-fn settings(scene: &Scene, initial_guess: String) -> Settings {
+/// The settings a scene is solved with on the grid `times`.
+fn settings(scene: &Scene, times: &[f64], initial_guess: String) -> Settings {
     Settings {
         operator: scene.operator.name().to_string(),
         nodes: scene.nodes,
-        t_start: scene.t_start,
-        t_end: scene.t_end,
+        t_start: times[0],
+        t_end: times[times.len() - 1],
         formulation: scene.formulation,
         hessian: scene.solver.hessian,
         tol: scene.solver.tol,
