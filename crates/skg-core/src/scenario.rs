@@ -1031,6 +1031,21 @@ nodes = 16
     }
 
     #[test]
+    fn constraints_are_classified_by_whether_they_use_velocities() {
+        let with = |expr: &str| {
+            let text = MINIMAL.replace("[time]", &format!("[[constraints]]\nname = \"c\"\nexpression = \"{expr}\"\n\n[time]"));
+            SceneFile::parse(&text, "mem.toml").unwrap().resolve(&Overrides::default())
+        };
+        assert_eq!(with("x_dot - t").unwrap().constraints[0].kind, ConstraintKind::Velocity);
+        assert_eq!(with("x - sin(t)").unwrap().constraints[0].kind, ConstraintKind::Position);
+        // x_dot − x_dot simplifies to 0: no coordinate, no velocity.
+        let msg = with("x_dot - x_dot + t").unwrap_err().to_string();
+        assert!(msg.contains("mem.toml:18:14") && msg.contains("depends on neither"), "{msg}");
+        let msg = with("x + tt").unwrap_err().to_string();
+        assert!(msg.contains("unknown symbol `tt`") && msg.contains("known names: x, x_dot, t, m, g, h0"), "{msg}");
+    }
+
+    #[test]
     fn override_of_unknown_parameter_is_an_error() {
         let f = SceneFile::parse(MINIMAL, "mem.toml").unwrap();
         let ov = Overrides { set: vec![("nope".into(), "1".into())], ..Default::default() };
