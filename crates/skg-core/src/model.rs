@@ -339,6 +339,7 @@ impl<'s> ExpressionParser<'s> {
     /// Parse the spanned string at `key`; an error carries its position in the file and,
     /// for an unknown name, the list of known ones.
     fn parse(&mut self, src: &Spanned<String>, key: &str) -> Result<ExprId, SceneError> {
+        // ExpressionNames numbers q_i as i and v_i as d + i, as LocalLayout does.
         let names = ExpressionNames { coordinates: &self.scene.coordinates, parameters: &self.scene.parameters, time: self.layout.time() };
         self.scene.file.parse_expression(&mut self.graph, src, key, &names)
     }

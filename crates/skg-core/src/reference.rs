@@ -30,13 +30,13 @@
 //! `μ N |∇h| d̂` along the friction direction, until lift-off, located as the zero crossing
 //! of `N` ([`Contact`] phases are listed in the provenance).
 //!
-//! Not covered, each an error rather than a wrong answer: walls together with velocity
-//! or position constraints (the impact law would have to respect the constraints),
-//! moving walls (a gap that depends on `t`: the impact law would need the wall's
-//! velocity, and a Gaussian moving wall's regularized reference is the reference),
-//! sticking under
-//! velocity-dependent friction (a particle coming to rest in contact), and impacts that
-//! accumulate without settling into contact.
+//! Explicit time in the Lagrangian and the forces is integrated like any other state
+//! dependence. Not covered, each an error rather than a wrong answer: walls together with
+//! velocity or position constraints (the impact law would have to respect the
+//! constraints), moving walls (a gap that depends on `t`: the impact law would need the
+//! wall's velocity, the sliding law its acceleration; the regularized reference covers
+//! them), sticking under velocity-dependent friction (a particle coming to rest in
+//! contact), and impacts that accumulate without settling into contact.
 //!
 //! Data flow: scene → model → time stepping → [`Reference`] (a [`Trajectory`] and how it
 //! was made); [`crate::output::write_reference`] writes it as CSV.

@@ -444,8 +444,7 @@ pub struct Wall {
 
 /// What a `[[constraints]]` expression constrains, decided by whether it depends on the
 /// velocities (docs/mathematics.md §1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ConstraintKind {
     /// `g(q, q̇, t) = 0`: depends on the velocities (linearly or not).
     Velocity,
@@ -456,7 +455,7 @@ pub enum ConstraintKind {
 }
 
 /// A declared constraint, classified.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Constraint {
     /// The constraint's name.
     pub name: String,
