@@ -271,3 +271,10 @@ fn a_start_not_strictly_inside_the_walls_is_refused_with_the_gap() {
     let s = variant(dir.path(), "vibrating_plate", &[("initial = 0.5", "initial = 0.04"), ("start = 0", "start = 0.125")]);
     expect_error(dir.path(), &s, &[], &["wall `plate`", "1.000000e-2"]);
 }
+
+#[test]
+fn a_friction_direction_of_the_wrong_length_is_refused_where_it_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "incline_friction", &[("friction_direction = [\"1\", \"tan(alpha)\"]", "friction_direction = [\"1\"]")]);
+    expect_error(dir.path(), &s, &[], &[&position_of(&s, "\"1\"]"), "friction_direction has 1 components, the scene has 2 coordinates"]);
+}

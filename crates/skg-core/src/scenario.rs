@@ -767,11 +767,16 @@ impl SceneFile {
             };
             if let Some(dir) = &w.friction_direction {
                 if dir.len() != coordinates.len() {
-                    return Err(self.toml_error(format!(
+                    let location = match dir.first() {
+                        Some(c) => self.origin.locate_in(c, None),
+                        None => self.origin.locate_in(&w.name, None),
+                    };
+                    let message = format!(
                         "wall `{name}`: friction_direction has {} components, the scene has {} coordinates",
                         dir.len(),
                         coordinates.len()
-                    )));
+                    );
+                    return Err(SceneError::Invalid { location, message });
                 }
             }
             walls.push(Wall { name, strength, width, friction, friction_velocity });
