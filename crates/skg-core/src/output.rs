@@ -11,7 +11,7 @@ use serde::Serialize;
 
 use crate::provenance;
 use crate::reference::{self, Reference};
-use crate::scenario::Scene;
+use crate::scenario::{ConstraintKind, Scene};
 use crate::solve::Outcome;
 use crate::trajectory::Trajectory;
 
@@ -71,14 +71,17 @@ pub fn trajectory_header(scene: &Scene) -> Vec<String> {
         h.push(format!("{c}_dot"));
     }
     for c in &scene.constraints {
-        h.push(format!("lambda_{c}"));
+        h.push(format!("lambda_{}", c.name));
     }
     h.push("energy".into());
     if !scene.walls.is_empty() {
         h.push("wall_energy".into());
     }
     for c in &scene.constraints {
-        h.push(format!("residual_{c}"));
+        h.push(format!("residual_{}", c.name));
+    }
+    for c in scene.constraints.iter().filter(|c| c.kind == ConstraintKind::Position) {
+        h.push(format!("drift_{}", c.name));
     }
     for w in &scene.walls {
         h.push(format!("gap_{}", w.name));
@@ -101,6 +104,7 @@ pub fn trajectory_rows(tr: &Trajectory) -> Vec<Vec<f64>> {
                 row.push(tr.wall_energy[k]);
             }
             row.extend(&tr.g[k]);
+            row.extend(&tr.drift[k]);
             row.extend(&tr.h[k]);
             row
         })
