@@ -19,7 +19,7 @@ use commands::{bench, check, plot, reference, solve, sweep, tune};
 action of the scene is discretized in time with summation-by-parts operators and its critical point \
 — the whole trajectory at once — is found by Ipopt with exact sparse derivatives.\n\n\
 Writes DIR/trajectory.csv (t, each coordinate and its velocity Dq, each multiplier, the energy, the \
-walls' potential energy, each constraint residual, each wall gap) and DIR/summary.json (status, iterations, timings, sizes, \
+walls' potential energy, each constraint residual, each position constraint's drift, each wall gap) and DIR/summary.json (status, iterations, timings, sizes, \
 residuals).\n\n\
 Exit status, the same for every command: 0 success; 1 an error in the input or while reading or writing \
 files (the message names the file, line and column); 2 a command-line usage error; 3 the solve did not \

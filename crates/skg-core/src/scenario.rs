@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
 use crate::sbp::OperatorKind;
-use skg_expr::{Graph, ParseError, Symbol};
+use skg_expr::{ExprId, Graph, ParseError, ParseErrorKind, Symbol};
 
 /// Errors in a scene file or its overrides. Each names the file and, where it can,
 /// the line and column.
@@ -154,7 +154,8 @@ pub struct SceneMeta {
     /// Free text.
     #[serde(default)]
     pub description: String,
-    /// L(q, q̇) in terms of coordinates `x`, velocities `x_dot` and parameters.
+    /// L(q, q̇, t) in terms of coordinates `x`, velocities `x_dot`, the time `t` and
+    /// parameters.
     pub lagrangian: Spanned<String>,
 }
 
@@ -170,13 +171,15 @@ pub struct CoordinateSpec {
     pub velocity: Spanned<NumOrExpr>,
 }
 
-/// One `[[constraints]]` entry: a velocity constraint.
+/// One `[[constraints]]` entry: a velocity or a position constraint ([`ConstraintKind`]).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConstraintSpec {
-    /// The constraint's name (columns `lambda_<name>`, `residual_<name>`).
+    /// The constraint's name (columns `lambda_<name>`, `residual_<name>` and, for a
+    /// position constraint, `drift_<name>`).
     pub name: Spanned<String>,
-    /// g(q, q̇) = 0, linear or nonlinear in the velocities.
+    /// g(q, q̇, t) = 0, linear or nonlinear in the velocities, or h(q, t) = 0 without
+    /// velocities.
     pub expression: Spanned<String>,
 }
 
@@ -186,7 +189,7 @@ pub struct ConstraintSpec {
 pub struct WallSpec {
     /// The wall's name (column `gap_<name>`, keys of per-wall diagnostics).
     pub name: Spanned<String>,
-    /// h(q): the allowed side is h ≤ 0.
+    /// h(q, t): the allowed side is h ≤ 0.
     pub h: Spanned<String>,
     /// A in F_N = -A δ_σ(h) ∇h.
     pub strength: Spanned<NumOrExpr>,
@@ -195,8 +198,9 @@ pub struct WallSpec {
     /// Kinetic friction coefficient μ (0 = no friction term at all).
     #[serde(default)]
     pub friction: Option<Spanned<NumOrExpr>>,
-    /// Fixed friction direction (expressions, normalized by the tool); when absent the
-    /// friction opposes the tangential velocity.
+    /// Friction direction, one expression per coordinate of the parameters,
+    /// coordinates, velocities and `t` (normalized by the tool); when absent the friction
+    /// opposes the tangential velocity.
     #[serde(default)]
     pub friction_direction: Option<Vec<Spanned<String>>>,
     /// ε in |v∥| ≈ sqrt(|v∥|² + ε²), which keeps friction differentiable at rest.
@@ -490,6 +494,27 @@ pub struct Wall {
     pub friction_velocity: f64,
 }
 
+/// What a `[[constraints]]` expression constrains, decided by whether it depends on the
+/// velocities (docs/mathematics.md §1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ConstraintKind {
+    /// `g(q, q̇, t) = 0`: depends on the velocities (linearly or not).
+    Velocity,
+    /// `h(q, t) = 0`: no velocities (a holonomic constraint). Enforced through its total
+    /// time derivative `∇h·q̇ + ∂h/∂t = 0`, a velocity constraint linear in `q̇`, together
+    /// with the check `h(q₀, t₀) = 0`; its drift `h` is reported.
+    Position,
+}
+
+/// A declared constraint, classified.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Constraint {
+    /// The constraint's name.
+    pub name: String,
+    /// Velocity or position constraint.
+    pub kind: ConstraintKind,
+}
+
 /// A validated scene: every number resolved, every name checked.
 #[derive(Debug, Clone)]
 pub struct Scene {
@@ -505,8 +530,8 @@ pub struct Scene {
     pub initial_q: Vec<f64>,
     /// Initial velocities q̇(t_start).
     pub initial_v: Vec<f64>,
-    /// Constraint names, in order.
-    pub constraints: Vec<String>,
+    /// Constraints, in order.
+    pub constraints: Vec<Constraint>,
     /// Walls, in order.
     pub walls: Vec<Wall>,
     /// Start time.
@@ -532,6 +557,52 @@ pub const RESERVED: &[&str] = &["pi", "sin", "cos", "tan", "exp", "log", "sqrt",
 
 /// Suffix that turns a coordinate name into its velocity: `x` → `x_dot`.
 pub const VELOCITY_SUFFIX: &str = "_dot";
+
+/// The name of the time in the model's expressions (Lagrangian, constraints, forces,
+/// walls); no parameter or coordinate may take it.
+pub const TIME: &str = "t";
+
+/// What the names of a scene's model expressions mean: coordinate `i` is variable `i`,
+/// its velocity `<name>_dot` variable `d + i`, the time `t` variable `time`, and a
+/// parameter its value.
+#[derive(Debug, Clone, Copy)]
+pub struct ExpressionNames<'a> {
+    /// Coordinate names, in order.
+    pub coordinates: &'a [String],
+    /// Parameter values.
+    pub parameters: &'a IndexMap<String, f64>,
+    /// The variable index of the time `t`.
+    pub time: usize,
+}
+
+impl ExpressionNames<'_> {
+    /// What `name` means, or `None` if it is unknown.
+    pub fn resolve(&self, name: &str) -> Option<Symbol> {
+        let coordinate = |c: &str| self.coordinates.iter().position(|x| x == c);
+        if let Some(i) = coordinate(name) {
+            return Some(Symbol::Var(i));
+        }
+        if let Some(i) = name.strip_suffix(VELOCITY_SUFFIX).and_then(coordinate) {
+            return Some(Symbol::Var(self.coordinates.len() + i));
+        }
+        if name == TIME {
+            return Some(Symbol::Var(self.time));
+        }
+        self.parameters.get(name).map(|v| Symbol::Const(*v))
+    }
+
+    /// The list of valid names, for the hint of an unknown-name error.
+    fn hint(&self) -> String {
+        let mut names: Vec<String> = Vec::new();
+        for c in self.coordinates {
+            names.push(c.clone());
+            names.push(format!("{c}{VELOCITY_SUFFIX}"));
+        }
+        names.push(TIME.to_string());
+        names.extend(self.parameters.keys().cloned());
+        format!("known names: {}, pi", names.join(", "))
+    }
+}
 
 /// Errors of reading a TOML input file ([`read_toml`], [`parse_toml`]).
 #[derive(Debug, thiserror::Error)]
@@ -612,6 +683,45 @@ impl SceneFile {
         }
     }
 
+    /// Parse a model expression (Lagrangian, constraint, force, wall) at the spanned
+    /// string `src` into `graph`, with the meaning of names given by `names`. An error
+    /// carries its position in the file and, for an unknown name, the list of known ones.
+    pub fn parse_expression(
+        &self,
+        graph: &mut Graph,
+        src: &Spanned<String>,
+        key: &str,
+        names: &ExpressionNames,
+    ) -> Result<ExprId, SceneError> {
+        graph.parse(src.get_ref(), &mut |name| names.resolve(name)).map_err(|mut e| {
+            if e.kind == ParseErrorKind::UnknownSymbol {
+                e.hint = Some(names.hint());
+            }
+            self.expression_error(src, key, e)
+        })
+    }
+
+    /// Whether a constraint depends on the velocities (a velocity constraint) or only
+    /// on the coordinates and `t` (a position constraint); one that depends on neither
+    /// coordinates nor velocities constrains nothing and is an error.
+    fn constraint_kind(&self, c: &ConstraintSpec, names: &ExpressionNames) -> Result<ConstraintKind, SceneError> {
+        let name = c.name.get_ref();
+        let mut graph = Graph::new();
+        let e = self.parse_expression(&mut graph, &c.expression, &format!("constraints.{name}.expression"), names)?;
+        let d = names.coordinates.len();
+        let vars = graph.variables(e);
+        if vars.iter().any(|&k| (d..2 * d).contains(&k)) {
+            Ok(ConstraintKind::Velocity)
+        } else if vars.iter().any(|&k| k < d) {
+            Ok(ConstraintKind::Position)
+        } else {
+            Err(self.invalid(
+                &c.expression,
+                format!("constraint `{name}` depends on neither the coordinates nor the velocities: it constrains nothing"),
+            ))
+        }
+    }
+
     /// Evaluate a number-or-expression in terms of resolved parameters.
     pub fn eval_value(&self, v: &Spanned<NumOrExpr>, key: &str, params: &IndexMap<String, f64>) -> Result<f64, SceneError> {
         let value = match v.get_ref() {
@@ -636,6 +746,7 @@ impl SceneFile {
         for r in RESERVED {
             seen.insert(r.to_string(), "a built-in name");
         }
+        seen.insert(TIME.to_string(), "the time `t`, a reserved name in expressions");
         for p in params.keys() {
             check_identifier(p).map_err(|e| self.toml_error(format!("parameter `{p}`: {e}")))?;
             if let Some(what) = seen.insert(p.clone(), "a parameter") {
@@ -663,14 +774,15 @@ impl SceneFile {
             initial_q.push(self.eval_value(&c.initial, &format!("coordinates.{n}.initial"), &params)?);
             initial_v.push(self.eval_value(&c.velocity, &format!("coordinates.{n}.velocity"), &params)?);
         }
-        let mut constraints = Vec::new();
+        let names = ExpressionNames { coordinates: &coordinates, parameters: &params, time: 2 * coordinates.len() };
+        let mut constraints: Vec<Constraint> = Vec::new();
         for c in &self.constraints {
             let name = c.name.get_ref();
             check_identifier(name).map_err(|e| self.invalid(&c.name, e.to_string()))?;
-            if constraints.contains(name) {
+            if constraints.iter().any(|x| &x.name == name) {
                 return Err(self.invalid(&c.name, format!("constraint `{name}` declared twice")));
             }
-            constraints.push(name.clone());
+            constraints.push(Constraint { name: name.clone(), kind: self.constraint_kind(c, &names)? });
         }
         for (name, v) in &self.forces {
             if !coordinates.contains(name) {
@@ -711,11 +823,16 @@ impl SceneFile {
             };
             if let Some(dir) = &w.friction_direction {
                 if dir.len() != coordinates.len() {
-                    return Err(self.toml_error(format!(
+                    let location = match dir.first() {
+                        Some(c) => self.origin.locate_in(c, None),
+                        None => self.origin.locate_in(&w.name, None),
+                    };
+                    let message = format!(
                         "wall `{name}`: friction_direction has {} components, the scene has {} coordinates",
                         dir.len(),
                         coordinates.len()
-                    )));
+                    );
+                    return Err(SceneError::Invalid { location, message });
                 }
             }
             walls.push(Wall { name, strength, width, friction, friction_velocity });
@@ -930,9 +1047,26 @@ impl SceneFile {
 }
 
 /// Evaluate an expression that may use only parameters (already resolved) and `pi`.
+/// The time `t` is unknown here, with a hint that says why.
 pub fn eval_constant(src: &str, params: &IndexMap<String, f64>) -> Result<f64, ParseError> {
     let mut g = Graph::new();
-    let e = g.parse(src, &mut |name| params.get(name).map(|v| Symbol::Const(*v)))?;
+    let mut asked_for_time = false;
+    let e = g
+        .parse(src, &mut |name| {
+            asked_for_time |= name == TIME;
+            params.get(name).map(|v| Symbol::Const(*v))
+        })
+        .map_err(|e| {
+            // An unknown name stops the parse at once, so the time was the unknown name.
+            if asked_for_time {
+                e.with_hint(
+                    "the time `t` may appear in the Lagrangian, constraints, forces and walls only; \
+                     parameters, initial values and the numbers of [[walls]] and [time] are constants",
+                )
+            } else {
+                e
+            }
+        })?;
     Ok(g.eval(e, &[]))
 }
 
@@ -1011,6 +1145,21 @@ nodes = 16
         let msg = err.to_string();
         assert!(msg.contains("mem.toml:9:"), "{msg}");
         assert!(msg.contains("gg"), "{msg}");
+    }
+
+    #[test]
+    fn constraints_are_classified_by_whether_they_use_velocities() {
+        let with = |expr: &str| {
+            let text = MINIMAL.replace("[time]", &format!("[[constraints]]\nname = \"c\"\nexpression = \"{expr}\"\n\n[time]"));
+            SceneFile::parse(&text, "mem.toml").unwrap().resolve(&Overrides::default())
+        };
+        assert_eq!(with("x_dot - t").unwrap().constraints[0].kind, ConstraintKind::Velocity);
+        assert_eq!(with("x - sin(t)").unwrap().constraints[0].kind, ConstraintKind::Position);
+        // x_dot − x_dot simplifies to 0: no coordinate, no velocity.
+        let msg = with("x_dot - x_dot + t").unwrap_err().to_string();
+        assert!(msg.contains("mem.toml:18:14") && msg.contains("depends on neither"), "{msg}");
+        let msg = with("x + tt").unwrap_err().to_string();
+        assert!(msg.contains("unknown symbol `tt`") && msg.contains("known names: x, x_dot, t, m, g, h0"), "{msg}");
     }
 
     #[test]

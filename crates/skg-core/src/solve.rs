@@ -21,7 +21,7 @@ use crate::contact;
 use crate::model::{Model, Workspace};
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
-use crate::scenario::{Formulation, HessianMode, IpoptValue, Scene, SceneError, Wall};
+use crate::scenario::{ConstraintKind, Formulation, HessianMode, IpoptValue, Scene, SceneError, Wall};
 use crate::time_stepping::{integrate_model, min_spacing};
 use crate::trajectory::{NodeSeries, States, Trajectory};
 use crate::verify::{self, Verification, VerifyStatus};
@@ -144,9 +144,16 @@ pub struct Diagnostics {
     pub max_constraint_interior: f64,
     /// max |g^a| at the last node, where the constraints are not enforced.
     pub constraint_last_node: f64,
+    /// max |h| over all nodes of each position constraint `h(q, t) = 0` (keyed by its
+    /// name): the drift of a constraint enforced through its time derivative.
+    pub max_position_drift: IndexMap<String, f64>,
+    /// Whether the scene depends on the time `t` explicitly; the energy is then not
+    /// conserved, and `energy_drift` measures the work of the time dependence.
+    pub depends_on_time: bool,
     /// max |E_k − E_1| of the total energy E = energy + wall_energy over nodes 1..N−2
     /// (the last two excluded: their equations are the boundary closure). Conserved up
-    /// to the discretization error unless friction or other non-conservative forces act.
+    /// to the discretization error unless friction or other non-conservative forces act
+    /// or the scene depends on `t` explicitly.
     pub energy_drift: f64,
     /// The same over all nodes.
     pub energy_drift_all: f64,
@@ -447,11 +454,11 @@ pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
 }
 
 /// Build the discrete action of a scene on `nodes` nodes of spacing `dt`, from the scene's
-/// initial state (a window changes it with [`Action::set_initial_state`]).
+/// initial state (a window re-targets it with [`Action::set_window`]).
 pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, SolveError> {
     let model = Model::build(scene)?;
     let op = SbpOperator::new(scene.operator, nodes, dt)?;
-    Ok(Action::new(model, op, scene.initial_q.clone(), scene.initial_v.clone()))
+    Ok(Action::new(model, op, scene.t_start, scene.initial_q.clone(), scene.initial_v.clone()))
 }
 
 /// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
@@ -573,7 +580,8 @@ fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut V
             // Steps at most the node spacing: a larger step can jump across a thin wall
             // that the error estimate never sees (free flight is integrated exactly).
             let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step: min_spacing(times), ..OdeOptions::default() };
-            match integrate_model(&action.model, &action.q0, &action.v0, times, &opts) {
+            let (q0, v0) = (action.q0(), action.v0());
+            match integrate_model(&action.model, q0, v0, times, &opts) {
                 Ok((States { q, lambda, .. }, _)) => (
                     q.clone(),
                     lambda,
@@ -582,8 +590,7 @@ fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut V
                 ),
                 Err(e) => {
                     warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
-                    let q: NodeSeries =
-                        times.iter().map(|t| (0..d).map(|i| action.q0[i] + action.v0[i] * (t - times[0])).collect()).collect();
+                    let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
                     (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
                 }
             }
@@ -680,13 +687,13 @@ fn run_ipopt(
     })
 }
 
-/// The settings a scene is solved with.
-fn settings(scene: &Scene, initial_guess: String) -> Settings {
+/// The settings a scene is solved with on the grid `times`.
+fn settings(scene: &Scene, times: &[f64], initial_guess: String) -> Settings {
     Settings {
         operator: scene.operator.name().to_string(),
         nodes: scene.nodes,
-        t_start: scene.t_start,
-        t_end: scene.t_end,
+        t_start: times[0],
+        t_end: times[times.len() - 1],
         formulation: scene.formulation,
         hessian: scene.solver.hessian,
         tol: scene.solver.tol,
@@ -826,7 +833,7 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
         method: run.method,
         ipopt_version: ipopt::ipopt_version().to_string(),
         iterations: run.iterations,
-        settings: settings(scene, run.guess),
+        settings: settings(scene, &run.trajectory.t, run.guess),
         sizes: run.sizes,
         timings,
         diagnostics,
@@ -878,7 +885,7 @@ fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
     let mut ws = model.workspace();
     let q: Vec<Vec<f64>> = (0..nodes).map(|k| (0..d).map(|i| z[lay.qp[k * d + i] as usize]).collect()).collect();
     let v = apply_d(&action.op, &q);
-    let phys: Vec<_> = (0..nodes).map(|k| model.physical(&q[k], &v[k], &mut ws)).collect();
+    let phys: Vec<_> = (0..nodes).map(|k| model.physical(times[k], &q[k], &v[k], &mut ws)).collect();
     let p: Vec<Vec<f64>> = phys.iter().map(|ph| ph.p.clone()).collect();
     let dp = apply_d(&action.op, &p);
     let mut lambda = vec![vec![0.0; n]; nodes];
@@ -940,10 +947,11 @@ fn diagnose(model: &Model, run: &Run) -> Diagnostics {
     let constraint_last_node = max_abs(&tr.g[nodes - 1..]);
     let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
     let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - total[0]).abs()));
+    let positions = model.constraints.iter().filter(|c| c.kind == ConstraintKind::Position);
     let max_wall_gap = per_wall(model, |j, _| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max));
     let ts_q = run.time_stepping_q.as_deref();
     let contact_episodes_time_stepping = ts_q.map(|qs| {
-        let h: Vec<Vec<f64>> = qs.iter().map(|q| model.wall_gaps(q)).collect();
+        let h: Vec<Vec<f64>> = qs.iter().zip(&tr.t).map(|(q, &t)| model.wall_gaps(t, q)).collect();
         contact_episodes(model, &h)
     });
     let distance_from_time_stepping =
@@ -953,6 +961,8 @@ fn diagnose(model: &Model, run: &Run) -> Diagnostics {
         max_eom_residual: run.max_eom_residual,
         max_constraint_interior,
         constraint_last_node,
+        max_position_drift: positions.map(|c| c.name.clone()).zip(tr.max_drift()).collect(),
+        depends_on_time: model.depends_on_time,
         energy_drift: drift(&total[..nodes.saturating_sub(2).max(1)]),
         energy_drift_all: drift(&total),
         max_wall_gap,

@@ -9,7 +9,7 @@
 use serde::Serialize;
 
 use crate::model::{Model, Physical};
-use crate::scenario::Scene;
+use crate::scenario::{ConstraintKind, Scene};
 
 /// Values per node: `series[k][i]` is component i at node k.
 pub type NodeSeries = Vec<Vec<f64>>;
@@ -37,13 +37,17 @@ pub struct Trajectory {
     /// `λ[k][a]`; for a solve, interior nodes from the solve, end nodes from a
     /// least-squares solve of the node's equation of motion.
     pub lambda: NodeSeries,
-    /// v·∂L/∂v − L (without the walls' potential, nonzero only in contact).
+    /// v·∂L/∂v − L (without the walls' potential, nonzero only in contact; not
+    /// conserved when the scene depends on `t` explicitly).
     pub energy: Vec<f64>,
     /// The walls' potential Σ A Φ(h/σ); `energy + wall_energy` is conserved when no
     /// friction or other non-conservative force acts.
     pub wall_energy: Vec<f64>,
-    /// Constraint residuals g^a at each node.
+    /// Constraint residuals g^a at each node (for a position constraint, its time
+    /// derivative `∇h·q̇ + ∂h/∂t`).
     pub g: NodeSeries,
+    /// `h(q, t)` of each position constraint at each node: its drift.
+    pub drift: NodeSeries,
     /// Wall gaps h_j at each node (≤ 0 on the allowed side).
     pub h: NodeSeries,
 }
@@ -61,15 +65,23 @@ impl Trajectory {
             energy: phys.iter().map(|ph| ph.energy).collect(),
             wall_energy: phys.iter().map(|ph| ph.wall_energy).collect(),
             g: phys.iter().map(|ph| ph.g.clone()).collect(),
+            drift: phys.iter().map(|ph| ph.drift.clone()).collect(),
             h: phys.iter().map(|ph| ph.h.clone()).collect(),
         }
+    }
+
+    /// max over the nodes of |h| of each position constraint (its drift), in the scene's order.
+    pub fn max_drift(&self) -> Vec<f64> {
+        let positions = self.drift.first().map_or(0, Vec::len);
+        (0..positions).map(|b| self.drift.iter().fold(0.0_f64, |m, h| m.max(h[b].abs()))).collect()
     }
 
     /// The trajectory of `states` at `times` with its physical columns evaluated by
     /// `model` at each node.
     pub fn with_physical_columns(model: &Model, times: &[f64], states: States) -> Trajectory {
         let mut ws = model.workspace();
-        let phys: Vec<Physical> = states.q.iter().zip(&states.v).map(|(q, v)| model.physical(q, v, &mut ws)).collect();
+        let phys: Vec<Physical> =
+            times.iter().zip(states.q.iter().zip(&states.v)).map(|(&t, (q, v))| model.physical(t, q, v, &mut ws)).collect();
         Trajectory::from_physical(times, states, &phys)
     }
 }
@@ -82,14 +94,17 @@ pub fn trajectory_header(scene: &Scene) -> Vec<String> {
         h.push(format!("{c}_dot"));
     }
     for c in &scene.constraints {
-        h.push(format!("lambda_{c}"));
+        h.push(format!("lambda_{}", c.name));
     }
     h.push("energy".into());
     if !scene.walls.is_empty() {
         h.push("wall_energy".into());
     }
     for c in &scene.constraints {
-        h.push(format!("residual_{c}"));
+        h.push(format!("residual_{}", c.name));
+    }
+    for c in scene.constraints.iter().filter(|c| c.kind == ConstraintKind::Position) {
+        h.push(format!("drift_{}", c.name));
     }
     for w in &scene.walls {
         h.push(format!("gap_{}", w.name));
@@ -112,6 +127,7 @@ pub fn trajectory_rows(tr: &Trajectory) -> Vec<Vec<f64>> {
                 row.push(tr.wall_energy[k]);
             }
             row.extend(&tr.g[k]);
+            row.extend(&tr.drift[k]);
             row.extend(&tr.h[k]);
             row
         })
@@ -129,6 +145,7 @@ impl Trajectory {
             energy: Vec::new(),
             wall_energy: Vec::new(),
             g: Vec::new(),
+            drift: Vec::new(),
             h: Vec::new(),
         }
     }
@@ -142,6 +159,7 @@ impl Trajectory {
         self.energy.extend_from_slice(&other.energy[nodes.clone()]);
         self.wall_energy.extend_from_slice(&other.wall_energy[nodes.clone()]);
         self.g.extend_from_slice(&other.g[nodes.clone()]);
+        self.drift.extend_from_slice(&other.drift[nodes.clone()]);
         self.h.extend_from_slice(&other.h[nodes]);
     }
 
@@ -156,6 +174,7 @@ impl Trajectory {
         self.energy.push(f64::NAN);
         self.wall_energy.push(f64::NAN);
         self.g.push(nan_like(&self.g));
+        self.drift.push(nan_like(&self.drift));
         self.h.push(nan_like(&self.h));
     }
 }

@@ -159,6 +159,10 @@ pub enum TuneError {
         /// The scene's parameters.
         known: Vec<String>,
     },
+    /// The scene depends on the time explicitly: its energy is not conserved between
+    /// contacts, so the energy artifact measures nothing.
+    #[error("the scene depends on the time t explicitly, so its energy is not conserved between contacts and the energy artifact cannot choose the wall width")]
+    TimeDependent,
     /// The starting value of the parameter is not positive.
     #[error("`{param}` must be positive to be tuned, got {value}")]
     NotPositive {
@@ -215,6 +219,9 @@ pub fn tune_width(
         return Err(TuneError::BadTolerance(opts.tol));
     }
     let base = file.clone().resolve(ov)?;
+    if crate::model::Model::build(&base)?.depends_on_time {
+        return Err(TuneError::TimeDependent);
+    }
     let current = *base
         .parameters
         .get(&param)

@@ -83,7 +83,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
     let mut start = 0;
     loop {
         let times: Vec<f64> = (0..grid.nodes).map(|k| scene.t_start + (start + k) as f64 * grid.dt).collect();
-        action.set_initial_state(&q0, &v0);
+        action.set_window(times[0], &q0, &v0);
         let piece = solve_piece(scene, &action, &plans, &times, &Guess::TimeStepping)?;
         timings.add(&piece.timings);
         iterations += piece.iterations;

@@ -87,7 +87,11 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
             println!("  solved as {}", outcome.method);
         }
         println!("  verified: {} ({})", v.status, v.reason);
-        println!("  residual {:.1e}, energy drift {:.3e} (last two nodes excluded)", d.max_residual, d.energy_drift);
+        let energy_note = if d.depends_on_time { "; not conserved: the scene depends on t" } else { "" };
+        println!("  residual {:.1e}, energy drift {:.3e} (last two nodes excluded{energy_note})", d.max_residual, d.energy_drift);
+        for (name, drift) in &d.max_position_drift {
+            println!("  position constraint {name}: drift max |h| {drift:.1e}");
+        }
         for path in written.paths() {
             println!("  wrote {}", path.display());
         }

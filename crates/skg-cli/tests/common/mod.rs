@@ -29,7 +29,17 @@ pub fn sweep_file(dir: &Path, scene: &Path, body: &str) -> PathBuf {
 }
 
 /// Every shipped scene.
-pub const SHIPPED: &[&str] = &["free_fall", "rolling_disk", "tumbler", "incline_friction", "incline_frictionless", "knife_edge"];
+pub const SHIPPED: &[&str] = &[
+    "free_fall",
+    "rolling_disk",
+    "tumbler",
+    "incline_friction",
+    "incline_frictionless",
+    "knife_edge",
+    "driven_oscillator",
+    "pendulum",
+    "vibrating_plate",
+];
 
 pub fn load(name: &str, ov: &Overrides) -> Scene {
     SceneFile::load(&scenario(name)).unwrap().resolve(ov).unwrap()
