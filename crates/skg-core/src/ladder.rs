@@ -13,12 +13,16 @@
 //!
 //!    Both only change the initial guess: a converged result is the critical point of the
 //!    scene's own discrete action.
-//! 3. **Windows** (whether or not step 1 converged): the span in windows of half the span
+//! 3. **Past the end** (a global solve only): one solve over the span extended by
+//!    [`END_MARGIN`] of it, of which the nodes up to the end time are kept: the end
+//!    closure, which carries errors backward (a contact just before the final time
+//!    pollutes the run), then lies outside the reported span.
+//! 4. **Windows** (whether or not step 1 converged): the span in windows of half the span
 //!    (or half the scene's window), each discarding its last quarter, halving the length
 //!    until a run converges and verifies or a window would have fewer than
 //!    [`MIN_WINDOW_NODES`] nodes. This cures the parasitic odd-even mode that damping or
-//!    contraction amplifies, contacts near the end of the span, and convergence failures
-//!    of long or contact-rich spans ([`crate::window`]).
+//!    contraction amplifies, and convergence failures of long or contact-rich spans
+//!    ([`crate::window`]).
 //!
 //! The first run that converges and verifies is reported; if none does, the converged run
 //! with the smallest verification error, else the scene's own run. Every run is listed
@@ -38,6 +42,8 @@ use crate::window::{self, WindowGrid};
 pub const MIN_WINDOW_NODES: usize = 24;
 /// Factors of the wall widths in the continuation, widest first.
 pub const WIDTH_FACTORS: [f64; 3] = [8.0, 4.0, 2.0];
+/// How far past the end time step 3 solves, as a fraction of the span.
+pub const END_MARGIN: f64 = 0.25;
 
 /// Solve `scene`: its own solve, then the ladder while it fails (see the module docs).
 pub fn solve(scene: &Scene) -> Result<Outcome, SolveError> {
@@ -52,6 +58,9 @@ pub fn solve(scene: &Scene) -> Result<Outcome, SolveError> {
     }
     let converged = ladder.tried[0].outcome.converged();
     if !converged && scene.windows.is_none() && (ladder.coarse_to_fine()? || ladder.width_continuation()?) {
+        return Ok(ladder.finish());
+    }
+    if scene.windows.is_none() && ladder.past_the_end()? {
         return Ok(ladder.finish());
     }
     ladder.windows()?;
@@ -138,7 +147,18 @@ impl Ladder<'_> {
         Ok(self.succeeded())
     }
 
-    /// Step 3: windows of halving length.
+    /// Step 3: one solve extended past the end time; `Ok(true)` when it succeeded.
+    fn past_the_end(&mut self) -> Result<bool, SolveError> {
+        let span = self.scene.t_end - self.scene.t_start;
+        let windows = Windows { length: span * (1.0 + END_MARGIN), overlap: span * END_MARGIN };
+        if WindowGrid::new(self.scene, windows).is_err() {
+            return Ok(false);
+        }
+        self.attempt(&format!("one solve {:.0} % past the end time", 100.0 * END_MARGIN), || window::solve_windows(self.scene, windows))?;
+        Ok(self.succeeded())
+    }
+
+    /// Step 4: windows of halving length.
     fn windows(&mut self) -> Result<(), SolveError> {
         let scene = self.scene;
         let mut length = scene.windows.map_or(scene.t_end - scene.t_start, |w| w.length) / 2.0;

@@ -278,6 +278,35 @@ mod tests {
         assert!(a["y"] <= 1e-8 / 16.0 * 1.0001, "{a:?}");
     }
 
+    /// Free motion x = t: the exact trajectory passes; a NaN in a derived column fails,
+    /// even with verification switched off, and the reason names the column and node.
+    #[test]
+    fn an_exact_trajectory_passes_and_a_non_finite_value_always_fails() {
+        use crate::model::Model;
+        use crate::scenario::{Overrides, SceneFile};
+        use crate::trajectory::States;
+        let text = "[scene]\nname = \"s\"\nlagrangian = \"x_dot^2/2\"\n[[coordinates]]\nname = \"x\"\ninitial = 0\nvelocity = 1\n\
+                    [time]\nstart = 0\nend = 1\nnodes = 8\n";
+        let resolve = |ov: &Overrides| SceneFile::parse(text, "s.toml").unwrap().resolve(ov).unwrap();
+        let scene = resolve(&Overrides::default());
+        let model = Model::build(&scene).unwrap();
+        let times: Vec<f64> = (0..8).map(|k| k as f64 / 7.0).collect();
+        let states = States { q: times.iter().map(|&t| vec![t]).collect(), v: vec![vec![1.0]; 8], lambda: vec![vec![]; 8] };
+        let mut tr = Trajectory::with_physical_columns(&model, &times, states);
+        let v = verify(&scene, &model, &tr);
+        assert_eq!(v.status, VerifyStatus::Passed, "{}", v.reason);
+        assert!(v.max_error.unwrap() < 1e-12);
+        tr.energy[5] = f64::NAN;
+        for ov in [Overrides::default(), Overrides { no_verify: true, ..Default::default() }] {
+            let v = verify(&resolve(&ov), &model, &tr);
+            assert_eq!(v.status, VerifyStatus::Failed);
+            assert!(v.reason.contains("energy = NaN at node 6"), "{}", v.reason);
+        }
+        tr.energy[5] = 0.5;
+        let v = verify(&resolve(&Overrides { no_verify: true, ..Default::default() }), &model, &tr);
+        assert_eq!(v.status, VerifyStatus::Skipped);
+    }
+
     #[test]
     fn scale_is_the_largest_coordinate_range() {
         let q = vec![vec![0.0, 5.0], vec![2.0, 4.0], vec![-1.0, 4.5]];

@@ -13,15 +13,19 @@
 //!
 //! Grid: the scene's nodes `t_k = t_start + k Δt` extended past `t_end` as far as the
 //! last window needs. A window of `n_w = round(length/Δt) + 1` nodes starting at global
-//! node `s` keeps nodes `s … s + r − 1` with `r = n_w − 1 − round(overlap/Δt)`; the next
-//! window starts at node `s + r` from this window's `(q, Dq)` there. Each window's
-//! initial guess is time stepping from its own initial state.
+//! node `s` keeps nodes `s … s + r − 1` with `r ≤ n_w − 1 − round(overlap/Δt)`; the next
+//! window starts at node `s + r` from this window's `(q, Dq)` there. `r` is the largest
+//! such index whose node and its two neighbours on each side are out of contact with
+//! every wall ([`crate::contact`]), searched down to half the window, so that no window
+//! starts inside a bounce (else the largest). Each window's initial guess is time
+//! stepping from its own initial state.
 //!
 //! A window that does not converge ends the run: the nodes after its start are not
 //! computed (NaN in the trajectory) and the run's status is that window's.
 
 use std::time::Instant;
 
+use crate::contact;
 use crate::scenario::{Scene, Windows};
 use crate::solve::{self, build_action_on, solve_piece, Guess, Method, Plans, Run, SolveError, Timings};
 use crate::trajectory::Trajectory;
@@ -33,9 +37,10 @@ pub struct WindowGrid {
     pub dt: f64,
     /// Nodes of each window's solve.
     pub nodes: usize,
-    /// Nodes each window keeps; the next window starts at this local index.
+    /// Nodes each window keeps at most; the next window starts at this local index or,
+    /// to avoid starting in contact, earlier.
     pub keep: usize,
-    /// Number of windows covering the scene's nodes.
+    /// Number of windows covering the scene's nodes if every window keeps `keep` nodes.
     pub count: usize,
 }
 
@@ -80,7 +85,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
     let (mut iterations, mut history) = (0, Vec::new());
     let (mut max_residual, mut max_eom_residual, mut max_minus_variable) = (0.0_f64, 0.0_f64, None::<f64>);
     let (mut q0, mut v0) = (scene.initial_q.clone(), scene.initial_v.clone());
-    let mut start = 0;
+    let (mut start, mut count) = (0, 0);
     loop {
         let times: Vec<f64> = (0..grid.nodes).map(|k| scene.t_start + (start + k) as f64 * grid.dt).collect();
         action.set_window(times[0], &q0, &v0);
@@ -92,7 +97,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
         max_eom_residual = max_eom_residual.max(piece.max_eom_residual);
         max_minus_variable = piece.max_minus_variable.map(|m| m.max(max_minus_variable.unwrap_or(0.0)));
         let last = start + grid.nodes >= total;
-        let keep = if last { total - start } else { grid.keep };
+        let keep = if last { total - start } else { restart_node(scene, &piece.trajectory, grid.keep) };
         trajectory.extend_from(&piece.trajectory, 0..keep);
         time_stepping_q = match (time_stepping_q, &piece.time_stepping_q) {
             (Some(mut acc), Some(ts)) => {
@@ -103,6 +108,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
         };
         if !piece.status.is_converged() {
             run_status = Some(piece.status);
+            count += 1;
             for k in start + keep..total {
                 trajectory.push_not_computed(scene.t_start + k as f64 * grid.dt);
             }
@@ -110,16 +116,17 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
             break;
         }
         run_status.get_or_insert(piece.status);
+        count += 1;
         if last {
             break;
         }
-        q0 = piece.trajectory.q[grid.keep].clone();
-        v0 = piece.trajectory.v[grid.keep].clone();
-        start += grid.keep;
+        q0 = piece.trajectory.q[keep].clone();
+        v0 = piece.trajectory.v[keep].clone();
+        start += keep;
     }
     let length = (grid.nodes - 1) as f64 * grid.dt;
     Ok(Run {
-        method: Method::Windows { length, overlap: length - grid.keep as f64 * grid.dt, nodes_per_window: grid.nodes, count: grid.count },
+        method: Method::Windows { length, overlap: length - grid.keep as f64 * grid.dt, nodes_per_window: grid.nodes, count },
         status: run_status.expect("at least one window"),
         iterations,
         history,
@@ -133,6 +140,19 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
         timings,
         sizes,
     })
+}
+
+/// Neighbours on each side of a restart node that must be out of contact too.
+const RESTART_CLEARANCE: usize = 2;
+
+/// The local node the next window starts from: the largest `k ≤ keep`, down to `keep / 2`,
+/// with nodes `k − 2 … k + 2` out of contact with every wall; `keep` if there is none.
+fn restart_node(scene: &Scene, tr: &Trajectory, keep: usize) -> usize {
+    let free = |k: usize| {
+        (k - RESTART_CLEARANCE..=k + RESTART_CLEARANCE)
+            .all(|m| scene.walls.iter().enumerate().all(|(j, w)| !contact::in_contact(tr.h[m][j], w.width)))
+    };
+    (keep / 2..=keep).rev().find(|&k| k >= RESTART_CLEARANCE && k + RESTART_CLEARANCE < tr.t.len() && free(k)).unwrap_or(keep)
 }
 
 #[cfg(test)]
