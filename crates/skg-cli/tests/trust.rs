@@ -185,3 +185,35 @@ fn exit_status_says_converged_and_verified() {
     assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
     assert!(Path::new(dir.path()).join("short/summary.json").is_file());
 }
+
+/// Windows agree with the global solve where both run: the tumbler's drum over 2 s
+/// (8 bounces) and the rolling disk over four revolutions, each within its tolerance of
+/// tight time stepping and of each other.
+#[test]
+fn windows_agree_with_the_global_solve_where_both_run() {
+    for (name, set, nodes, window, tol) in [("tumbler", "2", 2049, "0.5", 1e-4), ("rolling_disk", "8*pi", 1025, "4*pi", 1e-3)] {
+        let global = Overrides { nodes: Some(nodes), no_fallback: true, verify_tol: Some(tol), ..Default::default() };
+        // The shipped scene with a longer span and, for the windowed solve, windows.
+        let scene_with = |window: Option<&str>| {
+            let mut text = std::fs::read_to_string(common::scenario(name)).unwrap();
+            let end = if name == "tumbler" { "end = 0.5" } else { "end = \"2*pi\"" };
+            assert!(text.contains(end));
+            text = text.replacen(end, &format!("end = \"{set}\""), 1);
+            if let Some(w) = window {
+                text = text.replacen("[time]", &format!("[time]\nwindow = \"{w}\""), 1);
+            }
+            skg_core::scenario::SceneFile::parse(&text, name).unwrap().resolve(&global).unwrap()
+        };
+        let (g_scene, w_scene) = (scene_with(None), scene_with(Some(window)));
+        let g = solve::solve_scene(&g_scene).unwrap();
+        let w = solve::solve_scene(&w_scene).unwrap();
+        assert!(g.trusted() && w.trusted(), "{name}: {} / {}", g.verification.reason, w.verification.reason);
+        assert!(matches!(w.method, Method::Windows { count, .. } if count > 1), "{:?}", w.method);
+        let apart = g.trajectory.q[..nodes - 2]
+            .iter()
+            .zip(&w.trajectory.q)
+            .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+            .fold(0.0_f64, f64::max);
+        assert!(apart <= tol, "{name}: windows and the global solve differ by {apart:e}");
+    }
+}

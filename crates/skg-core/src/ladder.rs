@@ -182,7 +182,9 @@ impl Ladder<'_> {
         let chosen = self.chosen();
         let attempts: Vec<Attempt> = self.tried.iter().enumerate().map(|(i, t)| record(t, i == chosen)).collect();
         let fallback_used = self.tried.len() > 1;
+        let others_s: f64 = attempts.iter().filter(|a| !a.chosen).map(|a| a.wall_s).sum();
         let mut outcome = self.tried.swap_remove(chosen).outcome;
+        outcome.timings.other_attempts_s = others_s;
         outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &outcome, fallback_used));
         outcome.attempts = attempts;
         outcome

@@ -73,6 +73,8 @@ pub struct Timings {
     pub postprocess_s: f64,
     /// Verification against time stepping ([`crate::verify`]).
     pub verification_s: f64,
+    /// Fallback attempts whose result is not the one reported ([`crate::ladder`]).
+    pub other_attempts_s: f64,
     /// Writing files (filled in by the output module).
     pub output_s: f64,
 }
@@ -88,6 +90,7 @@ impl Timings {
             ipopt_internal_s: 0.0,
             postprocess_s: 0.0,
             verification_s: 0.0,
+            other_attempts_s: 0.0,
             output_s: 0.0,
         }
     }
@@ -101,12 +104,19 @@ impl Timings {
         self.ipopt_internal_s += other.ipopt_internal_s;
         self.postprocess_s += other.postprocess_s;
         self.verification_s += other.verification_s;
+        self.other_attempts_s += other.other_attempts_s;
         self.output_s += other.output_s;
     }
 
-    /// The whole wall time of the solve.
+    /// The whole wall time of the solve, fallback attempts included.
     pub fn total(&self) -> f64 {
-        self.setup_s + self.initial_guess_s + self.ipopt_total_s + self.postprocess_s + self.verification_s + self.output_s
+        self.setup_s
+            + self.initial_guess_s
+            + self.ipopt_total_s
+            + self.postprocess_s
+            + self.verification_s
+            + self.other_attempts_s
+            + self.output_s
     }
 }
 
