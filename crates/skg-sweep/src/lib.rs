@@ -37,7 +37,8 @@
 //!   `converged`, `not_converged`, `error`, `crashed`, `timeout`), `solver_status`
 //!   (Ipopt's status name, `ODE_Succeeded` for a peer point, empty when the solver did
 //!   not finish), then `iterations`, `wall_s`, `error_max`, `error_rms`, `error_column`,
-//!   `energy_drift`, `energy_artifact`, `artifacts`, `max_residual`, `message`;
+//!   `energy_drift`, `energy_artifact` (empty unless the energy is conserved:
+//!   [`skg_core::tune::conserves_energy`]), `artifacts`, `max_residual`, `message`;
 //! * the provenance ([`Provenance`]): `skg_solve_version`, `schema_version` and
 //!   `scene_hash` (`sha256:…` of the base scene file's content, as the worker read it).
 //!
@@ -820,7 +821,10 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             (r.trajectory, Some(format!("time stepping, rtol {rtol:e}")))
         }
     };
-    rec.energy_artifact = Some(skg_core::tune::energy_artifact(&scene, &trajectory, job.skip_last).value);
+    let model = skg_core::model::Model::build(&scene).map_err(|e| e.to_string())?;
+    if skg_core::tune::conserves_energy(&scene, &model) {
+        rec.energy_artifact = Some(skg_core::tune::energy_artifact(&scene, &trajectory, job.skip_last).value);
+    }
     let solution = Table::of_trajectory(&scene, &trajectory);
     if let Some(r) = &job.reference {
         match reference_errors(&scene, r, &solution, &compare_cols, job.skip_last) {
