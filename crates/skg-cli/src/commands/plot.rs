@@ -38,7 +38,8 @@ pub enum PlotKind {
         /// (their kept trajectories); several are overlaid.
         #[arg(required = true, value_name = "SOLUTION")]
         inputs: Vec<PathBuf>,
-        /// Reference CSV to overlay (e.g. from `skg-solve reference`).
+        /// Reference CSV to overlay (e.g. from `skg-solve reference`) [default: the first
+        /// solution directory's reference.csv, the verification's time stepping, if any].
         #[arg(long, value_name = "FILE.csv")]
         reference: Option<PathBuf>,
         /// Legend label of each solution, in order [default: the directory or file name].
@@ -117,7 +118,8 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
                 });
                 sols.push((name, t));
             }
-            let r = reference.as_deref().map(Table::read).transpose()?;
+            let verification_reference = || inputs.iter().find(|p| p.is_dir()).map(|d| d.join("reference.csv")).filter(|f| f.is_file());
+            let r = reference.or_else(verification_reference).as_deref().map(Table::read).transpose()?;
             plot::trajectory(&sols, r.as_ref(), &title, &out)?
         }
     };
