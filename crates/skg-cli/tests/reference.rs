@@ -7,7 +7,6 @@ mod common;
 use common::G;
 
 use skg_core::check::Table;
-use skg_core::output;
 use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scenario::Overrides;
 use skg_core::solve;
@@ -30,7 +29,7 @@ fn has_walls(name: &str) -> bool {
 fn every_shipped_scene_has_its_reference_files() {
     for name in common::SHIPPED {
         let scene = common::load(name, &Overrides::default());
-        let header = output::trajectory_header(&scene);
+        let header = skg_core::trajectory::trajectory_header(&scene);
         let (times, _) = solve::grid(&scene);
         let mut files = vec![format!("{name}.csv")];
         if has_walls(name) {
@@ -82,18 +81,13 @@ fn regenerated_references_match_the_checked_in_files() {
 
 #[test]
 fn rolling_disk_reference_matches_closed_form() {
-    // docs/scenes.md: φ = t, x = 5 sin t + k sin²t/2, y = 5(1 − cos t) + k(t/2 − sin 2t/4),
-    // θ = 5t + k(1 − cos t), k = g sin α/(1 + I_S/(M R²)).
-    let k = G * 0.5 / 1.5;
     let t = checked_in("rolling_disk.csv");
-    let (x, y, th, ph) = (col(&t, "x"), col(&t, "y"), col(&t, "theta"), col(&t, "phi"));
+    let q = [col(&t, "x"), col(&t, "y"), col(&t, "theta"), col(&t, "phi")];
     let mut e = 0.0_f64;
     for (i, tt) in t.times().into_iter().enumerate() {
-        e = e
-            .max((x[i] - (5.0 * tt.sin() + k * tt.sin().powi(2) / 2.0)).abs())
-            .max((y[i] - (5.0 * (1.0 - tt.cos()) + k * (tt / 2.0 - (2.0 * tt).sin() / 4.0))).abs())
-            .max((th[i] - (5.0 * tt + k * (1.0 - tt.cos()))).abs())
-            .max((ph[i] - tt).abs());
+        for (c, exact) in common::rolling_disk_exact(tt).into_iter().enumerate() {
+            e = e.max((q[c][i] - exact).abs());
+        }
     }
     assert!(e < 2e-10, "max error {e:e}");
     // Constraint drift of the index-reduced integration stays at the tolerance level.
@@ -103,21 +97,18 @@ fn rolling_disk_reference_matches_closed_form() {
 
 #[test]
 fn knife_edge_reference_matches_closed_form() {
-    // scenarios/knife_edge.toml: φ = ωt, u = u0 + (g sin α/ω) sin ωt,
-    // x = u0 sin ωt/ω + g sin α sin²ωt/(2ω²), y = u0(1 − cos ωt)/ω + g sin α (t − sin 2ωt/(2ω))/(2ω),
-    // λ = m (u ω + g sin α sin ωt).
+    // scenarios/knife_edge.toml: the coordinates' closed form, and the multiplier
+    // λ = m (u ω + g sin α sin ωt) with the speed along the blade u = u0 + (g sin α/ω) sin ωt.
     let (w, u0, gs) = (2.0, 1.0, G * 0.5);
     let t = checked_in("knife_edge.csv");
-    let (x, y, ph, lam) = (col(&t, "x"), col(&t, "y"), col(&t, "phi"), col(&t, "lambda_blade"));
+    let (q, lam) = ([col(&t, "x"), col(&t, "y"), col(&t, "phi")], col(&t, "lambda_blade"));
     let mut e = 0.0_f64;
     for (i, tt) in t.times().into_iter().enumerate() {
+        for (c, exact) in common::knife_edge_exact(tt).into_iter().enumerate() {
+            e = e.max((q[c][i] - exact).abs());
+        }
         let s = (w * tt).sin();
-        let u = u0 + gs / w * s;
-        e = e
-            .max((x[i] - (u0 * s / w + gs / (2.0 * w * w) * s * s)).abs())
-            .max((y[i] - (u0 * (1.0 - (w * tt).cos()) / w + gs / (2.0 * w) * (tt - (2.0 * w * tt).sin() / (2.0 * w)))).abs())
-            .max((ph[i] - w * tt).abs())
-            .max((lam[i] - (u * w + gs * s)).abs());
+        e = e.max((lam[i] - ((u0 + gs / w * s) * w + gs * s)).abs());
     }
     assert!(e < 1e-9, "max error {e:e}");
 }

@@ -13,6 +13,7 @@ use skg_core::convergence::{fit_order, pairwise_orders};
 use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scenario::{Overrides, Scene};
 use skg_core::solve::{self, Outcome};
+use skg_core::verify::VerifyStatus;
 
 /// The solver's trajectory as a [`Table`] (the CSV it would write).
 fn table(scene: &Scene, o: &Outcome) -> Table {
@@ -53,7 +54,7 @@ fn try_discretization_error(name: &str, nodes: usize, op: &str) -> (f64, Outcome
 
 /// Max error of the tumbler's x, y against its hard-wall reference (model error).
 fn model_error(sigma: &str, nodes: usize) -> (f64, f64) {
-    let ov = Overrides { set: vec![("sigma".into(), sigma.into())], nodes: Some(nodes), ..Default::default() };
+    let ov = Overrides { set: vec![("sigma".into(), sigma.into())], nodes: Some(nodes), no_fallback: true, ..Default::default() };
     let scene = common::load("tumbler", &ov);
     let o = common::solve("tumbler", &ov);
     let (times, _) = solve::grid(&scene);
@@ -215,6 +216,11 @@ fn knife_edge_sbp121_odd_even_mode_is_flagged() {
     let o = common::solve("knife_edge", &common::grid(64, "SBP121"));
     assert!(o.diagnostics.distance_from_time_stepping.unwrap() > 1.0);
     assert!(o.warnings.iter().any(|w| w.contains("away from time stepping")), "{:?}", o.warnings);
+    // Converged, but never trusted: verification fails, with the odd-even mode named.
+    let v = &o.verification;
+    assert_eq!(v.status, VerifyStatus::Failed, "{}", v.reason);
+    assert!(v.max_error.unwrap() > 1.0 && v.odd_even_max > 0.25 * v.max_error.unwrap(), "{v:?}");
+    assert!(v.reason.contains("odd-even"), "{}", v.reason);
     let good = common::solve("knife_edge", &common::grid(64, "SBP242"));
     assert!(good.warnings.is_empty(), "{:?}", good.warnings);
 }

@@ -406,3 +406,29 @@ fn sigma_auto_selection_reproduces_the_papers_choice() {
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(v["chosen"].as_f64().unwrap() > 1.0 / 125.0);
 }
+
+/// A point that converges but does not verify is recorded as such, with the verdict and
+/// the verification error; with `fallback = true` the same point is solved as
+/// `skg-solve SCENE` would (windows) and verifies.
+#[test]
+fn unverified_points_are_recorded_and_fallback_cures_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::test_scene("damped_oscillator");
+    for (fallback, status, verification, solved_as) in
+        [("false", "not_verified", "failed", "global"), ("true", "converged", "passed", "windows")]
+    {
+        let body = format!("fallback = {fallback}\n[[grid]]\nnodes = [512]\n");
+        let p = common::sweep_file(dir.path(), &scene, &body);
+        let out = dir.path().join(format!("fallback-{fallback}"));
+        let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"], Path::new("."));
+        assert!(o.status.success(), "{}", common::text(&o));
+        let r = Results::read(&out).unwrap();
+        assert_eq!(column(&r, "status"), [status]);
+        assert_eq!(column(&r, "converged"), ["true"]);
+        assert_eq!(column(&r, "verification"), [verification]);
+        assert!(column(&r, "solved_as")[0].starts_with(solved_as), "{:?}", column(&r, "solved_as"));
+        let e: f64 = column(&r, "verify_error")[0].parse().unwrap();
+        // The plain solve's odd-even mode (4.6e-2) or the windows' 6e-5.
+        assert!(if fallback == "false" { e > 1e-2 } else { e < 1e-4 }, "{e:e}");
+    }
+}

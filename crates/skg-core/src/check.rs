@@ -74,7 +74,7 @@ pub struct Table {
 impl Table {
     /// A trajectory as the table its CSV would hold (no comments).
     pub fn of_trajectory(scene: &Scene, tr: &Trajectory) -> Table {
-        Table { columns: crate::output::trajectory_header(scene), comments: Vec::new(), rows: crate::output::trajectory_rows(tr) }
+        Table { columns: crate::trajectory::trajectory_header(scene), comments: Vec::new(), rows: crate::trajectory::trajectory_rows(tr) }
     }
 
     /// Read a table; errors name the file and line.

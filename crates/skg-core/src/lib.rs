@@ -15,6 +15,9 @@
 //!    Lagrange–d'Alembert equations of a model integrated in time.
 //! 5. [`solve`]: the square system ∇S = 0 handed to Ipopt ([`ipopt`]) from a
 //!    time-stepping initial guess, and its diagnostics ([`solve::Outcome`]);
+//!    [`verify`]: the solution compared with time stepping of the same scene;
+//!    [`window`]: a span solved in windows; [`ladder`]: the scene's own solve and the
+//!    fallback ladder, what [`solve::solve_scene`] runs;
 //!    [`reference`](mod@reference): reference solutions by time stepping, regularized
 //!    or with hard walls.
 //! 6. [`output`]: writes what solve and reference produced (CSV, JSON), atomically.
@@ -29,6 +32,7 @@ pub mod action;
 pub mod check;
 pub mod contact;
 pub mod convergence;
+pub mod ladder;
 pub mod model;
 pub mod ode;
 pub mod output;
@@ -40,6 +44,8 @@ pub mod solve;
 pub mod time_stepping;
 pub mod trajectory;
 pub mod tune;
+pub mod verify;
+pub mod window;
 
 pub use skg_expr as expr;
 pub use skg_ipopt as ipopt;

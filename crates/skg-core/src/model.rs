@@ -883,6 +883,7 @@ impl Model {
         let mut ws = self.workspace();
         let (q0, v0) = (&scene.initial_q, &scene.initial_v);
         let ph = self.physical(scene.t_start, q0, v0, &mut ws);
+        check_finite_at_start(scene, &ph)?;
         let file = &scene.file;
         let sym = (&ph.kinetic + ph.kinetic.transpose()) * 0.5;
         let eig = sym.symmetric_eigenvalues();
@@ -972,3 +973,39 @@ pub const POSITION_TOLERANCE: f64 = 1e-9;
 /// A start on an ideal wall (the hard-wall reference) counts as touching it while
 /// `h ≤ 1e-12 · max(1, maxᵢ |q₀ᵢ|)`.
 pub const ON_WALL_TOLERANCE: f64 = 1e-12;
+
+/// The Lagrangian, its momenta and the forces must be numbers at the initial state: a
+/// scene that is NaN or infinite where its motion starts (e.g. `log(x)` at x < 0) is an
+/// input error, named at the expression that produced it.
+fn check_finite_at_start(scene: &Scene, ph: &Physical) -> Result<(), SceneError> {
+    let file = &scene.file;
+    let state = || {
+        let q = scene.coordinates.iter().zip(&scene.initial_q).map(|(c, x)| format!("{c} = {x}"));
+        let v = scene.coordinates.iter().zip(&scene.initial_v).map(|(c, x)| format!("{c}_dot = {x}"));
+        q.chain(v).collect::<Vec<_>>().join(", ")
+    };
+    let not_finite = |location, what: String| SceneError::Invalid {
+        location,
+        message: format!("{what} is not finite at the initial state ({}): the scene's expressions must be defined there", state()),
+    };
+    let lagrangian = file.origin.locate_in(&file.scene.lagrangian, None);
+    if !ph.energy.is_finite() {
+        return Err(not_finite(lagrangian, format!("the Lagrangian's energy q̇·∂L/∂q̇ − L = {}", ph.energy)));
+    }
+    for (i, name) in scene.coordinates.iter().enumerate() {
+        if !ph.p[i].is_finite() {
+            return Err(not_finite(lagrangian.clone(), format!("the momentum ∂L/∂{name}_dot = {}", ph.p[i])));
+        }
+        if !ph.force[i].is_finite() {
+            let location = match file.forces.get(name) {
+                Some(f) => file.origin.locate_in(f, None),
+                None => lagrangian.clone(),
+            };
+            return Err(not_finite(
+                location,
+                format!("the generalized force on `{name}` (∂L/∂{name} plus forces and walls) = {}", ph.force[i]),
+            ));
+        }
+    }
+    Ok(())
+}

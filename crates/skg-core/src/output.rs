@@ -11,9 +11,9 @@ use serde::Serialize;
 
 use crate::provenance;
 use crate::reference::{self, Reference};
-use crate::scenario::{ConstraintKind, Scene};
+use crate::scenario::Scene;
 use crate::solve::Outcome;
-use crate::trajectory::Trajectory;
+use crate::trajectory::{trajectory_header, trajectory_rows};
 
 /// Why an output file could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -63,54 +63,6 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::R
     Ok(())
 }
 
-/// Column names of a scene's trajectory CSV.
-pub fn trajectory_header(scene: &Scene) -> Vec<String> {
-    let mut h = vec!["t".to_string()];
-    for c in &scene.coordinates {
-        h.push(c.clone());
-        h.push(format!("{c}_dot"));
-    }
-    for c in &scene.constraints {
-        h.push(format!("lambda_{}", c.name));
-    }
-    h.push("energy".into());
-    if !scene.walls.is_empty() {
-        h.push("wall_energy".into());
-    }
-    for c in &scene.constraints {
-        h.push(format!("residual_{}", c.name));
-    }
-    for c in scene.constraints.iter().filter(|c| c.kind == ConstraintKind::Position) {
-        h.push(format!("drift_{}", c.name));
-    }
-    for w in &scene.walls {
-        h.push(format!("gap_{}", w.name));
-    }
-    h
-}
-
-/// Rows of the trajectory CSV, matching [`trajectory_header`].
-pub fn trajectory_rows(tr: &Trajectory) -> Vec<Vec<f64>> {
-    (0..tr.t.len())
-        .map(|k| {
-            let mut row = vec![tr.t[k]];
-            for i in 0..tr.q[k].len() {
-                row.push(tr.q[k][i]);
-                row.push(tr.v[k][i]);
-            }
-            row.extend(&tr.lambda[k]);
-            row.push(tr.energy[k]);
-            if !tr.h[k].is_empty() {
-                row.push(tr.wall_energy[k]);
-            }
-            row.extend(&tr.g[k]);
-            row.extend(&tr.drift[k]);
-            row.extend(&tr.h[k]);
-            row
-        })
-        .collect()
-}
-
 /// Write a numeric table as CSV, full precision (shortest round-trip representation).
 pub fn write_csv(path: &Path, comment: Option<&str>, header: &[String], rows: &[Vec<f64>]) -> Result<(), OutputError> {
     write_atomic(path, |w| {
@@ -152,13 +104,54 @@ struct Summary<'a> {
     outcome: &'a Outcome,
 }
 
-/// Write `trajectory.csv` and `summary.json` of a solve of `scene` into `dir`.
-pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result<(PathBuf, PathBuf), OutputError> {
+/// The files a solve wrote.
+#[derive(Debug, Clone)]
+pub struct Written {
+    /// `trajectory.csv`.
+    pub trajectory: PathBuf,
+    /// `reference.csv`: the verification's time-stepping reference at the same nodes
+    /// (absent when verification did not compute one).
+    pub reference: Option<PathBuf>,
+    /// `summary.json`, written last.
+    pub summary: PathBuf,
+}
+
+impl Written {
+    /// Every file written, in the order written.
+    pub fn paths(&self) -> impl Iterator<Item = &PathBuf> {
+        std::iter::once(&self.trajectory).chain(&self.reference).chain(std::iter::once(&self.summary))
+    }
+}
+
+/// Write `trajectory.csv`, `reference.csv` (the verification's reference, when there is
+/// one; a stale one is removed) and, last, `summary.json` of a solve of `scene` into `dir`.
+pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result<Written, OutputError> {
     let t = std::time::Instant::now();
     let csv_path = dir.join("trajectory.csv");
     let json_path = dir.join("summary.json");
+    let reference_path = dir.join("reference.csv");
     let header = trajectory_header(scene);
     write_csv(&csv_path, None, &header, &trajectory_rows(&outcome.trajectory))?;
+    let reference = match &outcome.verification.reference_trajectory {
+        Some(r) => {
+            let comment = format!(
+                "skg-solve {} verification reference of {}: {}",
+                provenance::VERSION,
+                scene.file.origin.path,
+                outcome.verification.reference
+            );
+            write_csv(&reference_path, Some(&comment), &header, &trajectory_rows(r))?;
+            Some(reference_path)
+        }
+        None => {
+            match std::fs::remove_file(&reference_path) {
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(io_err(&reference_path)(e)),
+            }
+            None
+        }
+    };
     outcome.timings.output_s = t.elapsed().as_secs_f64();
     let summary = Summary {
         skg_solve_version: provenance::VERSION,
@@ -167,7 +160,7 @@ pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result
         outcome,
     };
     write_json(&json_path, &summary)?;
-    Ok((csv_path, json_path))
+    Ok(Written { trajectory: csv_path, reference, summary: json_path })
 }
 
 /// Write a reference as a trajectory CSV with its provenance ([`reference::provenance`])

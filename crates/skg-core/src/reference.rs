@@ -268,7 +268,7 @@ impl fmt::Display for ReferenceKind {
 /// A reference trajectory and how it was made.
 #[derive(Debug, Clone)]
 pub struct Reference {
-    /// Same layout as the solver's trajectory (CSV columns via [`crate::output::trajectory_rows`]).
+    /// Same layout as the solver's trajectory (CSV columns via [`crate::trajectory::trajectory_rows`]).
     pub trajectory: Trajectory,
     /// Which reference it is.
     pub kind: ReferenceKind,

@@ -218,6 +218,21 @@ pub struct TimeSpec {
     pub end: Spanned<NumOrExpr>,
     /// Number of grid nodes N.
     pub nodes: Spanned<i64>,
+    /// Solve in successive windows of this length (seconds) instead of one global solve.
+    #[serde(default)]
+    pub window: Option<Spanned<NumOrExpr>>,
+    /// Length (seconds) discarded at the end of each window (default: a quarter window).
+    #[serde(default)]
+    pub overlap: Option<Spanned<NumOrExpr>>,
+}
+
+/// The `[verify]` table: how a solve is checked against time stepping of the same scene.
+#[derive(Debug, Clone, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct VerifySpec {
+    /// Absolute tolerance on max |q − q_reference| (coordinate units).
+    #[serde(default)]
+    pub tol: Option<Spanned<NumOrExpr>>,
 }
 
 /// The `[discretization]` table.
@@ -251,6 +266,8 @@ pub struct SolverSpec {
     /// Further Ipopt options passed through verbatim, e.g. `mumps_pivot_order = 0`.
     #[serde(default)]
     pub ipopt: IndexMap<String, IpoptValue>,
+    /// When the solve fails or is not verified, try the fallback ladder (default true).
+    pub fallback: Option<bool>,
 }
 
 /// The value of a pass-through Ipopt option: integer, number or string, as Ipopt's
@@ -294,6 +311,9 @@ pub struct SceneFile {
     /// `[solver]`.
     #[serde(default)]
     pub solver: SolverSpec,
+    /// `[verify]`.
+    #[serde(default)]
+    pub verify: VerifySpec,
     /// Path and source text, for error positions.
     #[serde(skip)]
     pub origin: Origin,
@@ -391,6 +411,16 @@ pub struct Overrides {
     pub hessian: Option<HessianMode>,
     /// Ipopt's iteration limit.
     pub max_iter: Option<u32>,
+    /// Window length in seconds (`--window`; 0 turns windows off).
+    pub window: Option<f64>,
+    /// Window overlap in seconds (`--overlap`).
+    pub overlap: Option<f64>,
+    /// Verification tolerance (`--verify-tol`).
+    pub verify_tol: Option<f64>,
+    /// Skip verification (`--no-verify`).
+    pub no_verify: bool,
+    /// Do not try the fallback ladder (`--no-fallback`).
+    pub no_fallback: bool,
 }
 
 impl Overrides {
@@ -424,6 +454,28 @@ pub struct SolverSettings {
     pub log_file: Option<PathBuf>,
     /// Further Ipopt options, passed through verbatim.
     pub ipopt: IndexMap<String, IpoptValue>,
+    /// Whether a failed or unverified solve tries the fallback ladder ([`crate::ladder`]).
+    pub fallback: bool,
+}
+
+/// Successive time windows: each solves `length` seconds from the state the previous
+/// one reached, and keeps all but its last `overlap` seconds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Windows {
+    /// Length of each window's solve, seconds.
+    pub length: f64,
+    /// Length discarded at the end of each window, seconds (0 ≤ overlap < length).
+    pub overlap: f64,
+}
+
+/// How a solve is verified ([`crate::verify`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct VerifySettings {
+    /// Whether to verify at all (`--no-verify` turns it off).
+    pub enabled: bool,
+    /// The absolute tolerance on max |q − q_reference|, if the scene or the command line
+    /// gives one (otherwise the default of [`crate::verify`]).
+    pub tol: Option<f64>,
 }
 
 /// A wall, resolved to numbers (its `h` and friction direction expressions are parsed
@@ -494,6 +546,10 @@ pub struct Scene {
     pub formulation: Formulation,
     /// Ipopt's settings.
     pub solver: SolverSettings,
+    /// Solve in windows (`[time] window`), or in one piece (None).
+    pub windows: Option<Windows>,
+    /// How the solve is verified.
+    pub verify: VerifySettings,
 }
 
 /// Names the expression language reserves.
@@ -825,7 +881,10 @@ impl SceneFile {
             hessian,
             log_file: s.log_file.as_ref().map(PathBuf::from),
             ipopt: s.ipopt.clone(),
+            fallback: !ov.no_fallback && s.fallback.unwrap_or(true),
         };
+        let windows = self.resolve_windows(ov, &params, t_end - t_start)?;
+        let verify = self.resolve_verify(ov, &params)?;
         Ok(Scene {
             name: self.scene.name.clone(),
             parameters: params,
@@ -840,8 +899,62 @@ impl SceneFile {
             operator,
             formulation,
             solver,
+            windows,
+            verify,
             file: self,
         })
+    }
+
+    /// `[time] window` and `overlap`, with the command line's overrides (a window of 0
+    /// from the command line turns windows off). A window as long as the span or longer
+    /// is one global solve.
+    fn resolve_windows(&self, ov: &Overrides, params: &IndexMap<String, f64>, span: f64) -> Result<Option<Windows>, SceneError> {
+        let from_file = |v: &Option<Spanned<NumOrExpr>>, key: &str| v.as_ref().map(|v| self.eval_value(v, key, params)).transpose();
+        let length = match ov.window {
+            Some(w) => Some(w),
+            None => from_file(&self.time.window, "time.window")?,
+        };
+        let overlap = match ov.overlap {
+            Some(o) => Some(o),
+            None => from_file(&self.time.overlap, "time.overlap")?,
+        };
+        let here = |key: &Option<Spanned<NumOrExpr>>, message: String| match key {
+            Some(v) => self.invalid(v, message),
+            None => SceneError::Override { assignment: "--window/--overlap".into(), message },
+        };
+        let Some(length) = length.filter(|&w| w != 0.0 || ov.window.is_none()) else {
+            return Ok(None);
+        };
+        if !(length > 0.0 && length.is_finite()) {
+            return Err(here(&self.time.window, format!("time.window must be a positive number of seconds, got {length}")));
+        }
+        let overlap = overlap.unwrap_or(length / 4.0);
+        if !(0.0..length).contains(&overlap) {
+            return Err(here(
+                &self.time.overlap,
+                format!("time.overlap must be ≥ 0 and shorter than the window ({length} s), got {overlap}"),
+            ));
+        }
+        Ok((length < span).then_some(Windows { length, overlap }))
+    }
+
+    /// `[verify] tol` with the command line's overrides.
+    fn resolve_verify(&self, ov: &Overrides, params: &IndexMap<String, f64>) -> Result<VerifySettings, SceneError> {
+        let tol = match (ov.verify_tol, &self.verify.tol) {
+            (Some(t), _) => Some(t),
+            (None, Some(v)) => Some(self.eval_value(v, "verify.tol", params)?),
+            (None, None) => None,
+        };
+        if let Some(t) = tol {
+            if t.is_nan() || t <= 0.0 {
+                let message = format!("the verification tolerance must be a positive number, got {t}");
+                return Err(match (&self.verify.tol, ov.verify_tol) {
+                    (Some(v), None) => self.invalid(v, message),
+                    _ => SceneError::Override { assignment: format!("--verify-tol {t}"), message },
+                });
+            }
+        }
+        Ok(VerifySettings { enabled: !ov.no_verify, tol })
     }
 
     fn toml_error(&self, message: String) -> SceneError {

@@ -24,6 +24,7 @@ use crate::sbp::{SbpError, SbpOperator};
 use crate::scenario::{ConstraintKind, Formulation, HessianMode, IpoptValue, Scene, SceneError, Wall};
 use crate::time_stepping::{integrate_model, min_spacing};
 use crate::trajectory::{NodeSeries, States, Trajectory};
+use crate::verify::{self, Verification, VerifyStatus};
 use skg_ipopt::{self as ipopt, EvalError, Problem};
 
 /// A solution farther than this fraction of the coordinates' range from the
@@ -45,6 +46,14 @@ pub enum SolveError {
     /// Ipopt could not be run (options, sizes, a callback error it did not recover from).
     #[error(transparent)]
     Ipopt(#[from] ipopt::SolveError),
+    /// The scene's windows do not fit its grid.
+    #[error("{}: [time] window: {message}", .scene)]
+    Windows {
+        /// The scene file.
+        scene: String,
+        /// Why.
+        message: String,
+    },
 }
 
 /// Where a solve's wall time went, in seconds.
@@ -62,8 +71,53 @@ pub struct Timings {
     pub ipopt_internal_s: f64,
     /// Trajectory, end multipliers and diagnostics from the solution.
     pub postprocess_s: f64,
+    /// Verification against time stepping ([`crate::verify`]).
+    pub verification_s: f64,
+    /// Fallback attempts whose result is not the one reported ([`crate::ladder`]).
+    pub other_attempts_s: f64,
     /// Writing files (filled in by the output module).
     pub output_s: f64,
+}
+
+impl Timings {
+    /// No time spent yet.
+    pub fn zero() -> Timings {
+        Timings {
+            setup_s: 0.0,
+            initial_guess_s: 0.0,
+            ipopt_total_s: 0.0,
+            evaluation_s: 0.0,
+            ipopt_internal_s: 0.0,
+            postprocess_s: 0.0,
+            verification_s: 0.0,
+            other_attempts_s: 0.0,
+            output_s: 0.0,
+        }
+    }
+
+    /// Add another part's times (the pieces of a windowed solve).
+    pub fn add(&mut self, other: &Timings) {
+        self.setup_s += other.setup_s;
+        self.initial_guess_s += other.initial_guess_s;
+        self.ipopt_total_s += other.ipopt_total_s;
+        self.evaluation_s += other.evaluation_s;
+        self.ipopt_internal_s += other.ipopt_internal_s;
+        self.postprocess_s += other.postprocess_s;
+        self.verification_s += other.verification_s;
+        self.other_attempts_s += other.other_attempts_s;
+        self.output_s += other.output_s;
+    }
+
+    /// The whole wall time of the solve, fallback attempts included.
+    pub fn total(&self) -> f64 {
+        self.setup_s
+            + self.initial_guess_s
+            + self.ipopt_total_s
+            + self.postprocess_s
+            + self.verification_s
+            + self.other_attempts_s
+            + self.output_s
+    }
 }
 
 /// The sizes of the problem handed to Ipopt.
@@ -252,6 +306,10 @@ pub struct Outcome {
     /// `status_text` and `solve_status`).
     #[serde(flatten)]
     pub status: SolveStatus,
+    /// The trajectory checked against time stepping of the same scene ([`verify`]).
+    pub verification: Verification,
+    /// How the reported trajectory covered the span (one solve, or windows).
+    pub method: Method,
     /// The Ipopt version the tool was built against.
     pub ipopt_version: String,
     /// Ipopt's iterations.
@@ -266,6 +324,11 @@ pub struct Outcome {
     pub diagnostics: Diagnostics,
     /// Suspicions about the solution (spurious critical point, residual too large, …).
     pub warnings: Vec<String>,
+    /// Every run tried ([`crate::ladder`]): the scene's own, then the fallbacks; the
+    /// one reported is marked `chosen`.
+    pub attempts: Vec<Attempt>,
+    /// What to do when the result cannot be trusted (not converged, or not verified).
+    pub remedy: Option<String>,
     /// Ipopt's iteration table.
     pub history: Vec<ipopt::IterationStat>,
     /// The solution at the nodes (written as trajectory.csv, not into the summary).
@@ -278,6 +341,33 @@ impl Outcome {
     pub fn converged(&self) -> bool {
         self.status.is_converged()
     }
+
+    /// Converged, every number finite, and verified (or verification switched off):
+    /// the result a user may act on (exit status 0).
+    pub fn trusted(&self) -> bool {
+        self.converged() && self.verification.is_acceptable()
+    }
+}
+
+/// One run tried by the ladder, as recorded in `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Attempt {
+    /// What was tried (method and initial guess).
+    pub method: String,
+    /// How it ended, in words (convergence and verification).
+    pub result: String,
+    /// Whether it converged.
+    pub converged: bool,
+    /// Its verification verdict, when it converged.
+    pub verification: Option<VerifyStatus>,
+    /// Its max |q − q_reference|, when verified.
+    pub max_error: Option<f64>,
+    /// Ipopt iterations.
+    pub iterations: usize,
+    /// Wall time, seconds.
+    pub wall_s: f64,
+    /// Whether its trajectory is the one reported.
+    pub chosen: bool,
 }
 
 /// Ipopt's view of the reduced system R(P) = ∂S/∂M = 0.
@@ -285,8 +375,8 @@ struct Reduced<'a> {
     action: &'a Action,
     z: Vec<f64>,
     ws: Workspace,
-    jac: MatrixPlan,
-    hess: Option<MatrixPlan>,
+    jac: &'a MatrixPlan,
+    hess: Option<&'a MatrixPlan>,
 }
 
 impl Reduced<'_> {
@@ -317,7 +407,7 @@ impl Problem for Reduced<'_> {
     }
     fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
         self.set(x, None);
-        self.action.matrix_values(&self.jac, &self.z, values, &mut self.ws);
+        self.action.matrix_values(self.jac, &self.z, values, &mut self.ws);
         Ok(())
     }
     fn hessian_structure(&self) -> &[(u32, u32)] {
@@ -326,7 +416,7 @@ impl Problem for Reduced<'_> {
     fn hessian_values(&mut self, x: &[f64], _obj: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
         if self.hess.is_some() {
             self.set(x, Some(lambda));
-            let plan = self.hess.as_ref().expect("checked");
+            let plan = self.hess.expect("checked");
             self.action.matrix_values(plan, &self.z, values, &mut self.ws);
         }
         Ok(())
@@ -337,7 +427,7 @@ impl Problem for Reduced<'_> {
 struct Full<'a> {
     action: &'a Action,
     ws: Workspace,
-    jac: MatrixPlan,
+    jac: &'a MatrixPlan,
 }
 
 impl Problem for Full<'_> {
@@ -355,7 +445,7 @@ impl Problem for Full<'_> {
         &self.jac.structure
     }
     fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.action.matrix_values(&self.jac, x, values, &mut self.ws);
+        self.action.matrix_values(self.jac, x, values, &mut self.ws);
         Ok(())
     }
 }
@@ -367,37 +457,165 @@ pub fn grid(scene: &Scene) -> (Vec<f64>, f64) {
     ((0..n).map(|k| scene.t_start + k as f64 * dt).collect(), dt)
 }
 
-/// Build the discrete action of a resolved scene.
+/// Build the discrete action of a resolved scene on its whole grid.
 pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
-    let model = Model::build(scene)?;
     let (_, dt) = grid(scene);
-    let op = SbpOperator::new(scene.operator, scene.nodes, dt)?;
+    build_action_on(scene, scene.nodes, dt)
+}
+
+/// Build the discrete action of a scene on `nodes` nodes of spacing `dt`, from the scene's
+/// initial state (a window re-targets it with [`Action::set_window`]).
+pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, SolveError> {
+    let model = Model::build(scene)?;
+    let op = SbpOperator::new(scene.operator, nodes, dt)?;
     Ok(Action::new(model, op, scene.t_start, scene.initial_q.clone(), scene.initial_v.clone()))
 }
 
+/// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
+/// verified against time stepping ([`crate::verify`]) and, when it fails to converge or
+/// to verify, the fallback ladder ([`crate::ladder`]).
+pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    crate::ladder::solve(scene)
+}
+
+/// How the initial guess of one solve is made.
+#[derive(Debug, Clone)]
+pub enum Guess {
+    /// Time stepping of the Lagrange–d'Alembert equations from the action's initial
+    /// state, sampled at its nodes.
+    TimeStepping,
+    /// Coordinates and multipliers at the action's nodes, e.g. a coarser solve
+    /// interpolated onto this grid, or the solve of a wider wall.
+    States {
+        /// `q[k][i]` at the action's nodes.
+        q: NodeSeries,
+        /// `λ[k][a]` at the action's nodes.
+        lambda: NodeSeries,
+        /// Where they came from (for the summary).
+        description: String,
+    },
+}
+
+/// The matrix plans of an action for a scene's formulation: computed once per action
+/// and reused by every solve on it.
+pub struct Plans {
+    jac: MatrixPlan,
+    hess: Option<MatrixPlan>,
+}
+
+impl Plans {
+    /// The sparsity plans of the Jacobian of the scene's formulation and, for the reduced
+    /// formulation with the exact Hessian, of the Hessian.
+    pub fn new(scene: &Scene, action: &Action) -> Plans {
+        let jac_block = match scene.formulation {
+            Formulation::Reduced => Block::ReducedJacobian,
+            Formulation::Full => Block::FullJacobian,
+        };
+        let exact_hessian = scene.formulation == Formulation::Reduced && scene.solver.hessian == HessianMode::Exact;
+        Plans { jac: action.plan(jac_block), hess: exact_hessian.then(|| action.plan(Block::ReducedHessian)) }
+    }
+}
+
+/// One solve of one action's discrete system: the whole span, or one window of it.
+#[derive(Debug, Clone)]
+pub struct Piece {
+    /// How Ipopt ended, checked against the unscaled residual.
+    pub status: SolveStatus,
+    /// Ipopt's iterations.
+    pub iterations: usize,
+    /// Ipopt's iteration table.
+    pub history: Vec<ipopt::IterationStat>,
+    /// The solution at the action's nodes.
+    pub trajectory: Trajectory,
+    /// max |c| of the system (unscaled) at the returned point.
+    pub max_residual: f64,
+    /// max |equation of motion| at interior nodes.
+    pub max_eom_residual: f64,
+    /// max |q-|, |λ-| for the full formulation.
+    pub max_minus_variable: Option<f64>,
+    /// The time-stepping coordinates at the nodes, when the guess made them.
+    pub time_stepping_q: Option<NodeSeries>,
+    /// How the initial guess was made.
+    pub guess: String,
+    /// Time of the guess and of Ipopt (setup and output are not a piece's).
+    pub timings: Timings,
+}
+
+/// Solve the discrete system of `action` (nodes at `times`) from `guess`.
+pub fn solve_piece(scene: &Scene, action: &Action, plans: &Plans, times: &[f64], guess: &Guess) -> Result<Piece, SolveError> {
+    let t_guess = Instant::now();
+    let mut warnings = Vec::new();
+    let (z0, guess_desc, ts_q) = initial_guess(action, times, guess, &mut warnings);
+    let initial_guess_s = t_guess.elapsed().as_secs_f64();
+
+    let (solution, z) = run_ipopt(scene.formulation, action, plans, &z0, &ipopt_options(scene))?;
+
+    let t_post = Instant::now();
+    let (trajectory, max_eom_residual) = evaluate(action, times, &z);
+    let lay = &action.layout;
+    let max_minus_variable = (scene.formulation == Formulation::Full)
+        .then(|| lay.qm.iter().chain(&lay.lm).map(|&i| z[i as usize].abs()).fold(0.0_f64, f64::max));
+    let max_residual = solution.max_constraint_violation;
+    Ok(Piece {
+        status: SolveStatus::classify(solution.status, max_residual),
+        iterations: solution.iterations,
+        history: solution.history,
+        trajectory,
+        max_residual,
+        max_eom_residual,
+        max_minus_variable,
+        time_stepping_q: ts_q,
+        guess: match warnings.first() {
+            Some(w) => format!("{guess_desc} ({w})"),
+            None => guess_desc,
+        },
+        timings: Timings {
+            initial_guess_s,
+            ipopt_total_s: solution.total_seconds,
+            evaluation_s: solution.total_seconds - solution.ipopt_seconds,
+            ipopt_internal_s: solution.ipopt_seconds,
+            postprocess_s: t_post.elapsed().as_secs_f64(),
+            ..Timings::zero()
+        },
+    })
+}
+
 /// Initial point Z0 and a description of how it was made; also the time-stepping
-/// coordinates when available (for the spurious-solution check).
-fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> (Vec<f64>, String, Option<Vec<Vec<f64>>>) {
+/// coordinates when the guess made them (for the spurious-solution check).
+fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut Vec<String>) -> (Vec<f64>, String, Option<NodeSeries>) {
+    let (d, n) = (action.layout.d, action.layout.n);
+    let (q, lambda, desc, ts_q) = match guess {
+        Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None),
+        Guess::TimeStepping => {
+            // Steps at most the node spacing: a larger step can jump across a thin wall
+            // that the error estimate never sees (free flight is integrated exactly).
+            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step: min_spacing(times), ..OdeOptions::default() };
+            let (q0, v0) = (action.q0(), action.v0());
+            match integrate_model(&action.model, q0, v0, times, &opts) {
+                Ok((States { q, lambda, .. }, _)) => (
+                    q.clone(),
+                    lambda,
+                    "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
+                    Some(q),
+                ),
+                Err(e) => {
+                    warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
+                    let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
+                    (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
+                }
+            }
+        }
+    };
+    (point_from_states(action, &q, &lambda), desc, ts_q)
+}
+
+/// The unknown vector Z with the given coordinates and multipliers at the nodes, the
+/// minus variables at zero and the boundary multipliers at the values that make their
+/// rows vanish.
+fn point_from_states(action: &Action, q: &[Vec<f64>], lambda: &[Vec<f64>]) -> Vec<f64> {
     let lay = &action.layout;
     let (d, n) = (lay.d, lay.n);
     let mut z = vec![0.0; lay.len()];
-    // Steps at most the node spacing: a larger step can jump across a thin wall that
-    // the error estimate never sees (free flight is integrated exactly).
-    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step: min_spacing(times), ..OdeOptions::default() };
-    let (q0, v0) = (action.q0(), action.v0());
-    let (q, lam, desc, reference) = match integrate_model(&action.model, q0, v0, times, &opts) {
-        Ok((States { q, lambda, .. }, _)) => (
-            q.clone(),
-            lambda,
-            "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
-            Some(q),
-        ),
-        Err(e) => {
-            warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
-            let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
-            (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
-        }
-    };
     for k in 0..lay.nodes {
         for i in 0..d {
             z[lay.qp[k * d + i] as usize] = q[k][i];
@@ -405,11 +623,10 @@ fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> 
         for a in 0..n {
             let zi = lay.lp[k * n + a];
             if zi != u32::MAX {
-                z[zi as usize] = lam[k][a];
+                z[zi as usize] = lambda[k][a];
             }
         }
     }
-    // Boundary multipliers: the values that make their rows vanish.
     let mut ws = action.model.workspace();
     let mut r = vec![0.0; lay.n_m];
     action.gradient(&z, true, &mut r, &mut ws);
@@ -423,70 +640,7 @@ fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> 
         z[lay.nu_l1[a] as usize] = -r[row(lay.lm[a])];
         z[lay.nu_ln[a] as usize] = -r[row(lay.lm[last * n + a])];
     }
-    (z, desc, reference)
-}
-
-/// Solve a resolved scene.
-pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
-    let t_setup = Instant::now();
-    let action = build_action(scene)?;
-    solve_action(scene, &action, t_setup)
-}
-
-/// Solve with an already built action (`started` marks the beginning of setup), on the
-/// action's own grid and initial state ([`Action::set_window`]).
-pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<Outcome, SolveError> {
-    let times = action.times();
-    let (jac, hess) = matrix_plans(scene, action);
-    let setup_s = started.elapsed().as_secs_f64();
-    let sizes = sizes(scene, action, &jac, hess.as_ref());
-
-    let t_guess = Instant::now();
-    let mut warnings = Vec::new();
-    let (z0, guess_desc, ts_q) = initial_guess(action, &times, &mut warnings);
-    let initial_guess_s = t_guess.elapsed().as_secs_f64();
-
-    let (solution, z) = run_ipopt(scene.formulation, action, jac, hess, &z0, &ipopt_options(scene))?;
-
-    let t_post = Instant::now();
-    let (trajectory, max_eom) = evaluate(action, &times, &z);
-    let diagnostics = diagnose(action, &trajectory, max_eom, &z, solution.max_constraint_violation, scene.formulation, ts_q.as_deref());
-    let postprocess_s = t_post.elapsed().as_secs_f64();
-
-    let status = SolveStatus::classify(solution.status, diagnostics.max_residual);
-    warnings.extend(suspicions(&diagnostics, ts_q.as_deref(), status));
-    Ok(Outcome {
-        scene: scene.name.clone(),
-        status,
-        ipopt_version: ipopt::ipopt_version().to_string(),
-        iterations: solution.iterations,
-        settings: settings(scene, &times, guess_desc),
-        sizes,
-        timings: Timings {
-            setup_s,
-            initial_guess_s,
-            ipopt_total_s: solution.total_seconds,
-            evaluation_s: solution.total_seconds - solution.ipopt_seconds,
-            ipopt_internal_s: solution.ipopt_seconds,
-            postprocess_s,
-            output_s: 0.0,
-        },
-        diagnostics,
-        warnings,
-        history: solution.history,
-        trajectory,
-    })
-}
-
-/// The sparsity plans of the Jacobian of the scene's formulation and, for the reduced
-/// formulation with the exact Hessian, of the Hessian.
-fn matrix_plans(scene: &Scene, action: &Action) -> (MatrixPlan, Option<MatrixPlan>) {
-    let jac_block = match scene.formulation {
-        Formulation::Reduced => Block::ReducedJacobian,
-        Formulation::Full => Block::FullJacobian,
-    };
-    let exact_hessian = scene.formulation == Formulation::Reduced && scene.solver.hessian == HessianMode::Exact;
-    (action.plan(jac_block), exact_hessian.then(|| action.plan(Block::ReducedHessian)))
+    z
 }
 
 /// Ipopt's options for a scene: its `[solver]` settings, then the pass-through options.
@@ -521,22 +675,21 @@ fn ipopt_options(scene: &Scene) -> ipopt::Options {
 fn run_ipopt(
     formulation: Formulation,
     action: &Action,
-    jac: MatrixPlan,
-    hess: Option<MatrixPlan>,
+    plans: &Plans,
     z0: &[f64],
     options: &ipopt::Options,
 ) -> Result<(ipopt::Solution, Vec<f64>), SolveError> {
     let lay = &action.layout;
     Ok(match formulation {
         Formulation::Reduced => {
-            let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac, hess };
+            let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac: &plans.jac, hess: plans.hess.as_ref() };
             let sol = ipopt::solve(&mut p, &z0[..lay.n_p], options)?;
             let mut z = vec![0.0; lay.len()];
             z[..lay.n_p].copy_from_slice(&sol.x);
             (sol, z)
         }
         Formulation::Full => {
-            let mut p = Full { action, ws: action.model.workspace(), jac };
+            let mut p = Full { action, ws: action.model.workspace(), jac: &plans.jac };
             let sol = ipopt::solve(&mut p, z0, options)?;
             let z = sol.x.clone();
             (sol, z)
@@ -560,23 +713,145 @@ fn settings(scene: &Scene, times: &[f64], initial_guess: String) -> Settings {
     }
 }
 
-/// The sizes of the system handed to Ipopt.
-fn sizes(scene: &Scene, action: &Action, jac: &MatrixPlan, hess: Option<&MatrixPlan>) -> Sizes {
+/// The sizes of the system handed to Ipopt for one piece (the whole span, or one window).
+pub fn sizes(scene: &Scene, action: &Action, plans: &Plans) -> Sizes {
     let (lay, model) = (&action.layout, &action.model);
     let (variables, equations) = match scene.formulation {
         Formulation::Reduced => (lay.n_p, lay.n_m),
         Formulation::Full => (lay.len(), lay.len()),
     };
     Sizes {
-        nodes: scene.nodes,
+        nodes: lay.nodes,
         coordinates: lay.d,
         constraints: lay.n,
         walls: model.walls.len(),
         variables,
         equations,
-        jacobian_nonzeros: jac.structure.len(),
-        hessian_nonzeros: hess.map_or(0, |h| h.structure.len()),
+        jacobian_nonzeros: plans.jac.structure.len(),
+        hessian_nonzeros: plans.hess.as_ref().map_or(0, |h| h.structure.len()),
         tape_instructions: model.minus_gradient.len() + model.mixed.tape.len(),
+    }
+}
+
+/// How a run covered the scene's span.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Method {
+    /// One solve over the whole span.
+    Global,
+    /// Successive windows ([`crate::window`]).
+    Windows {
+        /// Length of each window's solve, seconds.
+        length: f64,
+        /// Length discarded at the end of each window, seconds.
+        overlap: f64,
+        /// Nodes of each window's solve.
+        nodes_per_window: usize,
+        /// Number of windows.
+        count: usize,
+    },
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Method::Global => write!(f, "one solve over the whole span"),
+            Method::Windows { length, overlap, nodes_per_window, count } => {
+                write!(f, "{count} windows of {length:.4} s ({nodes_per_window} nodes), each discarding its last {overlap:.4} s")
+            }
+        }
+    }
+}
+
+/// One attempt at the whole span: a global solve or a sequence of windows, with the
+/// scene's grid.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// How the span was covered.
+    pub method: Method,
+    /// How the solve ended: converged only if every piece converged (else the first
+    /// piece that did not).
+    pub status: SolveStatus,
+    /// Ipopt's iterations, summed over the pieces.
+    pub iterations: usize,
+    /// Ipopt's iteration tables, one after the other.
+    pub history: Vec<ipopt::IterationStat>,
+    /// The solution at the scene's nodes.
+    pub trajectory: Trajectory,
+    /// max |c| over the pieces.
+    pub max_residual: f64,
+    /// max |equation of motion| at interior nodes of the pieces.
+    pub max_eom_residual: f64,
+    /// max |q-|, |λ-| for the full formulation.
+    pub max_minus_variable: Option<f64>,
+    /// Time-stepping coordinates at the scene's nodes, when every guess made them.
+    pub time_stepping_q: Option<NodeSeries>,
+    /// How the initial guess was made.
+    pub guess: String,
+    /// Where the time went (summed over the pieces).
+    pub timings: Timings,
+    /// The sizes of one piece's system.
+    pub sizes: Sizes,
+}
+
+impl Run {
+    /// A global run: the scene's whole span solved as one piece.
+    pub fn global(piece: Piece, sizes: Sizes, setup_s: f64) -> Run {
+        let mut timings = piece.timings.clone();
+        timings.setup_s = setup_s;
+        Run {
+            method: Method::Global,
+            status: piece.status,
+            iterations: piece.iterations,
+            history: piece.history,
+            trajectory: piece.trajectory,
+            max_residual: piece.max_residual,
+            max_eom_residual: piece.max_eom_residual,
+            max_minus_variable: piece.max_minus_variable,
+            time_stepping_q: piece.time_stepping_q,
+            guess: piece.guess,
+            timings,
+            sizes,
+        }
+    }
+}
+
+/// Solve the scene's whole span in one piece from `guess`.
+pub fn solve_global(scene: &Scene, guess: &Guess) -> Result<Run, SolveError> {
+    let t_setup = Instant::now();
+    let action = build_action(scene)?;
+    let plans = Plans::new(scene, &action);
+    let setup_s = t_setup.elapsed().as_secs_f64();
+    let (times, _) = grid(scene);
+    let piece = solve_piece(scene, &action, &plans, &times, guess)?;
+    Ok(Run::global(piece, sizes(scene, &action, &plans), setup_s))
+}
+
+/// The outcome of a run: its diagnostics, verification and warnings (the ladder adds
+/// the attempts and a remedy).
+pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
+    let t = Instant::now();
+    let verification = verify::verify(scene, model, &run.trajectory);
+    let mut timings = run.timings.clone();
+    timings.verification_s = t.elapsed().as_secs_f64();
+    let diagnostics = diagnose(model, &run);
+    let warnings = suspicions(&diagnostics, run.time_stepping_q.as_deref(), run.status);
+    Outcome {
+        scene: scene.name.clone(),
+        status: run.status,
+        verification,
+        method: run.method,
+        ipopt_version: ipopt::ipopt_version().to_string(),
+        iterations: run.iterations,
+        settings: settings(scene, &run.trajectory.t, run.guess),
+        sizes: run.sizes,
+        timings,
+        diagnostics,
+        warnings,
+        attempts: Vec::new(),
+        remedy: None,
+        history: run.history,
+        trajectory: run.trajectory,
     }
 }
 
@@ -586,14 +861,7 @@ fn sizes(scene: &Scene, action: &Action, jac: &MatrixPlan, hess: Option<&MatrixP
 fn suspicions(diagnostics: &Diagnostics, ts_q: Option<&[Vec<f64>]>, status: SolveStatus) -> Vec<String> {
     let mut warnings = Vec::new();
     if let (Some(dist), Some(ts)) = (diagnostics.distance_from_time_stepping, ts_q) {
-        // Scale: the largest range of a coordinate over the time-stepping trajectory.
-        let d = ts.first().map_or(0, Vec::len);
-        let scale = (0..d)
-            .map(|i| {
-                let (lo, hi) = ts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| (lo.min(q[i]), hi.max(q[i])));
-                hi - lo
-            })
-            .fold(0.0_f64, f64::max);
+        let scale = verify::coordinate_scale(ts);
         if dist > FAR_FROM_TIME_STEPPING * scale {
             warnings.push(format!(
                 "the solution is {dist:.3e} away from time stepping of the same scene ({:.0} % of the coordinates' range): \
@@ -681,37 +949,26 @@ fn end_multipliers(ph: &crate::model::Physical, dp: &[f64]) -> Vec<f64> {
     }
 }
 
-fn diagnose(
-    action: &Action,
-    tr: &Trajectory,
-    max_eom_residual: f64,
-    z: &[f64],
-    max_residual: f64,
-    formulation: Formulation,
-    ts_q: Option<&[Vec<f64>]>,
-) -> Diagnostics {
-    let lay = &action.layout;
-    let nodes = lay.nodes;
+fn diagnose(model: &Model, run: &Run) -> Diagnostics {
+    let tr = &run.trajectory;
+    let nodes = tr.t.len();
     let max_abs = |rows: &[Vec<f64>]| rows.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
     let max_constraint_interior = if nodes > 2 { max_abs(&tr.g[1..nodes - 1]) } else { 0.0 };
     let constraint_last_node = max_abs(&tr.g[nodes - 1..]);
     let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
     let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - total[0]).abs()));
-    let model = &action.model;
     let positions = model.constraints.iter().filter(|c| c.kind == ConstraintKind::Position);
     let max_wall_gap = per_wall(model, |j, _| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max));
-    let episodes = contact_episodes(model, &tr.h);
+    let ts_q = run.time_stepping_q.as_deref();
     let contact_episodes_time_stepping = ts_q.map(|qs| {
         let h: Vec<Vec<f64>> = qs.iter().zip(&tr.t).map(|(q, &t)| model.wall_gaps(t, q)).collect();
         contact_episodes(model, &h)
     });
     let distance_from_time_stepping =
         ts_q.map(|qs| qs.iter().zip(&tr.q).flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs())).fold(0.0_f64, f64::max));
-    let max_minus_variable =
-        (formulation == Formulation::Full).then(|| lay.qm.iter().chain(&lay.lm).map(|&i| z[i as usize].abs()).fold(0.0_f64, f64::max));
     Diagnostics {
-        max_residual,
-        max_eom_residual,
+        max_residual: run.max_residual,
+        max_eom_residual: run.max_eom_residual,
         max_constraint_interior,
         constraint_last_node,
         max_position_drift: positions.map(|c| c.name.clone()).zip(tr.max_drift()).collect(),
@@ -720,9 +977,9 @@ fn diagnose(
         energy_drift_all: drift(&total),
         max_wall_gap,
         distance_from_time_stepping,
-        contact_episodes: episodes,
+        contact_episodes: contact_episodes(model, &tr.h),
         contact_episodes_time_stepping,
-        max_minus_variable,
+        max_minus_variable: run.max_minus_variable,
     }
 }
 

@@ -49,6 +49,13 @@ pub struct Artifact {
     pub free_nodes: usize,
 }
 
+/// Whether the energy `energy + wall_energy` of `scene` is conserved by the motion, so
+/// that its energy artifact means something: no declared forces, no wall friction and no
+/// explicit time dependence (of the `model` built from it).
+pub fn conserves_energy(scene: &Scene, model: &crate::model::Model) -> bool {
+    scene.file.forces.is_empty() && scene.walls.iter().all(|w| w.friction == 0.0) && !model.depends_on_time
+}
+
 /// The energy artifact of a trajectory of `scene` (see the module documentation).
 pub fn energy_artifact(scene: &Scene, tr: &Trajectory, skip_last: usize) -> Artifact {
     let n = tr.energy.len();

@@ -37,7 +37,8 @@
 //!   `converged`, `not_converged`, `error`, `crashed`, `timeout`), `solver_status`
 //!   (Ipopt's status name, `ODE_Succeeded` for a peer point, empty when the solver did
 //!   not finish), then `iterations`, `wall_s`, `error_max`, `error_rms`, `error_column`,
-//!   `energy_drift`, `energy_artifact`, `artifacts`, `max_residual`, `message`;
+//!   `energy_drift`, `energy_artifact` (empty unless the energy is conserved:
+//!   [`skg_core::tune::conserves_energy`]), `artifacts`, `max_residual`, `message`;
 //! * the provenance ([`Provenance`]): `skg_solve_version`, `schema_version` and
 //!   `scene_hash` (`sha256:…` of the base scene file's content, as the worker read it).
 //!
@@ -200,6 +201,10 @@ pub struct SweepMeta {
     /// Keep each point's `trajectory.csv` and `summary.json` under `points/<id>/`.
     #[serde(default)]
     pub keep_trajectories: bool,
+    /// Let each point use the fallback ladder as `skg-solve SCENE` does (default false:
+    /// a sweep measures the scene's own solve at every point).
+    #[serde(default)]
+    pub fallback: bool,
     /// Wall-time limit of one point in seconds: a worker still running then is killed and
     /// the point recorded as [`PointStatus::TimedOut`] (default: no limit).
     #[serde(default)]
@@ -682,6 +687,8 @@ pub struct Job {
     pub skip_last: usize,
     /// Where to keep trajectory.csv and summary.json (None: not kept).
     pub keep_dir: Option<PathBuf>,
+    /// Whether the point may use the fallback ladder.
+    pub fallback: bool,
 }
 
 /// What a worker reports about one point (the columns of its row in results.csv).
@@ -717,6 +724,16 @@ pub struct Record {
     pub max_residual: Option<f64>,
     /// SHA-256 of the base scene file as the worker read it (None: not read).
     pub scene_hash: Option<String>,
+    /// The verification verdict of a converged SKG point (`passed`, `failed`,
+    /// `unverified`), empty otherwise.
+    #[serde(default)]
+    pub verification: String,
+    /// Its max |q − q_reference| against time stepping of the same scene.
+    #[serde(default)]
+    pub verify_error: Option<f64>,
+    /// How the reported trajectory covered the span (`global`, or `windows L s`).
+    #[serde(default)]
+    pub solved_as: String,
     /// Warnings and errors.
     pub message: String,
 }
@@ -739,6 +756,9 @@ impl Record {
             energy_artifact: None,
             max_residual: None,
             scene_hash: None,
+            verification: String::new(),
+            verify_error: None,
+            solved_as: String::new(),
             message,
         }
     }
@@ -757,7 +777,8 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
     let start = Instant::now();
     let file = SceneFile::load(&job.scene).map_err(|e| e.to_string())?;
     let scene_hash = file.origin.content_hash();
-    let scene = file.resolve(&ov).map_err(|e| e.to_string())?;
+    let mut scene = file.resolve(&ov).map_err(|e| e.to_string())?;
+    scene.solver.fallback &= job.fallback;
     let mut rec = Record { nodes: Some(scene.nodes), scene_hash: Some(scene_hash), ..Record::new(PointStatus::Error, String::new()) };
     let compare_cols = job.compare.clone().unwrap_or_else(|| scene.coordinates.clone());
     let (trajectory, ode_csv) = match job.point.method {
@@ -766,8 +787,20 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             rec.formulation = Some(scene.formulation.to_string());
             let mut outcome = skg_core::solve::solve_scene(&scene).map_err(|e| e.to_string())?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
-            rec.status = if outcome.converged() { PointStatus::Converged } else { PointStatus::NotConverged };
+            rec.status = match (outcome.converged(), outcome.trusted()) {
+                (true, true) => PointStatus::Converged,
+                (true, false) => PointStatus::NotVerified,
+                (false, _) => PointStatus::NotConverged,
+            };
             rec.solver_status = outcome.status.ipopt().name().to_string();
+            if outcome.converged() {
+                rec.verification = outcome.verification.status.to_string();
+                rec.verify_error = outcome.verification.max_error;
+            }
+            rec.solved_as = match outcome.method {
+                skg_core::solve::Method::Global => "global".into(),
+                skg_core::solve::Method::Windows { length, .. } => format!("windows {length:.4} s"),
+            };
             rec.iterations = Some(outcome.iterations);
             let d = &outcome.diagnostics;
             rec.energy_drift = Some(d.energy_drift);
@@ -788,7 +821,10 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             (r.trajectory, Some(format!("time stepping, rtol {rtol:e}")))
         }
     };
-    rec.energy_artifact = Some(skg_core::tune::energy_artifact(&scene, &trajectory, job.skip_last).value);
+    let model = skg_core::model::Model::build(&scene).map_err(|e| e.to_string())?;
+    if skg_core::tune::conserves_energy(&scene, &model) {
+        rec.energy_artifact = Some(skg_core::tune::energy_artifact(&scene, &trajectory, job.skip_last).value);
+    }
     let solution = Table::of_trajectory(&scene, &trajectory);
     if let Some(r) = &job.reference {
         match reference_errors(&scene, r, &solution, &compare_cols, job.skip_last) {
@@ -959,6 +995,7 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
                 compare: file.sweep.compare.clone(),
                 skip_last: file.skip_last(),
                 keep_dir: file.sweep.keep_trajectories.then(|| dir.join("points").join(&id)),
+                fallback: file.sweep.fallback,
             };
             running.push(start_worker(&opts.worker_exe, &work, job)?);
         }

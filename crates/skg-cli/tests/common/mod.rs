@@ -53,8 +53,10 @@ pub fn solve(name: &str, ov: &Overrides) -> Outcome {
 }
 
 /// Overrides with a node count and operator.
+/// The scene's own solve is reported (no fallback ladder): the studies of the
+/// discretization measure the plain SBP solution at every grid, verified or not.
 pub fn grid(nodes: usize, operator: &str) -> Overrides {
-    Overrides { nodes: Some(nodes), operator: Some(operator.parse().unwrap()), ..Default::default() }
+    Overrides { nodes: Some(nodes), operator: Some(operator.parse().unwrap()), no_fallback: true, ..Default::default() }
 }
 
 /// max over nodes 0..N-skip and the given coordinates of |q - exact(t)|.
@@ -79,4 +81,38 @@ pub fn skg(args: &[&str], dir: &Path) -> Output {
 /// Everything a run printed: stdout, then stderr.
 pub fn text(o: &Output) -> String {
     format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// The rolling disk's closed form (docs/scenes.md): (x, y, θ, φ) at t, with
+/// `k = g sin α / (1 + I_S/(M R²))`.
+pub fn rolling_disk_exact(t: f64) -> Vec<f64> {
+    let k = G * 0.5 / 1.5;
+    vec![
+        5.0 * t.sin() + k * t.sin().powi(2) / 2.0,
+        5.0 * (1.0 - t.cos()) + k * (t / 2.0 - (2.0 * t).sin() / 4.0),
+        5.0 * t + k * (1.0 - t.cos()),
+        t,
+    ]
+}
+
+/// The knife edge's closed form (scenarios/knife_edge.toml, ω = 2, u0 = 1, α = π/6):
+/// (x, y, φ) at t.
+pub fn knife_edge_exact(t: f64) -> Vec<f64> {
+    let (w, u0, gs) = (2.0, 1.0, G * 0.5);
+    let s = (w * t).sin();
+    vec![
+        u0 * s / w + gs / (2.0 * w * w) * s * s,
+        u0 * (1.0 - (w * t).cos()) / w + gs / (2.0 * w) * (t - (2.0 * w * t).sin() / (2.0 * w)),
+        w * t,
+    ]
+}
+
+/// Path of a scene written for the tests (crates/skg-cli/tests/scenes).
+pub fn test_scene(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/scenes").join(format!("{name}.toml"))
+}
+
+/// Load and resolve a test scene.
+pub fn load_test_scene(name: &str, ov: &Overrides) -> Scene {
+    SceneFile::load(&test_scene(name)).unwrap().resolve(ov).unwrap()
 }
