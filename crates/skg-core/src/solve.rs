@@ -763,57 +763,18 @@ impl fmt::Display for Method {
     }
 }
 
-/// One attempt at the whole span: a global solve or a sequence of windows, with the
+/// One attempt at the whole span: a global solve or a sequence of windows, on the
 /// scene's grid.
 #[derive(Debug, Clone)]
 pub struct Run {
     /// How the span was covered.
     pub method: Method,
-    /// How the solve ended: converged only if every piece converged (else the first
-    /// piece that did not).
-    pub status: SolveStatus,
-    /// Ipopt's iterations, summed over the pieces.
-    pub iterations: usize,
-    /// Ipopt's iteration tables, one after the other.
-    pub history: Vec<ipopt::IterationStat>,
-    /// The solution at the scene's nodes.
-    pub trajectory: Trajectory,
-    /// max |c| over the pieces.
-    pub max_residual: f64,
-    /// max |equation of motion| at interior nodes of the pieces.
-    pub max_eom_residual: f64,
-    /// max |q-|, |λ-| for the full formulation.
-    pub max_minus_variable: Option<f64>,
-    /// Time-stepping coordinates at the scene's nodes, when every guess made them.
-    pub time_stepping_q: Option<NodeSeries>,
-    /// How the initial guess was made.
-    pub guess: String,
-    /// Where the time went (summed over the pieces).
-    pub timings: Timings,
     /// The sizes of one piece's system.
     pub sizes: Sizes,
-}
-
-impl Run {
-    /// A global run: the scene's whole span solved as one piece.
-    pub fn global(piece: Piece, sizes: Sizes, setup_s: f64) -> Run {
-        let mut timings = piece.timings.clone();
-        timings.setup_s = setup_s;
-        Run {
-            method: Method::Global,
-            status: piece.status,
-            iterations: piece.iterations,
-            history: piece.history,
-            trajectory: piece.trajectory,
-            max_residual: piece.max_residual,
-            max_eom_residual: piece.max_eom_residual,
-            max_minus_variable: piece.max_minus_variable,
-            time_stepping_q: piece.time_stepping_q,
-            guess: piece.guess,
-            timings,
-            sizes,
-        }
-    }
+    /// The solution over the whole span. For windows, the pieces joined: converged only
+    /// if every window converged (else the status of the first that did not),
+    /// iterations, iteration tables and times one after the other, residuals maximized.
+    pub solution: Piece,
 }
 
 /// Solve the scene's whole span in one piece from `guess`.
@@ -823,13 +784,15 @@ pub fn solve_global(scene: &Scene, guess: &Guess) -> Result<Run, SolveError> {
     let plans = Plans::new(scene, &action);
     let setup_s = t_setup.elapsed().as_secs_f64();
     let (times, _) = grid(scene);
-    let piece = solve_piece(scene, &action, &plans, &times, guess)?;
-    Ok(Run::global(piece, sizes(scene, &action, &plans), setup_s))
+    let mut solution = solve_piece(scene, &action, &plans, &times, guess)?;
+    solution.timings.setup_s = setup_s;
+    Ok(Run { method: Method::Global, sizes: sizes(scene, &action, &plans), solution })
 }
 
 /// The outcome of a run: its diagnostics, verification and warnings (the ladder adds
 /// the attempts and a remedy).
 pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
+    let Run { method, sizes, solution: run } = run;
     let t = Instant::now();
     let verification = verify::verify(scene, model, &run.trajectory);
     let mut timings = run.timings.clone();
@@ -840,11 +803,11 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
         scene: scene.name.clone(),
         status: run.status,
         verification,
-        method: run.method,
+        method,
         ipopt_version: ipopt::ipopt_version().to_string(),
         iterations: run.iterations,
         settings: settings(scene, &run.trajectory.t, run.guess),
-        sizes: run.sizes,
+        sizes,
         timings,
         diagnostics,
         warnings,
@@ -949,7 +912,7 @@ fn end_multipliers(ph: &crate::model::Physical, dp: &[f64]) -> Vec<f64> {
     }
 }
 
-fn diagnose(model: &Model, run: &Run) -> Diagnostics {
+fn diagnose(model: &Model, run: &Piece) -> Diagnostics {
     let tr = &run.trajectory;
     let nodes = tr.t.len();
     let max_abs = |rows: &[Vec<f64>]| rows.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
