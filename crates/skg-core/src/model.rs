@@ -780,20 +780,32 @@ impl Model {
     }
 
     /// Checks on the initial state: a positive-definite kinetic matrix (masses and
-    /// inertias) and initial velocities that satisfy every declared constraint.
+    /// inertias), independent velocity constraints (∂g/∂q̇ of full row rank) and initial
+    /// velocities that satisfy every declared constraint.
     fn validate_initial_state(&self, scene: &Scene) -> Result<(), SceneError> {
         let mut ws = self.workspace();
         let ph = self.physical(&scene.initial_q, &scene.initial_v, &mut ws);
-        let location = scene.file.origin.whole();
-        let sym = (&ph.kinetic + ph.kinetic.transpose()) * 0.5;
-        let eig = sym.symmetric_eigenvalues();
-        let min = eig.iter().cloned().fold(f64::INFINITY, f64::min);
+        let file = &scene.file;
+        let min = smallest_eigenvalue(&ph.kinetic);
         if min.is_nan() || min <= 0.0 {
             return Err(SceneError::Invalid {
-                location,
+                location: file.origin.locate_in(&file.scene.lagrangian, None),
                 message: format!(
-                    "the kinetic matrix ∂²L/∂q̇² is not positive definite at the initial state \
+                    "the kinetic matrix ∂²L/∂q̇² of the Lagrangian is not positive definite at the initial state \
                      (smallest eigenvalue {min:.3e}): check the masses and inertias in the Lagrangian"
+                ),
+            });
+        }
+        if let Some(a) = self.dependent_constraint(&ph.gv) {
+            return Err(SceneError::Invalid {
+                location: file.origin.locate_in(&file.constraints[a].expression, None),
+                message: format!(
+                    "constraint `{}` is redundant at the initial state: its gradient ∂g/∂q̇ is a combination of those of {} \
+                     (the constraints' Jacobian ∂g/∂q̇ has rank below {}), so its multiplier is not determined: remove it \
+                     or make the constraints independent",
+                    self.constraints[a],
+                    self.constraints[..a].iter().map(|c| format!("`{c}`")).collect::<Vec<_>>().join(", "),
+                    self.constraints.len()
                 ),
             });
         }
@@ -802,7 +814,7 @@ impl Model {
         for (a, val) in ph.g.iter().enumerate() {
             if val.is_nan() || val.abs() > tol {
                 return Err(SceneError::Invalid {
-                    location: scene.file.origin.locate_in(&scene.file.constraints[a].expression, None),
+                    location: file.origin.locate_in(&file.constraints[a].expression, None),
                     message: format!(
                         "the initial state violates constraint `{}`: {} = {:.6e} (tolerance {:.1e}); \
                          choose initial velocities that satisfy it",
@@ -814,11 +826,74 @@ impl Model {
         for (j, h) in ph.h.iter().enumerate() {
             if !h.is_finite() {
                 return Err(SceneError::Invalid {
-                    location,
-                    message: format!("wall `{}`: h is not finite at the initial state", self.walls[j].name),
+                    location: file.origin.locate_in(&file.walls[j].h, None),
+                    message: format!("wall `{}`: h is not finite at the initial state ({h})", self.walls[j].name),
                 });
             }
         }
         Ok(())
     }
+
+    /// The first constraint whose row of `G = ∂g/∂q̇` (n×d) depends linearly on the rows
+    /// before it (relative tolerance 1e-10 on the Gram–Schmidt remainder), if any.
+    fn dependent_constraint(&self, gv: &DMatrix<f64>) -> Option<usize> {
+        let mut basis: Vec<DVector<f64>> = Vec::new();
+        for a in 0..gv.nrows() {
+            let row: DVector<f64> = gv.row(a).transpose();
+            let mut rest = row.clone();
+            for b in &basis {
+                rest -= b * b.dot(&rest);
+            }
+            if rest.norm() <= 1e-10 * row.norm() || rest.norm().is_nan() {
+                return Some(a);
+            }
+            basis.push(rest.normalize());
+        }
+        None
+    }
+
+    /// The first node `k` at which the kinetic matrix ∂²L/∂q̇² of the states `(q[k], v[k])`
+    /// is not positive definite, with its smallest eigenvalue.
+    pub fn kinetic_loss(&self, q: &[Vec<f64>], v: &[Vec<f64>]) -> Option<(usize, f64)> {
+        let mut ws = self.workspace();
+        (0..q.len()).find_map(|k| {
+            let min = smallest_eigenvalue(&self.physical(&q[k], &v[k], &mut ws).kinetic);
+            (min.is_nan() || min <= 0.0).then_some((k, min))
+        })
+    }
+
+    /// Which of the scene's expressions is not finite at the state (q, v): a description
+    /// and its place in the scene file. `None` if all are finite.
+    pub fn non_finite_expression(&self, scene: &Scene, q: &[f64], v: &[f64]) -> Option<(String, crate::scenario::Location)> {
+        let mut ws = self.workspace();
+        let ph = self.physical(q, v, &mut ws);
+        let file = &scene.file;
+        let at = |spanned: &Spanned<String>| file.origin.locate_in(spanned, None);
+        let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());
+        if let Some(j) = ph.h.iter().position(|h| !h.is_finite()) {
+            return Some((format!("the gap h of wall `{}`", self.walls[j].name), at(&file.walls[j].h)));
+        }
+        let row_finite = |m: &DMatrix<f64>, a: usize| m.row(a).iter().all(|x| x.is_finite());
+        if let Some(a) = (0..ph.g.len()).find(|&a| !ph.g[a].is_finite() || !row_finite(&ph.gv, a) || !row_finite(&ph.gq, a)) {
+            return Some((format!("constraint `{}` or its derivatives", self.constraints[a]), at(&file.constraints[a].expression)));
+        }
+        if !ph.energy.is_finite() || !finite(&ph.p) || !finite(ph.kinetic.as_slice()) || !finite(ph.dpdq.as_slice()) {
+            return Some(("the Lagrangian or its derivatives".into(), at(&file.scene.lagrangian)));
+        }
+        let i = ph.force.iter().position(|f| !f.is_finite())?;
+        let name = &self.coordinates[i];
+        Some(match file.forces.get(name) {
+            Some(src) => (format!("the force on `{name}`, ∂L/∂{name} or a wall's force on it"), at(src)),
+            None => (format!("∂L/∂{name} or a wall's force on `{name}`"), at(&file.scene.lagrangian)),
+        })
+    }
+}
+
+/// The smallest eigenvalue of the symmetric part of a square matrix (NaN if it has a NaN).
+fn smallest_eigenvalue(m: &DMatrix<f64>) -> f64 {
+    if m.iter().any(|x| !x.is_finite()) {
+        return f64::NAN;
+    }
+    let sym = (m + m.transpose()) * 0.5;
+    sym.symmetric_eigenvalues().iter().cloned().fold(f64::INFINITY, f64::min)
 }

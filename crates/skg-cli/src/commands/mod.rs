@@ -23,8 +23,12 @@ use skg_core::scenario::{Formulation, HessianMode, Overrides, Scene, SceneFile};
 
 /// Exit code of a solve that ran but did not converge.
 pub const EXIT_NOT_CONVERGED: u8 = 3;
-/// Exit code of `check` when a tolerance is exceeded.
-pub const EXIT_TOLERANCE_EXCEEDED: u8 = 4;
+/// Exit code of a solve that converged but failed verification (e.g. a kinetic matrix
+/// that is not positive definite at some node).
+pub const EXIT_VERIFICATION_FAILED: u8 = 4;
+/// Exit code of `check` when a tolerance is exceeded (the same meaning: a result that
+/// ran but does not pass).
+pub const EXIT_TOLERANCE_EXCEEDED: u8 = EXIT_VERIFICATION_FAILED;
 
 #[derive(Args, Clone)]
 pub struct SceneArgs {

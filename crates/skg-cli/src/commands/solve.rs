@@ -3,12 +3,12 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 
 use skg_core::{output, solve};
 
-use super::{load, SceneArgs, EXIT_NOT_CONVERGED};
+use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_VERIFICATION_FAILED};
 
 #[derive(Args)]
 pub struct SolveArgs {
@@ -36,18 +36,37 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
-    if let Some(log) = &scene.solver.log_file {
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        scene.solver.log_file = Some(dir.join(log));
+    let out = output::OutputDir::lock(&dir)?;
+    // Ipopt writes its log into a staged file, moved over the old log when the solve
+    // returns: a killed run leaves the old log complete.
+    let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
+    scene.solver.log_file = log.as_ref().map(|(_, staged)| staged.clone());
+    let outcome = solve::solve_scene(&scene);
+    if let Some((target, staged)) = &log {
+        out.commit(staged, target)?;
     }
-    let mut outcome = solve::solve_scene(&scene)?;
-    let (csv, json) = output::write_outcome(&dir, &mut outcome, &scene).context("writing the results")?;
+    let mut outcome = match outcome {
+        Ok(outcome) => outcome,
+        Err(e) => {
+            out.abandon();
+            return Err(e.into());
+        }
+    };
+    let (csv, json) = output::write_outcome(&dir, &mut outcome, &scene)?;
     for w in &outcome.warnings {
         eprintln!("warning: {w}");
     }
     let t = &outcome.timings;
     let total = t.setup_s + t.initial_guess_s + t.ipopt_total_s + t.postprocess_s + t.output_s;
-    if outcome.converged() {
+    if let (true, Some(loss)) = (outcome.converged(), &outcome.diagnostics.kinetic_loss) {
+        eprintln!(
+            "error: {}: converged, but verification failed at node {} (see the warning above); summary in {}",
+            outcome.scene,
+            loss.node,
+            json.display()
+        );
+        Ok(ExitCode::from(EXIT_VERIFICATION_FAILED))
+    } else if outcome.converged() {
         if !args.quiet {
             let d = &outcome.diagnostics;
             println!(
