@@ -150,7 +150,7 @@ fn shards_partition_the_grid_and_merge_joins_them() {
     args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
     let o = common::skg(&args, Path::new("."));
     assert!(o.status.success(), "{}", common::text(&o));
-    assert!(common::text(&o).contains("every point of the sweep is present"), "{}", common::text(&o));
+    assert!(common::text(&o).contains("every point of the sweep (11) is present"), "{}", common::text(&o));
     let (r, ids) = rows_by_id(&merged);
     assert_eq!(ids.len(), all.len());
     assert!(ids.values().all(|&c| c == 1));
