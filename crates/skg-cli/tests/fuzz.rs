@@ -131,6 +131,9 @@ fn string_spans(text: &str) -> Vec<(usize, usize)> {
 /// One mutation of `text`.
 fn mutate(text: &str, rng: &mut Rng) -> String {
     let lines: Vec<&str> = text.lines().collect();
+    if lines.is_empty() {
+        return rng.pick(FRAGMENTS).to_string();
+    }
     let splice = |(a, b): (usize, usize), with: &str| format!("{}{with}{}", &text[..a], &text[b..]);
     match rng.below(9) {
         0..=2 => match number_spans(text) {
@@ -168,25 +171,45 @@ fn mutate(text: &str, rng: &mut Rng) -> String {
     }
 }
 
+/// How far a mutant got.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Debug)]
+enum Stage {
+    /// Not valid TOML of a scene.
+    Rejected,
+    /// Parsed, refused by resolution.
+    Parsed,
+    /// Resolved, refused by the model or the solve setup.
+    Resolved,
+    /// Solved (converged or not) and written.
+    Solved,
+}
+
 /// Everything a solve does with a scene text, capped in size; the errors are expected.
-fn exercise(text: &str) {
-    let Ok(file) = SceneFile::parse(text, "mutant.toml") else { return };
-    let Ok(scene) = file.clone().resolve(&Overrides::default()) else { return };
+fn exercise(text: &str) -> Stage {
+    let Ok(file) = SceneFile::parse(text, "mutant.toml") else { return Stage::Rejected };
+    let Ok(scene) = file.clone().resolve(&Overrides::default()) else { return Stage::Parsed };
     let _ = skg_core::solve::grid(&scene);
     let capped = Overrides { nodes: Some(scene.nodes.min(SOLVE_NODES)), max_iter: Some(SOLVE_MAX_ITER), ..Overrides::default() };
-    let Ok(mut scene) = file.resolve(&capped) else { return };
+    let Ok(mut scene) = file.resolve(&capped) else { return Stage::Resolved };
     // Never let a mutant make Ipopt print or write files.
     scene.solver.print_level = 0;
     scene.solver.log_file = None;
-    if let Ok(mut outcome) = skg_core::solve::solve_scene(&scene) {
-        let dir = tempfile::tempdir().unwrap();
-        skg_core::output::write_outcome(dir.path(), &mut outcome, &scene).unwrap();
-        skg_core::check::Table::read(&dir.path().join("trajectory.csv")).unwrap();
-    }
+    let Ok(mut outcome) = skg_core::solve::solve_scene(&scene) else { return Stage::Resolved };
+    let dir = tempfile::tempdir().unwrap();
+    skg_core::output::write_outcome(dir.path(), &mut outcome, &scene).unwrap();
+    skg_core::check::Table::read(&dir.path().join("trajectory.csv")).unwrap();
+    Stage::Solved
 }
 
-/// Run `count` mutants from `seed`; returns the failures (mutant number, what happened).
-fn fuzz(count: usize, seed: u64) -> Vec<(usize, String)> {
+/// What a fuzz run found: the failures (mutant number, what happened) and how many
+/// mutants reached each [`Stage`].
+struct Report {
+    failures: Vec<(usize, String)>,
+    stages: std::collections::BTreeMap<Stage, usize>,
+}
+
+/// Run `count` mutants from `seed`.
+fn fuzz(count: usize, seed: u64) -> Report {
     let seeds: Vec<String> = common::SHIPPED.iter().map(|s| std::fs::read_to_string(common::scenario(s)).unwrap()).collect();
     let mut rng = Rng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
     // The watchdog: the mutant in progress and when it started (ms since `epoch`).
@@ -206,6 +229,7 @@ fn fuzz(count: usize, seed: u64) -> Vec<(usize, String)> {
     });
     let started = Instant::now();
     let mut failures = Vec::new();
+    let mut stages = std::collections::BTreeMap::new();
     for k in 0..count {
         let base = &seeds[rng.below(seeds.len())];
         let mut text = base.clone();
@@ -215,11 +239,14 @@ fn fuzz(count: usize, seed: u64) -> Vec<(usize, String)> {
         std::fs::write(dump.join(format!("hang-{k}.toml")), &text).unwrap();
         current.1.store(epoch.elapsed().as_millis() as u64, Ordering::SeqCst);
         current.0.store(k as u64, Ordering::SeqCst);
-        if let Err(payload) = catch_unwind(AssertUnwindSafe(|| exercise(&text))) {
-            let message = payload.downcast_ref::<String>().cloned().or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()));
-            let path = dump.join(format!("panic-{k}.toml"));
-            std::fs::write(&path, &text).unwrap();
-            failures.push((k, format!("panicked: {} ({})", message.unwrap_or_default(), path.display())));
+        match catch_unwind(AssertUnwindSafe(|| exercise(&text))) {
+            Ok(stage) => *stages.entry(stage).or_insert(0) += 1,
+            Err(payload) => {
+                let message = payload.downcast_ref::<String>().cloned().or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()));
+                let path = dump.join(format!("panic-{k}.toml"));
+                std::fs::write(&path, &text).unwrap();
+                failures.push((k, format!("panicked: {} ({})", message.unwrap_or_default(), path.display())));
+            }
         }
         current.0.store(u64::MAX, Ordering::SeqCst);
         let _ = std::fs::remove_file(dump.join(format!("hang-{k}.toml")));
@@ -227,14 +254,17 @@ fn fuzz(count: usize, seed: u64) -> Vec<(usize, String)> {
             eprintln!("{} mutants, {} failures, {:.0} s", k + 1, failures.len(), started.elapsed().as_secs_f64());
         }
     }
-    eprintln!("{count} mutants of seed {seed}: {} failures in {:.1} s", failures.len(), started.elapsed().as_secs_f64());
-    failures
+    eprintln!("{count} mutants of seed {seed}: {} failures in {:.1} s; stages {stages:?}", failures.len(), started.elapsed().as_secs_f64());
+    Report { failures, stages }
 }
 
 #[test]
 fn mutants_of_the_shipped_scenes_never_panic_or_hang() {
-    let failures = fuzz(SUITE_MUTANTS, 11);
-    assert!(failures.is_empty(), "{failures:#?}");
+    let r = fuzz(SUITE_MUTANTS, 11);
+    assert!(r.failures.is_empty(), "{:#?}", r.failures);
+    // The mutants reach every stage, a good share of them the solve.
+    let solved = r.stages.get(&Stage::Solved).copied().unwrap_or(0);
+    assert!(r.stages.len() == 4 && solved >= SUITE_MUTANTS / 5, "{:?}", r.stages);
 }
 
 /// The long run (see the module docs): `SKG_FUZZ_MUTANTS` mutants (default 10⁵) from
@@ -243,8 +273,8 @@ fn mutants_of_the_shipped_scenes_never_panic_or_hang() {
 #[ignore]
 fn mutation_fuzz_long_run() {
     let env = |name: &str, default: u64| std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default);
-    let failures = fuzz(env("SKG_FUZZ_MUTANTS", 100_000) as usize, env("SKG_FUZZ_SEED", 1));
-    assert!(failures.is_empty(), "{failures:#?}");
+    let r = fuzz(env("SKG_FUZZ_MUTANTS", 100_000) as usize, env("SKG_FUZZ_SEED", 1));
+    assert!(r.failures.is_empty(), "{:#?}", r.failures);
 }
 
 #[test]

@@ -164,13 +164,17 @@ fn is_stale_temporary(name: &str) -> bool {
     }
 }
 
-/// Whether a process with this id runs (on Linux: `/proc/<pid>` exists; elsewhere
-/// assumed, so nothing is removed).
+/// Whether a process with this id runs (on Linux: `/proc/<pid>/stat` exists and is not
+/// a zombie's, which stays listed until someone reaps it; elsewhere assumed, so nothing
+/// is removed).
 fn process_is_running(pid: u32) -> bool {
-    if cfg!(target_os = "linux") {
-        Path::new("/proc").join(pid.to_string()).exists()
-    } else {
-        true
+    if !cfg!(target_os = "linux") {
+        return true;
+    }
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        // `pid (comm) S …`: the state follows the last `)`.
+        Ok(stat) => stat.rsplit_once(')').is_none_or(|(_, rest)| !matches!(rest.trim_start().chars().next(), Some('Z' | 'X'))),
+        Err(_) => false,
     }
 }
 
