@@ -2,26 +2,31 @@
 //! is allocated, with a message that states the estimate and the limit, instead of
 //! running out of memory (or panicking on a capacity overflow) part-way.
 //!
-//! The estimates are fits to measured peak resident memory (release build, Debian's
-//! Ipopt 3.11.9 with MUMPS; docs/benchmarks.md): a solve needs about
-//! `N · (d + n)² · c_op` bytes (MUMPS's factors of the KKT matrix dominate), `c_op`
-//! growing with the operator's stencil and doubled by the full formulation; a reference
-//! stores its samples (a few dozen doubles per node) and the integrator's steps. They
-//! err on the high side. The limit is the memory the kernel reports as available
-//! (`MemAvailable` in `/proc/meminfo`); where that cannot be read, nothing is refused.
-//! Reading one line of `/proc/meminfo` needs no crate (the `sysinfo` crate would bring a
-//! large dependency for it).
+//! The estimates are fits to the measured peak resident memory (Debian's Ipopt 3.11.9
+//! with MUMPS, 2-core machine; docs/benchmarks.md lists the measurements). A solve needs
+//! about `64 MB + N · u² · 2 kB · max(1, N/16384)^0.75` bytes, `u = d + n` the unknowns
+//! per node: MUMPS's factors of the KKT matrix dominate and grow faster than N (rolling
+//! disk, u = 6: 140 MB at N = 4096, 1.04 GB at N = 16384). SBP121 needs about half,
+//! SBP363 1.5 times, the full formulation 3 times as much. A reference stores its
+//! samples and the integrator's dense output: about 96 bytes per sample and column
+//! (tumbler: 79 MB for 10⁵ samples, 705 MB for 10⁶). Both err on the high side. The limit is the memory
+//! the kernel reports as available (`MemAvailable` in `/proc/meminfo`); where that
+//! cannot be read, nothing is refused. Reading one line of `/proc/meminfo` needs no
+//! crate (`sysinfo` would bring a large dependency for it).
 
 use crate::sbp::OperatorKind;
 use crate::scenario::{Formulation, Location, Scene, SceneError};
 
-/// Bytes per node and per (d + n)² of a reduced solve with `SBP242`, fitted to the
-/// measured peak memory (see the module docs).
+/// Bytes per node and per unknown² of a reduced `SBP242` solve at N ≤ 16384.
 const SOLVE_BYTES_PER_NODE_UNIT: f64 = 2.0e3;
+/// Above this node count the bytes per node grow as (N / this)^[`SOLVE_FILL_EXPONENT`].
+const SOLVE_FILL_NODES: f64 = 16384.0;
+/// The growth of MUMPS's fill per node with N (fitted: 0.71 on the rolling disk).
+const SOLVE_FILL_EXPONENT: f64 = 0.75;
 /// Bytes of a solve independent of the grid (tapes, Ipopt, MUMPS workspaces).
 const SOLVE_BASE_BYTES: f64 = 64.0e6;
-/// Doubles a reference stores per node and per column.
-const REFERENCE_DOUBLES_PER_CELL: f64 = 8.0;
+/// Bytes a reference keeps per sample and column.
+const REFERENCE_BYTES_PER_CELL: f64 = 96.0;
 
 /// Estimated peak memory in bytes of solving `scene`.
 pub fn solve_bytes(scene: &Scene) -> f64 {
@@ -32,13 +37,15 @@ pub fn solve_bytes(scene: &Scene) -> f64 {
         _ => 1.6,
     };
     let formulation = if scene.formulation == Formulation::Full { 3.0 } else { 1.0 };
-    SOLVE_BASE_BYTES + scene.nodes as f64 * unknowns * unknowns * SOLVE_BYTES_PER_NODE_UNIT * stencil * formulation
+    let n = scene.nodes as f64;
+    let fill = (n / SOLVE_FILL_NODES).max(1.0).powf(SOLVE_FILL_EXPONENT);
+    SOLVE_BASE_BYTES + n * unknowns * unknowns * SOLVE_BYTES_PER_NODE_UNIT * fill * stencil * formulation
 }
 
 /// Estimated peak memory in bytes of a reference of `scene` sampled at `samples` times.
 pub fn reference_bytes(scene: &Scene, samples: usize) -> f64 {
     let columns = (1 + 2 * scene.coordinates.len() + 3 * scene.constraints.len() + 2 * scene.walls.len() + 2) as f64;
-    SOLVE_BASE_BYTES / 4.0 + samples as f64 * columns * REFERENCE_DOUBLES_PER_CELL * 8.0
+    SOLVE_BASE_BYTES / 4.0 + samples as f64 * columns * REFERENCE_BYTES_PER_CELL
 }
 
 /// The memory available to this run in bytes (`MemAvailable`), if the system says.
@@ -84,6 +91,44 @@ fn bytes_text(bytes: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use crate::scenario::{Overrides, SceneFile};
+
+    fn scene(text: &str, nodes: usize, operator: &str, formulation: Formulation) -> Scene {
+        let ov = Overrides {
+            nodes: Some(nodes),
+            operator: Some(operator.parse().unwrap()),
+            formulation: Some(formulation),
+            ..Overrides::default()
+        };
+        SceneFile::parse(text, "scene.toml").unwrap().resolve(&ov).unwrap()
+    }
+
+    /// The estimates bound the measured peak memory (docs/benchmarks.md) from above,
+    /// by at most a factor 3.
+    #[test]
+    fn estimates_bound_the_measured_memory() {
+        let disk = include_str!("../../../scenarios/rolling_disk.toml");
+        let tumbler = include_str!("../../../scenarios/tumbler.toml");
+        let (reduced, full) = (Formulation::Reduced, Formulation::Full);
+        let solves = [
+            (tumbler, 4096, "SBP242", reduced, 37.1e6),
+            (tumbler, 16384, "SBP242", reduced, 104.2e6),
+            (disk, 4096, "SBP242", reduced, 140.0e6),
+            (disk, 16384, "SBP242", reduced, 1042.6e6),
+            (disk, 4096, "SBP363", reduced, 193.1e6),
+            (disk, 4096, "SBP121", reduced, 83.8e6),
+            (disk, 4096, "SBP242", full, 363.9e6),
+        ];
+        for (text, n, op, form, measured) in solves {
+            let estimate = solve_bytes(&scene(text, n, op, form));
+            assert!(estimate >= measured && estimate <= 3.0 * measured, "N = {n} {op} {form}: {estimate:e} for {measured:e}");
+        }
+        for (text, n, measured) in [(tumbler, 100_000, 78.9e6), (tumbler, 1_000_000, 704.7e6), (disk, 1_000_000, 1157.8e6)] {
+            let estimate = reference_bytes(&scene(text, n, "SBP242", reduced), n);
+            assert!(estimate >= measured && estimate <= 3.0 * measured, "reference N = {n}: {estimate:e} for {measured:e}");
+        }
+    }
 
     #[test]
     fn byte_counts_read_as_decimal_units() {

@@ -703,6 +703,13 @@ impl SweepFile {
                 .clone()
                 .resolve(&ov)
                 .map_err(|e| SweepError::Invalid { location: loc.clone(), message: format!("point {}: {e}", p.canonical()) })?;
+            let memory = match p.method {
+                Method::Skg => skg_core::memory::check(&scene, "the solve", scene.nodes, skg_core::memory::solve_bytes(&scene)),
+                Method::Ode { .. } => {
+                    skg_core::memory::check(&scene, "the reference", scene.nodes, skg_core::memory::reference_bytes(&scene, scene.nodes))
+                }
+            };
+            memory.map_err(|e| SweepError::Invalid { location: loc.clone(), message: format!("point {}: {e}", p.canonical()) })?;
             if seen.insert(p.id()) {
                 p.evaluated = evaluated_parameters(&p, &scene);
                 costs.push(estimated_cost(&scene, &p.method));
