@@ -19,11 +19,13 @@ use commands::{bench, check, plot, reference, solve, sweep, tune};
 action of the scene is discretized in time with summation-by-parts operators and its critical point \
 — the whole trajectory at once — is found by Ipopt with exact sparse derivatives.\n\n\
 Writes DIR/trajectory.csv (t, each coordinate and its velocity Dq, each multiplier, the energy, the \
-walls' potential energy, each constraint residual, each wall gap) and DIR/summary.json (status, iterations, timings, sizes, \
-residuals).\n\n\
+walls' potential energy, each constraint residual, each wall gap) and then DIR/summary.json (status, iterations, timings, \
+sizes, residuals, and the SHA-256 of trajectory.csv: check and plot refuse a trajectory that its summary does not \
+describe). A second skg-solve writing into the same DIR is refused.\n\n\
 Exit status, the same for every command: 0 success; 1 an error in the input or while reading or writing \
 files (the message names the file, line and column); 2 a command-line usage error; 3 the solve did not \
-converge (the summary is still written, marked \"converged\": false); 4 a tolerance was exceeded (check).",
+converge (the summary is still written, marked \"converged\": false); 4 converged but verification failed (the \
+kinetic matrix is not positive definite at some node), or a tolerance was exceeded (check).",
     args_conflicts_with_subcommands = true,
     subcommand_negates_reqs = true
 )]

@@ -14,12 +14,18 @@
 //!   child dies with the driver (`PR_SET_PDEATHSIG`), and Ctrl-C reaches the whole
 //!   process group.
 //! * **Results**: the driver alone appends to `results.csv`, one whole line per
-//!   finished point, flushed and fsync'd. On a rerun a trailing partial line (from a
-//!   kill in the middle of a write) is cut off and points whose id is present are skipped:
-//!   no row is lost or duplicated. A rerun refuses a `results.csv` whose rows come from a
-//!   base scene with other content (their `scene_hash`).
+//!   finished point, flushed and fsync'd, and holds the output directory's lock
+//!   ([`output::OutputDir`]) meanwhile, so a second sweep into it is refused. On a rerun
+//!   a trailing partial line (from a kill in the middle of a write) is cut off and points
+//!   whose id is present are skipped: no row is lost or duplicated; with
+//!   [`SweepOptions::retry_failed`] the rows of points that did not converge are removed
+//!   first, so they run again.
+//! * **Identity of the inputs**: rows carry the hashes of the base scene and of the
+//!   reference file, `sweep.json` the [`RowSettings`]; a rerun with other inputs is
+//!   refused ([`SweepOptions::new_results`] moves the old result set aside instead).
 //! * **Shards**: `--shard k/n` keeps the points whose index is `k−1 mod n`; [`merge`]
-//!   joins the shards' `results.csv` files (of one base scene and one schema).
+//!   joins the shards' `results.csv` files (of one sweep, one input content and one
+//!   schema) and refuses an incomplete set unless asked for a partial merge.
 //!
 //! **`results.csv`** is a plain CSV (one header line, no comments: `pd.read_csv` reads
 //! it). Its columns ([`results_columns`]), in order:
@@ -39,14 +45,15 @@
 //!   not finish), then `iterations`, `wall_s`, `error_max`, `error_rms`, `error_column`,
 //!   `energy_drift`, `energy_artifact`, `artifacts`, `max_residual`, `message`;
 //! * the provenance ([`Provenance`]): `skg_solve_version`, `schema_version` and
-//!   `scene_hash` (`sha256:…` of the base scene file's content, as the worker read it).
+//!   `scene_hash` (`sha256:…` of the base scene file's content, as the worker read it),
+//!   `reference_hash` (of the reference file's content; empty without one).
 //!
 //! [`Results::read`] refuses a file of another schema version (or one without the
 //! `schema_version` column, written before it existed) with a message naming the file.
 //!
 //! **`sweep.json`**, beside `results.csv` ([`SweepInfo`]): the sweep's name, the sweep
-//! file, the base scene, `skg_solve_version`, `schema_version`, `scene_hash`, the number
-//! of points of the whole sweep, the shard and the ids of this run's points.
+//! file, the base scene, the provenance, the row settings, the number of points of the
+//! whole sweep, the shard, the ids of this run's points and of every point.
 
 #![warn(missing_docs)]
 // Errors carry file:line:column text, as in the core modules.

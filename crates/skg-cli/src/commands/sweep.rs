@@ -20,17 +20,22 @@ pub fn sweep_long_about() -> String {
     let statuses: Vec<&str> = sweep::PointStatus::ALL.iter().map(|s| s.name()).collect();
     format!(
         "Run a parameter sweep: every point of the sweep file's grid in its own worker process, each finished point \
-         appended to DIR/results.csv. Rerunning resumes (points already in results.csv are skipped; rows of a base \
-         scene whose content has changed since are refused).\n\n\
+         appended to DIR/results.csv. Rerunning resumes (points already in results.csv are skipped; --retry-failed runs \
+         the failed ones again). A rerun after the base scene, the reference file or the [sweep] settings that \
+         change a row were edited is refused (--new-results starts a new result set). A second sweep into the same \
+         DIR is refused. Above {} points the sweep starts only with --yes.\n\n\
          results.csv is a plain CSV, one row per point, with the columns {}; one column per grid axis; {}; and the \
          provenance {}. status is one of {} (converged is true exactly for `converged`); solver_status is Ipopt's \
-         status name (ODE_Succeeded for a peer point); scene_hash is the SHA-256 of the base scene file's content.\n\n\
+         status name (ODE_Succeeded for a peer point); scene_hash and reference_hash are the SHA-256 of the base \
+         scene file's and the reference file's content.\n\n\
          A grid axis that is a scene parameter holds the number the point's scene has (sigma = \"1/110\" gives \
          0.00909090909090909, the shortest text that reads back to the same double). If any of its values is \
          written as an expression, the column <axis>{} follows it with every value as written (1/110); an axis of \
          plain numbers has none. `skg-solve plot ... --where sigma=1/110` matches either.\n\n\
-         DIR/sweep.json records the sweep's name, the sweep file, the base scene, the same provenance, the number \
-         of points, the shard and the ids of the shard's points.",
+         DIR/sweep.json records the sweep's name, the sweep file, the base scene, the same provenance, the settings \
+         that change a row, the number of points, the shard, the ids of the shard's points and of every point (merge \
+         uses them to find missing points).",
+        sweep::CONFIRM_ABOVE,
         sweep::LEADING_COLUMNS.join(", "),
         sweep::RESULT_COLUMNS.join(", "),
         sweep::PROVENANCE_COLUMNS.join(", "),
