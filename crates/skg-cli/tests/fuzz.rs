@@ -23,6 +23,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use common::Rng;
 use skg_core::scenario::{Overrides, SceneFile};
 
 /// Mutants per suite run.
@@ -34,19 +35,12 @@ const TIME_LIMIT: Duration = Duration::from_secs(60);
 const SOLVE_NODES: usize = 40;
 const SOLVE_MAX_ITER: u32 = 8;
 
-/// xorshift64*: a small seeded generator, so that every run of a seed sees the same mutants.
-struct Rng(u64);
+/// Picks from a list.
+trait Pick {
+    fn pick<'a>(&mut self, xs: &[&'a str]) -> &'a str;
+}
 
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
+impl Pick for Rng {
     fn pick<'a>(&mut self, xs: &[&'a str]) -> &'a str {
         xs[self.below(xs.len())]
     }

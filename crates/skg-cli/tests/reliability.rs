@@ -17,18 +17,6 @@ fn run(args: &[&str], dir: &Path) -> (Option<i32>, String) {
     (o.status.code(), t)
 }
 
-/// A variant of a shipped scene with text replaced, written to `dir/name`.
-fn variant(dir: &Path, scene: &str, name: &str, replacements: &[(&str, &str)]) -> PathBuf {
-    let mut s = std::fs::read_to_string(common::scenario(scene)).unwrap();
-    for (from, to) in replacements {
-        assert!(s.contains(from), "{from} not in {scene}");
-        s = s.replacen(from, to, 1);
-    }
-    let p = dir.join(name);
-    std::fs::write(&p, s).unwrap();
-    p
-}
-
 /// The 1-based line of the first occurrence of `needle` in the file.
 fn line_of(path: &Path, needle: &str) -> usize {
     let text = std::fs::read_to_string(path).unwrap();
@@ -37,13 +25,7 @@ fn line_of(path: &Path, needle: &str) -> usize {
 
 /// Rows per id of a results directory (every row once is the invariant).
 fn ids(dir: &Path) -> HashMap<String, usize> {
-    let r = Results::read(dir).unwrap();
-    let id = r.column_index("id").unwrap();
-    let mut count = HashMap::new();
-    for row in &r.rows {
-        *count.entry(row[id].clone()).or_insert(0) += 1;
-    }
-    count
+    common::rows_by_id(dir).1
 }
 
 /// A free-fall sweep of `points` points (node counts 16, 17, …; fast to solve).
@@ -268,7 +250,7 @@ fn huge_node_counts_are_refused_with_the_estimate_and_the_limit() {
     assert!(t.contains("needs an estimated") && t.contains(" TB of memory, more than the") && t.contains("GB available"), "{t}");
     assert!(t.contains("rolling_disk.toml:") && !dir.path().join("out").exists(), "{t}");
     // In a scene file, and as a sweep point.
-    let big = variant(dir.path(), "free_fall", "big.toml", &[("nodes = 32", "nodes = 9223372036854775807")]);
+    let big = common::variant(dir.path(), "free_fall", "big.toml", &[("nodes = 32", "nodes = 9223372036854775807")]);
     let (code, t) = run(&[s(&big)], dir.path());
     assert_eq!((code, t.contains(&format!("big.toml:{}:9", line_of(&big, "nodes =")))), (Some(1), true), "{t}");
     for (nodes, needle) in [("9223372036854775807", "at most 100000000 nodes"), ("10000000", "needs an estimated")] {
@@ -288,7 +270,7 @@ fn time_spans_without_distinct_node_times_are_refused() {
         (("start = 0", "start = 0"), ("end = 2", "end = 5e-324"), "zero time step"),
     ];
     for ((a, b), (c, d), needle) in cases {
-        let scene = variant(dir.path(), "free_fall", "t.toml", &[(a, b), (c, d)]);
+        let scene = common::variant(dir.path(), "free_fall", "t.toml", &[(a, b), (c, d)]);
         let (code, t) = run(&[s(&scene)], dir.path());
         assert_eq!(code, Some(1), "{t}");
         assert!(t.contains(needle) && t.contains(&format!("t.toml:{}:7", line_of(&scene, "end ="))), "{t}");
@@ -353,7 +335,7 @@ fn scene_errors_name_the_line_and_column() {
         ),
     ];
     for (scene, replacements, line_text, message) in cases {
-        let p = variant(dir.path(), scene, "scene.toml", &replacements);
+        let p = common::variant(dir.path(), scene, "scene.toml", &replacements);
         let (code, t) = run(&[s(&p), "-o", "out"], dir.path());
         let first = line_text.lines().next().unwrap();
         let mut line = line_of(&p, first);
@@ -373,7 +355,7 @@ fn a_kinetic_matrix_that_loses_definiteness_fails_verification() {
     let dir = tempfile::tempdir().unwrap();
     // L = ½ (1 − x) ẋ²: the mass 1 − x vanishes at x = 1, which the motion from x = 0
     // with ẋ = 3 reaches (free motion conserves (1 − x) ẋ² = 9).
-    let scene = variant(
+    let scene = common::variant(
         dir.path(),
         "free_fall",
         "mass.toml",
@@ -458,8 +440,12 @@ fn stale_temporary_files_are_removed_and_live_ones_kept() {
     for p in [&stale, &no_pid, &live] {
         std::fs::write(p, "partial").unwrap();
     }
-    let scene =
-        variant(dir.path(), "free_fall", "log.toml", &[("[discretization]", "[solver]\nlog_file = \"ipopt.log\"\n[discretization]")]);
+    let scene = common::variant(
+        dir.path(),
+        "free_fall",
+        "log.toml",
+        &[("[discretization]", "[solver]\nlog_file = \"ipopt.log\"\n[discretization]")],
+    );
     let (code, t) = run(&[s(&scene), "-o", "out", "-q"], dir.path());
     assert_eq!(code, Some(0), "{t}");
     assert!(!stale.exists() && !no_pid.exists(), "stale temporary files are removed");
