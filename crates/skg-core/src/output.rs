@@ -110,11 +110,6 @@ impl OutputDir {
         Ok(OutputDir { path: dir.to_path_buf(), created, _lock: file })
     }
 
-    /// The directory.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
     /// Release the lock of a run that wrote nothing (an input error found late): the
     /// directories that [`OutputDir::lock`] created are removed again if they hold
     /// nothing but the lock file.

@@ -1316,6 +1316,9 @@ pub fn merge(inputs: &[PathBuf], output_dir: &Path, partial: bool) -> Result<Mer
             if i0.all_ids != info.all_ids {
                 return Err(not_shards(format!("its sweep.json lists other points than {}'s", r0.path.display())));
             }
+            if i0.settings != info.settings {
+                return Err(not_shards(format!("its sweep.json records other [sweep] settings than {}'s", r0.path.display())));
+            }
         } else if let Some(other) = res.conflict(&info.provenance) {
             return Err(SweepError::Results { path, message: format!("has rows computed from {other}, unlike its sweep.json") });
         }
@@ -1358,8 +1361,8 @@ pub fn merge(inputs: &[PathBuf], output_dir: &Path, partial: bool) -> Result<Mer
 /// At most this many missing points are listed in a message.
 const LISTED_MISSING: usize = 10;
 
-/// `index 3 (id …), …` for a message: the first [`LISTED_MISSING`] points.
-fn list_points(points: &[(usize, String)]) -> String {
+/// `index 3 (id …), …` for a message: the first ten (index, id) pairs and how many more.
+pub fn list_points(points: &[(usize, String)]) -> String {
     let mut text: Vec<String> = points.iter().take(LISTED_MISSING).map(|(k, id)| format!("index {k} (id {id})")).collect();
     if points.len() > LISTED_MISSING {
         text.push(format!("and {} more", points.len() - LISTED_MISSING));

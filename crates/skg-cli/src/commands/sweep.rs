@@ -172,12 +172,11 @@ pub fn run_merge(args: MergeArgs) -> Result<ExitCode> {
     if r.missing.is_empty() {
         println!("every point of the sweep ({}) is present", r.total);
     } else {
-        let listed: Vec<String> = r.missing.iter().map(|(k, id)| format!("{k} ({id})")).collect();
         eprintln!(
-            "warning: {} of the sweep's {} points are missing (--partial): index (id) {}",
+            "warning: {} of the sweep's {} points are missing (--partial): {}",
             r.missing.len(),
             r.total,
-            listed.join(", ")
+            sweep::list_points(&r.missing)
         );
     }
     Ok(ExitCode::SUCCESS)
