@@ -77,7 +77,9 @@ fn bad_sweep_files_are_clear_errors() {
         ("[[grid]]\nsigma = [\"1/\"]\n", &["sigma"]),
         ("[grid]\nnodes = [64]\n", &["[[grid]]"]),
         ("", &["no points"]),
-        ("[peer]\ntolerances = [2.0]\n", &["tolerances"]),
+        ("[peer]\ntolerances = [2.0]\n", &["tolerances", "sweep.toml:4:1"]),
+        ("timeout = -1\n[[grid]]\nnodes = [64]\n", &["sweep.toml:3:11", "timeout"]),
+        ("artifact_tol = 0\n[[grid]]\nnodes = [64]\n", &["sweep.toml:3:16", "artifact_tol"]),
     ];
     for (body, needles) in cases {
         let p = sweep_file(dir.path(), "tumbler", body);

@@ -220,14 +220,14 @@ pub struct SweepMeta {
     /// Tolerance on the energy artifact: above it a converged point counts as
     /// "converged with energy artifacts" (default 1e-5, relative; see [`skg_core::tune`]).
     #[serde(default)]
-    pub artifact_tol: Option<f64>,
+    pub artifact_tol: Option<Spanned<f64>>,
     /// Keep each point's `trajectory.csv` and `summary.json` under `points/<id>/`.
     #[serde(default)]
     pub keep_trajectories: bool,
     /// Wall-time limit of one point in seconds: a worker still running then is killed and
     /// the point recorded as [`PointStatus::TimedOut`] (default: no limit).
     #[serde(default)]
-    pub timeout: Option<f64>,
+    pub timeout: Option<Spanned<f64>>,
 }
 
 /// `[peer]`: the time-stepping reference integrator at a ladder of tolerances.
@@ -570,7 +570,7 @@ impl SweepFile {
 
     /// Tolerance on the energy artifact (default [`skg_core::tune::DEFAULT_ARTIFACT_TOL`]).
     pub fn artifact_tol(&self) -> f64 {
-        self.sweep.artifact_tol.unwrap_or(skg_core::tune::DEFAULT_ARTIFACT_TOL)
+        self.sweep.artifact_tol.as_ref().map_or(skg_core::tune::DEFAULT_ARTIFACT_TOL, |t| *t.get_ref())
     }
 
     /// Expand the grids, explicit points and peer ladder, and check every point against
@@ -581,20 +581,14 @@ impl SweepFile {
             location: self.origin.locate_in(&self.sweep.scene, None),
             message: format!("base scene: {e}"),
         })?;
-        if let Some(tol) = self.sweep.artifact_tol {
-            if !(tol > 0.0 && tol.is_finite()) {
-                return Err(SweepError::Invalid {
-                    location: self.origin.whole(),
-                    message: format!("sweep.artifact_tol must be a positive number, got {tol}"),
-                });
+        if let Some(tol) = &self.sweep.artifact_tol {
+            if !(*tol.get_ref() > 0.0 && tol.get_ref().is_finite()) {
+                return Err(self.invalid(tol, format!("sweep.artifact_tol must be a positive number, got {}", tol.get_ref())));
             }
         }
-        if let Some(t) = self.sweep.timeout {
-            if !(t > 0.0 && t.is_finite()) {
-                return Err(SweepError::Invalid {
-                    location: self.origin.whole(),
-                    message: format!("sweep.timeout must be a positive number of seconds, got {t}"),
-                });
+        if let Some(t) = &self.sweep.timeout {
+            if !(*t.get_ref() > 0.0 && t.get_ref().is_finite()) {
+                return Err(self.invalid(t, format!("sweep.timeout must be a positive number of seconds, got {}", t.get_ref())));
             }
         }
         let mut reference_hash = None;
@@ -681,7 +675,7 @@ impl SweepFile {
             for &rtol in &peer.tolerances {
                 if !(rtol > 0.0 && rtol < 1.0) {
                     return Err(SweepError::Invalid {
-                        location: self.origin.whole(),
+                        location: self.locate_key(spanned, "tolerances"),
                         message: format!("peer.tolerances: {rtol} is not in (0, 1)"),
                     });
                 }
@@ -1154,7 +1148,7 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
     let jobs = opts.jobs.max(1);
     let mut running: Vec<Running> = Vec::new();
     let artifact_tol = file.artifact_tol();
-    let timeout = file.sweep.timeout;
+    let timeout = file.sweep.timeout.as_ref().map(|t| *t.get_ref());
     let reference = file.reference();
     let scene_path = std::path::absolute(file.scene_path()).unwrap_or(file.scene_path());
     while !queue.is_empty() || !running.is_empty() {
