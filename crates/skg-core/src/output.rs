@@ -428,6 +428,34 @@ mod tests {
     }
 
     #[test]
+    fn readers_accept_only_the_file_a_summary_lists() {
+        let dir = tempfile::tempdir().unwrap();
+        let csv = dir.path().join(TRAJECTORY_FILE);
+        let listed = write_csv(&csv, None, &["t".into()], &[vec![0.0], vec![1.0]]).unwrap();
+        let bytes = std::fs::read(&csv).unwrap();
+        assert_eq!(listed, DataFile { rows: 2, sha256: provenance::content_hash(b"t\n0.0\n1.0\n") });
+        // No summary, or one that does not list the file (a summary of an older schema): unchecked.
+        verify_pairing(&csv, b"anything").unwrap();
+        std::fs::write(dir.path().join(SUMMARY_FILE), r#"{"converged": true}"#).unwrap();
+        verify_pairing(&csv, b"anything").unwrap();
+        let summary = serde_json::json!({ "files": { TRAJECTORY_FILE: listed } });
+        std::fs::write(dir.path().join(SUMMARY_FILE), summary.to_string()).unwrap();
+        verify_pairing(&csv, &bytes).unwrap();
+        let e = verify_pairing(&csv, b"t\n0.0\n2.0\n").unwrap_err().to_string();
+        assert!(e.contains("is not the file that") && e.contains("2 rows"), "{e}");
+        verify_pairing(&dir.path().join("reference.csv"), b"other").unwrap();
+    }
+
+    #[test]
+    fn temporary_files_of_dead_processes_are_stale() {
+        assert!(!is_stale_temporary(&format!("{}x", temp_prefix())), "this process's own");
+        assert!(is_stale_temporary(".skg-tmp-4194304-x"), "no pid reaches 2^22 on Linux");
+        assert!(is_stale_temporary(".skg-tmp-AbCdEf"), "no pid in the name");
+        assert!(!is_stale_temporary("trajectory.csv"));
+        assert!(process_is_running(1) || !cfg!(target_os = "linux"), "pid 1 runs");
+    }
+
+    #[test]
     fn csv_round_trips_full_precision() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("t.csv");
