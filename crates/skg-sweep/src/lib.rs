@@ -767,8 +767,11 @@ pub fn estimated_cost(scene: &Scene, method: &Method) -> f64 {
 }
 
 /// Seconds of one worker per unit of [`estimated_cost`], and per point (process start,
-/// scene setup): a rough fit to release-build timings on this project's 2-core machine
-/// (docs/benchmarks.md: tumbler N = 256 SBP242 0.028 s, disk N = 4096 about 2 s).
+/// scene setup): a rough fit to the release-build timings of docs/benchmarks.md. It
+/// gives 0.08 s for the tumbler at N = 256 (measured: 0.01 s plus the process start),
+/// 3.3 s at N = 16384 (1.5 s) and 0.85 s for the rolling disk at N = 4096 (1.7 s: the
+/// cost of a scene with more unknowns per node grows faster), so within a factor of
+/// about 2 for the shipped scenes: enough to tell minutes from days.
 const SECONDS_PER_COST: f64 = 1.0e-4;
 const SECONDS_PER_POINT: f64 = 0.03;
 
