@@ -453,3 +453,23 @@ fn stale_temporary_files_are_removed_and_live_ones_kept() {
     let log = std::fs::read_to_string(out.join("ipopt.log")).unwrap();
     assert!(log.contains("EXIT: Optimal Solution Found"), "{log}");
 }
+
+#[test]
+fn negative_or_nan_numeric_options_are_input_errors_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let (tumbler, free_fall) = (common::scenario("tumbler"), common::scenario("free_fall"));
+    let reference = common::root().join("references/free_fall.csv");
+    let cases: [(&[&str], &str); 5] = [
+        (&["reference", s(&free_fall), "--atol", "-1", "-o", "r.csv"], "--atol must be a number ≥ 0, got -1"),
+        (&["reference", s(&free_fall), "--rtol", "nan", "-o", "r.csv"], "--rtol must be a positive number"),
+        (&["tune", s(&tumbler), "--lo", "-1", "-o", "t.json"], "lo must be a positive number, got -1"),
+        (&["tune", s(&tumbler), "--rel", "0", "-o", "t.json"], "rel must be a positive number, got 0"),
+        (&["check", s(&reference), s(&reference), "--tol", "-1", "--json", "c.json"], "--tol: a tolerance must be a number ≥ 0"),
+    ];
+    for (args, needle) in cases {
+        let (code, t) = run(args, dir.path());
+        assert_eq!(code, Some(1), "{args:?}: {t}");
+        assert!(t.contains(needle) && !t.contains("converged"), "{args:?}: {t}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written");
+}

@@ -26,10 +26,10 @@ pub struct CheckArgs {
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     pub columns: Option<Vec<String>>,
     /// Tolerance on every compared column's max |error|.
-    #[arg(long, value_name = "TOL")]
+    #[arg(long, allow_negative_numbers = true, value_name = "TOL")]
     pub tol: Option<f64>,
     /// Tolerance on every compared column's RMS error.
-    #[arg(long, value_name = "TOL")]
+    #[arg(long, allow_negative_numbers = true, value_name = "TOL")]
     pub tol_rms: Option<f64>,
     /// Tolerance on one column's max |error| (repeatable; overrides --tol for it).
     #[arg(long, value_name = "COLUMN=TOL")]
