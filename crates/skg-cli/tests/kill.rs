@@ -80,16 +80,18 @@ fn a_solve_killed_at_random_moments_keeps_its_files_paired_and_its_log_whole() {
     std::fs::write(&scene, text).unwrap();
     let out = dir.path().join("out");
     let args = [scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"];
-    let full = complete(&args);
+    // The faster of two runs: the first may pay for a cold start.
+    let full = complete(&args).min(complete(&args));
     let log_is_whole = || std::fs::read_to_string(out.join("ipopt.log")).unwrap().contains("EXIT: Optimal Solution Found");
     let mut rng = Rng(0x5eed_0014);
     let mut killed_running = 0;
     for _ in 0..12 {
-        let delay = full.mul_f64(1.2 * rng.uniform());
+        let delay = full.mul_f64(rng.uniform());
         killed_running += kill_after(&args, delay) as usize;
         assert_paired(&out);
         assert!(log_is_whole(), "a kill leaves the previous complete log");
     }
+    eprintln!("{killed_running} of 12 kills hit a running solve");
     assert!(killed_running >= 6, "only {killed_running} of 12 kills hit a running solve");
     complete(&args);
     assert_paired(&out);
@@ -135,6 +137,7 @@ fn a_sweep_killed_at_random_moments_and_resumed_has_each_point_once() {
             assert_paired(&out.join("points").join(id));
         }
     }
+    eprintln!("{killed_running} of 6 kills hit a running sweep");
     assert!(killed_running >= 2, "only {killed_running} of 6 kills hit a running sweep");
     complete(&args);
     let ids = complete_row_ids(&out);
