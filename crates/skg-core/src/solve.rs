@@ -182,6 +182,34 @@ pub struct Diagnostics {
     pub contact_episodes_time_stepping: Option<IndexMap<String, usize>>,
     /// max |q-|, |λ-| of the full formulation's solution (0 in the physical limit).
     pub max_minus_variable: Option<f64>,
+    /// The first node at which the kinetic matrix ∂²L/∂q̇² of the solution is not
+    /// positive definite (the Lagrangian stops describing a mechanical system there: a
+    /// mass or inertia turned zero or negative); `null` if it is positive definite at
+    /// every node. A converged solve with such a node fails verification.
+    pub kinetic_loss: Option<KineticLoss>,
+}
+
+/// Where the solution's kinetic matrix stops being positive definite.
+#[derive(Debug, Clone, Serialize)]
+pub struct KineticLoss {
+    /// The node (0-based).
+    pub node: usize,
+    /// Its time.
+    pub t: f64,
+    /// The smallest eigenvalue of ∂²L/∂q̇² there (≤ 0 or NaN).
+    pub min_eigenvalue: f64,
+}
+
+impl fmt::Display for KineticLoss {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the kinetic matrix ∂²L/∂q̇² is not positive definite at node {} (t = {}, smallest eigenvalue {:.3e}): \
+             the Lagrangian stops describing a mechanical system there (a mass or inertia turned zero or negative), \
+             so the solution is not physical from there on",
+            self.node, self.t, self.min_eigenvalue
+        )
+    }
 }
 
 /// The settings a solve ran with.
@@ -474,7 +502,11 @@ pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, S
 /// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
 /// verified against time stepping ([`crate::verify`]) and, when it fails to converge or
 /// to verify, the fallback ladder ([`crate::ladder`]).
+///
+/// Refused before anything is allocated if its memory estimate exceeds the available
+/// memory ([`crate::memory`]).
 pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    crate::memory::check(scene, "the solve", scene.nodes, crate::memory::solve_bytes(scene))?;
     crate::ladder::solve(scene)
 }
 
@@ -546,9 +578,13 @@ pub fn solve_piece(scene: &Scene, action: &Action, plans: &Plans, times: &[f64],
     let t_guess = Instant::now();
     let mut warnings = Vec::new();
     let (z0, guess_desc, ts_q) = initial_guess(action, times, guess, &mut warnings);
+    check_initial_guess(scene, action, times, &z0)?;
     let initial_guess_s = t_guess.elapsed().as_secs_f64();
 
-    let (solution, z) = run_ipopt(scene.formulation, action, plans, &z0, &ipopt_options(scene))?;
+    let (solution, z) = run_ipopt(scene.formulation, action, plans, &z0, &ipopt_options(scene)).map_err(|e| rejected_option(scene, e))?;
+    if solution.status == ipopt::Status::InvalidOption {
+        return Err(unusable_option(scene));
+    }
 
     let t_post = Instant::now();
     let (trajectory, max_eom_residual) = evaluate(action, times, &z);
@@ -607,6 +643,62 @@ fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut V
         }
     };
     (point_from_states(action, &q, &lambda), desc, ts_q)
+}
+
+/// Refuse an initial guess with a value that is not finite, naming the node, the state
+/// and the scene's expression that is undefined there (Ipopt would only say "starting
+/// point x0[i] = NaN").
+fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64]) -> Result<(), SolveError> {
+    let Some(bad) = z0.iter().position(|x| !x.is_finite()) else { return Ok(()) };
+    let names: Vec<String> = scene.constraints.iter().map(|c| c.name.clone()).collect();
+    let (k, what) = action.layout.describe(bad, &scene.coordinates, &names);
+    let q = action.layout.coordinates(z0);
+    let v = apply_d(&action.op, &q);
+    let source = action.model.non_finite_expression(scene, times[k], &q[k], &v[k]);
+    let state = |xs: &[f64]| xs.iter().map(|x| format!("{x:.6e}")).collect::<Vec<_>>().join(", ");
+    let message = format!(
+        "the initial guess (time stepping from the initial state) is not finite: {what} at node {k} (t = {}) is {}; \
+         at that node q = ({}), q̇ = ({}){}",
+        times[k],
+        z0[bad],
+        state(&q[k]),
+        state(&v[k]),
+        match &source {
+            Some((expr, _)) => format!(", where {expr} is not finite (e.g. sqrt or log of a negative number, a division by zero)"),
+            None => String::new(),
+        }
+    );
+    let location = source.map_or_else(|| scene.file.origin.whole(), |(_, at)| at);
+    Err(SceneError::Invalid { location, message }.into())
+}
+
+/// An option Ipopt refused when it was set, as an input error at the option's place in
+/// the scene file; other errors pass through.
+fn rejected_option(scene: &Scene, e: SolveError) -> SolveError {
+    let SolveError::Ipopt(ipopt::SolveError::BadOption { name, value }) = &e else { return e };
+    let message = format!(
+        "Ipopt refused the option {name} = {value}: it has no such option, or the value has the wrong type or is outside \
+         the option's range (Ipopt prints its reason on stdout)"
+    );
+    SceneError::Invalid { location: scene.file.solver_option_location(name), message }.into()
+}
+
+/// Ipopt's `Invalid_Option` at the start of a solve (an option value it accepted but
+/// cannot use, e.g. a linear solver whose library it cannot load), as an input error.
+fn unusable_option(scene: &Scene) -> SolveError {
+    let (location, message) = match &scene.solver.linear_solver {
+        Some(solver) => (
+            scene.file.solver_option_location("linear_solver"),
+            format!(
+                "Ipopt cannot use linear_solver = \"{solver}\" (Invalid_Option: its library could not be loaded); Debian's \
+                 Ipopt has only MUMPS: use linear_solver = \"mumps\" or remove the key"
+            ),
+        ),
+        None => {
+            (scene.file.origin.whole(), "Ipopt stopped with Invalid_Option: an option of [solver.ipopt] has a value it cannot use".into())
+        }
+    };
+    SceneError::Invalid { location, message }.into()
 }
 
 /// The unknown vector Z with the given coordinates and multipliers at the nodes, the
@@ -794,11 +886,15 @@ pub fn solve_global(scene: &Scene, guess: &Guess) -> Result<Run, SolveError> {
 pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
     let Run { method, sizes, solution: run } = run;
     let t = Instant::now();
-    let verification = verify::verify(scene, model, &run.trajectory);
+    let mut verification = verify::verify(scene, model, &run.trajectory);
     let mut timings = run.timings.clone();
     timings.verification_s = t.elapsed().as_secs_f64();
     let diagnostics = diagnose(model, &run);
-    let warnings = suspicions(&diagnostics, run.time_stepping_q.as_deref(), run.status);
+    let mut warnings = suspicions(&diagnostics, run.time_stepping_q.as_deref(), run.status);
+    if let Some(loss) = &diagnostics.kinetic_loss {
+        verification.fail(loss.to_string());
+        warnings.push(loss.to_string());
+    }
     Outcome {
         scene: scene.name.clone(),
         status: run.status,
@@ -943,6 +1039,11 @@ fn diagnose(model: &Model, run: &Piece) -> Diagnostics {
         contact_episodes: contact_episodes(model, &tr.h),
         contact_episodes_time_stepping,
         max_minus_variable: run.max_minus_variable,
+        kinetic_loss: model.kinetic_loss(&tr.t, &tr.q, &tr.v).map(|(node, min_eigenvalue)| KineticLoss {
+            node,
+            t: tr.t[node],
+            min_eigenvalue,
+        }),
     }
 }
 
