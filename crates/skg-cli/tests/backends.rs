@@ -48,6 +48,25 @@ fn newton_and_ipopt_agree_on_every_shipped_scene() {
     }
 }
 
+/// The shipped scenes solved in windows (the damped oscillator after the fallback
+/// ladder, the long rolling disk by its own `[time] window`): both backends verify, cover
+/// the span the same way and agree to 1e-9.
+#[test]
+fn newton_and_ipopt_agree_on_the_windowed_scenes() {
+    for name in ["damped_oscillator", "rolling_disk_long"] {
+        let ipopt = common::solve(name, &with_backend(Backend::Ipopt, Formulation::Reduced));
+        let newton = common::solve(name, &with_backend(Backend::Newton, Formulation::Reduced));
+        assert!(ipopt.trusted() && newton.trusted(), "{name}: {} / {}", ipopt.verification.reason, newton.verification.reason);
+        assert_eq!(newton.method, ipopt.method, "{name}");
+        assert!(matches!(newton.method, solve::Method::Windows { count, .. } if count > 1), "{name}: {}", newton.method);
+        assert!(!newton.backend.handed_over_to_ipopt, "{name}");
+        let d = max_diff(&newton.trajectory.q, &ipopt.trajectory.q);
+        assert!(d < 1e-9, "{name}: max |q_newton − q_ipopt| = {d:e}");
+        // The report is the first window's, which made the analysis the others reused.
+        assert!(!newton.backend.newton.as_ref().unwrap().analysis_reused, "{name}");
+    }
+}
+
 /// One `SquareSolver` reused for a second initial state (a time window) keeps its
 /// symbolic analysis and still finds that state's own root; a new solver of an action
 /// with equal structure adopts it too.

@@ -4,16 +4,9 @@ mod common;
 
 use std::path::Path;
 
-/// Write a variant of the free-fall scene with `from` replaced by `to`.
+/// A variant of a shipped scene, written to `dir/scene.toml`.
 fn variant(dir: &Path, name: &str, replacements: &[(&str, &str)]) -> String {
-    let mut s = std::fs::read_to_string(common::scenario(name)).unwrap();
-    for (from, to) in replacements {
-        assert!(s.contains(from), "{from} not in {name}");
-        s = s.replacen(from, to, 1);
-    }
-    let p = dir.join("scene.toml");
-    std::fs::write(&p, s).unwrap();
-    p.display().to_string()
+    common::variant(dir, name, "scene.toml", replacements).display().to_string()
 }
 
 /// Run on a bad scene: exit code 1, no panic, message contains every `needle`.
@@ -238,4 +231,72 @@ fn backend_key_and_flag() {
     assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
     let t = common::text(&o);
     assert!(t.contains("scene.toml:") && t.contains("`lu`") && t.contains("`ipopt` or `newton`"), "names the place and the choices: {t}");
+}
+
+/// `line:col` (1-based) of the first occurrence of `needle` in the file at `path`.
+fn position_of(path: &str, needle: &str) -> String {
+    let text = std::fs::read_to_string(path).unwrap();
+    let offset = text.find(needle).unwrap_or_else(|| panic!("{needle} not in {path}"));
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().unwrap().chars().count() + 1;
+    format!("{line}:{col}")
+}
+
+#[test]
+fn time_is_a_reserved_name_and_constants_cannot_use_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "free_fall", &[("m = 2", "m = 2\nt = 1")]);
+    expect_error(dir.path(), &s, &[], &["parameter `t` clashes with the time `t`"]);
+    let s = variant(dir.path(), "free_fall", &[("name = \"x\"", "name = \"t\""), ("1/2*m*x_dot^2 - m*g*x", "1/2*m*t_dot^2 - m*g*t")]);
+    expect_error(dir.path(), &s, &[], &[&position_of(&s, "\"t\""), "`t` clashes with the time `t`"]);
+    let hint = "the time `t` may appear in the Lagrangian, constraints, forces and walls only";
+    let s = variant(dir.path(), "free_fall", &[("initial = 10", "initial = \"10 + t\"")]);
+    expect_error(dir.path(), &s, &[], &["coordinates.x.initial", "unknown symbol `t`", hint]);
+    let s = variant(dir.path(), "free_fall", &[("m = 2", "m = \"2*t\"")]);
+    expect_error(dir.path(), &s, &[], &["parameters.m", "unknown symbol `t`", hint]);
+    let s = variant(dir.path(), "free_fall", &[("end = 2", "end = \"2 + t\"")]);
+    expect_error(dir.path(), &s, &[], &["time.end", hint]);
+}
+
+#[test]
+fn a_position_constraint_must_hold_at_the_start_with_a_tangent_velocity() {
+    let dir = tempfile::tempdir().unwrap();
+    // x0 = 1.01 l sin θ0: h = (1.01² − 1) sin²(1) = 1.4233e-2.
+    let s = variant(dir.path(), "pendulum", &[("initial = \"l*sin(theta0)\"", "initial = \"1.01*l*sin(theta0)\"")]);
+    let h = (1.01_f64.powi(2) - 1.0) * 1.0_f64.sin().powi(2);
+    expect_error(
+        dir.path(),
+        &s,
+        &[],
+        &[&position_of(&s, "\"x^2 + y^2"), "violates position constraint `rod`", "h(q₀, t₀)", &format!("{h:.6e}")],
+    );
+    // ẋ0 = 1: the time derivative 2(x ẋ + y ẏ) = 2 sin(1) ≠ 0.
+    let s = variant(dir.path(), "pendulum", &[("initial = \"l*sin(theta0)\"\nvelocity = 0", "initial = \"l*sin(theta0)\"\nvelocity = 1")]);
+    let g = 2.0 * 1.0_f64.sin();
+    expect_error(dir.path(), &s, &[], &["violates constraint `rod`", "∇h·q̇ + ∂h/∂t", &format!("{g:.6e}"), "tangent"]);
+    // A constraint of parameters and t alone constrains nothing.
+    let s = variant(dir.path(), "pendulum", &[("expression = \"x^2 + y^2 - l^2\"", "expression = \"l - 1 + t\"")]);
+    expect_error(dir.path(), &s, &[], &[&position_of(&s, "\"l - 1"), "`rod` depends on neither the coordinates nor the velocities"]);
+}
+
+#[test]
+fn a_start_not_strictly_inside_the_walls_is_refused_with_the_gap() {
+    let dir = tempfile::tempdir().unwrap();
+    // x0 = −1.5: h = 2.25 + 0.5625 − 1 = 1.8125.
+    let s = variant(dir.path(), "tumbler", &[("initial = -0.5", "initial = -1.5")]);
+    expect_error(dir.path(), &s, &[], &[&position_of(&s, "\"x^2 + y^2 - R^2\""), "wall `drum`", "1.812500e0", "need h < 0"]);
+    // On the wall (h = 0 at (0, −1)): the Gaussian wall already pushes there.
+    let s = variant(dir.path(), "tumbler", &[("initial = -0.5", "initial = 0"), ("initial = -0.75", "initial = -1")]);
+    expect_error(dir.path(), &s, &[], &["wall `drum`", "h(q₀, t₀) = 0.000000e0", "strictly on the allowed side"]);
+    // A moving wall is checked at the start time: the plate at t0 = 1/8 s is at y = a.
+    let s = variant(dir.path(), "vibrating_plate", &[("initial = 0.5", "initial = 0.04"), ("start = 0", "start = 0.125")]);
+    expect_error(dir.path(), &s, &[], &["wall `plate`", "1.000000e-2"]);
+}
+
+#[test]
+fn a_friction_direction_of_the_wrong_length_is_refused_where_it_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "incline_friction", &[("friction_direction = [\"1\", \"tan(alpha)\"]", "friction_direction = [\"1\"]")]);
+    expect_error(dir.path(), &s, &[], &[&position_of(&s, "\"1\"]"), "friction_direction has 1 components, the scene has 2 coordinates"]);
 }

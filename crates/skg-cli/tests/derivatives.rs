@@ -26,7 +26,7 @@ fn random_point(action: &Action, rng: &mut Rng) -> Vec<f64> {
     let mut z: Vec<f64> = (0..lay.len()).map(|_| rng.next()).collect();
     for k in 0..lay.nodes {
         for i in 0..lay.d {
-            z[lay.qp[k * lay.d + i] as usize] = action.q0[i] + 0.05 * rng.next();
+            z[lay.qp[k * lay.d + i] as usize] = action.q0()[i] + 0.05 * rng.next();
         }
     }
     z
@@ -155,7 +155,7 @@ fn discrete_systems_are_square_and_nonsingular_at_small_n() {
             // At the time-stepping solution (a point near the critical point).
             let (times, _) = skg_core::solve::grid(&scene);
             let (states, _) =
-                skg_core::time_stepping::integrate_model(&action.model, &action.q0, &action.v0, &times, &Default::default()).unwrap();
+                skg_core::time_stepping::integrate_model(&action.model, action.q0(), action.v0(), &times, &Default::default()).unwrap();
             let (q, lam) = (states.q, states.lambda);
             let mut z = vec![0.0; lay.len()];
             for k in 0..nodes {

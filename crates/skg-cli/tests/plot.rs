@@ -63,6 +63,12 @@ fn every_chart_is_written_as_svg_and_png() {
     let o = common::skg(&["plot", "trajectory", &s(&sol), "--reference", &s(&reference), "-o", &s(&stem)], Path::new("."));
     assert!(o.status.success(), "{}", common::text(&o));
     check_chart(&stem, "energy");
+    // Without --reference, a solve's directory brings its own (the verification's
+    // reference.csv), drawn as the line labelled `reference`.
+    let stem = img.join("own_reference");
+    let o = common::skg(&["plot", "trajectory", &s(&sol), "-o", &s(&stem)], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    check_chart(&stem, "x, reference");
     let stem = img.join("ladder");
     let o = common::skg(&["plot", "trajectory", &out_s, "-o", &s(&stem), "--title", "sigma ladder"], Path::new("."));
     assert!(o.status.success(), "{}", common::text(&o));
@@ -70,7 +76,7 @@ fn every_chart_is_written_as_svg_and_png() {
 
     // No temporary files are left next to the charts.
     let names: Vec<String> = std::fs::read_dir(&img).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    assert_eq!(names.len(), 10, "{names:?}");
+    assert_eq!(names.len(), 12, "{names:?}");
     assert!(names.iter().all(|n| !n.contains("tmp")), "{names:?}");
 
     // Bad requests: exit status 1, a message, no panic.

@@ -7,7 +7,6 @@ mod common;
 use common::G;
 
 use skg_core::check::Table;
-use skg_core::output;
 use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scenario::Overrides;
 use skg_core::solve;
@@ -20,16 +19,17 @@ fn col(t: &Table, name: &str) -> Vec<f64> {
     t.column(name).unwrap_or_else(|| panic!("no column {name} in {:?}", t.columns))
 }
 
-/// Scenes with walls get a hard-wall reference too.
+/// Scenes with fixed walls get a hard-wall reference too (it refuses moving walls).
 fn has_walls(name: &str) -> bool {
-    !common::load(name, &Overrides::default()).walls.is_empty()
+    let model = skg_core::model::Model::build(&common::load(name, &Overrides::default())).unwrap();
+    !model.walls.is_empty() && (0..model.walls.len()).all(|j| !model.wall_moves(j))
 }
 
 #[test]
 fn every_shipped_scene_has_its_reference_files() {
     for name in common::SHIPPED {
         let scene = common::load(name, &Overrides::default());
-        let header = output::trajectory_header(&scene);
+        let header = skg_core::trajectory::trajectory_header(&scene);
         let (times, _) = solve::grid(&scene);
         let mut files = vec![format!("{name}.csv")];
         if has_walls(name) {
@@ -81,18 +81,13 @@ fn regenerated_references_match_the_checked_in_files() {
 
 #[test]
 fn rolling_disk_reference_matches_closed_form() {
-    // docs/scenes.md: φ = t, x = 5 sin t + k sin²t/2, y = 5(1 − cos t) + k(t/2 − sin 2t/4),
-    // θ = 5t + k(1 − cos t), k = g sin α/(1 + I_S/(M R²)).
-    let k = G * 0.5 / 1.5;
     let t = checked_in("rolling_disk.csv");
-    let (x, y, th, ph) = (col(&t, "x"), col(&t, "y"), col(&t, "theta"), col(&t, "phi"));
+    let q = [col(&t, "x"), col(&t, "y"), col(&t, "theta"), col(&t, "phi")];
     let mut e = 0.0_f64;
     for (i, tt) in t.times().into_iter().enumerate() {
-        e = e
-            .max((x[i] - (5.0 * tt.sin() + k * tt.sin().powi(2) / 2.0)).abs())
-            .max((y[i] - (5.0 * (1.0 - tt.cos()) + k * (tt / 2.0 - (2.0 * tt).sin() / 4.0))).abs())
-            .max((th[i] - (5.0 * tt + k * (1.0 - tt.cos()))).abs())
-            .max((ph[i] - tt).abs());
+        for (c, exact) in common::rolling_disk_exact(tt).into_iter().enumerate() {
+            e = e.max((q[c][i] - exact).abs());
+        }
     }
     assert!(e < 2e-10, "max error {e:e}");
     // Constraint drift of the index-reduced integration stays at the tolerance level.
@@ -102,21 +97,18 @@ fn rolling_disk_reference_matches_closed_form() {
 
 #[test]
 fn knife_edge_reference_matches_closed_form() {
-    // scenarios/knife_edge.toml: φ = ωt, u = u0 + (g sin α/ω) sin ωt,
-    // x = u0 sin ωt/ω + g sin α sin²ωt/(2ω²), y = u0(1 − cos ωt)/ω + g sin α (t − sin 2ωt/(2ω))/(2ω),
-    // λ = m (u ω + g sin α sin ωt).
+    // scenarios/knife_edge.toml: the coordinates' closed form, and the multiplier
+    // λ = m (u ω + g sin α sin ωt) with the speed along the blade u = u0 + (g sin α/ω) sin ωt.
     let (w, u0, gs) = (2.0, 1.0, G * 0.5);
     let t = checked_in("knife_edge.csv");
-    let (x, y, ph, lam) = (col(&t, "x"), col(&t, "y"), col(&t, "phi"), col(&t, "lambda_blade"));
+    let (q, lam) = ([col(&t, "x"), col(&t, "y"), col(&t, "phi")], col(&t, "lambda_blade"));
     let mut e = 0.0_f64;
     for (i, tt) in t.times().into_iter().enumerate() {
+        for (c, exact) in common::knife_edge_exact(tt).into_iter().enumerate() {
+            e = e.max((q[c][i] - exact).abs());
+        }
         let s = (w * tt).sin();
-        let u = u0 + gs / w * s;
-        e = e
-            .max((x[i] - (u0 * s / w + gs / (2.0 * w * w) * s * s)).abs())
-            .max((y[i] - (u0 * (1.0 - (w * tt).cos()) / w + gs / (2.0 * w) * (tt - (2.0 * w * tt).sin() / (2.0 * w)))).abs())
-            .max((ph[i] - w * tt).abs())
-            .max((lam[i] - (u * w + gs * s)).abs());
+        e = e.max((lam[i] - ((u0 + gs / w * s) * w + gs * s)).abs());
     }
     assert!(e < 1e-9, "max error {e:e}");
 }
@@ -253,6 +245,15 @@ fn hard_walls_refuse_what_they_do_not_model() {
     let (times, _) = solve::grid(&disk);
     let e = reference::hard_wall(&disk, &times, &ReferenceOptions::default()).unwrap_err().to_string();
     assert!(e.contains("no walls"), "{e}");
+    let plate = common::load("vibrating_plate", &Overrides::default());
+    let (times, _) = solve::grid(&plate);
+    let e = reference::hard_wall(&plate, &times, &ReferenceOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("wall `plate` moves") && e.contains("regularized reference"), "{e}");
+    let mut text = std::fs::read_to_string(common::scenario("pendulum")).unwrap();
+    text.push_str("\n[[walls]]\nname = \"floor\"\nh = \"-y - 2\"\nstrength = 10\nwidth = 0.01\n");
+    let with_wall = skg_core::scenario::SceneFile::parse(&text, "pendulum+floor.toml").unwrap().resolve(&Overrides::default()).unwrap();
+    let e = reference::hard_wall(&with_wall, &solve::grid(&with_wall).0, &ReferenceOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("walls and constraints"), "{e}");
     let tumbler = common::load("tumbler", &Overrides::default());
     let e = reference::regularized(&tumbler, &[0.1, 0.2], &ReferenceOptions::default()).unwrap_err().to_string();
     assert!(e.contains("start time"), "{e}");
@@ -402,4 +403,53 @@ fn loose_tolerance_does_not_step_across_the_tumbler_wall() {
     // Still inside the drum at the end.
     let last = loose.trajectory.h.last().unwrap()[0];
     assert!(last < 0.0, "final gap {last}");
+}
+
+/// The hard-wall reference integrates explicit time between impacts: a ball above a
+/// fixed floor `h = −y` under gravity and the drive `A cos Ωt`, so
+/// `y(t) = y₀ − g t²/2 + (A/Ω²)(1 − cos Ωt)` until it hits the floor (found here by a
+/// scan and bisection), then the same with `ẏ` reversed.
+#[test]
+fn hard_wall_reference_follows_a_time_dependent_force() {
+    let (a, w, y0) = (5.0, 3.0, 1.0);
+    let text = format!(
+        "[scene]\nname = \"driven ball\"\nlagrangian = \"1/2*y_dot^2 - g*y\"\n[parameters]\ng = {G:?}\nA = {a:?}\nW = {w:?}\n\
+         [[coordinates]]\nname = \"y\"\ninitial = {y0:?}\nvelocity = 0\n[forces]\ny = \"A*cos(W*t)\"\n\
+         [[walls]]\nname = \"floor\"\nh = \"-y\"\nstrength = 100\nwidth = 0.01\n[time]\nstart = 0\nend = 1\nnodes = 101\n"
+    );
+    let scene = skg_core::scenario::SceneFile::parse(&text, "driven-ball.toml").unwrap().resolve(&Overrides::default()).unwrap();
+    let (times, _) = solve::grid(&scene);
+    let r = reference::hard_wall(&scene, &times, &ReferenceOptions::default()).unwrap();
+    // The flight from (t_i, y_i = 0 after the first impact, or y0 at the start) with speed v_i.
+    let flight = |ti: f64, yi: f64, vi: f64, t: f64| {
+        let tau = t - ti;
+        let y = yi + vi * tau - 0.5 * G * tau * tau + a / (w * w) * ((w * ti).cos() - (w * t).cos()) - a / w * (w * ti).sin() * tau;
+        let v = vi - G * tau + a / w * ((w * t).sin() - (w * ti).sin());
+        (y, v)
+    };
+    let (mut lo, mut hi) = (0.0, 1.0);
+    assert!(flight(0.0, y0, 0.0, hi).0 < 0.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if flight(0.0, y0, 0.0, mid).0 > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let t1 = hi;
+    let v1 = -flight(0.0, y0, 0.0, t1).1;
+    assert!(!r.impacts.is_empty());
+    assert!((r.impacts[0].t - t1).abs() < 1e-10, "impact at {} vs {t1}", r.impacts[0].t);
+    let t2 = r.impacts.get(1).map_or(f64::INFINITY, |im| im.t);
+    for (k, &t) in r.trajectory.t.iter().enumerate() {
+        let (y, v) = if t < t1 {
+            flight(0.0, y0, 0.0, t)
+        } else if t < t2 {
+            flight(t1, 0.0, v1, t)
+        } else {
+            continue;
+        };
+        assert!((r.trajectory.q[k][0] - y).abs() < 1e-10 && (r.trajectory.v[k][0] - v).abs() < 1e-9, "t = {t}");
+    }
 }

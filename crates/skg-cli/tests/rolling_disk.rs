@@ -3,26 +3,13 @@
 
 mod common;
 
-use common::G;
-
 use skg_core::convergence::fit_order;
 use skg_core::scenario::Overrides;
-
-const K: f64 = G * 0.5 / 1.5; // g sin α / (1 + I_S / (M R²))
-
-fn exact(t: f64) -> Vec<f64> {
-    vec![
-        5.0 * t.sin() + K * t.sin().powi(2) / 2.0,
-        5.0 * (1.0 - t.cos()) + K * (t / 2.0 - (2.0 * t).sin() / 4.0),
-        5.0 * t + K * (1.0 - t.cos()),
-        t,
-    ]
-}
 
 /// Max error of x, y, θ, last two nodes excluded (as the reference numbers are measured).
 fn disk_error(n: usize, op: &str) -> f64 {
     let o = common::solve("rolling_disk", &common::grid(n, op));
-    common::max_error(&o, &[0, 1, 2], 2, exact)
+    common::max_error(&o, &[0, 1, 2], 2, common::rolling_disk_exact)
 }
 
 #[test]
@@ -30,11 +17,11 @@ fn paper_grid_matches_closed_form_and_constraints_hold() {
     let o = common::solve("rolling_disk", &Overrides::default());
     assert_eq!(o.settings.nodes, 64);
     assert_eq!(o.settings.operator, "SBP242");
-    let err = common::max_error(&o, &[0, 1, 2], 2, exact);
+    let err = common::max_error(&o, &[0, 1, 2], 2, common::rolling_disk_exact);
     // Independent implementation: 0.0152 at N = 64.
     assert!((err - 0.0152).abs() < 0.0152 * 0.05, "max error {err}");
     // φ = t exactly solves φ'' = 0 with φ(0)=0, φ'(0)=1: exact to round-off on SBP242.
-    assert!(common::max_error(&o, &[3], 0, exact) < 1e-10);
+    assert!(common::max_error(&o, &[3], 0, common::rolling_disk_exact) < 1e-10);
     let d = &o.diagnostics;
     assert!(d.max_constraint_interior < 1e-10, "g at interior nodes {:e}", d.max_constraint_interior);
     assert!(o.iterations <= 8, "{} Ipopt iterations", o.iterations);
@@ -82,11 +69,12 @@ fn sbp484_is_an_order_more_accurate_than_sbp363() {
         .iter()
         .map(|&n| {
             let ov = Overrides { backend: Some(skg_core::scenario::Backend::Newton), ..common::grid(n, "SBP484") };
-            common::max_error(&common::solve("rolling_disk", &ov), &[0, 1, 2, 3], 2, exact)
+            common::max_error(&common::solve("rolling_disk", &ov), &[0, 1, 2, 3], 2, common::rolling_disk_exact)
         })
         .collect();
     assert!(errors[2] < 2.5e-6, "SBP484 at N = 256: {:e}", errors[2]);
-    let e363 = common::max_error(&common::solve("rolling_disk", &common::grid(256, "SBP363")), &[0, 1, 2, 3], 2, exact);
+    let e363 =
+        common::max_error(&common::solve("rolling_disk", &common::grid(256, "SBP363")), &[0, 1, 2, 3], 2, common::rolling_disk_exact);
     assert!(errors[2] < e363 / 20.0, "SBP484 {:e} vs SBP363 {e363:e} at N = 256", errors[2]);
     let h: Vec<f64> = ns.iter().map(|&n| 1.0 / (n as f64 - 1.0)).collect();
     let fit = fit_order(&h, &errors, 1e-12).unwrap();

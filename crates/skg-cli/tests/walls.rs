@@ -131,12 +131,15 @@ fn per_wall<'a, V: Copy + 'a>(m: impl IntoIterator<Item = (&'a String, &'a V)>) 
 /// must say so instead of returning it silently. At the paper's N = 256 it must not.
 #[test]
 fn a_spurious_solution_with_a_missing_bounce_is_flagged() {
-    let scene = common::load("tumbler", &Overrides { nodes: Some(48), ..Default::default() });
+    let scene = common::load("tumbler", &Overrides { nodes: Some(48), no_fallback: true, ..Default::default() });
     let o = skg_core::solve::solve_scene(&scene).unwrap();
     let d = &o.diagnostics;
     assert_eq!(d.contact_episodes_time_stepping.as_ref().map(per_wall), Some(vec![("drum", 2)]));
     assert_ne!(per_wall(&d.contact_episodes), vec![("drum", 2)], "N=48 unexpectedly found both bounces");
     assert!(o.warnings.iter().any(|w| w.contains("contact episode") && w.contains("spurious")), "{:?}", o.warnings);
+    // It converged, but it is not trusted: verification against time stepping fails.
+    assert!(o.converged() && !o.trusted(), "{}", o.verification.reason);
+    assert_eq!(o.verification.status, skg_core::verify::VerifyStatus::Failed);
     let good = common::solve("tumbler", &Overrides::default());
     assert_eq!(per_wall(&good.diagnostics.contact_episodes), vec![("drum", 2)]);
     assert!(good.warnings.is_empty(), "{:?}", good.warnings);

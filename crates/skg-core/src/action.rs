@@ -8,10 +8,12 @@
 //! of the initial conditions `ν_x` (`q+[1] = q_i`) and `ν_v` (`(Dq+)[1] = q̇_i`).
 //! Both blocks have `N d + N n + 2d` entries: the system is square.
 //!
-//! The action is `S(Z) = Σ_k H_kk s(T_k Z) + ½ Zᵀ K Z + lᵀ Z` with `Z = [P, M]`, the
-//! node density `s` of [`crate::model`], `T_k` the linear map from `Z` to the local
-//! variables of node `k` (the SBP derivative `D` supplies `v = Dq+` and `dw = Dq-`),
-//! and `K`, `l` the boundary terms. `S` is linear in `M`, so
+//! The action is `S(Z) = Σ_k H_kk s(T_k Z, t_k) + ½ Zᵀ K Z + lᵀ Z` with `Z = [P, M]`,
+//! the node density `s` of [`crate::model`] evaluated at the node's time
+//! `t_k = t₀ + k Δt` (k from 0), `T_k` the linear map from `Z` to the local variables of
+//! node `k` (the SBP derivative `D` supplies `v = Dq+` and `dw = Dq-`), and `K`, `l` the
+//! boundary terms: `K` couples each boundary multiplier to its condition, and `l` holds
+//! the initial state, `l = −(q₀, q̇₀)` on `(ν_x, ν_v)`. `S` is linear in `M`, so
 //!
 //! * the reduced system is `R(P) = ∂S/∂M = 0` with Jacobian `∂²S/∂M∂P`, and the
 //!   Hessian of Ipopt's Lagrangian with multipliers `y` is `∂²S/∂P²` at `M = y`;
@@ -19,6 +21,11 @@
 //!
 //! All are assembled from the node tapes by precomputed scatter plans: the sparsity
 //! structure is computed once, values are filled in place.
+//!
+//! The initial state and the start time enter only `l` and the node times, so one action
+//! serves successive windows of equal node count and spacing: [`Action::set_window`]
+//! (or [`Action::set_initial_state`], [`Action::set_start_time`]) re-targets it without
+//! rebuilding the model or the plans.
 
 use rustc_hash::FxHashMap;
 
@@ -119,6 +126,38 @@ impl GlobalLayout {
     pub fn is_plus(&self, z: u32) -> bool {
         (z as usize) < self.n_p
     }
+
+    /// The node of Z index `z` and what it is, in words (e.g. `q+ of coordinate x`,
+    /// `the multiplier of q-[N] = 0 for coordinate x`), given the names of the
+    /// coordinates and constraints.
+    pub fn describe(&self, z: usize, coordinates: &[String], constraints: &[String]) -> (usize, String) {
+        let z = z as u32;
+        let last = self.nodes - 1;
+        let node_major = |v: &[u32], names: &[String], what: &str| {
+            let per = names.len().max(1);
+            v.iter().position(|&i| i == z).map(|p| (p / per, format!("{what} {}", names[p % per])))
+        };
+        let boundary = |v: &[u32], node: usize, names: &[String], what: &str| {
+            v.iter().position(|&i| i == z).map(|c| (node, format!("{what} {}", names[c])))
+        };
+        let (q, g) = (coordinates, constraints);
+        node_major(&self.qp, q, "q+ of coordinate")
+            .or_else(|| node_major(&self.lp, g, "λ+ of constraint"))
+            .or_else(|| node_major(&self.qm, q, "q- of coordinate"))
+            .or_else(|| node_major(&self.lm, g, "λ- of constraint"))
+            .or_else(|| boundary(&self.nu_q1, 0, q, "the multiplier of q-[1] = 0 for coordinate"))
+            .or_else(|| boundary(&self.nu_qn, last, q, "the multiplier of q-[N] = 0 for coordinate"))
+            .or_else(|| boundary(&self.nu_l1, 0, g, "the multiplier of λ-[1] = 0 for constraint"))
+            .or_else(|| boundary(&self.nu_ln, last, g, "the multiplier of λ-[N] = 0 for constraint"))
+            .or_else(|| boundary(&self.nu_x, 0, q, "the multiplier of the initial position of coordinate"))
+            .or_else(|| boundary(&self.nu_v, 0, q, "the multiplier of the initial velocity of coordinate"))
+            .unwrap_or((0, format!("unknown {z}")))
+    }
+
+    /// The coordinates q+ of each node in Z.
+    pub fn coordinates(&self, z: &[f64]) -> Vec<Vec<f64>> {
+        (0..self.nodes).map(|k| (0..self.d).map(|i| z[self.qp[k * self.d + i] as usize]).collect()).collect()
+    }
 }
 
 /// Which system a residual or matrix belongs to.
@@ -152,25 +191,26 @@ pub struct Action {
     pub op: SbpOperator,
     /// Where each unknown lives in Z.
     pub layout: GlobalLayout,
+    /// Time of the first node.
+    t0: f64,
     /// Initial coordinates q_i.
-    pub q0: Vec<f64>,
+    q0: Vec<f64>,
     /// Initial velocities q̇_i.
-    pub v0: Vec<f64>,
+    v0: Vec<f64>,
     /// Node map T: for node k and local variable a, entries `map[offsets[k*m+a]..offsets[k*m+a+1]]`.
     offsets: Vec<u32>,
     map: Vec<(u32, f64)>,
-    /// Boundary terms: bilinear `c z_a z_b` (a ≠ b) and linear `l z_a`.
+    /// Boundary terms `c z_a z_b` (a ≠ b); the linear ones are `−q0`, `−v0` on `ν_x`, `ν_v`.
     bilinear: Vec<(u32, u32, f64)>,
-    linear: Vec<(u32, f64)>,
     /// Local variables whose gradient the residual tapes compute, in tape output order.
     minus_locals: Vec<usize>,
     all_locals: Vec<usize>,
 }
 
 impl Action {
-    /// The discrete action of `model` on the grid of `op` with initial state (q0, v0):
-    /// the node map T and the boundary terms.
-    pub fn new(model: Model, op: SbpOperator, q0: Vec<f64>, v0: Vec<f64>) -> Action {
+    /// The discrete action of `model` on the grid of `op` whose first node is at time
+    /// `t0`, with initial state (q0, v0) there: the node map T and the boundary terms.
+    pub fn new(model: Model, op: SbpOperator, t0: f64, q0: Vec<f64>, v0: Vec<f64>) -> Action {
         let (d, n) = (model.layout.d, model.layout.n);
         let nodes = op.len();
         let layout = GlobalLayout::new(d, n, nodes);
@@ -200,23 +240,75 @@ impl Action {
         }
         let last = nodes - 1;
         let mut bilinear = Vec::new();
-        let mut linear = Vec::new();
         for i in 0..d {
             bilinear.push((layout.nu_q1[i], layout.qm[i], 1.0));
             bilinear.push((layout.nu_qn[i], layout.qm[last * d + i], 1.0));
             bilinear.push((layout.nu_x[i], layout.qp[i], 1.0));
-            linear.push((layout.nu_x[i], -q0[i]));
             for (j, cf) in op.row(0) {
                 bilinear.push((layout.nu_v[i], layout.qp[j * d + i], cf));
             }
-            linear.push((layout.nu_v[i], -v0[i]));
         }
         for a in 0..n {
             bilinear.push((layout.nu_l1[a], layout.lm[a], 1.0));
             bilinear.push((layout.nu_ln[a], layout.lm[last * n + a], 1.0));
         }
         let minus_locals = (0..m).filter(|&a| !model.layout.kind(a).0.is_plus()).collect();
-        Action { model, op, layout, q0, v0, offsets, map, bilinear, linear, minus_locals, all_locals: (0..m).collect() }
+        assert_eq!((q0.len(), v0.len()), (d, d), "initial state of the wrong size");
+        Action { model, op, layout, t0, q0, v0, offsets, map, bilinear, minus_locals, all_locals: (0..m).collect() }
+    }
+
+    /// Time of the first node.
+    pub fn t0(&self) -> f64 {
+        self.t0
+    }
+
+    /// Initial coordinates (at the first node).
+    pub fn q0(&self) -> &[f64] {
+        &self.q0
+    }
+
+    /// Initial velocities (at the first node).
+    pub fn v0(&self) -> &[f64] {
+        &self.v0
+    }
+
+    /// Time of node `k` (from 0): `t0 + k Δt`.
+    pub fn node_time(&self, k: usize) -> f64 {
+        self.t0 + k as f64 * self.op.dt()
+    }
+
+    /// The times of all nodes.
+    pub fn times(&self) -> Vec<f64> {
+        (0..self.layout.nodes).map(|k| self.node_time(k)).collect()
+    }
+
+    /// Replace the initial state (q0, v0). Nothing else changes: the sparsity plans stay valid.
+    ///
+    /// # Panics
+    /// If `q0` or `v0` does not have one entry per coordinate.
+    pub fn set_initial_state(&mut self, q0: &[f64], v0: &[f64]) {
+        assert_eq!((q0.len(), v0.len()), (self.layout.d, self.layout.d), "initial state of the wrong size");
+        self.q0.copy_from_slice(q0);
+        self.v0.copy_from_slice(v0);
+    }
+
+    /// Move the grid to start at `t0` (same node count and spacing).
+    pub fn set_start_time(&mut self, t0: f64) {
+        self.t0 = t0;
+    }
+
+    /// Re-target the action to the window that starts at `t0` with state (q0, v0): the
+    /// next of successive windows of equal node count and spacing.
+    pub fn set_window(&mut self, t0: f64, q0: &[f64], v0: &[f64]) {
+        self.set_start_time(t0);
+        self.set_initial_state(q0, v0);
+    }
+
+    /// The linear boundary terms `l z_a`: `−q0` on `ν_x`, `−v0` on `ν_v`.
+    fn linear(&self) -> impl Iterator<Item = (u32, f64)> + '_ {
+        let lay = &self.layout;
+        let x = lay.nu_x.iter().zip(&self.q0).map(|(&z, q)| (z, -q));
+        x.chain(lay.nu_v.iter().zip(&self.v0).map(|(&z, v)| (z, -v)))
     }
 
     fn entries(&self, k: usize, a: usize) -> &[(u32, f64)] {
@@ -225,11 +317,13 @@ impl Action {
         &self.map[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
 
-    /// Local variables of node k from Z.
+    /// The tape inputs of node k: its local variables from Z and its time.
     fn gather(&self, k: usize, z: &[f64], u: &mut [f64]) {
-        for (a, ua) in u.iter_mut().enumerate() {
+        let m = self.model.layout.len();
+        for (a, ua) in u[..m].iter_mut().enumerate() {
             *ua = self.entries(k, a).iter().map(|&(i, c)| c * z[i as usize]).sum();
         }
+        u[self.model.layout.time()] = self.node_time(k);
     }
 
     /// The discrete action S(Z).
@@ -242,7 +336,7 @@ impl Action {
             s += h[k] * ws.out[0];
         }
         s += self.bilinear.iter().map(|&(a, b, c)| c * z[a as usize] * z[b as usize]).sum::<f64>();
-        s + self.linear.iter().map(|&(a, l)| l * z[a as usize]).sum::<f64>()
+        s + self.linear().map(|(a, l)| l * z[a as usize]).sum::<f64>()
     }
 
     /// ∂S/∂Z. With `minus_only`, only the rows of M are computed (the reduced residual),
@@ -272,7 +366,7 @@ impl Action {
                 out[b as usize - offset] += c * z[a as usize];
             }
         }
-        for &(a, l) in &self.linear {
+        for (a, l) in self.linear() {
             if in_rows(a) {
                 out[a as usize - offset] += l;
             }

@@ -5,7 +5,8 @@
 //!
 //! 1. [`provenance`] (version, schema version, content hash), [`sbp`] (the
 //!    summation-by-parts operators) and [`scenario`]: the TOML scene, validated and
-//!    resolved to numbers ([`scenario::Scene`]).
+//!    resolved to numbers ([`scenario::Scene`]); [`memory`]: what a solve or a
+//!    reference of a scene would need, checked before anything is allocated.
 //! 2. [`model`]: the scene's expressions, their exact derivatives compiled into tapes
 //!    ([`expr`]), and the walls' geometry; [`contact`]: when a node is in contact with
 //!    a wall.
@@ -16,7 +17,9 @@
 //! 5. [`newton`] (Newton's method with a sparse LU) and [`backend`]: the solvers of the
 //!    square system, Ipopt ([`ipopt`]) or Newton; [`solve`]: the square system ∇S = 0
 //!    handed to the backend from a time-stepping initial guess, and its diagnostics
-//!    ([`solve::Outcome`]);
+//!    ([`solve::Outcome`]); [`verify`]: the solution compared with time stepping of the
+//!    same scene; [`window`]: a span solved in windows; [`ladder`]: the scene's own
+//!    solve and the fallback ladder, what [`solve::solve_scene`] runs;
 //!    [`reference`](mod@reference): reference solutions by time stepping, regularized
 //!    or with hard walls.
 //! 6. [`output`]: writes what solve and reference produced (CSV, JSON), atomically.
@@ -32,6 +35,8 @@ pub mod backend;
 pub mod check;
 pub mod contact;
 pub mod convergence;
+pub mod ladder;
+pub mod memory;
 pub mod model;
 pub mod newton;
 pub mod ode;
@@ -44,6 +49,8 @@ pub mod solve;
 pub mod time_stepping;
 pub mod trajectory;
 pub mod tune;
+pub mod verify;
+pub mod window;
 
 pub use skg_expr as expr;
 pub use skg_ipopt as ipopt;

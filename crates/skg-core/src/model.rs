@@ -19,6 +19,17 @@
 //! Sign convention: varying `q-` gives `d/dt p = f + F − Σ_a λ_a ∂g^a/∂q̇`; the
 //! multipliers reported are the `λ` of this action.
 //!
+//! **Time.** Every expression may depend on the time `t` explicitly. `t` is one more
+//! input of every tape, after the local variables `u` (index [`LocalLayout::time`]); the
+//! action sets it to each node's time. No derivative is taken with respect to it for the
+//! solve; the time stepping needs `∂p/∂t` and `∂g/∂t`, which the physical tape provides.
+//!
+//! **Position constraints.** A constraint without velocities, `h(q, t) = 0`
+//! ([`ConstraintKind::Position`]), is enforced through its total time derivative
+//! `g = ∇h·v + ∂h/∂t`, built here symbolically: from then on it is a velocity
+//! constraint like any other. `h` itself is kept for the initial check `h(q₀, t₀) = 0`
+//! and for its drift ([`Physical::drift`]).
+//!
 //! [`Model::build`] parses the scene's expressions into one graph (each exactly once),
 //! adds the walls' Gaussian normal and friction forces, derives `p`, `f`, `G` and `s`,
 //! and compiles the derivative tapes and a tape of physical quantities
@@ -26,9 +37,9 @@
 //! friction direction) for the hard-wall reference, which builds the same model without
 //! wall forces ([`Model::with_hard_walls`]).
 
-use crate::scenario::{Scene, SceneError, Wall, WallSpec, VELOCITY_SUFFIX};
+use crate::scenario::{Constraint, ConstraintKind, ExpressionNames, Scene, SceneError, Wall, WallSpec};
 use nalgebra::{DMatrix, DVector};
-use skg_expr::{ExprId, Graph, ParseError, Symbol, Tape};
+use skg_expr::{ExprId, Graph, Tape};
 use toml::Spanned;
 
 /// Index ranges of the node-local variable vector `u = [q, v, λ, w, dw, μ]`.
@@ -73,6 +84,17 @@ impl LocalLayout {
     /// True only for a scene without coordinates (rejected by validation).
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// Index of the time `t` in a tape's inputs: after the local variables. It is an
+    /// input, not a local variable: nothing is differentiated with respect to it.
+    pub fn time(&self) -> usize {
+        self.len()
+    }
+
+    /// Number of a tape's inputs: the local variables `u` and the time.
+    pub fn inputs(&self) -> usize {
+        self.len() + 1
     }
 
     /// Index of q_i.
@@ -139,6 +161,8 @@ struct PhysLayout {
     d: usize,
     n: usize,
     walls: usize,
+    /// Position constraints.
+    positions: usize,
 }
 
 impl PhysLayout {
@@ -169,8 +193,17 @@ impl PhysLayout {
     fn gq(&self) -> usize {
         self.gv() + self.n * self.d
     }
-    fn len(&self) -> usize {
+    fn dpdt(&self) -> usize {
         self.gq() + self.n * self.d
+    }
+    fn gt(&self) -> usize {
+        self.dpdt() + self.d
+    }
+    fn drift(&self) -> usize {
+        self.gt() + self.n
+    }
+    fn len(&self) -> usize {
+        self.drift() + self.positions
     }
 }
 
@@ -204,12 +237,15 @@ pub struct Model {
     pub layout: LocalLayout,
     /// Coordinate names, in the scene's order.
     pub coordinates: Vec<String>,
-    /// Constraint names, in the scene's order.
-    pub constraints: Vec<String>,
+    /// The constraints, in the scene's order.
+    pub constraints: Vec<Constraint>,
     /// The scene's walls, in the scene's order.
     pub walls: Vec<Wall>,
     /// How the walls act.
     pub wall_model: WallModel,
+    /// Whether the Lagrangian, a force, a constraint or a wall depends on the time `t`
+    /// explicitly. The energy `v·∂L/∂v − L` is then not conserved.
+    pub depends_on_time: bool,
     /// s itself (for tests and diagnostics).
     pub density: Tape,
     /// ∂s/∂u_a for the minus-type a (w, dw, μ), in local order: the residual density.
@@ -229,7 +265,7 @@ pub struct Model {
 
 /// Scratch memory for evaluating tapes without allocation.
 pub struct Workspace {
-    /// The node-local variables `u`.
+    /// A tape's inputs: the node-local variables `u`, then the time `t`.
     pub u: Vec<f64>,
     /// A tape's registers.
     pub scratch: Vec<f64>,
@@ -237,16 +273,17 @@ pub struct Workspace {
     pub out: Vec<f64>,
 }
 
-/// Physical quantities at one state (q, v).
+/// Physical quantities at one state (t, q, v).
 #[derive(Debug, Clone)]
 pub struct Physical {
-    /// v·∂L/∂v − L.
+    /// v·∂L/∂v − L: conserved when no force acts and nothing depends on `t` explicitly.
     pub energy: f64,
     /// Σ_j A_j Φ(h_j/σ_j), Φ the standard normal distribution function: the potential
     /// of the walls' normal forces F_N = −A δ_σ(h) ∇h (friction is not conservative).
     /// Zero for hard walls (their potential vanishes on the allowed side).
     pub wall_energy: f64,
-    /// Constraint values g^a.
+    /// Constraint values g^a (for a position constraint its time derivative
+    /// `∇h·v + ∂h/∂t`).
     pub g: Vec<f64>,
     /// Wall gaps h_j (≤ 0 on the allowed side).
     pub h: Vec<f64>,
@@ -262,10 +299,32 @@ pub struct Physical {
     pub gv: DMatrix<f64>,
     /// ∂g^a/∂q_i (n×d).
     pub gq: DMatrix<f64>,
+    /// ∂p_i/∂t.
+    pub dpdt: Vec<f64>,
+    /// ∂g^a/∂t.
+    pub gt: Vec<f64>,
+    /// `h(q, t)` of each position constraint, in the scene's order: its drift (0 in the
+    /// continuum).
+    pub drift: Vec<f64>,
+}
+
+impl Physical {
+    /// The right-hand side of `W q̈ = f + F − (∂p/∂q) v − ∂p/∂t − Gᵀλ` without the
+    /// constraint forces: `d/dt p(q, v, t) = W q̈ + (∂p/∂q) v + ∂p/∂t` moved to the force side.
+    pub fn free_force(&self, v: &[f64]) -> DVector<f64> {
+        let vv = DVector::from_column_slice(v);
+        DVector::from_column_slice(&self.force) - &self.dpdq * &vv - DVector::from_column_slice(&self.dpdt)
+    }
+
+    /// The right-hand side of the differentiated constraints `G q̈ = −(∂g/∂q) v − ∂g/∂t`
+    /// (`dg/dt = 0` along the motion).
+    pub fn constraint_acceleration(&self, v: &[f64]) -> DVector<f64> {
+        -(&self.gq * DVector::from_column_slice(v)) - DVector::from_column_slice(&self.gt)
+    }
 }
 
 /// Parses a scene's expression strings into one graph: a coordinate name is the local
-/// variable q_i, `<name>_dot` the velocity v_i, a parameter its value.
+/// variable q_i, `<name>_dot` the velocity v_i, `t` the time input, a parameter its value.
 struct ExpressionParser<'s> {
     scene: &'s Scene,
     layout: LocalLayout,
@@ -280,42 +339,34 @@ impl<'s> ExpressionParser<'s> {
     /// Parse the spanned string at `key`; an error carries its position in the file and,
     /// for an unknown name, the list of known ones.
     fn parse(&mut self, src: &Spanned<String>, key: &str) -> Result<ExprId, SceneError> {
-        let (scene, lay) = (self.scene, self.layout);
-        let mut resolve = |name: &str| -> Option<Symbol> {
-            let coordinate = |c: &str| scene.coordinates.iter().position(|x| x == c);
-            if let Some(i) = coordinate(name) {
-                return Some(Symbol::Var(lay.q(i)));
-            }
-            if let Some(i) = name.strip_suffix(VELOCITY_SUFFIX).and_then(coordinate) {
-                return Some(Symbol::Var(lay.v(i)));
-            }
-            scene.parameters.get(name).map(|v| Symbol::Const(*v))
-        };
-        self.graph.parse(src.get_ref(), &mut resolve).map_err(|mut e: ParseError| {
-            if e.message.contains("unknown symbol") {
-                e.hint = Some(known_names(scene));
-            }
-            scene.file.expression_error(src, key, e)
-        })
+        // ExpressionNames numbers q_i as i and v_i as d + i, as LocalLayout does.
+        let names = ExpressionNames { coordinates: &self.scene.coordinates, parameters: &self.scene.parameters, time: self.layout.time() };
+        self.scene.file.parse_expression(&mut self.graph, src, key, &names)
     }
-}
 
-/// The names an expression may use, for the hint of an unknown-name error.
-fn known_names(scene: &Scene) -> String {
-    let mut names: Vec<String> = Vec::new();
-    for c in &scene.coordinates {
-        names.push(c.clone());
-        names.push(format!("{c}{VELOCITY_SUFFIX}"));
+    /// `∇h·v + ∂h/∂t`: the total time derivative of `h(q, t)`.
+    fn time_derivative(&mut self, h: ExprId) -> ExprId {
+        let lay = self.layout;
+        let g = &mut self.graph;
+        let mut sum = g.diff(h, lay.time());
+        for i in 0..lay.d {
+            let dh = g.diff(h, lay.q(i));
+            let v = g.var(lay.v(i));
+            let term = g.mul(dh, v);
+            sum = g.add(sum, term);
+        }
+        sum
     }
-    names.extend(scene.parameters.keys().cloned());
-    format!("known names: {}, pi", names.join(", "))
 }
 
 /// The scene's expressions in one graph, before the wall forces are added.
 struct Expressions {
     graph: Graph,
     lagrangian: ExprId,
+    /// The enforced constraints g^a (for a position constraint `∇h·v + ∂h/∂t`).
     constraints: Vec<ExprId>,
+    /// `h(q, t)` of each position constraint.
+    positions: Vec<ExprId>,
     /// The declared generalized force on each coordinate (0 where none is declared).
     forces: Vec<ExprId>,
     walls: Vec<WallExprs>,
@@ -339,8 +390,16 @@ impl Expressions {
         let mut p = ExpressionParser::new(scene, lay);
         let lagrangian = p.parse(&file.scene.lagrangian, "scene.lagrangian")?;
         let mut constraints = Vec::new();
-        for c in &file.constraints {
-            constraints.push(p.parse(&c.expression, &format!("constraints.{}.expression", c.name.get_ref()))?);
+        let mut positions = Vec::new();
+        for (c, spec) in scene.constraints.iter().zip(&file.constraints) {
+            let e = p.parse(&spec.expression, &format!("constraints.{}.expression", c.name))?;
+            constraints.push(match c.kind {
+                ConstraintKind::Velocity => e,
+                ConstraintKind::Position => {
+                    positions.push(e);
+                    p.time_derivative(e)
+                }
+            });
         }
         let mut forces: Vec<ExprId> = vec![p.graph.constant(0.0); lay.d];
         for (name, src) in &file.forces {
@@ -351,18 +410,19 @@ impl Expressions {
         for (spec, wall) in file.walls.iter().zip(&scene.walls) {
             walls.push(Self::parse_wall(&mut p, spec, wall)?);
         }
-        Ok(Expressions { graph: p.graph, lagrangian, constraints, forces, walls })
+        Ok(Expressions { graph: p.graph, lagrangian, constraints, positions, forces, walls })
     }
 
-    /// A wall's gap (a function of the coordinates only), its gradient and, if the wall
-    /// has friction, its declared friction direction.
+    /// A wall's gap (a function of the coordinates and the time, not of the
+    /// velocities), its gradient and, if the wall has friction, its declared friction
+    /// direction.
     fn parse_wall(p: &mut ExpressionParser, spec: &WallSpec, wall: &Wall) -> Result<WallExprs, SceneError> {
         let lay = p.layout;
         let h = p.parse(&spec.h, &format!("walls.{}.h", wall.name))?;
-        if p.graph.variables(h).iter().any(|&k| k >= lay.d) {
+        if p.graph.variables(h).iter().any(|&k| (lay.d..2 * lay.d).contains(&k)) {
             return Err(SceneError::Invalid {
                 location: p.scene.file.origin.locate_in(&spec.h, None),
-                message: format!("wall `{}`: h may depend on coordinates only, not on velocities", wall.name),
+                message: format!("wall `{}`: h may depend on the coordinates and `t` only, not on velocities", wall.name),
             });
         }
         let grad = (0..lay.d).map(|i| p.graph.diff(h, lay.q(i))).collect();
@@ -468,6 +528,10 @@ struct Mechanics {
     gq: Vec<Vec<ExprId>>,
     /// f + F = ∂L/∂q plus every generalized force.
     total_force: Vec<ExprId>,
+    /// ∂p_i/∂t.
+    dpdt: Vec<ExprId>,
+    /// ∂g^a/∂t.
+    gt: Vec<ExprId>,
 }
 
 impl Mechanics {
@@ -478,7 +542,9 @@ impl Mechanics {
         let gv = e.constraints.iter().map(|&c| (0..d).map(|i| g.diff(c, lay.v(i))).collect()).collect();
         let gq = e.constraints.iter().map(|&c| (0..d).map(|i| g.diff(c, lay.q(i))).collect()).collect();
         let total_force = (0..d).map(|i| g.add(f[i], forces[i])).collect();
-        Mechanics { p, gv, gq, total_force }
+        let dpdt = p.iter().map(|&pi| g.diff(pi, lay.time())).collect();
+        let gt = e.constraints.iter().map(|&c| g.diff(c, lay.time())).collect();
+        Mechanics { p, gv, gq, total_force, dpdt, gt }
     }
 }
 
@@ -522,12 +588,12 @@ impl DerivativeTapes {
     /// Differentiate `s` once and twice and compile the residual, Jacobian and Hessian
     /// densities. Pairs of two minus variables are skipped: `s` is linear in them.
     fn compile(g: &mut Graph, lay: LocalLayout, s: ExprId) -> DerivativeTapes {
-        let m = lay.len();
+        let (m, inputs) = (lay.len(), lay.inputs());
         let grad: Vec<ExprId> = (0..m).map(|a| g.diff(s, a)).collect();
         let minus: Vec<usize> = (0..m).filter(|&a| !lay.kind(a).0.is_plus()).collect();
-        let minus_gradient = Tape::compile(g, &minus.iter().map(|&a| grad[a]).collect::<Vec<_>>(), m);
-        let gradient = Tape::compile(g, &grad, m);
-        let density = Tape::compile(g, &[s], m);
+        let minus_gradient = Tape::compile(g, &minus.iter().map(|&a| grad[a]).collect::<Vec<_>>(), inputs);
+        let gradient = Tape::compile(g, &grad, inputs);
+        let density = Tape::compile(g, &[s], inputs);
 
         let mut mixed = (Vec::new(), Vec::new());
         let mut plus_plus = (Vec::new(), Vec::new());
@@ -550,7 +616,7 @@ impl DerivativeTapes {
             }
         }
         let pair_tape =
-            |g: &Graph, (pairs, exprs): (Vec<(usize, usize)>, Vec<ExprId>)| PairTape { tape: Tape::compile(g, &exprs, m), pairs };
+            |g: &Graph, (pairs, exprs): (Vec<(usize, usize)>, Vec<ExprId>)| PairTape { tape: Tape::compile(g, &exprs, inputs), pairs };
         DerivativeTapes {
             density,
             minus_gradient,
@@ -562,8 +628,9 @@ impl DerivativeTapes {
     }
 }
 
-/// The tape of the physical quantities at a state (q, v), in the order of
-/// [`PhysLayout`]: energy, g, h, f + F, p, ∂p/∂v, ∂p/∂q, ∂g/∂v, ∂g/∂q.
+/// The tape of the physical quantities at a state (t, q, v), in the order of
+/// [`PhysLayout`]: energy, g, h, f + F, p, ∂p/∂v, ∂p/∂q, ∂g/∂v, ∂g/∂q, ∂p/∂t, ∂g/∂t and
+/// the position constraints' h.
 fn physical_tape(g: &mut Graph, lay: LocalLayout, e: &Expressions, m: &Mechanics) -> (Tape, PhysLayout) {
     let d = lay.d;
     let mut energy = g.neg(e.lagrangian);
@@ -572,7 +639,7 @@ fn physical_tape(g: &mut Graph, lay: LocalLayout, e: &Expressions, m: &Mechanics
         let t = g.mul(vi, m.p[i]);
         energy = g.add(energy, t);
     }
-    let pl = PhysLayout { d, n: lay.n, walls: e.walls.len() };
+    let pl = PhysLayout { d, n: lay.n, walls: e.walls.len(), positions: e.positions.len() };
     let mut outs = vec![energy];
     outs.extend(&e.constraints);
     outs.extend(e.walls.iter().map(|w| w.h));
@@ -594,21 +661,25 @@ fn physical_tape(g: &mut Graph, lay: LocalLayout, e: &Expressions, m: &Mechanics
     for row in &m.gq {
         outs.extend(row);
     }
+    outs.extend(&m.dpdt);
+    outs.extend(&m.gt);
+    outs.extend(&e.positions);
     debug_assert_eq!(outs.len(), pl.len());
-    (Tape::compile(g, &outs, lay.len()), pl)
+    (Tape::compile(g, &outs, lay.inputs()), pl)
 }
 
 /// The walls' geometry as expressions of the model's graph, evaluated directly (not on
 /// a tape: the hard-wall reference needs it only at events and in contact).
 struct WallGeometry {
     graph: Graph,
-    /// h_j(q).
+    layout: LocalLayout,
+    /// h_j(q, t).
     h: Vec<ExprId>,
     /// ∇h_j.
     grad: Vec<Vec<ExprId>>,
     /// ∇²h_j, row-major d×d.
     hess: Vec<Vec<ExprId>>,
-    /// The declared friction direction of a wall with friction (of q and v).
+    /// The declared friction direction of a wall with friction (of q, v and t).
     friction_direction: Vec<Option<Vec<ExprId>>>,
 }
 
@@ -625,13 +696,23 @@ impl WallGeometry {
             }
             hess.push(hj);
         }
-        let mut geometry = WallGeometry { graph, h: vec![], grad: vec![], hess, friction_direction: vec![] };
+        let mut geometry = WallGeometry { graph, layout: lay, h: vec![], grad: vec![], hess, friction_direction: vec![] };
         for w in walls {
             geometry.h.push(w.h);
             geometry.grad.push(w.grad);
             geometry.friction_direction.push(w.friction_direction);
         }
         geometry
+    }
+
+    /// Evaluate `exprs` at (t, q, v); `v` may be empty where the expressions do not use it.
+    fn eval(&self, exprs: &[ExprId], t: f64, q: &[f64], v: &[f64]) -> Vec<f64> {
+        let lay = self.layout;
+        let mut inputs = vec![0.0; lay.inputs()];
+        inputs[..lay.d].copy_from_slice(q);
+        inputs[lay.d..lay.d + v.len()].copy_from_slice(v);
+        inputs[lay.time()] = t;
+        self.graph.eval_many(exprs, &inputs)
     }
 }
 
@@ -663,6 +744,15 @@ impl Model {
                 }
             }
         }
+        let depends_on_time = {
+            let mut roots = vec![e.lagrangian];
+            roots.extend(e.constraints.iter().chain(&forces).copied());
+            for w in &e.walls {
+                roots.push(w.h);
+                roots.extend(w.friction_direction.iter().flatten().copied());
+            }
+            roots.iter().any(|&r| g.variables(r).contains(&lay.time()))
+        };
         let mech = Mechanics::derive(&mut g, lay, &e, &forces);
         let s = density(&mut g, lay, &mech, &e.constraints);
         let tapes = DerivativeTapes::compile(&mut g, lay, s);
@@ -673,6 +763,7 @@ impl Model {
             constraints: scene.constraints.clone(),
             walls: scene.walls.clone(),
             wall_model,
+            depends_on_time,
             density: tapes.density,
             minus_gradient: tapes.minus_gradient,
             gradient: tapes.gradient,
@@ -692,18 +783,19 @@ impl Model {
         let tapes =
             [&self.density, &self.minus_gradient, &self.gradient, &self.mixed.tape, &self.plus_plus.tape, &self.all_pairs.tape, &self.phys];
         Workspace {
-            u: vec![0.0; self.layout.len()],
+            u: vec![0.0; self.layout.inputs()],
             scratch: vec![0.0; tapes.iter().map(|t| t.scratch_len()).max().unwrap_or(0)],
             out: vec![0.0; tapes.iter().map(|t| t.n_outputs()).max().unwrap_or(0)],
         }
     }
 
-    /// Physical quantities at the state (q, v).
-    pub fn physical(&self, q: &[f64], v: &[f64], ws: &mut Workspace) -> Physical {
+    /// Physical quantities at the state (q, v) at time t.
+    pub fn physical(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace) -> Physical {
         let (d, n) = (self.layout.d, self.layout.n);
         ws.u.iter_mut().for_each(|x| *x = 0.0);
         ws.u[..d].copy_from_slice(q);
         ws.u[d..2 * d].copy_from_slice(v);
+        ws.u[self.layout.time()] = t;
         let pl = self.phys_layout;
         let out = &mut ws.out[..pl.len()];
         self.phys.eval(&ws.u, &mut ws.scratch, out);
@@ -725,52 +817,54 @@ impl Model {
             dpdq: DMatrix::from_row_slice(d, d, &out[pl.dpdq()..pl.dpdq() + d * d]),
             gv: DMatrix::from_row_slice(n, d, &out[pl.gv()..pl.gv() + n * d]),
             gq: DMatrix::from_row_slice(n, d, &out[pl.gq()..pl.gq() + n * d]),
+            dpdt: out[pl.dpdt()..pl.dpdt() + d].to_vec(),
+            gt: out[pl.gt()..pl.gt() + n].to_vec(),
+            drift: out[pl.drift()..pl.drift() + pl.positions].to_vec(),
         }
     }
 
-    /// The gaps `h_j(q)` of every wall (≤ 0 on the allowed side).
-    pub fn wall_gaps(&self, q: &[f64]) -> Vec<f64> {
-        self.geometry.graph.eval_many(&self.geometry.h, q)
+    /// The gaps `h_j(q, t)` of every wall (≤ 0 on the allowed side).
+    pub fn wall_gaps(&self, t: f64, q: &[f64]) -> Vec<f64> {
+        self.geometry.eval(&self.geometry.h, t, q, &[])
     }
 
-    /// The gradient `∇h_j(q)` of wall `j`'s gap: its outward normal, not normalized.
-    pub fn wall_normal(&self, j: usize, q: &[f64]) -> Vec<f64> {
-        self.geometry.graph.eval_many(&self.geometry.grad[j], q)
+    /// Whether wall `j`'s gap depends on the time explicitly (a moving wall).
+    pub fn wall_moves(&self, j: usize) -> bool {
+        self.geometry.graph.variables(self.geometry.h[j]).contains(&self.layout.time())
     }
 
-    /// The Hessian `∇²h_j(q)` of wall `j`'s gap, row-major d×d.
-    pub fn wall_hessian(&self, j: usize, q: &[f64]) -> Vec<f64> {
-        self.geometry.graph.eval_many(&self.geometry.hess[j], q)
+    /// The gradient `∇h_j(q, t)` of wall `j`'s gap: its outward normal, not normalized.
+    pub fn wall_normal(&self, j: usize, t: f64, q: &[f64]) -> Vec<f64> {
+        self.geometry.eval(&self.geometry.grad[j], t, q, &[])
     }
 
-    /// The declared friction direction of wall `j` at (q, v), not normalized; `None` if
-    /// the wall has no friction or declares no direction (friction then opposes the
+    /// The Hessian `∇²h_j(q, t)` of wall `j`'s gap, row-major d×d.
+    pub fn wall_hessian(&self, j: usize, t: f64, q: &[f64]) -> Vec<f64> {
+        self.geometry.eval(&self.geometry.hess[j], t, q, &[])
+    }
+
+    /// The declared friction direction of wall `j` at (t, q, v), not normalized; `None`
+    /// if the wall has no friction or declares no direction (friction then opposes the
     /// velocity along the wall).
-    pub fn friction_direction(&self, j: usize, q: &[f64], v: &[f64]) -> Option<Vec<f64>> {
+    pub fn friction_direction(&self, j: usize, t: f64, q: &[f64], v: &[f64]) -> Option<Vec<f64>> {
         let dir = self.geometry.friction_direction[j].as_ref()?;
-        let state: Vec<f64> = q.iter().chain(v).copied().collect();
-        Some(self.geometry.graph.eval_many(dir, &state))
+        Some(self.geometry.eval(dir, t, q, v))
     }
 
-    /// Accelerations and multipliers of the Lagrange–d'Alembert equations at (q, v):
+    /// Accelerations and multipliers of the Lagrange–d'Alembert equations at (t, q, v):
     /// the index-reduced system
-    /// `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v; −(∂g/∂q) v]`.
-    pub fn accelerations(&self, q: &[f64], v: &[f64], ws: &mut Workspace) -> Result<(Vec<f64>, Vec<f64>), DynamicsError> {
+    /// `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v − ∂p/∂t; −(∂g/∂q) v − ∂g/∂t]`.
+    pub fn accelerations(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace) -> Result<(Vec<f64>, Vec<f64>), DynamicsError> {
         let (d, n) = (self.layout.d, self.layout.n);
-        let ph = self.physical(q, v, ws);
-        let vv = DVector::from_column_slice(v);
+        let ph = self.physical(t, q, v, ws);
         let mut a = DMatrix::zeros(d + n, d + n);
         a.view_mut((0, 0), (d, d)).copy_from(&ph.kinetic);
+        let mut rhs = DVector::zeros(d + n);
+        rhs.rows_mut(0, d).copy_from(&ph.free_force(v));
         if n > 0 {
             a.view_mut((0, d), (d, n)).copy_from(&ph.gv.transpose());
             a.view_mut((d, 0), (n, d)).copy_from(&ph.gv);
-        }
-        let mut rhs = DVector::zeros(d + n);
-        let fr = DVector::from_column_slice(&ph.force) - &ph.dpdq * &vv;
-        rhs.rows_mut(0, d).copy_from(&fr);
-        if n > 0 {
-            let gr = -(&ph.gq * &vv);
-            rhs.rows_mut(d, n).copy_from(&gr);
+            rhs.rows_mut(d, n).copy_from(&ph.constraint_acceleration(v));
         }
         let sol = a.lu().solve(&rhs).ok_or(DynamicsError::SingularMassMatrix)?;
         if sol.iter().any(|x| !x.is_finite()) {
@@ -779,46 +873,193 @@ impl Model {
         Ok((sol.rows(0, d).iter().copied().collect(), sol.rows(d, n).iter().copied().collect()))
     }
 
-    /// Checks on the initial state: a positive-definite kinetic matrix (masses and
-    /// inertias) and initial velocities that satisfy every declared constraint.
+    /// Checks on the initial state at the start time: a positive-definite kinetic matrix
+    /// (masses and inertias), independent velocity constraints (∂g/∂q̇ of full row rank),
+    /// initial positions on every position constraint, initial velocities that satisfy
+    /// every constraint, and an initial position on the allowed side of every wall.
+    // `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     fn validate_initial_state(&self, scene: &Scene) -> Result<(), SceneError> {
         let mut ws = self.workspace();
-        let ph = self.physical(&scene.initial_q, &scene.initial_v, &mut ws);
-        let location = scene.file.origin.whole();
-        let sym = (&ph.kinetic + ph.kinetic.transpose()) * 0.5;
-        let eig = sym.symmetric_eigenvalues();
-        let min = eig.iter().cloned().fold(f64::INFINITY, f64::min);
-        if min.is_nan() || min <= 0.0 {
+        let (q0, v0) = (&scene.initial_q, &scene.initial_v);
+        let file = &scene.file;
+        if let Some((what, location)) = self.non_finite_expression(scene, scene.t_start, q0, v0) {
+            let state = scene.coordinates.iter().zip(q0).map(|(c, x)| format!("{c} = {x}"));
+            let state = state.chain(scene.coordinates.iter().zip(v0).map(|(c, x)| format!("{c}_dot = {x}")));
             return Err(SceneError::Invalid {
                 location,
                 message: format!(
-                    "the kinetic matrix ∂²L/∂q̇² is not positive definite at the initial state \
+                    "{what} is not finite at the initial state ({}): the scene's expressions must be defined there",
+                    state.collect::<Vec<_>>().join(", ")
+                ),
+            });
+        }
+        let ph = self.physical(scene.t_start, q0, v0, &mut ws);
+        let min = smallest_eigenvalue(&ph.kinetic);
+        if min.is_nan() || min <= 0.0 {
+            return Err(SceneError::Invalid {
+                location: file.origin.locate_in(&file.scene.lagrangian, None),
+                message: format!(
+                    "the kinetic matrix ∂²L/∂q̇² of the Lagrangian is not positive definite at the initial state \
                      (smallest eigenvalue {min:.3e}): check the masses and inertias in the Lagrangian"
                 ),
             });
         }
-        let vmax = scene.initial_v.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
-        let tol = 1e-9 * vmax * vmax;
-        for (a, val) in ph.g.iter().enumerate() {
-            if val.is_nan() || val.abs() > tol {
-                return Err(SceneError::Invalid {
-                    location: scene.file.origin.locate_in(&scene.file.constraints[a].expression, None),
-                    message: format!(
-                        "the initial state violates constraint `{}`: {} = {:.6e} (tolerance {:.1e}); \
-                         choose initial velocities that satisfy it",
-                        self.constraints[a], self.constraints[a], val, tol
+        if let Some(a) = self.dependent_constraint(&ph.gv) {
+            return Err(SceneError::Invalid {
+                location: file.origin.locate_in(&file.constraints[a].expression, None),
+                message: format!(
+                    "constraint `{}` is redundant at the initial state: its gradient ∂g/∂q̇ is a combination of those of {} \
+                     (the constraints' Jacobian ∂g/∂q̇ has rank below {}), so its multiplier is not determined: remove it \
+                     or make the constraints independent",
+                    self.constraints[a].name,
+                    self.constraints[..a].iter().map(|c| format!("`{}`", c.name)).collect::<Vec<_>>().join(", "),
+                    self.constraints.len()
+                ),
+            });
+        }
+        let qmax = q0.iter().fold(1.0_f64, |m, q| m.max(q.abs()));
+        let constraint_error = |a: usize, message: String| SceneError::Invalid {
+            location: file.origin.locate_in(&file.constraints[a].expression, None),
+            message,
+        };
+        let positions = self.constraints.iter().enumerate().filter(|(_, c)| c.kind == ConstraintKind::Position).map(|(a, _)| a);
+        for (a, &h) in positions.zip(&ph.drift) {
+            let name = &self.constraints[a].name;
+            // G's row of a position constraint is ∇h; h changes by about |∇h| δq when q moves by δq.
+            let grad = ph.gv.row(a).norm();
+            if !(grad > 0.0) {
+                return Err(constraint_error(
+                    a,
+                    format!("position constraint `{name}`: ∇h = {grad:e} at the initial position: it fixes no direction there"),
+                ));
+            }
+            let tol = POSITION_TOLERANCE * grad * qmax;
+            if !(h.abs() <= tol) {
+                return Err(constraint_error(
+                    a,
+                    format!(
+                        "the initial position violates position constraint `{name}`: h(q₀, t₀) = {h:.6e} \
+                         (tolerance {tol:.1e} = {POSITION_TOLERANCE:e} · |∇h| · max(1, max|q₀|)); \
+                         choose initial coordinates on it"
                     ),
-                });
+                ));
             }
         }
-        for (j, h) in ph.h.iter().enumerate() {
+        let vmax = v0.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        let tol = 1e-9 * vmax * vmax;
+        for (a, val) in ph.g.iter().enumerate() {
+            if !(val.abs() <= tol) {
+                let name = &self.constraints[a].name;
+                let (what, advice) = match self.constraints[a].kind {
+                    ConstraintKind::Velocity => (name.clone(), "choose initial velocities that satisfy it"),
+                    ConstraintKind::Position => {
+                        ("its time derivative ∇h·q̇ + ∂h/∂t".to_string(), "choose initial velocities tangent to it (∇h·q̇₀ = −∂h/∂t)")
+                    }
+                };
+                return Err(constraint_error(
+                    a,
+                    format!("the initial state violates constraint `{name}`: {what} = {val:.6e} (tolerance {tol:.1e}); {advice}"),
+                ));
+            }
+        }
+        for (j, &h) in ph.h.iter().enumerate() {
             if !h.is_finite() {
                 return Err(SceneError::Invalid {
-                    location,
-                    message: format!("wall `{}`: h is not finite at the initial state", self.walls[j].name),
+                    location: file.origin.locate_in(&file.walls[j].h, None),
+                    message: format!("wall `{}`: h is not finite at the initial state ({h})", self.walls[j].name),
+                });
+            }
+            // An ideal wall may be touched at the start (sliding contact); a Gaussian wall
+            // pushes at h = 0 already, so its scene must start strictly inside.
+            let allowed = match self.wall_model {
+                WallModel::Gaussian => h < 0.0,
+                WallModel::Hard => h <= ON_WALL_TOLERANCE * qmax,
+            };
+            if !allowed {
+                let wall = &self.walls[j].name;
+                let need = match self.wall_model {
+                    WallModel::Gaussian => "h < 0, strictly on the allowed side",
+                    WallModel::Hard => "h ≤ 0, on the allowed side or touching the wall",
+                };
+                return Err(SceneError::Invalid {
+                    location: file.origin.locate_in(&file.walls[j].h, None),
+                    message: format!("wall `{wall}`: the initial position is not on the allowed side: h(q₀, t₀) = {h:.6e} (need {need})"),
                 });
             }
         }
         Ok(())
     }
+
+    /// The first constraint whose row of `G = ∂g/∂q̇` (n×d) depends linearly on the rows
+    /// before it (relative tolerance 1e-10 on the Gram–Schmidt remainder), if any.
+    fn dependent_constraint(&self, gv: &DMatrix<f64>) -> Option<usize> {
+        let mut basis: Vec<DVector<f64>> = Vec::new();
+        for a in 0..gv.nrows() {
+            let row: DVector<f64> = gv.row(a).transpose();
+            let mut rest = row.clone();
+            for b in &basis {
+                rest -= b * b.dot(&rest);
+            }
+            if rest.norm() <= 1e-10 * row.norm() || rest.norm().is_nan() {
+                return Some(a);
+            }
+            basis.push(rest.normalize());
+        }
+        None
+    }
+
+    /// The first node `k` at which the kinetic matrix ∂²L/∂q̇² of the states `(q[k], v[k])`
+    /// at times `t[k]` is not positive definite, with its smallest eigenvalue.
+    pub fn kinetic_loss(&self, t: &[f64], q: &[Vec<f64>], v: &[Vec<f64>]) -> Option<(usize, f64)> {
+        let mut ws = self.workspace();
+        (0..q.len()).find_map(|k| {
+            let min = smallest_eigenvalue(&self.physical(t[k], &q[k], &v[k], &mut ws).kinetic);
+            (min.is_nan() || min <= 0.0).then_some((k, min))
+        })
+    }
+
+    /// Which of the scene's expressions is not finite at the state (q, v) at time t: a
+    /// description and its place in the scene file. `None` if all are finite.
+    pub fn non_finite_expression(&self, scene: &Scene, t: f64, q: &[f64], v: &[f64]) -> Option<(String, crate::scenario::Location)> {
+        let mut ws = self.workspace();
+        let ph = self.physical(t, q, v, &mut ws);
+        let file = &scene.file;
+        let at = |spanned: &Spanned<String>| file.origin.locate_in(spanned, None);
+        let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());
+        if let Some(j) = ph.h.iter().position(|h| !h.is_finite()) {
+            return Some((format!("the gap h of wall `{}`", self.walls[j].name), at(&file.walls[j].h)));
+        }
+        let row_finite = |m: &DMatrix<f64>, a: usize| m.row(a).iter().all(|x| x.is_finite());
+        if let Some(a) = (0..ph.g.len()).find(|&a| !ph.g[a].is_finite() || !row_finite(&ph.gv, a) || !row_finite(&ph.gq, a)) {
+            return Some((format!("constraint `{}` or its derivatives", self.constraints[a].name), at(&file.constraints[a].expression)));
+        }
+        if !ph.energy.is_finite() || !finite(&ph.p) || !finite(ph.kinetic.as_slice()) || !finite(ph.dpdq.as_slice()) {
+            return Some(("the Lagrangian or its derivatives".into(), at(&file.scene.lagrangian)));
+        }
+        let i = ph.force.iter().position(|f| !f.is_finite())?;
+        let name = &self.coordinates[i];
+        Some(match file.forces.get(name) {
+            Some(src) => (format!("the force on `{name}`, ∂L/∂{name} or a wall's force on it"), at(src)),
+            None => (format!("∂L/∂{name} or a wall's force on `{name}`"), at(&file.scene.lagrangian)),
+        })
+    }
 }
+
+/// The smallest eigenvalue of the symmetric part of a square matrix (NaN if it has a NaN).
+fn smallest_eigenvalue(m: &DMatrix<f64>) -> f64 {
+    if m.iter().any(|x| !x.is_finite()) {
+        return f64::NAN;
+    }
+    let sym = (m + m.transpose()) * 0.5;
+    sym.symmetric_eigenvalues().iter().cloned().fold(f64::INFINITY, f64::min)
+}
+
+/// Relative tolerance of the initial check `h(q₀, t₀) = 0` of a position constraint:
+/// `|h| ≤ 1e-9 · |∇h(q₀, t₀)| · max(1, maxᵢ |q₀ᵢ|)`, i.e. the initial position lies within
+/// about 1e-9 (relative to the coordinates' size) of the constraint surface.
+pub const POSITION_TOLERANCE: f64 = 1e-9;
+
+/// A start on an ideal wall (the hard-wall reference) counts as touching it while
+/// `h ≤ 1e-12 · max(1, maxᵢ |q₀ᵢ|)`.
+pub const ON_WALL_TOLERANCE: f64 = 1e-12;

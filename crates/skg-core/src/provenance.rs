@@ -14,7 +14,11 @@ pub const SCHEMA_VERSION: u32 = 3;
 
 /// The hash of a file's content, written as `sha256:<64 hex digits>`.
 pub fn content_hash(bytes: &[u8]) -> String {
-    let digest = Sha256::digest(bytes);
+    hex_digest(&Sha256::digest(bytes))
+}
+
+/// A SHA-256 digest written as `sha256:<64 hex digits>`.
+pub fn hex_digest(digest: &[u8]) -> String {
     let mut s = String::with_capacity(7 + 64);
     s.push_str("sha256:");
     for b in digest {

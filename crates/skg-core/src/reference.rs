@@ -4,11 +4,14 @@
 //!   scene the solver discretizes (same TOML, same symbolic model and derivatives,
 //!   Gaussian walls included) integrated by [`crate::time_stepping`] (the DOP853 of
 //!   [`crate::ode`]) at a tight tolerance and sampled at the requested times from its
-//!   dense output. Velocity constraints enter index-reduced: accelerations and
-//!   multipliers solve `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) q̇; −(∂g/∂q) q̇]`
-//!   ([`Model::accelerations`]), so `g = 0` holds only up to the integrator's drift, which
-//!   is reported (the `residual_*` columns and `max |g|` in the provenance). The distance
-//!   of a solve from this reference is its *discretization error*.
+//!   dense output. Explicit time is the integrator's time. Velocity constraints enter
+//!   index-reduced: accelerations and multipliers solve
+//!   `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) q̇ − ∂p/∂t; −(∂g/∂q) q̇ − ∂g/∂t]`
+//!   ([`Model::accelerations`]); a position constraint `h(q, t) = 0` enters as its time
+//!   derivative, so its second derivative is what is enforced. `g = 0` and `h = 0` then
+//!   hold only up to the integrator's drift, which is reported (the `residual_*` and
+//!   `drift_*` columns, `max |g|` and `max |h|` in the provenance). The distance of a
+//!   solve from this reference is its *discretization error*.
 //! * **Hard-wall** ([`hard_wall`]): the same scene with every wall an ideal elastic wall,
 //!   the σ → 0 limit of the Gaussian wall (the model of [`Model::with_hard_walls`]: the
 //!   walls' geometry, no wall force). Between impacts the particle moves under the
@@ -27,10 +30,13 @@
 //! `μ N |∇h| d̂` along the friction direction, until lift-off, located as the zero crossing
 //! of `N` ([`Contact`] phases are listed in the provenance).
 //!
-//! Not covered, each an error rather than a wrong answer: walls together with velocity
-//! constraints (the impact law would have to respect the constraints), sticking under
-//! velocity-dependent friction (a particle coming to rest in contact), and impacts that
-//! accumulate without settling into contact.
+//! Explicit time in the Lagrangian and the forces is integrated like any other state
+//! dependence. Not covered, each an error rather than a wrong answer: walls together with
+//! velocity or position constraints (the impact law would have to respect the
+//! constraints), moving walls (a gap that depends on `t`: the impact law would need the
+//! wall's velocity, the sliding law its acceleration; the regularized reference covers
+//! them), sticking under velocity-dependent friction (a particle coming to rest in
+//! contact), and impacts that accumulate without settling into contact.
 //!
 //! Data flow: scene → model → time stepping → [`Reference`] (a [`Trajectory`] and how it
 //! was made); [`crate::output::write_reference`] writes it as CSV.
@@ -41,9 +47,9 @@
 #![allow(clippy::result_large_err)]
 use std::fmt;
 
-use crate::model::{Model, Workspace};
+use crate::model::{Model, Workspace, ON_WALL_TOLERANCE};
 use crate::ode::{self, EventHit, OdeOptions, OdeSolution, OdeStats, RhsError};
-use crate::scenario::{Scene, SceneError};
+use crate::scenario::{ConstraintKind, Scene, SceneError};
 use crate::time_stepping::{integrate_model, min_spacing, rhs, split_states};
 use crate::trajectory::Trajectory;
 
@@ -119,17 +125,20 @@ pub enum HardWallError {
         /// The scene's name.
         scene: String,
     },
-    /// The scene has walls and velocity constraints.
-    #[error("scene `{scene}` has walls and velocity constraints; impacts of constrained systems are not supported")]
+    /// The scene has walls and constraints.
+    #[error("scene `{scene}` has walls and constraints; impacts of constrained systems are not supported")]
     WallsWithConstraints {
         /// The scene's name.
         scene: String,
     },
-    /// The initial position is outside a wall.
-    #[error("the initial state is outside the walls (max h = {max_h:.3e})")]
-    StartsOutside {
-        /// The largest gap at the initial position.
-        max_h: f64,
+    /// A wall's gap depends on the time.
+    #[error(
+        "wall `{wall}` moves (its h depends on t); the hard-wall reference supports fixed walls only \
+         (the regularized reference supports moving walls)"
+    )]
+    MovingWall {
+        /// The wall.
+        wall: String,
     },
     /// The initial state lies on a wall that does not push it.
     #[error("the initial state lies on wall `{wall}` and moves away from it or outwards; start strictly inside")]
@@ -259,7 +268,7 @@ impl fmt::Display for ReferenceKind {
 /// A reference trajectory and how it was made.
 #[derive(Debug, Clone)]
 pub struct Reference {
-    /// Same layout as the solver's trajectory (CSV columns via [`crate::output::trajectory_rows`]).
+    /// Same layout as the solver's trajectory (CSV columns via [`crate::trajectory::trajectory_rows`]).
     pub trajectory: Trajectory,
     /// Which reference it is.
     pub kind: ReferenceKind,
@@ -273,6 +282,8 @@ pub struct Reference {
     pub contacts: Vec<Contact>,
     /// max |g^a| over the samples: the drift of the index-reduced integration.
     pub constraint_drift: f64,
+    /// max |h| of the position constraints over the samples (0 without any).
+    pub position_drift: f64,
     /// max |E − E(t₀)| over the samples.
     pub energy_drift: f64,
 }
@@ -287,15 +298,18 @@ fn check_times(scene: &Scene, times: &[f64]) -> Result<(), ReferenceError> {
     if (times[0] - scene.t_start).abs() > 1e-12 * (1.0 + scene.t_start.abs()) {
         return Err(TimesError::NotAtStart { first: times[0], start: scene.t_start }.into());
     }
+    crate::memory::check(scene, "the reference", times.len(), crate::memory::reference_bytes(scene, times.len()))?;
     Ok(())
 }
 
-fn drifts(tr: &Trajectory) -> (f64, f64) {
+/// The drifts of a reference: max |g|, max |h| of the position constraints, and max
+/// |E − E₀| of the total energy (mechanical plus the walls' potential).
+fn drifts(tr: &Trajectory) -> (f64, f64, f64) {
     let g = tr.g.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
-    // Total energy: mechanical plus the walls' potential.
+    let h = tr.max_drift().into_iter().fold(0.0_f64, f64::max);
     let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
     let e = total.iter().fold(0.0_f64, |m, x| m.max((x - total[0]).abs()));
-    (g, e)
+    (g, h, e)
 }
 
 /// The regularized reference of `scene` sampled at `times` (the first one must be the
@@ -305,7 +319,7 @@ pub fn regularized(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Res
     let model = Model::build(scene)?;
     let (states, stats) = integrate_model(&model, &scene.initial_q, &scene.initial_v, times, &opts.ode(times))?;
     let tr = Trajectory::with_physical_columns(&model, times, states);
-    let (constraint_drift, energy_drift) = drifts(&tr);
+    let (constraint_drift, position_drift, energy_drift) = drifts(&tr);
     Ok(Reference {
         trajectory: tr,
         kind: ReferenceKind::Regularized,
@@ -314,33 +328,34 @@ pub fn regularized(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Res
         impacts: vec![],
         contacts: vec![],
         constraint_drift,
+        position_drift,
         energy_drift,
     })
 }
 
 /// The wall with the largest gap at `q` and that gap.
-fn max_gap(model: &Model, q: &[f64]) -> (usize, f64) {
-    model.wall_gaps(q).into_iter().enumerate().fold((0, f64::NEG_INFINITY), |best, (j, h)| if h > best.1 { (j, h) } else { best })
+fn max_gap(model: &Model, t: f64, q: &[f64]) -> (usize, f64) {
+    model.wall_gaps(t, q).into_iter().enumerate().fold((0, f64::NEG_INFINITY), |best, (j, h)| if h > best.1 { (j, h) } else { best })
 }
 
 /// Sliding on wall `j` (h_j = 0 kept at the acceleration level): the accelerations
 /// and the normal force magnitude `N` (≥ 0 while in contact) of
-/// `W q̈ = f + F − (∂p/∂q) q̇ − N ∇h + μ N |∇h| d̂`, `∇h·q̈ + q̇ᵀ(∇²h) q̇ = 0`,
+/// `W q̈ = f + F − (∂p/∂q) q̇ − ∂p/∂t − N ∇h + μ N |∇h| d̂`, `∇h·q̈ + q̇ᵀ(∇²h) q̇ = 0`,
 /// with `d̂` the wall's friction direction (kinetic Coulomb friction).
-fn sliding(model: &Model, ws: &mut Workspace, j: usize, q: &[f64], v: &[f64]) -> Result<(Vec<f64>, f64), HardWallError> {
+fn sliding(model: &Model, ws: &mut Workspace, j: usize, t: f64, q: &[f64], v: &[f64]) -> Result<(Vec<f64>, f64), HardWallError> {
     use nalgebra::{DMatrix, DVector};
     let d = q.len();
     let wall = || model.walls[j].name.clone();
-    let ph = model.physical(q, v, ws);
+    let ph = model.physical(t, q, v, ws);
     let vv = DVector::from_column_slice(v);
-    let rhs = DVector::from_column_slice(&ph.force) - &ph.dpdq * &vv;
-    let n = DVector::from_vec(model.wall_normal(j, q));
-    let hm = DMatrix::from_row_slice(d, d, &model.wall_hessian(j, q));
+    let rhs = ph.free_force(v);
+    let n = DVector::from_vec(model.wall_normal(j, t, q));
+    let hm = DMatrix::from_row_slice(d, d, &model.wall_hessian(j, t, q));
     let curv = vv.dot(&(&hm * &vv));
     let mut b = -&n;
     let mu = model.walls[j].friction;
     if mu > 0.0 {
-        let dhat = match model.friction_direction(j, q, v) {
+        let dhat = match model.friction_direction(j, t, q, v) {
             Some(dir) => DVector::from_vec(dir),
             None => {
                 let nhat = &n / n.norm();
@@ -366,21 +381,21 @@ fn sliding(model: &Model, ws: &mut Workspace, j: usize, q: &[f64], v: &[f64]) ->
 }
 
 /// Remove the normal velocity of wall `j` (in the kinetic metric).
-fn project(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<f64>) -> Option<Vec<f64>> {
+fn project(model: &Model, j: usize, t: f64, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<f64>) -> Option<Vec<f64>> {
     use nalgebra::DVector;
-    let n = DVector::from_vec(model.wall_normal(j, q));
+    let n = DVector::from_vec(model.wall_normal(j, t, q));
     let wn = w.clone().lu().solve(&n)?;
     let vv = DVector::from_column_slice(v);
     let out = &vv - (n.dot(&vv) / n.dot(&wn)) * wn;
     Some(out.iter().copied().collect())
 }
 
-/// The velocity after an impact on wall `j` at `q` with incoming velocity `v`.
-fn reflect(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<f64>) -> Result<(Vec<f64>, f64), HardWallError> {
+/// The velocity after an impact on wall `j` at `q` at time `t` with incoming velocity `v`.
+fn reflect(model: &Model, j: usize, t: f64, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<f64>) -> Result<(Vec<f64>, f64), HardWallError> {
     use nalgebra::DVector;
     let d = q.len();
     let wall = || model.walls[j].name.clone();
-    let n = DVector::from_vec(model.wall_normal(j, q));
+    let n = DVector::from_vec(model.wall_normal(j, t, q));
     let n_norm = n.norm();
     if !(n_norm > 0.0) {
         return Err(HardWallError::VanishingNormal { wall: wall(), q: q.to_vec() });
@@ -393,7 +408,7 @@ fn reflect(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<
     let nwn = n.dot(&wn);
     let mut v_new = vv.clone();
     let mu = model.walls[j].friction;
-    match (model.friction_direction(j, q, v), mu > 0.0) {
+    match (model.friction_direction(j, t, q, v), mu > 0.0) {
         (Some(dir), true) => {
             // Impulse P = −j n + μ j |n| d̂, with j fixed by n·v⁺ = −n·v.
             let mut dhat = DVector::from_vec(dir);
@@ -437,9 +452,16 @@ fn reflect(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<
 /// The velocity along wall `j` (its normal part removed in the kinetic metric `w`) if the
 /// wall pushes the particle at (q, v) sliding along it (normal force `N > 0`); `None` if
 /// the particle would leave it.
-fn slide_if_pushed(model: &Model, j: usize, q: &[f64], v: &[f64], w: &nalgebra::DMatrix<f64>) -> Result<Option<Vec<f64>>, HardWallError> {
-    let vt = project(model, j, q, v, w).ok_or(HardWallError::SingularKineticMatrix)?;
-    let (_, big_n) = sliding(model, &mut model.workspace(), j, q, &vt)?;
+fn slide_if_pushed(
+    model: &Model,
+    j: usize,
+    t: f64,
+    q: &[f64],
+    v: &[f64],
+    w: &nalgebra::DMatrix<f64>,
+) -> Result<Option<Vec<f64>>, HardWallError> {
+    let vt = project(model, j, t, q, v, w).ok_or(HardWallError::SingularKineticMatrix)?;
+    let (_, big_n) = sliding(model, &mut model.workspace(), j, t, q, &vt)?;
     Ok((big_n > 0.0).then_some(vt))
 }
 
@@ -456,16 +478,16 @@ fn integrate_phase(
     let d = model.layout.d;
     let mut ws = model.workspace();
     match contact {
-        None => ode::integrate_to_event(rhs(model, &mut ws), y, ts, opts, |_, y| max_gap(model, &y[..d]).1),
+        None => ode::integrate_to_event(rhs(model, &mut ws), y, ts, opts, |t, y| max_gap(model, t, &y[..d]).1),
         Some(j) => {
             let mut ws_event = model.workspace();
-            let slide = |_: f64, y: &[f64], dy: &mut [f64]| -> Result<(), RhsError> {
-                let (a, _) = sliding(model, &mut ws, j, &y[..d], &y[d..])?;
+            let slide = |t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), RhsError> {
+                let (a, _) = sliding(model, &mut ws, j, t, &y[..d], &y[d..])?;
                 dy[..d].copy_from_slice(&y[d..]);
                 dy[d..].copy_from_slice(&a);
                 Ok(())
             };
-            let lift_off = |_: f64, y: &[f64]| sliding(model, &mut ws_event, j, &y[..d], &y[d..]).map_or(f64::NAN, |(_, n)| -n);
+            let lift_off = |t: f64, y: &[f64]| sliding(model, &mut ws_event, j, t, &y[..d], &y[d..]).map_or(f64::NAN, |(_, n)| -n);
             ode::integrate_to_event(slide, y, ts, opts, lift_off)
         }
     }
@@ -484,39 +506,41 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
     if !scene.constraints.is_empty() {
         return Err(HardWallError::WallsWithConstraints { scene: scene.name.clone() }.into());
     }
-    // No wall force: the motion between impacts is the scene's without its walls.
+    // No wall force: the motion between impacts is the scene's without its walls. Building
+    // the model checks that the start is not beyond a wall.
     let model = Model::with_hard_walls(scene)?;
+    if let Some(j) = (0..model.walls.len()).find(|&j| model.wall_moves(j)) {
+        return Err(HardWallError::MovingWall { wall: model.walls[j].name.clone() }.into());
+    }
     let d = scene.coordinates.len();
     let ode_opts = opts.ode(times);
     let vscale = 1.0 + scene.initial_v.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    let kinetic = |q: &[f64], v: &[f64]| {
+    let kinetic = |t: f64, q: &[f64], v: &[f64]| {
         let mut ws = model.workspace();
-        model.physical(q, v, &mut ws).kinetic
+        model.physical(t, q, v, &mut ws).kinetic
     };
 
+    let t0 = times[0];
     let mut y: Vec<f64> = scene.initial_q.iter().chain(&scene.initial_v).copied().collect();
-    let (j0, h0) = max_gap(&model, &scene.initial_q);
-    let on_wall_tol = 1e-12 * (1.0 + scene.initial_q.iter().fold(0.0_f64, |m, q| m.max(q.abs())));
+    let (j0, h0) = max_gap(&model, t0, &scene.initial_q);
+    let on_wall_tol = ON_WALL_TOLERANCE * scene.initial_q.iter().fold(1.0_f64, |m, q| m.max(q.abs()));
     // Contact: Some((wall, start time)).
     let mut contact: Option<(usize, f64)> = None;
-    if h0 > on_wall_tol {
-        return Err(HardWallError::StartsOutside { max_h: h0 }.into());
-    }
     if h0 >= -on_wall_tol {
         // Starting on a wall: slide along it if it pushes, else leave it.
-        let w = kinetic(&y[..d], &y[d..]);
-        let Some(vt) = slide_if_pushed(&model, j0, &y[..d], &y[d..], &w)? else {
+        let w = kinetic(t0, &y[..d], &y[d..]);
+        let Some(vt) = slide_if_pushed(&model, j0, t0, &y[..d], &y[d..], &w)? else {
             return Err(HardWallError::StartsLeaving { wall: model.walls[j0].name.clone() }.into());
         };
         y[d..].copy_from_slice(&vt);
-        contact = Some((j0, times[0]));
+        contact = Some((j0, t0));
     }
 
     let mut states: Vec<Vec<f64>> = Vec::with_capacity(times.len());
     let mut impacts = Vec::new();
     let mut contacts = Vec::new();
     let mut stats = OdeStats::default();
-    let mut t_cur = times[0];
+    let mut t_cur = t0;
     let mut first = true;
     loop {
         // Sample times still to fill; after an event the restart time comes first and
@@ -543,13 +567,13 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
             }
             continue;
         }
-        let (j, _) = max_gap(&model, &ye[..d]);
-        let w = kinetic(&ye[..d], &ye[d..]);
-        let (v_new, vn) = reflect(&model, j, &ye[..d], &ye[d..], &w)?;
+        let (j, _) = max_gap(&model, t, &ye[..d]);
+        let w = kinetic(t, &ye[..d], &ye[d..]);
+        let (v_new, vn) = reflect(&model, j, t, &ye[..d], &ye[d..], &w)?;
         impacts.push(Impact { t, wall: model.walls[j].name.clone(), normal_speed: vn, q: ye[..d].to_vec() });
         if vn.abs() <= 1e-7 * vscale {
             // Grazing arrival: slide along the wall if it pushes back.
-            if let Some(vt) = slide_if_pushed(&model, j, &ye[..d], &ye[d..], &w)? {
+            if let Some(vt) = slide_if_pushed(&model, j, t, &ye[..d], &ye[d..], &w)? {
                 contact = Some((j, t));
                 y = ye[..d].iter().chain(&vt).copied().collect();
                 if states.len() == times.len() {
@@ -571,7 +595,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
     }
     let mut ws = model.workspace();
     let tr = Trajectory::with_physical_columns(&model, times, split_states(&model, &states, times, &mut ws)?);
-    let (constraint_drift, energy_drift) = drifts(&tr);
+    let (constraint_drift, position_drift, energy_drift) = drifts(&tr);
     Ok(Reference {
         trajectory: tr,
         kind: ReferenceKind::HardWall,
@@ -580,6 +604,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         impacts,
         contacts,
         constraint_drift,
+        position_drift,
         energy_drift,
     })
 }
@@ -605,6 +630,9 @@ pub fn provenance(scene: &Scene, scene_path: &str, r: &Reference) -> String {
         r.constraint_drift,
         r.energy_drift,
     );
+    if scene.constraints.iter().any(|c| c.kind == ConstraintKind::Position) {
+        s.push_str(&format!(", max |h| of the position constraints {:.3e}", r.position_drift));
+    }
     if !scene.parameters.is_empty() {
         let p: Vec<String> = scene.parameters.iter().map(|(k, v)| format!("{k}={v:?}")).collect();
         s.push_str(&format!("\nparameters: {}", p.join(", ")));

@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
 use crate::sbp::OperatorKind;
-use skg_expr::{Graph, ParseError, Symbol};
+use skg_expr::{ExprId, Graph, ParseError, ParseErrorKind, Symbol};
 
 /// Errors in a scene file or its overrides. Each names the file and, where it can,
 /// the line and column.
@@ -196,7 +196,8 @@ pub struct SceneMeta {
     /// Free text.
     #[serde(default)]
     pub description: String,
-    /// L(q, q̇) in terms of coordinates `x`, velocities `x_dot` and parameters.
+    /// L(q, q̇, t) in terms of coordinates `x`, velocities `x_dot`, the time `t` and
+    /// parameters.
     pub lagrangian: Spanned<String>,
 }
 
@@ -212,13 +213,15 @@ pub struct CoordinateSpec {
     pub velocity: Spanned<NumOrExpr>,
 }
 
-/// One `[[constraints]]` entry: a velocity constraint.
+/// One `[[constraints]]` entry: a velocity or a position constraint ([`ConstraintKind`]).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConstraintSpec {
-    /// The constraint's name (columns `lambda_<name>`, `residual_<name>`).
+    /// The constraint's name (columns `lambda_<name>`, `residual_<name>` and, for a
+    /// position constraint, `drift_<name>`).
     pub name: Spanned<String>,
-    /// g(q, q̇) = 0, linear or nonlinear in the velocities.
+    /// g(q, q̇, t) = 0, linear or nonlinear in the velocities, or h(q, t) = 0 without
+    /// velocities.
     pub expression: Spanned<String>,
 }
 
@@ -228,7 +231,7 @@ pub struct ConstraintSpec {
 pub struct WallSpec {
     /// The wall's name (column `gap_<name>`, keys of per-wall diagnostics).
     pub name: Spanned<String>,
-    /// h(q): the allowed side is h ≤ 0.
+    /// h(q, t): the allowed side is h ≤ 0.
     pub h: Spanned<String>,
     /// A in F_N = -A δ_σ(h) ∇h.
     pub strength: Spanned<NumOrExpr>,
@@ -237,8 +240,9 @@ pub struct WallSpec {
     /// Kinetic friction coefficient μ (0 = no friction term at all).
     #[serde(default)]
     pub friction: Option<Spanned<NumOrExpr>>,
-    /// Fixed friction direction (expressions, normalized by the tool); when absent the
-    /// friction opposes the tangential velocity.
+    /// Friction direction, one expression per coordinate of the parameters,
+    /// coordinates, velocities and `t` (normalized by the tool); when absent the friction
+    /// opposes the tangential velocity.
     #[serde(default)]
     pub friction_direction: Option<Vec<Spanned<String>>>,
     /// ε in |v∥| ≈ sqrt(|v∥|² + ε²), which keeps friction differentiable at rest.
@@ -256,6 +260,21 @@ pub struct TimeSpec {
     pub end: Spanned<NumOrExpr>,
     /// Number of grid nodes N.
     pub nodes: Spanned<i64>,
+    /// Solve in successive windows of this length (seconds) instead of one global solve.
+    #[serde(default)]
+    pub window: Option<Spanned<NumOrExpr>>,
+    /// Length (seconds) discarded at the end of each window (default: a quarter window).
+    #[serde(default)]
+    pub overlap: Option<Spanned<NumOrExpr>>,
+}
+
+/// The `[verify]` table: how a solve is checked against time stepping of the same scene.
+#[derive(Debug, Clone, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct VerifySpec {
+    /// Absolute tolerance on max |q − q_reference| (coordinate units).
+    #[serde(default)]
+    pub tol: Option<Spanned<NumOrExpr>>,
 }
 
 /// The `[discretization]` table.
@@ -277,20 +296,22 @@ pub struct SolverSpec {
     /// The solver of the square system (default ipopt).
     pub backend: Option<Backend>,
     /// Ipopt's `tol` and `constr_viol_tol` (default 1e-11).
-    pub tol: Option<f64>,
+    pub tol: Option<Spanned<f64>>,
     /// Ipopt's `max_iter` (default 100).
     pub max_iter: Option<u32>,
     /// Ipopt's console `print_level` (default 0: silent).
-    pub print_level: Option<i32>,
+    pub print_level: Option<Spanned<i32>>,
     /// Ipopt's `linear_solver` (default: Ipopt's).
-    pub linear_solver: Option<String>,
+    pub linear_solver: Option<Spanned<String>>,
     /// The Hessian given to Ipopt (default zero).
-    pub hessian: Option<HessianMode>,
+    pub hessian: Option<Spanned<HessianMode>>,
     /// Ipopt log file, relative to the output directory.
     pub log_file: Option<String>,
     /// Further Ipopt options passed through verbatim, e.g. `mumps_pivot_order = 0`.
     #[serde(default)]
-    pub ipopt: IndexMap<String, IpoptValue>,
+    pub ipopt: IndexMap<String, Spanned<IpoptValue>>,
+    /// When the solve fails or is not verified, try the fallback ladder (default true).
+    pub fallback: Option<bool>,
 }
 
 /// The value of a pass-through Ipopt option: integer, number or string, as Ipopt's
@@ -334,6 +355,9 @@ pub struct SceneFile {
     /// `[solver]`.
     #[serde(default)]
     pub solver: SolverSpec,
+    /// `[verify]`.
+    #[serde(default)]
+    pub verify: VerifySpec,
     /// Path and source text, for error positions.
     #[serde(skip)]
     pub origin: Origin,
@@ -433,6 +457,16 @@ pub struct Overrides {
     pub max_iter: Option<u32>,
     /// The solver of the square system.
     pub backend: Option<Backend>,
+    /// Window length in seconds (`--window`; 0 turns windows off).
+    pub window: Option<f64>,
+    /// Window overlap in seconds (`--overlap`).
+    pub overlap: Option<f64>,
+    /// Verification tolerance (`--verify-tol`).
+    pub verify_tol: Option<f64>,
+    /// Skip verification (`--no-verify`).
+    pub no_verify: bool,
+    /// Do not try the fallback ladder (`--no-fallback`).
+    pub no_fallback: bool,
 }
 
 impl Overrides {
@@ -468,6 +502,28 @@ pub struct SolverSettings {
     pub log_file: Option<PathBuf>,
     /// Further Ipopt options, passed through verbatim.
     pub ipopt: IndexMap<String, IpoptValue>,
+    /// Whether a failed or unverified solve tries the fallback ladder ([`crate::ladder`]).
+    pub fallback: bool,
+}
+
+/// Successive time windows: each solves `length` seconds from the state the previous
+/// one reached, and keeps all but its last `overlap` seconds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Windows {
+    /// Length of each window's solve, seconds.
+    pub length: f64,
+    /// Length discarded at the end of each window, seconds (0 ≤ overlap < length).
+    pub overlap: f64,
+}
+
+/// How a solve is verified ([`crate::verify`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct VerifySettings {
+    /// Whether to verify at all (`--no-verify` turns it off).
+    pub enabled: bool,
+    /// The absolute tolerance on max |q − q_reference|, if the scene or the command line
+    /// gives one (otherwise the default of [`crate::verify`]).
+    pub tol: Option<f64>,
 }
 
 /// A wall, resolved to numbers (its `h` and friction direction expressions are parsed
@@ -486,6 +542,27 @@ pub struct Wall {
     pub friction_velocity: f64,
 }
 
+/// What a `[[constraints]]` expression constrains, decided by whether it depends on the
+/// velocities (docs/mathematics.md §1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ConstraintKind {
+    /// `g(q, q̇, t) = 0`: depends on the velocities (linearly or not).
+    Velocity,
+    /// `h(q, t) = 0`: no velocities (a holonomic constraint). Enforced through its total
+    /// time derivative `∇h·q̇ + ∂h/∂t = 0`, a velocity constraint linear in `q̇`, together
+    /// with the check `h(q₀, t₀) = 0`; its drift `h` is reported.
+    Position,
+}
+
+/// A declared constraint, classified.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Constraint {
+    /// The constraint's name.
+    pub name: String,
+    /// Velocity or position constraint.
+    pub kind: ConstraintKind,
+}
+
 /// A validated scene: every number resolved, every name checked.
 #[derive(Debug, Clone)]
 pub struct Scene {
@@ -501,8 +578,8 @@ pub struct Scene {
     pub initial_q: Vec<f64>,
     /// Initial velocities q̇(t_start).
     pub initial_v: Vec<f64>,
-    /// Constraint names, in order.
-    pub constraints: Vec<String>,
+    /// Constraints, in order.
+    pub constraints: Vec<Constraint>,
     /// Walls, in order.
     pub walls: Vec<Wall>,
     /// Start time.
@@ -517,6 +594,47 @@ pub struct Scene {
     pub formulation: Formulation,
     /// Ipopt's settings.
     pub solver: SolverSettings,
+    /// Solve in windows (`[time] window`), or in one piece (None).
+    pub windows: Option<Windows>,
+    /// How the solve is verified.
+    pub verify: VerifySettings,
+}
+
+/// The largest node count a scene may have (far above what fits in memory for a
+/// solve; the solve and the reference check their memory estimate separately).
+pub const MAX_NODES: usize = 100_000_000;
+
+/// The smallest time step a grid may have (1/Δt and its powers must stay finite).
+const MIN_TIME_STEP: f64 = 1e-100;
+
+/// Check that `nodes` equally spaced times from `t_start` to `t_end` are distinct and
+/// increasing in floating point: the step must exceed a few units in the last place of
+/// the larger end.
+fn check_time_resolution(t_start: f64, t_end: f64, nodes: usize) -> Result<(), String> {
+    let dt = (t_end - t_start) / (nodes as f64 - 1.0);
+    let ulp = t_start.abs().max(t_end.abs()) * f64::EPSILON;
+    if dt > 4.0 * ulp && dt > MIN_TIME_STEP && dt.is_finite() {
+        return Ok(());
+    }
+    if dt == 0.0 {
+        return Err(format!(
+            "the time span end − start = {:e} divided into {} steps gives a zero time step: lengthen the span or use fewer nodes",
+            t_end - t_start,
+            nodes - 1
+        ));
+    }
+    if dt <= MIN_TIME_STEP && dt > 4.0 * ulp {
+        return Err(format!(
+            "the time step Δt = {dt:e} is below {MIN_TIME_STEP:e}: the SBP derivative (∝ 1/Δt) would overflow; rescale time"
+        ));
+    }
+    Err(format!(
+        "the time step Δt = ({t_end:e} − {t_start:e})/{} = {dt:e} is not resolved by floating-point numbers near {:e} \
+         (their spacing there is {ulp:e}), so the {nodes} node times would not be distinct: measure time from 0 (shift start \
+         and end), or use a longer span or fewer nodes",
+        nodes - 1,
+        t_start.abs().max(t_end.abs())
+    ))
 }
 
 /// Names the expression language reserves.
@@ -524,6 +642,52 @@ pub const RESERVED: &[&str] = &["pi", "sin", "cos", "tan", "exp", "log", "sqrt",
 
 /// Suffix that turns a coordinate name into its velocity: `x` → `x_dot`.
 pub const VELOCITY_SUFFIX: &str = "_dot";
+
+/// The name of the time in the model's expressions (Lagrangian, constraints, forces,
+/// walls); no parameter or coordinate may take it.
+pub const TIME: &str = "t";
+
+/// What the names of a scene's model expressions mean: coordinate `i` is variable `i`,
+/// its velocity `<name>_dot` variable `d + i`, the time `t` variable `time`, and a
+/// parameter its value.
+#[derive(Debug, Clone, Copy)]
+pub struct ExpressionNames<'a> {
+    /// Coordinate names, in order.
+    pub coordinates: &'a [String],
+    /// Parameter values.
+    pub parameters: &'a IndexMap<String, f64>,
+    /// The variable index of the time `t`.
+    pub time: usize,
+}
+
+impl ExpressionNames<'_> {
+    /// What `name` means, or `None` if it is unknown.
+    pub fn resolve(&self, name: &str) -> Option<Symbol> {
+        let coordinate = |c: &str| self.coordinates.iter().position(|x| x == c);
+        if let Some(i) = coordinate(name) {
+            return Some(Symbol::Var(i));
+        }
+        if let Some(i) = name.strip_suffix(VELOCITY_SUFFIX).and_then(coordinate) {
+            return Some(Symbol::Var(self.coordinates.len() + i));
+        }
+        if name == TIME {
+            return Some(Symbol::Var(self.time));
+        }
+        self.parameters.get(name).map(|v| Symbol::Const(*v))
+    }
+
+    /// The list of valid names, for the hint of an unknown-name error.
+    fn hint(&self) -> String {
+        let mut names: Vec<String> = Vec::new();
+        for c in self.coordinates {
+            names.push(c.clone());
+            names.push(format!("{c}{VELOCITY_SUFFIX}"));
+        }
+        names.push(TIME.to_string());
+        names.extend(self.parameters.keys().cloned());
+        format!("known names: {}, pi", names.join(", "))
+    }
+}
 
 /// Errors of reading a TOML input file ([`read_toml`], [`parse_toml`]).
 #[derive(Debug, thiserror::Error)]
@@ -604,6 +768,45 @@ impl SceneFile {
         }
     }
 
+    /// Parse a model expression (Lagrangian, constraint, force, wall) at the spanned
+    /// string `src` into `graph`, with the meaning of names given by `names`. An error
+    /// carries its position in the file and, for an unknown name, the list of known ones.
+    pub fn parse_expression(
+        &self,
+        graph: &mut Graph,
+        src: &Spanned<String>,
+        key: &str,
+        names: &ExpressionNames,
+    ) -> Result<ExprId, SceneError> {
+        graph.parse(src.get_ref(), &mut |name| names.resolve(name)).map_err(|mut e| {
+            if e.kind == ParseErrorKind::UnknownSymbol {
+                e.hint = Some(names.hint());
+            }
+            self.expression_error(src, key, e)
+        })
+    }
+
+    /// Whether a constraint depends on the velocities (a velocity constraint) or only
+    /// on the coordinates and `t` (a position constraint); one that depends on neither
+    /// coordinates nor velocities constrains nothing and is an error.
+    fn constraint_kind(&self, c: &ConstraintSpec, names: &ExpressionNames) -> Result<ConstraintKind, SceneError> {
+        let name = c.name.get_ref();
+        let mut graph = Graph::new();
+        let e = self.parse_expression(&mut graph, &c.expression, &format!("constraints.{name}.expression"), names)?;
+        let d = names.coordinates.len();
+        let vars = graph.variables(e);
+        if vars.iter().any(|&k| (d..2 * d).contains(&k)) {
+            Ok(ConstraintKind::Velocity)
+        } else if vars.iter().any(|&k| k < d) {
+            Ok(ConstraintKind::Position)
+        } else {
+            Err(self.invalid(
+                &c.expression,
+                format!("constraint `{name}` depends on neither the coordinates nor the velocities: it constrains nothing"),
+            ))
+        }
+    }
+
     /// Evaluate a number-or-expression in terms of resolved parameters.
     pub fn eval_value(&self, v: &Spanned<NumOrExpr>, key: &str, params: &IndexMap<String, f64>) -> Result<f64, SceneError> {
         let value = match v.get_ref() {
@@ -628,10 +831,15 @@ impl SceneFile {
         for r in RESERVED {
             seen.insert(r.to_string(), "a built-in name");
         }
+        seen.insert(TIME.to_string(), "the time `t`, a reserved name in expressions");
         for p in params.keys() {
-            check_identifier(p).map_err(|e| self.toml_error(format!("parameter `{p}`: {e}")))?;
+            let at = |message: String| match self.parameters.get(p) {
+                Some(v) => self.invalid(v, message),
+                None => self.toml_error(message),
+            };
+            check_identifier(p).map_err(|e| at(format!("parameter `{p}`: {e}")))?;
             if let Some(what) = seen.insert(p.clone(), "a parameter") {
-                return Err(self.toml_error(format!("parameter `{p}` clashes with {what}")));
+                return Err(at(format!("parameter `{p}` clashes with {what}")));
             }
         }
         if self.coordinates.is_empty() {
@@ -655,14 +863,15 @@ impl SceneFile {
             initial_q.push(self.eval_value(&c.initial, &format!("coordinates.{n}.initial"), &params)?);
             initial_v.push(self.eval_value(&c.velocity, &format!("coordinates.{n}.velocity"), &params)?);
         }
-        let mut constraints = Vec::new();
+        let names = ExpressionNames { coordinates: &coordinates, parameters: &params, time: 2 * coordinates.len() };
+        let mut constraints: Vec<Constraint> = Vec::new();
         for c in &self.constraints {
             let name = c.name.get_ref();
             check_identifier(name).map_err(|e| self.invalid(&c.name, e.to_string()))?;
-            if constraints.contains(name) {
+            if constraints.iter().any(|x| &x.name == name) {
                 return Err(self.invalid(&c.name, format!("constraint `{name}` declared twice")));
             }
-            constraints.push(name.clone());
+            constraints.push(Constraint { name: name.clone(), kind: self.constraint_kind(c, &names)? });
         }
         for (name, v) in &self.forces {
             if !coordinates.contains(name) {
@@ -671,10 +880,13 @@ impl SceneFile {
                 );
             }
         }
-        let mut walls = Vec::new();
+        let mut walls: Vec<Wall> = Vec::new();
         for w in &self.walls {
             let name = w.name.get_ref().clone();
             check_identifier(&name).map_err(|e| self.invalid(&w.name, e.to_string()))?;
+            if walls.iter().any(|other| other.name == name) {
+                return Err(self.invalid(&w.name, format!("wall `{name}` declared twice (each wall names its column gap_{name})")));
+            }
             let strength = self.eval_value(&w.strength, &format!("walls.{name}.strength"), &params)?;
             if strength < 0.0 {
                 return Err(self.invalid(&w.strength, format!("wall `{name}`: strength must be ≥ 0, got {strength}")));
@@ -703,11 +915,16 @@ impl SceneFile {
             };
             if let Some(dir) = &w.friction_direction {
                 if dir.len() != coordinates.len() {
-                    return Err(self.toml_error(format!(
-                        "wall `{name}`: friction_direction has {} components, the scene has {} coordinates",
+                    let message = format!(
+                        "wall `{name}`: friction_direction has {} components, the scene has {} coordinates ({})",
                         dir.len(),
-                        coordinates.len()
-                    )));
+                        coordinates.len(),
+                        coordinates.join(", ")
+                    );
+                    return Err(match dir.first() {
+                        Some(first) => self.invalid(first, message),
+                        None => self.invalid(&w.name, message),
+                    });
                 }
             }
             walls.push(Wall { name, strength, width, friction, friction_velocity });
@@ -724,40 +941,56 @@ impl SceneFile {
             (None, None) => OperatorKind::Sbp242,
         };
         let nodes_raw = match ov.nodes {
-            Some(n) => n as i64,
-            None => *self.time.nodes.get_ref(),
+            Some(n) => n as i128,
+            None => *self.time.nodes.get_ref() as i128,
         };
-        if nodes_raw < operator.min_nodes() as i64 {
+        let nodes_origin = if ov.nodes.is_some() { " (set by --nodes or a sweep point)" } else { "" };
+        if nodes_raw < operator.min_nodes() as i128 {
             return Err(self.invalid(
                 &self.time.nodes,
-                format!("{} needs at least {} nodes, got {}", operator.name(), operator.min_nodes(), nodes_raw),
+                format!("{} needs at least {} nodes, got {nodes_raw}{nodes_origin}", operator.name(), operator.min_nodes()),
             ));
         }
+        if nodes_raw > MAX_NODES as i128 {
+            return Err(self.invalid(&self.time.nodes, format!("at most {MAX_NODES} nodes are supported, got {nodes_raw}{nodes_origin}")));
+        }
+        let nodes = nodes_raw as usize;
+        check_time_resolution(t_start, t_end, nodes).map_err(|m| self.invalid(&self.time.end, format!("{m}{nodes_origin}")))?;
         let formulation = ov.formulation.or(self.discretization.formulation).unwrap_or_default();
         let s = &self.solver;
-        let tol = s.tol.unwrap_or(1e-11);
+        let tol = s.tol.as_ref().map_or(1e-11, |t| *t.get_ref());
         if !(tol > 0.0 && tol.is_finite()) {
-            return Err(self.toml_error(format!("solver.tol must be a positive number, got {tol}")));
+            let t = s.tol.as_ref().expect("the default is positive");
+            return Err(self.invalid(t, format!("solver.tol must be a positive number, got {tol}")));
         }
-        let hessian = ov.hessian.or(s.hessian).unwrap_or_default();
+        let hessian = ov.hessian.or(s.hessian.as_ref().map(|h| *h.get_ref())).unwrap_or_default();
         if hessian == HessianMode::Exact && formulation == Formulation::Full {
-            return Err(self.toml_error(
-                "solver.hessian = \"exact\" is available for the reduced formulation only \
+            let message = "solver.hessian = \"exact\" is available for the reduced formulation only \
                  (the full formulation's Lagrangian Hessian would need fourth derivatives of L; \
-                 for a square system Ipopt's step does not depend on it)"
-                    .into(),
-            ));
+                 for a square system Ipopt's step does not depend on it)";
+            return Err(match (&s.hessian, ov.hessian) {
+                (Some(h), None) => self.invalid(h, message),
+                _ => self.toml_error(format!("{message} (the exact Hessian or the full formulation was asked for on the command line)")),
+            });
+        }
+        let print_level = s.print_level.as_ref().map_or(0, |p| *p.get_ref());
+        if !(0..=12).contains(&print_level) {
+            let p = s.print_level.as_ref().expect("the default is in range");
+            return Err(self.invalid(p, format!("solver.print_level must be 0 (silent) … 12 (Ipopt's range), got {print_level}")));
         }
         let solver = SolverSettings {
             backend: ov.backend.or(s.backend).unwrap_or_default(),
             tol,
             max_iter: ov.max_iter.or(s.max_iter).unwrap_or(100),
-            print_level: s.print_level.unwrap_or(0),
-            linear_solver: s.linear_solver.clone(),
+            print_level,
+            linear_solver: s.linear_solver.as_ref().map(|l| l.get_ref().clone()),
             hessian,
             log_file: s.log_file.as_ref().map(PathBuf::from),
-            ipopt: s.ipopt.clone(),
+            ipopt: s.ipopt.iter().map(|(k, v)| (k.clone(), v.get_ref().clone())).collect(),
+            fallback: !ov.no_fallback && s.fallback.unwrap_or(true),
         };
+        let windows = self.resolve_windows(ov, &params, t_end - t_start)?;
+        let verify = self.resolve_verify(ov, &params)?;
         Ok(Scene {
             name: self.scene.name.clone(),
             parameters: params,
@@ -768,12 +1001,82 @@ impl SceneFile {
             walls,
             t_start,
             t_end,
-            nodes: nodes_raw as usize,
+            nodes,
             operator,
             formulation,
             solver,
+            windows,
+            verify,
             file: self,
         })
+    }
+
+    /// `[time] window` and `overlap`, with the command line's overrides (a window of 0
+    /// from the command line turns windows off). A window as long as the span or longer
+    /// is one global solve.
+    fn resolve_windows(&self, ov: &Overrides, params: &IndexMap<String, f64>, span: f64) -> Result<Option<Windows>, SceneError> {
+        let from_file = |v: &Option<Spanned<NumOrExpr>>, key: &str| v.as_ref().map(|v| self.eval_value(v, key, params)).transpose();
+        let length = match ov.window {
+            Some(w) => Some(w),
+            None => from_file(&self.time.window, "time.window")?,
+        };
+        let overlap = match ov.overlap {
+            Some(o) => Some(o),
+            None => from_file(&self.time.overlap, "time.overlap")?,
+        };
+        let here = |key: &Option<Spanned<NumOrExpr>>, message: String| match key {
+            Some(v) => self.invalid(v, message),
+            None => SceneError::Override { assignment: "--window/--overlap".into(), message },
+        };
+        let Some(length) = length.filter(|&w| w != 0.0 || ov.window.is_none()) else {
+            return Ok(None);
+        };
+        if !(length > 0.0 && length.is_finite()) {
+            return Err(here(&self.time.window, format!("time.window must be a positive number of seconds, got {length}")));
+        }
+        let overlap = overlap.unwrap_or(length / 4.0);
+        if !(0.0..length).contains(&overlap) {
+            return Err(here(
+                &self.time.overlap,
+                format!("time.overlap must be ≥ 0 and shorter than the window ({length} s), got {overlap}"),
+            ));
+        }
+        Ok((length < span).then_some(Windows { length, overlap }))
+    }
+
+    /// `[verify] tol` with the command line's overrides.
+    fn resolve_verify(&self, ov: &Overrides, params: &IndexMap<String, f64>) -> Result<VerifySettings, SceneError> {
+        let tol = match (ov.verify_tol, &self.verify.tol) {
+            (Some(t), _) => Some(t),
+            (None, Some(v)) => Some(self.eval_value(v, "verify.tol", params)?),
+            (None, None) => None,
+        };
+        if let Some(t) = tol {
+            if t.is_nan() || t <= 0.0 {
+                let message = format!("the verification tolerance must be a positive number, got {t}");
+                return Err(match (&self.verify.tol, ov.verify_tol) {
+                    (Some(v), None) => self.invalid(v, message),
+                    _ => SceneError::Override { assignment: format!("--verify-tol {t}"), message },
+                });
+            }
+        }
+        Ok(VerifySettings { enabled: !ov.no_verify, tol })
+    }
+
+    /// Where the scene sets the Ipopt option `name` (`[solver]` or `[solver.ipopt]`);
+    /// the whole file if it does not (an option skg-solve sets itself).
+    pub fn solver_option_location(&self, name: &str) -> Location {
+        let s = &self.solver;
+        let spanned = match name {
+            "tol" | "constr_viol_tol" => s.tol.as_ref().map(|v| v.span()),
+            "print_level" => s.print_level.as_ref().map(|v| v.span()),
+            "linear_solver" => s.linear_solver.as_ref().map(|v| v.span()),
+            _ => None,
+        };
+        match spanned.or_else(|| s.ipopt.get(name).map(|v| v.span())) {
+            Some(span) => self.origin.locate(span.start),
+            None => self.origin.whole(),
+        }
     }
 
     fn toml_error(&self, message: String) -> SceneError {
@@ -866,9 +1169,26 @@ impl SceneFile {
 }
 
 /// Evaluate an expression that may use only parameters (already resolved) and `pi`.
+/// The time `t` is unknown here, with a hint that says why.
 pub fn eval_constant(src: &str, params: &IndexMap<String, f64>) -> Result<f64, ParseError> {
     let mut g = Graph::new();
-    let e = g.parse(src, &mut |name| params.get(name).map(|v| Symbol::Const(*v)))?;
+    let mut asked_for_time = false;
+    let e = g
+        .parse(src, &mut |name| {
+            asked_for_time |= name == TIME;
+            params.get(name).map(|v| Symbol::Const(*v))
+        })
+        .map_err(|e| {
+            // An unknown name stops the parse at once, so the time was the unknown name.
+            if asked_for_time {
+                e.with_hint(
+                    "the time `t` may appear in the Lagrangian, constraints, forces and walls only; \
+                     parameters, initial values and the numbers of [[walls]] and [time] are constants",
+                )
+            } else {
+                e
+            }
+        })?;
     Ok(g.eval(e, &[]))
 }
 
@@ -947,6 +1267,21 @@ nodes = 16
         let msg = err.to_string();
         assert!(msg.contains("mem.toml:9:"), "{msg}");
         assert!(msg.contains("gg"), "{msg}");
+    }
+
+    #[test]
+    fn constraints_are_classified_by_whether_they_use_velocities() {
+        let with = |expr: &str| {
+            let text = MINIMAL.replace("[time]", &format!("[[constraints]]\nname = \"c\"\nexpression = \"{expr}\"\n\n[time]"));
+            SceneFile::parse(&text, "mem.toml").unwrap().resolve(&Overrides::default())
+        };
+        assert_eq!(with("x_dot - t").unwrap().constraints[0].kind, ConstraintKind::Velocity);
+        assert_eq!(with("x - sin(t)").unwrap().constraints[0].kind, ConstraintKind::Position);
+        // x_dot − x_dot simplifies to 0: no coordinate, no velocity.
+        let msg = with("x_dot - x_dot + t").unwrap_err().to_string();
+        assert!(msg.contains("mem.toml:18:14") && msg.contains("depends on neither"), "{msg}");
+        let msg = with("x + tt").unwrap_err().to_string();
+        assert!(msg.contains("unknown symbol `tt`") && msg.contains("known names: x, x_dot, t, m, g, h0"), "{msg}");
     }
 
     #[test]

@@ -17,15 +17,16 @@ use std::time::Instant;
 use indexmap::IndexMap;
 use serde::Serialize;
 
-use crate::action::{Action, MatrixPlan};
+use crate::action::Action;
 use crate::backend::{BackendError, BackendReport, SolverStatus, SquareSolver};
 use crate::contact;
 use crate::model::Model;
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
-use crate::scenario::{Backend, Formulation, HessianMode, Scene, SceneError, Wall};
+use crate::scenario::{Backend, ConstraintKind, Formulation, HessianMode, Scene, SceneError, Wall};
 use crate::time_stepping::{integrate_model, min_spacing};
 use crate::trajectory::{NodeSeries, States, Trajectory};
+use crate::verify::{self, Verification, VerifyStatus};
 use skg_ipopt as ipopt;
 
 /// A solution farther than this fraction of the coordinates' range from the
@@ -48,6 +49,14 @@ pub enum SolveError {
     /// recover from; Newton's structure).
     #[error(transparent)]
     Backend(#[from] BackendError),
+    /// The scene's windows do not fit its grid.
+    #[error("{}: [time] window: {message}", .scene)]
+    Windows {
+        /// The scene file.
+        scene: String,
+        /// Why.
+        message: String,
+    },
 }
 
 /// Where a solve's wall time went, in seconds.
@@ -67,11 +76,56 @@ pub struct Timings {
     pub solver_internal_s: f64,
     /// Trajectory, end multipliers and diagnostics from the solution.
     pub postprocess_s: f64,
+    /// Verification against time stepping ([`crate::verify`]).
+    pub verification_s: f64,
+    /// Fallback attempts whose result is not the one reported ([`crate::ladder`]).
+    pub other_attempts_s: f64,
     /// Writing files (filled in by the output module).
     pub output_s: f64,
 }
 
-/// The sizes of the problem handed to the backend.
+impl Timings {
+    /// No time spent yet.
+    pub fn zero() -> Timings {
+        Timings {
+            setup_s: 0.0,
+            initial_guess_s: 0.0,
+            solver_s: 0.0,
+            evaluation_s: 0.0,
+            solver_internal_s: 0.0,
+            postprocess_s: 0.0,
+            verification_s: 0.0,
+            other_attempts_s: 0.0,
+            output_s: 0.0,
+        }
+    }
+
+    /// Add another part's times (the pieces of a windowed solve).
+    pub fn add(&mut self, other: &Timings) {
+        self.setup_s += other.setup_s;
+        self.initial_guess_s += other.initial_guess_s;
+        self.solver_s += other.solver_s;
+        self.evaluation_s += other.evaluation_s;
+        self.solver_internal_s += other.solver_internal_s;
+        self.postprocess_s += other.postprocess_s;
+        self.verification_s += other.verification_s;
+        self.other_attempts_s += other.other_attempts_s;
+        self.output_s += other.output_s;
+    }
+
+    /// The whole wall time of the solve, fallback attempts included.
+    pub fn total(&self) -> f64 {
+        self.setup_s
+            + self.initial_guess_s
+            + self.solver_s
+            + self.postprocess_s
+            + self.verification_s
+            + self.other_attempts_s
+            + self.output_s
+    }
+}
+
+/// The sizes of the problem handed to Ipopt.
 #[derive(Debug, Clone, Serialize)]
 pub struct Sizes {
     /// Grid nodes N.
@@ -105,9 +159,16 @@ pub struct Diagnostics {
     pub max_constraint_interior: f64,
     /// max |g^a| at the last node, where the constraints are not enforced.
     pub constraint_last_node: f64,
+    /// max |h| over all nodes of each position constraint `h(q, t) = 0` (keyed by its
+    /// name): the drift of a constraint enforced through its time derivative.
+    pub max_position_drift: IndexMap<String, f64>,
+    /// Whether the scene depends on the time `t` explicitly; the energy is then not
+    /// conserved, and `energy_drift` measures the work of the time dependence.
+    pub depends_on_time: bool,
     /// max |E_k − E_1| of the total energy E = energy + wall_energy over nodes 1..N−2
     /// (the last two excluded: their equations are the boundary closure). Conserved up
-    /// to the discretization error unless friction or other non-conservative forces act.
+    /// to the discretization error unless friction or other non-conservative forces act
+    /// or the scene depends on `t` explicitly.
     pub energy_drift: f64,
     /// The same over all nodes.
     pub energy_drift_all: f64,
@@ -126,6 +187,34 @@ pub struct Diagnostics {
     pub contact_episodes_time_stepping: Option<IndexMap<String, usize>>,
     /// max |q-|, |λ-| of the full formulation's solution (0 in the physical limit).
     pub max_minus_variable: Option<f64>,
+    /// The first node at which the kinetic matrix ∂²L/∂q̇² of the solution is not
+    /// positive definite (the Lagrangian stops describing a mechanical system there: a
+    /// mass or inertia turned zero or negative); `null` if it is positive definite at
+    /// every node. A converged solve with such a node fails verification.
+    pub kinetic_loss: Option<KineticLoss>,
+}
+
+/// Where the solution's kinetic matrix stops being positive definite.
+#[derive(Debug, Clone, Serialize)]
+pub struct KineticLoss {
+    /// The node (0-based).
+    pub node: usize,
+    /// Its time.
+    pub t: f64,
+    /// The smallest eigenvalue of ∂²L/∂q̇² there (≤ 0 or NaN).
+    pub min_eigenvalue: f64,
+}
+
+impl fmt::Display for KineticLoss {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the kinetic matrix ∂²L/∂q̇² is not positive definite at node {} (t = {}, smallest eigenvalue {:.3e}): \
+             the Lagrangian stops describing a mechanical system there (a mass or inertia turned zero or negative), \
+             so the solution is not physical from there on",
+            self.node, self.t, self.min_eigenvalue
+        )
+    }
 }
 
 /// The settings a solve ran with.
@@ -256,6 +345,10 @@ pub struct Outcome {
     /// `status_text` and `solve_status`).
     #[serde(flatten)]
     pub status: SolveStatus,
+    /// The trajectory checked against time stepping of the same scene ([`verify`]).
+    pub verification: Verification,
+    /// How the reported trajectory covered the span (one solve, or windows).
+    pub method: Method,
     /// The Ipopt version the tool was built against.
     pub ipopt_version: String,
     /// Which backend ran: the one asked for, Newton's own outcome, a hand-over to Ipopt.
@@ -272,8 +365,12 @@ pub struct Outcome {
     pub diagnostics: Diagnostics,
     /// Suspicions about the solution (spurious critical point, residual too large, …).
     pub warnings: Vec<String>,
-    /// The iteration table of the backend that finished (Ipopt's, or Newton's in the
-    /// same layout, [`crate::newton::NewtonSolution::history`]).
+    /// Every run tried ([`crate::ladder`]): the scene's own, then the fallbacks; the
+    /// one reported is marked `chosen`.
+    pub attempts: Vec<Attempt>,
+    /// What to do when the result cannot be trusted (not converged, or not verified).
+    pub remedy: Option<String>,
+    /// Ipopt's iteration table.
     pub history: Vec<ipopt::IterationStat>,
     /// The solution at the nodes (written as trajectory.csv, not into the summary).
     #[serde(skip)]
@@ -285,6 +382,33 @@ impl Outcome {
     pub fn converged(&self) -> bool {
         self.status.is_converged()
     }
+
+    /// Converged, every number finite, and verified (or verification switched off):
+    /// the result a user may act on (exit status 0).
+    pub fn trusted(&self) -> bool {
+        self.converged() && self.verification.is_acceptable()
+    }
+}
+
+/// One run tried by the ladder, as recorded in `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Attempt {
+    /// What was tried (method and initial guess).
+    pub method: String,
+    /// How it ended, in words (convergence and verification).
+    pub result: String,
+    /// Whether it converged.
+    pub converged: bool,
+    /// Its verification verdict, when it converged.
+    pub verification: Option<VerifyStatus>,
+    /// Its max |q − q_reference|, when verified.
+    pub max_error: Option<f64>,
+    /// Ipopt iterations.
+    pub iterations: usize,
+    /// Wall time, seconds.
+    pub wall_s: f64,
+    /// Whether its trajectory is the one reported.
+    pub chosen: bool,
 }
 
 /// Node times of a scene's grid.
@@ -294,40 +418,220 @@ pub fn grid(scene: &Scene) -> (Vec<f64>, f64) {
     ((0..n).map(|k| scene.t_start + k as f64 * dt).collect(), dt)
 }
 
-/// Build the discrete action of a resolved scene.
+/// Build the discrete action of a resolved scene on its whole grid.
 pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
-    let model = Model::build(scene)?;
     let (_, dt) = grid(scene);
-    let op = SbpOperator::new(scene.operator, scene.nodes, dt)?;
-    Ok(Action::new(model, op, scene.initial_q.clone(), scene.initial_v.clone()))
+    build_action_on(scene, scene.nodes, dt)
+}
+
+/// Build the discrete action of a scene on `nodes` nodes of spacing `dt`, from the scene's
+/// initial state (a window re-targets it with [`Action::set_window`]).
+pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, SolveError> {
+    let model = Model::build(scene)?;
+    let op = SbpOperator::new(scene.operator, nodes, dt)?;
+    Ok(Action::new(model, op, scene.t_start, scene.initial_q.clone(), scene.initial_v.clone()))
+}
+
+/// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
+/// verified against time stepping ([`crate::verify`]) and, when it fails to converge or
+/// to verify, the fallback ladder ([`crate::ladder`]).
+///
+/// Refused before anything is allocated if its memory estimate exceeds the available
+/// memory ([`crate::memory`]).
+pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    crate::memory::check(scene, "the solve", scene.nodes, crate::memory::solve_bytes(scene))?;
+    crate::ladder::solve(scene)
+}
+
+/// How the initial guess of one solve is made.
+#[derive(Debug, Clone)]
+pub enum Guess {
+    /// Time stepping of the Lagrange–d'Alembert equations from the action's initial
+    /// state, sampled at its nodes.
+    TimeStepping,
+    /// Coordinates and multipliers at the action's nodes, e.g. a coarser solve
+    /// interpolated onto this grid, or the solve of a wider wall.
+    States {
+        /// `q[k][i]` at the action's nodes.
+        q: NodeSeries,
+        /// `λ[k][a]` at the action's nodes.
+        lambda: NodeSeries,
+        /// Where they came from (for the summary).
+        description: String,
+    },
+}
+
+/// One solve of one action's discrete system: the whole span, or one window of it.
+#[derive(Debug, Clone)]
+pub struct Piece {
+    /// How the backend ended, checked against the unscaled residual.
+    pub status: SolveStatus,
+    /// Iterations of the backend that finished.
+    pub iterations: usize,
+    /// Its iteration table.
+    pub history: Vec<ipopt::IterationStat>,
+    /// Which backend ran, and Newton's own outcome.
+    pub backend: BackendReport,
+    /// The solution at the action's nodes.
+    pub trajectory: Trajectory,
+    /// max |c| of the system (unscaled) at the returned point.
+    pub max_residual: f64,
+    /// max |equation of motion| at interior nodes.
+    pub max_eom_residual: f64,
+    /// max |q-|, |λ-| for the full formulation.
+    pub max_minus_variable: Option<f64>,
+    /// The time-stepping coordinates at the nodes, when the guess made them.
+    pub time_stepping_q: Option<NodeSeries>,
+    /// How the initial guess was made.
+    pub guess: String,
+    /// Time of the guess and of the backend (setup and output are not a piece's).
+    pub timings: Timings,
+}
+
+/// Solve the discrete system of `action` (nodes at `times`) from `guess` with `solver`,
+/// which was built for this action (or one of equal structure) and keeps its sparsity
+/// plans and LU analysis for the next piece.
+pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, times: &[f64], guess: &Guess) -> Result<Piece, SolveError> {
+    let t_guess = Instant::now();
+    let mut warnings = Vec::new();
+    let (z0, guess_desc, ts_q) = initial_guess(action, times, guess, &mut warnings);
+    check_initial_guess(scene, action, times, &z0)?;
+    let initial_guess_s = t_guess.elapsed().as_secs_f64();
+
+    let solution = solver.solve(action, &z0).map_err(|e| rejected_option(scene, e.into()))?;
+    if solution.status == SolverStatus::Ipopt(ipopt::Status::InvalidOption) {
+        return Err(unusable_option(scene));
+    }
+    let z = &solution.z;
+
+    let t_post = Instant::now();
+    let (trajectory, max_eom_residual) = evaluate(action, times, z);
+    let lay = &action.layout;
+    let max_minus_variable = (scene.formulation == Formulation::Full)
+        .then(|| lay.qm.iter().chain(&lay.lm).map(|&i| z[i as usize].abs()).fold(0.0_f64, f64::max));
+    let max_residual = solution.max_residual;
+    Ok(Piece {
+        status: SolveStatus::classify(solution.status, max_residual),
+        iterations: solution.iterations,
+        history: solution.history,
+        backend: solution.report,
+        trajectory,
+        max_residual,
+        max_eom_residual,
+        max_minus_variable,
+        time_stepping_q: ts_q,
+        guess: match warnings.first() {
+            Some(w) => format!("{guess_desc} ({w})"),
+            None => guess_desc,
+        },
+        timings: Timings {
+            initial_guess_s,
+            solver_s: solution.total_s,
+            evaluation_s: solution.evaluation_s,
+            solver_internal_s: solution.total_s - solution.evaluation_s,
+            postprocess_s: t_post.elapsed().as_secs_f64(),
+            ..Timings::zero()
+        },
+    })
 }
 
 /// Initial point Z0 and a description of how it was made; also the time-stepping
-/// coordinates when available (for the spurious-solution check).
-fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> (Vec<f64>, String, Option<Vec<Vec<f64>>>) {
+/// coordinates when the guess made them (for the spurious-solution check).
+fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut Vec<String>) -> (Vec<f64>, String, Option<NodeSeries>) {
+    let (d, n) = (action.layout.d, action.layout.n);
+    let (q, lambda, desc, ts_q) = match guess {
+        Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None),
+        Guess::TimeStepping => {
+            // With walls, steps at most the node spacing: a larger step can jump across a
+            // thin wall that the error estimate never sees (free flight is integrated
+            // exactly). Without walls the step is left to the error control: at
+            // N = 16384 the capped guess cost as much as the whole Newton solve, the
+            // uncapped one a tenth, with the same Newton iterations on every shipped
+            // scene (docs/benchmarks.md#the-initial-guess).
+            let max_step = if action.model.walls.is_empty() { None } else { min_spacing(times) };
+            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, ..OdeOptions::default() };
+            let (q0, v0) = (action.q0(), action.v0());
+            match integrate_model(&action.model, q0, v0, times, &opts) {
+                Ok((States { q, lambda, .. }, _)) => (
+                    q.clone(),
+                    lambda,
+                    "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
+                    Some(q),
+                ),
+                Err(e) => {
+                    warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
+                    let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
+                    (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
+                }
+            }
+        }
+    };
+    (point_from_states(action, &q, &lambda), desc, ts_q)
+}
+
+/// Refuse an initial guess with a value that is not finite, naming the node, the state
+/// and the scene's expression that is undefined there (Ipopt would only say "starting
+/// point x0[i] = NaN").
+fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64]) -> Result<(), SolveError> {
+    let Some(bad) = z0.iter().position(|x| !x.is_finite()) else { return Ok(()) };
+    let names: Vec<String> = scene.constraints.iter().map(|c| c.name.clone()).collect();
+    let (k, what) = action.layout.describe(bad, &scene.coordinates, &names);
+    let q = action.layout.coordinates(z0);
+    let v = apply_d(&action.op, &q);
+    let source = action.model.non_finite_expression(scene, times[k], &q[k], &v[k]);
+    let state = |xs: &[f64]| xs.iter().map(|x| format!("{x:.6e}")).collect::<Vec<_>>().join(", ");
+    let message = format!(
+        "the initial guess (time stepping from the initial state) is not finite: {what} at node {k} (t = {}) is {}; \
+         at that node q = ({}), q̇ = ({}){}",
+        times[k],
+        z0[bad],
+        state(&q[k]),
+        state(&v[k]),
+        match &source {
+            Some((expr, _)) => format!(", where {expr} is not finite (e.g. sqrt or log of a negative number, a division by zero)"),
+            None => String::new(),
+        }
+    );
+    let location = source.map_or_else(|| scene.file.origin.whole(), |(_, at)| at);
+    Err(SceneError::Invalid { location, message }.into())
+}
+
+/// An option Ipopt refused when it was set, as an input error at the option's place in
+/// the scene file; other errors pass through.
+fn rejected_option(scene: &Scene, e: SolveError) -> SolveError {
+    let SolveError::Backend(BackendError::Ipopt(ipopt::SolveError::BadOption { name, value })) = &e else { return e };
+    let message = format!(
+        "Ipopt refused the option {name} = {value}: it has no such option, or the value has the wrong type or is outside \
+         the option's range (Ipopt prints its reason on stdout)"
+    );
+    SceneError::Invalid { location: scene.file.solver_option_location(name), message }.into()
+}
+
+/// Ipopt's `Invalid_Option` at the start of a solve (an option value it accepted but
+/// cannot use, e.g. a linear solver whose library it cannot load), as an input error.
+fn unusable_option(scene: &Scene) -> SolveError {
+    let (location, message) = match &scene.solver.linear_solver {
+        Some(solver) => (
+            scene.file.solver_option_location("linear_solver"),
+            format!(
+                "Ipopt cannot use linear_solver = \"{solver}\" (Invalid_Option: its library could not be loaded); Debian's \
+                 Ipopt has only MUMPS: use linear_solver = \"mumps\" or remove the key"
+            ),
+        ),
+        None => {
+            (scene.file.origin.whole(), "Ipopt stopped with Invalid_Option: an option of [solver.ipopt] has a value it cannot use".into())
+        }
+    };
+    SceneError::Invalid { location, message }.into()
+}
+
+/// The unknown vector Z with the given coordinates and multipliers at the nodes, the
+/// minus variables at zero and the boundary multipliers at the values that make their
+/// rows vanish.
+fn point_from_states(action: &Action, q: &[Vec<f64>], lambda: &[Vec<f64>]) -> Vec<f64> {
     let lay = &action.layout;
     let (d, n) = (lay.d, lay.n);
     let mut z = vec![0.0; lay.len()];
-    // With walls, steps at most the node spacing: a larger step can jump across a thin
-    // wall that the error estimate never sees (free flight is integrated exactly).
-    // Without walls the step is left to the error control: at N = 16384 the capped
-    // guess cost as much as the whole Newton solve, the uncapped one a tenth, with the
-    // same Newton iterations on every shipped scene (docs/benchmarks.md).
-    let max_step = if action.model.walls.is_empty() { None } else { min_spacing(times) };
-    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, ..OdeOptions::default() };
-    let (q, lam, desc, reference) = match integrate_model(&action.model, &action.q0, &action.v0, times, &opts) {
-        Ok((States { q, lambda, .. }, _)) => (
-            q.clone(),
-            lambda,
-            "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
-            Some(q),
-        ),
-        Err(e) => {
-            warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
-            let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| action.q0[i] + action.v0[i] * (t - times[0])).collect()).collect();
-            (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
-        }
-    };
     for k in 0..lay.nodes {
         for i in 0..d {
             z[lay.qp[k * d + i] as usize] = q[k][i];
@@ -335,11 +639,10 @@ fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> 
         for a in 0..n {
             let zi = lay.lp[k * n + a];
             if zi != u32::MAX {
-                z[zi as usize] = lam[k][a];
+                z[zi as usize] = lambda[k][a];
             }
         }
     }
-    // Boundary multipliers: the values that make their rows vanish.
     let mut ws = action.model.workspace();
     let mut r = vec![0.0; lay.n_m];
     action.gradient(&z, true, &mut r, &mut ws);
@@ -353,77 +656,16 @@ fn initial_guess(action: &Action, times: &[f64], warnings: &mut Vec<String>) -> 
         z[lay.nu_l1[a] as usize] = -r[row(lay.lm[a])];
         z[lay.nu_ln[a] as usize] = -r[row(lay.lm[last * n + a])];
     }
-    (z, desc, reference)
+    z
 }
 
-/// Solve a resolved scene.
-pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
-    let t_setup = Instant::now();
-    let action = build_action(scene)?;
-    solve_action(scene, &action, t_setup)
-}
-
-/// Solve with an already built action (`started` marks the beginning of setup).
-pub fn solve_action(scene: &Scene, action: &Action, started: Instant) -> Result<Outcome, SolveError> {
-    let (times, _) = grid(scene);
-    let mut solver = SquareSolver::new(scene, action);
-    let setup_s = started.elapsed().as_secs_f64();
-    let sizes = sizes(scene, action, solver.jacobian_plan(), solver.hessian_plan());
-
-    let t_guess = Instant::now();
-    let mut warnings = Vec::new();
-    let (z0, guess_desc, ts_q) = initial_guess(action, &times, &mut warnings);
-    let initial_guess_s = t_guess.elapsed().as_secs_f64();
-
-    let solution = solver.solve(action, &z0)?;
-    let z = &solution.z;
-    if let Some(newton) = solution.report.newton.as_ref().filter(|_| solution.report.handed_over_to_ipopt) {
-        warnings.push(format!(
-            "Newton's method did not converge ({}, {} iterations, residual {:.3e}); Ipopt solved the system from the same initial guess",
-            newton.status.name(),
-            newton.iterations,
-            newton.max_residual
-        ));
-    }
-
-    let t_post = Instant::now();
-    let (trajectory, max_eom) = evaluate(action, &times, z);
-    let diagnostics = diagnose(action, &trajectory, max_eom, z, solution.max_residual, scene.formulation, ts_q.as_deref());
-    let postprocess_s = t_post.elapsed().as_secs_f64();
-
-    let status = SolveStatus::classify(solution.status, diagnostics.max_residual);
-    warnings.extend(suspicions(&diagnostics, ts_q.as_deref(), status));
-    Ok(Outcome {
-        scene: scene.name.clone(),
-        status,
-        ipopt_version: ipopt::ipopt_version().to_string(),
-        backend: solution.report,
-        iterations: solution.iterations,
-        settings: settings(scene, guess_desc),
-        sizes,
-        timings: Timings {
-            setup_s,
-            initial_guess_s,
-            solver_s: solution.total_s,
-            evaluation_s: solution.evaluation_s,
-            solver_internal_s: solution.total_s - solution.evaluation_s,
-            postprocess_s,
-            output_s: 0.0,
-        },
-        diagnostics,
-        warnings,
-        history: solution.history,
-        trajectory,
-    })
-}
-
-/// The settings a scene is solved with.
-fn settings(scene: &Scene, initial_guess: String) -> Settings {
+/// The settings a scene is solved with on the grid `times`.
+fn settings(scene: &Scene, times: &[f64], initial_guess: String) -> Settings {
     Settings {
         operator: scene.operator.name().to_string(),
         nodes: scene.nodes,
-        t_start: scene.t_start,
-        t_end: scene.t_end,
+        t_start: times[0],
+        t_end: times[times.len() - 1],
         formulation: scene.formulation,
         backend: scene.solver.backend,
         hessian: scene.solver.hessian,
@@ -434,23 +676,122 @@ fn settings(scene: &Scene, initial_guess: String) -> Settings {
     }
 }
 
-/// The sizes of the system handed to the backend.
-fn sizes(scene: &Scene, action: &Action, jac: &MatrixPlan, hess: Option<&MatrixPlan>) -> Sizes {
+/// The sizes of the system handed to the backend for one piece (the whole span, or one
+/// window).
+pub fn sizes(scene: &Scene, action: &Action, solver: &SquareSolver) -> Sizes {
     let (lay, model) = (&action.layout, &action.model);
     let (variables, equations) = match scene.formulation {
         Formulation::Reduced => (lay.n_p, lay.n_m),
         Formulation::Full => (lay.len(), lay.len()),
     };
     Sizes {
-        nodes: scene.nodes,
+        nodes: lay.nodes,
         coordinates: lay.d,
         constraints: lay.n,
         walls: model.walls.len(),
         variables,
         equations,
-        jacobian_nonzeros: jac.structure.len(),
-        hessian_nonzeros: hess.map_or(0, |h| h.structure.len()),
+        jacobian_nonzeros: solver.jacobian_plan().structure.len(),
+        hessian_nonzeros: solver.hessian_plan().map_or(0, |h| h.structure.len()),
         tape_instructions: model.minus_gradient.len() + model.mixed.tape.len(),
+    }
+}
+
+/// How a run covered the scene's span.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Method {
+    /// One solve over the whole span.
+    Global,
+    /// Successive windows ([`crate::window`]).
+    Windows {
+        /// Length of each window's solve, seconds.
+        length: f64,
+        /// Length discarded at the end of each window, seconds.
+        overlap: f64,
+        /// Nodes of each window's solve.
+        nodes_per_window: usize,
+        /// Number of windows.
+        count: usize,
+    },
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Method::Global => write!(f, "one solve over the whole span"),
+            Method::Windows { length, overlap, nodes_per_window, count } => {
+                write!(f, "{count} windows of {length:.4} s ({nodes_per_window} nodes), each discarding its last {overlap:.4} s")
+            }
+        }
+    }
+}
+
+/// One attempt at the whole span: a global solve or a sequence of windows, on the
+/// scene's grid.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// How the span was covered.
+    pub method: Method,
+    /// The sizes of one piece's system.
+    pub sizes: Sizes,
+    /// The solution over the whole span. For windows, the pieces joined: converged only
+    /// if every window converged (else the status of the first that did not),
+    /// iterations, iteration tables and times one after the other, residuals maximized.
+    pub solution: Piece,
+}
+
+/// Solve the scene's whole span in one piece from `guess`.
+pub fn solve_global(scene: &Scene, guess: &Guess) -> Result<Run, SolveError> {
+    let t_setup = Instant::now();
+    let action = build_action(scene)?;
+    let mut solver = SquareSolver::new(scene, &action);
+    let setup_s = t_setup.elapsed().as_secs_f64();
+    let (times, _) = grid(scene);
+    let mut solution = solve_piece(scene, &action, &mut solver, &times, guess)?;
+    solution.timings.setup_s = setup_s;
+    Ok(Run { method: Method::Global, sizes: sizes(scene, &action, &solver), solution })
+}
+
+/// The outcome of a run: its diagnostics, verification and warnings (the ladder adds
+/// the attempts and a remedy).
+pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
+    let Run { method, sizes, solution: run } = run;
+    let t = Instant::now();
+    let mut verification = verify::verify(scene, model, &run.trajectory);
+    let mut timings = run.timings.clone();
+    timings.verification_s = t.elapsed().as_secs_f64();
+    let diagnostics = diagnose(model, &run);
+    let mut warnings = suspicions(&diagnostics, run.time_stepping_q.as_deref(), run.status);
+    if let Some(newton) = run.backend.newton.as_ref().filter(|_| run.backend.handed_over_to_ipopt) {
+        warnings.push(format!(
+            "Newton's method did not converge ({}, {} iterations, residual {:.3e}); Ipopt solved the system from the same initial guess",
+            newton.status.name(),
+            newton.iterations,
+            newton.max_residual
+        ));
+    }
+    if let Some(loss) = &diagnostics.kinetic_loss {
+        verification.fail(loss.to_string());
+        warnings.push(loss.to_string());
+    }
+    Outcome {
+        scene: scene.name.clone(),
+        status: run.status,
+        verification,
+        method,
+        ipopt_version: ipopt::ipopt_version().to_string(),
+        backend: run.backend,
+        iterations: run.iterations,
+        settings: settings(scene, &run.trajectory.t, run.guess),
+        sizes,
+        timings,
+        diagnostics,
+        warnings,
+        attempts: Vec::new(),
+        remedy: None,
+        history: run.history,
+        trajectory: run.trajectory,
     }
 }
 
@@ -460,14 +801,7 @@ fn sizes(scene: &Scene, action: &Action, jac: &MatrixPlan, hess: Option<&MatrixP
 fn suspicions(diagnostics: &Diagnostics, ts_q: Option<&[Vec<f64>]>, status: SolveStatus) -> Vec<String> {
     let mut warnings = Vec::new();
     if let (Some(dist), Some(ts)) = (diagnostics.distance_from_time_stepping, ts_q) {
-        // Scale: the largest range of a coordinate over the time-stepping trajectory.
-        let d = ts.first().map_or(0, Vec::len);
-        let scale = (0..d)
-            .map(|i| {
-                let (lo, hi) = ts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| (lo.min(q[i]), hi.max(q[i])));
-                hi - lo
-            })
-            .fold(0.0_f64, f64::max);
+        let scale = verify::coordinate_scale(ts);
         if dist > FAR_FROM_TIME_STEPPING * scale {
             warnings.push(format!(
                 "the solution is {dist:.3e} away from time stepping of the same scene ({:.0} % of the coordinates' range): \
@@ -502,7 +836,7 @@ fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
     let mut ws = model.workspace();
     let q: Vec<Vec<f64>> = (0..nodes).map(|k| (0..d).map(|i| z[lay.qp[k * d + i] as usize]).collect()).collect();
     let v = apply_d(&action.op, &q);
-    let phys: Vec<_> = (0..nodes).map(|k| model.physical(&q[k], &v[k], &mut ws)).collect();
+    let phys: Vec<_> = (0..nodes).map(|k| model.physical(times[k], &q[k], &v[k], &mut ws)).collect();
     let p: Vec<Vec<f64>> = phys.iter().map(|ph| ph.p.clone()).collect();
     let dp = apply_d(&action.op, &p);
     let mut lambda = vec![vec![0.0; n]; nodes];
@@ -556,45 +890,42 @@ fn end_multipliers(ph: &crate::model::Physical, dp: &[f64]) -> Vec<f64> {
     }
 }
 
-fn diagnose(
-    action: &Action,
-    tr: &Trajectory,
-    max_eom_residual: f64,
-    z: &[f64],
-    max_residual: f64,
-    formulation: Formulation,
-    ts_q: Option<&[Vec<f64>]>,
-) -> Diagnostics {
-    let lay = &action.layout;
-    let nodes = lay.nodes;
+fn diagnose(model: &Model, run: &Piece) -> Diagnostics {
+    let tr = &run.trajectory;
+    let nodes = tr.t.len();
     let max_abs = |rows: &[Vec<f64>]| rows.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
     let max_constraint_interior = if nodes > 2 { max_abs(&tr.g[1..nodes - 1]) } else { 0.0 };
     let constraint_last_node = max_abs(&tr.g[nodes - 1..]);
     let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
     let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - total[0]).abs()));
-    let model = &action.model;
+    let positions = model.constraints.iter().filter(|c| c.kind == ConstraintKind::Position);
     let max_wall_gap = per_wall(model, |j, _| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max));
-    let episodes = contact_episodes(model, &tr.h);
+    let ts_q = run.time_stepping_q.as_deref();
     let contact_episodes_time_stepping = ts_q.map(|qs| {
-        let h: Vec<Vec<f64>> = qs.iter().map(|q| model.wall_gaps(q)).collect();
+        let h: Vec<Vec<f64>> = qs.iter().zip(&tr.t).map(|(q, &t)| model.wall_gaps(t, q)).collect();
         contact_episodes(model, &h)
     });
     let distance_from_time_stepping =
         ts_q.map(|qs| qs.iter().zip(&tr.q).flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs())).fold(0.0_f64, f64::max));
-    let max_minus_variable =
-        (formulation == Formulation::Full).then(|| lay.qm.iter().chain(&lay.lm).map(|&i| z[i as usize].abs()).fold(0.0_f64, f64::max));
     Diagnostics {
-        max_residual,
-        max_eom_residual,
+        max_residual: run.max_residual,
+        max_eom_residual: run.max_eom_residual,
         max_constraint_interior,
         constraint_last_node,
+        max_position_drift: positions.map(|c| c.name.clone()).zip(tr.max_drift()).collect(),
+        depends_on_time: model.depends_on_time,
         energy_drift: drift(&total[..nodes.saturating_sub(2).max(1)]),
         energy_drift_all: drift(&total),
         max_wall_gap,
         distance_from_time_stepping,
-        contact_episodes: episodes,
+        contact_episodes: contact_episodes(model, &tr.h),
         contact_episodes_time_stepping,
-        max_minus_variable,
+        max_minus_variable: run.max_minus_variable,
+        kinetic_loss: model.kinetic_loss(&tr.t, &tr.q, &tr.v).map(|(node, min_eigenvalue)| KineticLoss {
+            node,
+            t: tr.t[node],
+            min_eigenvalue,
+        }),
     }
 }
 

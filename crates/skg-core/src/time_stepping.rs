@@ -2,11 +2,13 @@
 //! discretization: used for the solver's initial guess ([`crate::solve`]) and for the
 //! reference solutions ([`crate::reference`]).
 //!
-//! The equations are integrated index-reduced: at each state (q, v) the accelerations
-//! and multipliers solve `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v; −(∂g/∂q) v]`
+//! The equations are integrated index-reduced: at each state (t, q, v) the accelerations
+//! and multipliers solve `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v − ∂p/∂t; −(∂g/∂q) v − ∂g/∂t]`
 //! ([`Model::accelerations`]), and the state `y = (q, v)` is advanced by the DOP853 of
-//! [`crate::ode`] and sampled at the requested times from its dense output. The
-//! constraints `g = 0` then hold only up to the integrator's drift.
+//! [`crate::ode`] and sampled at the requested times from its dense output. Times are
+//! absolute: the model is evaluated at the integrator's time, so an explicitly
+//! time-dependent scene can be integrated from any start time. The constraints `g = 0`
+//! (and a position constraint's `h = 0`) then hold only up to the integrator's drift.
 
 use crate::model::{DynamicsError, Model, Workspace};
 use crate::ode::{self, OdeError, OdeOptions, OdeStats, RhsError};
@@ -17,8 +19,9 @@ pub fn min_spacing(times: &[f64]) -> Option<f64> {
     times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).reduce(f64::min)
 }
 
-/// Integrate the index-reduced Lagrange–d'Alembert equations of `model` from `(q0, v0)`
-/// and sample `(q, v, λ)` at `times`.
+/// Integrate the index-reduced Lagrange–d'Alembert equations of `model` from the state
+/// `(q0, v0)` at the absolute time `times[0]` and sample `(q, v, λ)` at `times`
+/// (increasing).
 pub fn integrate_model(model: &Model, q0: &[f64], v0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<(States, OdeStats), OdeError> {
     let y0: Vec<f64> = q0.iter().chain(v0).copied().collect();
     let sol = ode::integrate(rhs(model, &mut model.workspace()), &y0, times, opts)?;
@@ -26,11 +29,11 @@ pub fn integrate_model(model: &Model, q0: &[f64], v0: &[f64], times: &[f64], opt
     Ok((states, sol.stats))
 }
 
-/// The right-hand side `(q, v) ↦ (v, q̈)` of the index-reduced equations.
+/// The right-hand side `(t, q, v) ↦ (v, q̈)` of the index-reduced equations.
 pub fn rhs<'a>(model: &'a Model, ws: &'a mut Workspace) -> impl FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError> + 'a {
     let d = model.layout.d;
-    move |_, y, dy| {
-        let (a, _) = model.accelerations(&y[..d], &y[d..], ws)?;
+    move |t, y, dy| {
+        let (a, _) = model.accelerations(t, &y[..d], &y[d..], ws)?;
         dy[..d].copy_from_slice(&y[d..]);
         dy[d..].copy_from_slice(&a);
         Ok(())
@@ -44,7 +47,7 @@ pub fn split_states(model: &Model, states: &[Vec<f64>], times: &[f64], ws: &mut 
     let mut out =
         States { q: Vec::with_capacity(states.len()), v: Vec::with_capacity(states.len()), lambda: Vec::with_capacity(states.len()) };
     for (y, &t) in states.iter().zip(times) {
-        let (_, lambda) = model.accelerations(&y[..d], &y[d..], ws).map_err(|e| OdeError::Rhs { t, error: e.into() })?;
+        let (_, lambda) = model.accelerations(t, &y[..d], &y[d..], ws).map_err(|e| OdeError::Rhs { t, error: e.into() })?;
         out.q.push(y[..d].to_vec());
         out.v.push(y[d..].to_vec());
         out.lambda.push(lambda);

@@ -49,6 +49,13 @@ pub struct Artifact {
     pub free_nodes: usize,
 }
 
+/// Whether the energy `energy + wall_energy` of `scene` is conserved by the motion, so
+/// that its energy artifact means something: no declared forces, no wall friction and no
+/// explicit time dependence (of the `model` built from it).
+pub fn conserves_energy(scene: &Scene, model: &crate::model::Model) -> bool {
+    scene.file.forces.is_empty() && scene.walls.iter().all(|w| w.friction == 0.0) && !model.depends_on_time
+}
+
 /// The energy artifact of a trajectory of `scene` (see the module documentation).
 pub fn energy_artifact(scene: &Scene, tr: &Trajectory, skip_last: usize) -> Artifact {
     let n = tr.energy.len();
@@ -151,6 +158,14 @@ pub enum TuneError {
     /// The tolerance on the artifact is not positive.
     #[error("the tolerance must be positive, got {0}")]
     BadTolerance(f64),
+    /// A bracket end or the bracket's relative width is not a positive number.
+    #[error("{name} must be a positive number, got {value}")]
+    BadSearchOption {
+        /// The option (`lo`, `hi`, `rel`).
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
     /// The parameter to tune is not one of the scene's.
     #[error("the scene has no parameter `{param}` (parameters: {})", .known.join(", "))]
     UnknownParameter {
@@ -159,6 +174,10 @@ pub enum TuneError {
         /// The scene's parameters.
         known: Vec<String>,
     },
+    /// The scene depends on the time explicitly: its energy is not conserved between
+    /// contacts, so the energy artifact measures nothing.
+    #[error("the scene depends on the time t explicitly, so its energy is not conserved between contacts and the energy artifact cannot choose the wall width")]
+    TimeDependent,
     /// The starting value of the parameter is not positive.
     #[error("`{param}` must be positive to be tuned, got {value}")]
     NotPositive {
@@ -214,7 +233,15 @@ pub fn tune_width(
     if opts.tol.is_nan() || opts.tol <= 0.0 {
         return Err(TuneError::BadTolerance(opts.tol));
     }
+    for (name, value) in [("lo", opts.lo), ("hi", opts.hi), ("rel", Some(opts.rel))] {
+        if let Some(value) = value.filter(|v| !(*v > 0.0 && v.is_finite())) {
+            return Err(TuneError::BadSearchOption { name, value });
+        }
+    }
     let base = file.clone().resolve(ov)?;
+    if crate::model::Model::build(&base)?.depends_on_time {
+        return Err(TuneError::TimeDependent);
+    }
     let current = *base
         .parameters
         .get(&param)

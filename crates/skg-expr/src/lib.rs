@@ -1,7 +1,7 @@
 //! Symbolic expressions: parsing, simplification, exact derivatives of any order and
 //! compiled evaluation tapes.
 //!
-//! A scene's Lagrangian `L(q, q̇)`, its velocity constraints `g(q, q̇)` and its forces are
+//! A scene's Lagrangian `L(q, q̇, t)`, its constraints `g(q, q̇, t)` and its forces are
 //! written as expression strings. They are parsed into a hash-consed DAG (a [`Graph`]):
 //! every distinct subexpression exists once and is named by an [`ExprId`], so equal
 //! subexpressions share one node no matter where, or in which expression, they appear.
@@ -60,8 +60,8 @@
 //!   A name followed by `(` is always a function call.
 //! * `pi` is built in. Every other name is the caller's business: the parser asks the
 //!   caller's resolver what it means (a variable of the problem, such as a coordinate
-//!   `x` or a velocity `x_dot` — whatever velocity syntax the caller has chosen — or a
-//!   named constant such as a mass `M`, which is folded in as a number). A name the
+//!   `x` or a velocity `x_dot` — whatever velocity syntax the caller has chosen — or the
+//!   time `t`, or a named constant such as a mass `M`, which is folded in as a number). A name the
 //!   resolver does not know is a [`ParseError`] at that name's position, to which the
 //!   caller can attach a hint listing the valid names ([`ParseError::with_hint`]).
 //! * Whitespace is ignored. Positions in errors count characters (not bytes) from 0.

@@ -520,10 +520,12 @@ pub fn trajectory(solutions: &[(String, Table)], reference: Option<&Table>, titl
 /// State of one stability-map cell (a cell without a point is drawn as "not run").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Cell {
-    /// Converged, energy artifact within the sweep's tolerance.
+    /// Converged and verified, energy artifact within the sweep's tolerance.
     Converged,
-    /// Converged, energy artifact above the sweep's tolerance.
+    /// Converged and verified, energy artifact above the sweep's tolerance.
     Artifacts,
+    /// Converged, but not verified against time stepping of the same scene.
+    NotVerified,
     /// Any other [`PointStatus`]: not converged, error, crashed, timed out.
     Failed,
 }
@@ -531,10 +533,11 @@ pub enum Cell {
 impl Cell {
     /// The cell of a point with this status and `artifacts` flag.
     pub fn of(status: PointStatus, artifacts: bool) -> Cell {
-        match (status.is_converged(), artifacts) {
-            (false, _) => Cell::Failed,
-            (true, true) => Cell::Artifacts,
-            (true, false) => Cell::Converged,
+        match (status, artifacts) {
+            (PointStatus::Converged, false) => Cell::Converged,
+            (PointStatus::Converged, true) => Cell::Artifacts,
+            (PointStatus::NotVerified, _) => Cell::NotVerified,
+            _ => Cell::Failed,
         }
     }
 }
@@ -553,6 +556,7 @@ fn draw_stability<DB: DrawingBackend>(
     let fill = |c: Cell| match c {
         Cell::Converged => RGBColor(120, 190, 120),
         Cell::Artifacts => RGBColor(245, 180, 80),
+        Cell::NotVerified => RGBColor(170, 130, 210),
         Cell::Failed => RGBColor(215, 80, 80),
     };
     let root = root.titled(title, ("sans-serif", 20)).map_err(e2s)?;
@@ -560,8 +564,9 @@ fn draw_stability<DB: DrawingBackend>(
     // Legend strip above the map.
     let mut x = 90;
     for (name, c) in [
-        ("converged", Some(Cell::Converged)),
-        ("converged, energy artifacts", Some(Cell::Artifacts)),
+        ("verified", Some(Cell::Converged)),
+        ("verified, energy artifacts", Some(Cell::Artifacts)),
+        ("not verified", Some(Cell::NotVerified)),
         ("failed", Some(Cell::Failed)),
         ("not run", None),
     ] {
@@ -638,19 +643,21 @@ fn axis_values(res: &Results, rows: &[&Vec<String>], column: usize) -> Vec<(Stri
     v
 }
 
-/// Stability map over two axes: each cell converged / failed / converged with energy
-/// artifacts (column `artifacts`), labelled with the energy artifact.
+/// Stability map over two axes: each cell verified / verified with energy artifacts
+/// (column `artifacts`) / converged but not verified / failed, labelled with the column
+/// `value` (e.g. `energy_artifact`, `error_max`).
+#[allow(clippy::too_many_arguments)]
 pub fn stability(
     res: &Results,
     xaxis: &str,
     yaxis: &str,
+    value: &str,
     filters: &[(String, String)],
     title: &str,
     stem: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let rows = filtered(res, filters)?;
-    let (ix, iy, ia, iv, im) =
-        (col(res, xaxis)?, col(res, yaxis)?, col(res, "artifacts")?, col(res, "energy_artifact")?, col(res, "method")?);
+    let (ix, iy, ia, iv, im) = (col(res, xaxis)?, col(res, yaxis)?, col(res, "artifacts")?, col(res, value)?, col(res, "method")?);
     let rows: Vec<_> = rows.into_iter().filter(|r| r[im] == "skg").collect();
     if rows.is_empty() {
         return Err(PlotError::Data("no solver points to map".into()));

@@ -14,6 +14,9 @@ pub enum PointStatus {
     /// The solve converged (Ipopt reported success and the unscaled residual of the
     /// square system is at most 1e-8), or the time-stepping peer reached the final time.
     Converged,
+    /// The solve converged, but its verification against time stepping of the same
+    /// scene failed or could not run (`skg-solve` would exit 4).
+    NotVerified,
     /// Ipopt stopped without converging, or reported success with an unscaled residual
     /// above 1e-8.
     NotConverged,
@@ -29,13 +32,20 @@ pub enum PointStatus {
 
 impl PointStatus {
     /// Every status, in the order of the list above.
-    pub const ALL: [PointStatus; 5] =
-        [PointStatus::Converged, PointStatus::NotConverged, PointStatus::Error, PointStatus::Crashed, PointStatus::TimedOut];
+    pub const ALL: [PointStatus; 6] = [
+        PointStatus::Converged,
+        PointStatus::NotVerified,
+        PointStatus::NotConverged,
+        PointStatus::Error,
+        PointStatus::Crashed,
+        PointStatus::TimedOut,
+    ];
 
     /// The stable name written to `results.csv` (and to the worker's result JSON).
     pub fn name(self) -> &'static str {
         match self {
             PointStatus::Converged => "converged",
+            PointStatus::NotVerified => "not_verified",
             PointStatus::NotConverged => "not_converged",
             PointStatus::Error => "error",
             PointStatus::Crashed => "crashed",
@@ -43,8 +53,13 @@ impl PointStatus {
         }
     }
 
-    /// Whether the point has a trustworthy solution (the `converged` column).
+    /// Whether the solve converged, verified or not (the `converged` column).
     pub fn is_converged(self) -> bool {
+        matches!(self, PointStatus::Converged | PointStatus::NotVerified)
+    }
+
+    /// Whether the point has a trustworthy solution: converged and verified.
+    pub fn is_trusted(self) -> bool {
         self == PointStatus::Converged
     }
 }
@@ -53,6 +68,7 @@ impl fmt::Display for PointStatus {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
             PointStatus::Converged => "converged",
+            PointStatus::NotVerified => "converged, not verified",
             PointStatus::NotConverged => "did not converge",
             PointStatus::Error => "could not be computed",
             PointStatus::Crashed => "worker crashed",

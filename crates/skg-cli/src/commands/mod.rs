@@ -23,8 +23,12 @@ use skg_core::scenario::{Backend, Formulation, HessianMode, Overrides, Scene, Sc
 
 /// Exit code of a solve that ran but did not converge.
 pub const EXIT_NOT_CONVERGED: u8 = 3;
-/// Exit code of `check` when a tolerance is exceeded.
-pub const EXIT_TOLERANCE_EXCEEDED: u8 = 4;
+/// Exit code of a solve that converged but did not verify, and of `check` when a
+/// tolerance is exceeded.
+pub const EXIT_NOT_VERIFIED: u8 = 4;
+/// Exit code of `check` when a tolerance is exceeded (the same meaning as a solve that
+/// fails verification).
+pub const EXIT_TOLERANCE_EXCEEDED: u8 = EXIT_NOT_VERIFIED;
 
 #[derive(Args, Clone)]
 pub struct SceneArgs {
@@ -50,6 +54,26 @@ pub struct SceneArgs {
     /// residual; hands over to Ipopt if it fails). Overrides `[solver] backend`.
     #[arg(long, value_name = "NAME")]
     pub backend: Option<Backend>,
+    /// Solve in successive windows of SECONDS (each starts from the state the previous one
+    /// reached and discards its last --overlap); cures the odd-even mode that damping
+    /// amplifies and makes long spans linear in cost. 0 turns the scene's windows off.
+    #[arg(long, value_name = "SECONDS")]
+    pub window: Option<f64>,
+    /// Seconds discarded at the end of each window [default: a quarter of the window].
+    #[arg(long, value_name = "SECONDS")]
+    pub overlap: Option<f64>,
+    /// Verification tolerance: max |q − q_reference| allowed, in coordinate units
+    /// [default: the scene's [verify] tol, else 1e-3 × the largest coordinate range].
+    #[arg(long, value_name = "TOL")]
+    pub verify_tol: Option<f64>,
+    /// Skip the comparison with time stepping (the result is still checked for
+    /// non-finite numbers); a converged solve then exits 0.
+    #[arg(long)]
+    pub no_verify: bool,
+    /// Report the scene's own solve even if it fails, without trying the fallback ladder
+    /// (coarse-to-fine guess, wall-width continuation, windows).
+    #[arg(long)]
+    pub no_fallback: bool,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -73,6 +97,11 @@ impl SceneArgs {
             }),
             max_iter: self.max_iter,
             backend: self.backend,
+            window: self.window,
+            overlap: self.overlap,
+            verify_tol: self.verify_tol,
+            no_verify: self.no_verify,
+            no_fallback: self.no_fallback,
         })
     }
 }

@@ -17,7 +17,8 @@ pub enum PlotKind {
     WorkPrecision(ResultsPlotArgs),
     /// Error versus N (log-log), the fitted order in the legend.
     Convergence(ResultsPlotArgs),
-    /// Map over two grid axes: converged / failed / converged with energy artifacts.
+    /// Map over two grid axes: verified / verified with energy artifacts / converged but
+    /// not verified / failed, each cell labelled with a column's value.
     Stability {
         #[command(flatten)]
         common: ResultsPlotArgs,
@@ -27,6 +28,9 @@ pub enum PlotKind {
         /// Column on the vertical axis.
         #[arg(long, default_value = "sigma")]
         y: String,
+        /// Column whose value is written in each cell (e.g. `error_max`, `verify_error`).
+        #[arg(long, default_value = "energy_artifact")]
+        value: String,
     },
     /// Solve time versus N (log-log) from `skg-solve bench --csv` files, one line per
     /// file, with a line of slope 1 (cost proportional to N) through the last file's
@@ -51,7 +55,8 @@ pub enum PlotKind {
         /// (their kept trajectories); several are overlaid.
         #[arg(required = true, value_name = "SOLUTION")]
         inputs: Vec<PathBuf>,
-        /// Reference CSV to overlay (e.g. from `skg-solve reference`).
+        /// Reference CSV to overlay (e.g. from `skg-solve reference`) [default: the first
+        /// solution directory's reference.csv, the verification's time stepping, if any].
         #[arg(long, value_name = "FILE.csv")]
         reference: Option<PathBuf>,
         /// Legend label of each solution, in order [default: the directory or file name].
@@ -111,9 +116,9 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
             let r = sweep::Results::read(&c.results)?;
             plot::convergence(&r, &parse_filters(&c.filters)?, &title_for(&c, "convergence"), &c.output)?
         }
-        PlotKind::Stability { common: c, x, y } => {
+        PlotKind::Stability { common: c, x, y, value } => {
             let r = sweep::Results::read(&c.results)?;
-            plot::stability(&r, &x, &y, &parse_filters(&c.filters)?, &title_for(&c, "stability"), &c.output)?
+            plot::stability(&r, &x, &y, &value, &parse_filters(&c.filters)?, &title_for(&c, "stability"), &c.output)?
         }
         PlotKind::Scaling { inputs, label, output: out, title } => {
             let mut benchmarks = Vec::new();
@@ -139,7 +144,8 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
                 });
                 sols.push((name, t));
             }
-            let r = reference.as_deref().map(Table::read).transpose()?;
+            let verification_reference = || inputs.iter().find(|p| p.is_dir()).map(|d| d.join("reference.csv")).filter(|f| f.is_file());
+            let r = reference.or_else(verification_reference).as_deref().map(Table::read).transpose()?;
             plot::trajectory(&sols, r.as_ref(), &title, &out)?
         }
     };

@@ -3,13 +3,13 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 
 use skg_core::backend::SolverStatus;
 use skg_core::{output, solve};
 
-use super::{load, SceneArgs, EXIT_NOT_CONVERGED};
+use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
 
 #[derive(Args)]
 pub struct SolveArgs {
@@ -47,46 +47,95 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
-    if let Some(log) = &scene.solver.log_file {
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        scene.solver.log_file = Some(dir.join(log));
+    let out = output::OutputDir::lock(&dir)?;
+    // Ipopt writes its log into a staged file, moved over the old log when the solve
+    // returns: a killed run leaves the old log complete.
+    let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
+    scene.solver.log_file = log.as_ref().map(|(_, staged)| staged.clone());
+    let outcome = solve::solve_scene(&scene);
+    if let Some((target, staged)) = &log {
+        out.commit(staged, target)?;
     }
-    let mut outcome = solve::solve_scene(&scene)?;
-    let (csv, json) = output::write_outcome(&dir, &mut outcome, &scene).context("writing the results")?;
+    let mut outcome = match outcome {
+        Ok(outcome) => outcome,
+        Err(e) => {
+            out.abandon();
+            return Err(e.into());
+        }
+    };
+    let written = output::write_outcome(&dir, &mut outcome, &scene)?;
     for w in &outcome.warnings {
         eprintln!("warning: {w}");
     }
-    let t = &outcome.timings;
-    let total = t.setup_s + t.initial_guess_s + t.solver_s + t.postprocess_s + t.output_s;
-    if outcome.converged() {
-        if !args.quiet {
-            let d = &outcome.diagnostics;
-            println!(
-                "{}: converged in {} {} iterations ({}), {} {} N={}{}, {:.3} s",
-                outcome.scene,
-                outcome.iterations,
-                solver_name(&outcome),
-                outcome.status,
-                outcome.settings.operator,
-                outcome.settings.formulation,
-                outcome.settings.nodes,
-                if scene.constraints.is_empty() { String::new() } else { format!(", max |g| interior {:.1e}", d.max_constraint_interior) },
-                total
-            );
-            println!("  residual {:.1e}, energy drift {:.3e} (last two nodes excluded)", d.max_residual, d.energy_drift);
-            println!("  wrote {}", csv.display());
-            println!("  wrote {}", json.display());
-        }
-        Ok(ExitCode::SUCCESS)
-    } else {
+    let v = &outcome.verification;
+    print_attempts(&outcome, args.quiet);
+    if !outcome.converged() {
         eprintln!(
             "error: {}: the solve did not converge: {} ({} iterations, residual {:.3e}); summary in {}",
             outcome.scene,
             outcome.status,
             outcome.iterations,
             outcome.diagnostics.max_residual,
-            json.display()
+            written.summary.display()
         );
-        Ok(ExitCode::from(EXIT_NOT_CONVERGED))
+        print_remedy(&outcome);
+        return Ok(ExitCode::from(EXIT_NOT_CONVERGED));
+    }
+    if !outcome.trusted() {
+        eprintln!(
+            "error: {}: the solve converged but its verification {}: {}; summary in {}",
+            outcome.scene,
+            v.status,
+            v.reason,
+            written.summary.display()
+        );
+        print_remedy(&outcome);
+        return Ok(ExitCode::from(EXIT_NOT_VERIFIED));
+    }
+    if !args.quiet {
+        let d = &outcome.diagnostics;
+        println!(
+            "{}: converged in {} {} iterations ({}), {} {} N={}{}, {:.3} s",
+            outcome.scene,
+            outcome.iterations,
+            solver_name(&outcome),
+            outcome.status,
+            outcome.settings.operator,
+            outcome.settings.formulation,
+            outcome.settings.nodes,
+            if scene.constraints.is_empty() { String::new() } else { format!(", max |g| interior {:.1e}", d.max_constraint_interior) },
+            outcome.timings.total()
+        );
+        if let skg_core::solve::Method::Windows { .. } = outcome.method {
+            println!("  solved as {}", outcome.method);
+        }
+        println!("  verified: {} ({})", v.status, v.reason);
+        let energy_note = if d.depends_on_time { "; not conserved: the scene depends on t" } else { "" };
+        println!("  residual {:.1e}, energy drift {:.3e} (last two nodes excluded{energy_note})", d.max_residual, d.energy_drift);
+        for (name, drift) in &d.max_position_drift {
+            println!("  position constraint {name}: drift max |h| {drift:.1e}");
+        }
+        for path in written.paths() {
+            println!("  wrote {}", path.display());
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// When the fallback ladder ran, one line per attempt (on stderr, as notes).
+fn print_attempts(outcome: &solve::Outcome, quiet: bool) {
+    if outcome.attempts.len() < 2 || (quiet && outcome.trusted()) {
+        return;
+    }
+    eprintln!("note: the scene's own solve was not trusted; the fallback ladder tried:");
+    for (i, a) in outcome.attempts.iter().enumerate() {
+        eprintln!("  {}. {}{} ({:.2} s): {}", i + 1, a.method, if a.chosen { " [reported]" } else { "" }, a.wall_s, a.result);
+    }
+}
+
+/// Print what to do about a result that cannot be trusted.
+fn print_remedy(outcome: &solve::Outcome) {
+    if let Some(r) = &outcome.remedy {
+        eprintln!("  remedy: {r}");
     }
 }

@@ -1,0 +1,219 @@
+//! Exit 0 only for a verified trajectory. One test per failure class of a global solve
+//! (damping, contraction, a contact near the end, non-finite numbers, friction with a
+//! stop, a stiff wall), each on a scene written for the tests (tests/scenes): the plain
+//! solve is caught (exit 4, or 3) where that is the honest answer, and the fallback
+//! ladder's remedy passes verification. Truth is a closed form or time stepping at a
+//! tight tolerance, never the solver's own earlier output.
+
+mod common;
+
+use std::path::Path;
+
+use skg_core::check::{self, CheckOptions, Table};
+use skg_core::reference::{self, ReferenceOptions};
+use skg_core::scenario::{Overrides, Scene};
+use skg_core::solve::{self, Method, Outcome};
+use skg_core::trajectory::{trajectory_header, trajectory_rows};
+use skg_core::verify::VerifyStatus;
+
+fn plain() -> Overrides {
+    Overrides { no_fallback: true, ..Default::default() }
+}
+
+fn solve(name: &str, ov: &Overrides) -> (Scene, Outcome) {
+    let scene = common::load_test_scene(name, ov);
+    let o = solve::solve_scene(&scene).unwrap();
+    (scene, o)
+}
+
+/// The damped oscillator's closed form (tests/scenes/damped_oscillator.toml).
+fn damped_exact(t: f64) -> Vec<f64> {
+    let (m, k, c, x0, v0) = (1.0_f64, 4.0_f64, 3.0_f64, 1.0_f64, 0.0_f64);
+    let w = (k / m - c * c / (4.0 * m * m)).sqrt();
+    vec![(-c * t / (2.0 * m)).exp() * (x0 * (w * t).cos() + (v0 + c * x0 / (2.0 * m)) / w * (w * t).sin())]
+}
+
+/// max |q − exact| over every coordinate and all but the last two nodes (the
+/// verification's own exclusion).
+fn true_error(o: &Outcome, exact: impl Fn(f64) -> Vec<f64>) -> f64 {
+    let d = o.trajectory.q[0].len();
+    common::max_error(o, &(0..d).collect::<Vec<_>>(), 2, exact)
+}
+
+/// The verification's estimate is within 20 % of the true error.
+fn assert_estimate_matches(o: &Outcome, truth: f64, what: &str) {
+    let estimate = o.verification.max_error.unwrap();
+    assert!((estimate - truth).abs() <= 0.2 * truth, "{what}: verification says {estimate:e}, the closed form {truth:e}");
+}
+
+/// Distance of a solve's coordinates from the regularized reference at rtol 1e-12 on the
+/// same nodes, last two nodes excluded.
+fn reference_error(scene: &Scene, o: &Outcome) -> f64 {
+    let opts = ReferenceOptions { rtol: 1e-12, atol: 1e-12 };
+    let r = reference::regularized(scene, &o.trajectory.t, &opts).unwrap();
+    let table = |tr| Table { columns: trajectory_header(scene), comments: Vec::new(), rows: trajectory_rows(tr) };
+    let cmp = check::compare(
+        &table(&o.trajectory),
+        &table(&r.trajectory),
+        &CheckOptions { skip_last: 2, columns: Some(scene.coordinates.clone()) },
+    );
+    cmp.unwrap().max_abs
+}
+
+#[test]
+fn damping_is_caught_in_the_plain_solve_and_cured_by_windows() {
+    let (_, o) = solve("damped_oscillator", &plain());
+    let v = &o.verification;
+    assert!(o.converged() && !o.trusted());
+    assert_eq!(v.status, VerifyStatus::Failed);
+    let truth = true_error(&o, damped_exact);
+    assert!((4.0e-2..5.0e-2).contains(&truth), "measured 4.6e-2, got {truth:e}");
+    assert_estimate_matches(&o, truth, "plain");
+    assert!(v.odd_even_max > 0.9 * v.max_error.unwrap(), "the error is the odd-even mode: {v:?}");
+    assert!(o.remedy.as_deref().unwrap().contains("window"), "{:?}", o.remedy);
+
+    let (_, o) = solve("damped_oscillator", &Overrides::default());
+    assert!(o.trusted(), "{}", o.verification.reason);
+    assert!(matches!(o.method, Method::Windows { .. }), "{:?}", o.method);
+    let truth = true_error(&o, damped_exact);
+    assert!(truth < 1e-4, "windows: {truth:e} against the closed form");
+    assert_estimate_matches(&o, truth, "windows");
+    assert!(o.attempts.len() >= 2 && o.attempts.last().unwrap().chosen && !o.attempts[0].chosen);
+}
+
+#[test]
+fn verification_estimates_the_true_error_of_the_shipped_closed_forms() {
+    let o = common::solve("rolling_disk", &Overrides::default());
+    assert!(o.trusted());
+    assert_estimate_matches(&o, true_error(&o, common::rolling_disk_exact), "rolling disk");
+    let o = common::solve("knife_edge", &Overrides::default());
+    assert!(o.trusted());
+    assert_estimate_matches(&o, true_error(&o, common::knife_edge_exact), "knife edge");
+}
+
+#[test]
+fn a_contracting_sleigh_is_solved_in_windows_and_agrees_with_tight_time_stepping() {
+    let (_, plain) = solve("chaplygin_sleigh", &plain());
+    assert!(!plain.trusted(), "the global solve over 20 s: {} / {}", plain.status, plain.verification.reason);
+    let (scene, o) = solve("chaplygin_sleigh", &Overrides::default());
+    assert!(o.trusted(), "{}", o.verification.reason);
+    assert!(matches!(o.method, Method::Windows { .. }));
+    let e = reference_error(&scene, &o);
+    assert!(e <= o.verification.tolerance.unwrap(), "{e:e}");
+    assert!(o.diagnostics.max_constraint_interior < 1e-9, "{:e}", o.diagnostics.max_constraint_interior);
+}
+
+#[test]
+fn a_bounce_near_the_end_is_cured_by_solving_past_the_end_time() {
+    let (scene, o) = solve("box_contact_near_end", &plain());
+    assert_eq!(o.verification.status, VerifyStatus::Failed, "{}", o.verification.reason);
+    assert!(reference_error(&scene, &o) > 1e-5);
+    let (scene, o) = solve("box_contact_near_end", &Overrides::default());
+    assert!(o.trusted(), "{}", o.verification.reason);
+    assert!(matches!(o.method, Method::Windows { count: 1, .. }), "one solve past the end: {:?}", o.method);
+    assert!(reference_error(&scene, &o) < 1e-5);
+}
+
+#[test]
+fn a_block_with_friction_comes_to_rest_against_a_stop_on_every_grid() {
+    for nodes in [128, 256, 512, 1024] {
+        let (scene, o) = solve("block_into_stop", &Overrides { nodes: Some(nodes), ..Default::default() });
+        assert!(o.trusted(), "N = {nodes}: {} / {}", o.status, o.verification.reason);
+        assert!(reference_error(&scene, &o) <= 0.01, "N = {nodes}");
+    }
+    // The scene does what it says: time stepping at a tight tolerance has the block at
+    // rest against the stop over the last half second, within the wall's reach; the
+    // regularized friction (eps = 1 cm/s) lets it creep by 1.9 mm there. The solves above
+    // reproduce it to 1 cm.
+    let scene = common::load_test_scene("block_into_stop", &Overrides::default());
+    let times: Vec<f64> = (0..=300).map(|k| 0.01 * k as f64).collect();
+    let r = reference::regularized(&scene, &times, &ReferenceOptions { rtol: 1e-12, atol: 1e-12 }).unwrap();
+    let s: Vec<f64> = r.trajectory.q[250..].iter().map(|q| q[0]).collect();
+    let (lo, hi) = s.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+    assert!(lo > 0.0 && hi < 0.2 && hi - lo < 2.5e-3, "s in [{lo}, {hi}] over the last half second");
+    {}
+}
+
+#[test]
+fn a_stiff_tumbler_wall_converges_at_256_nodes() {
+    // The stability map's failed cell: σ = 1/300 at N = 256 did not converge before the
+    // ladder. Converged now (verification may honestly fail: the wall is under-resolved).
+    let ov = Overrides { nodes: Some(256), set: vec![("sigma".into(), "1/300".into())], ..Default::default() };
+    let o = common::solve("tumbler", &ov);
+    assert!(o.converged());
+}
+
+#[test]
+fn non_finite_numbers_at_the_start_are_an_input_error_naming_the_expression() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::test_scene("nan_at_start");
+    let o = common::skg(&[scene.to_str().unwrap(), "-o", "out"], dir.path());
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("nan_at_start.toml:4:") && t.contains("not finite at the initial state") && t.contains("x = -1"), "{t}");
+}
+
+#[test]
+fn exit_status_says_converged_and_verified() {
+    let dir = tempfile::tempdir().unwrap();
+    let damped = common::test_scene("damped_oscillator");
+    let damped = damped.to_str().unwrap();
+    let run = |args: &[&str]| common::skg(args, dir.path());
+
+    let o = run(&[damped, "-o", "plain", "--no-fallback"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(4), "{t}");
+    assert!(t.contains("verification failed") && t.contains("remedy:") && t.contains("--window"), "{t}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("plain/summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["verification"]["status"], "failed");
+    assert!(dir.path().join("plain/reference.csv").is_file());
+
+    let o = run(&[damped, "-o", "cured"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+    let o = run(&[damped, "-o", "cured2", "--window", "1.25"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+    assert!(common::text(&o).contains("windows of 1.2"), "{}", common::text(&o));
+    let o = run(&[damped, "-o", "unchecked", "--no-fallback", "--no-verify"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+    assert!(!dir.path().join("unchecked/reference.csv").exists());
+
+    let tumbler = common::scenario("tumbler");
+    let o = run(&[tumbler.to_str().unwrap(), "-o", "short", "--max-iter", "1", "--no-fallback"]);
+    assert_eq!(o.status.code(), Some(3), "{}", common::text(&o));
+    let o = run(&[damped, "-o", "x", "--verify-tol", "0"]);
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    assert!(Path::new(dir.path()).join("short/summary.json").is_file());
+}
+
+/// Windows agree with the global solve where both run: the tumbler's drum over 2 s
+/// (8 bounces) and the rolling disk over four revolutions, each within its tolerance of
+/// tight time stepping and of each other.
+#[test]
+fn windows_agree_with_the_global_solve_where_both_run() {
+    for (name, set, nodes, window, tol) in [("tumbler", "2", 2049, "0.5", 1e-4), ("rolling_disk", "8*pi", 1025, "4*pi", 1e-3)] {
+        let global = Overrides { nodes: Some(nodes), no_fallback: true, verify_tol: Some(tol), ..Default::default() };
+        // The shipped scene with a longer span and, for the windowed solve, windows.
+        let scene_with = |window: Option<&str>| {
+            let mut text = std::fs::read_to_string(common::scenario(name)).unwrap();
+            let end = if name == "tumbler" { "end = 0.5" } else { "end = \"2*pi\"" };
+            assert!(text.contains(end));
+            text = text.replacen(end, &format!("end = \"{set}\""), 1);
+            if let Some(w) = window {
+                text = text.replacen("[time]", &format!("[time]\nwindow = \"{w}\""), 1);
+            }
+            skg_core::scenario::SceneFile::parse(&text, name).unwrap().resolve(&global).unwrap()
+        };
+        let (g_scene, w_scene) = (scene_with(None), scene_with(Some(window)));
+        let g = solve::solve_scene(&g_scene).unwrap();
+        let w = solve::solve_scene(&w_scene).unwrap();
+        assert!(g.trusted() && w.trusted(), "{name}: {} / {}", g.verification.reason, w.verification.reason);
+        assert!(matches!(w.method, Method::Windows { count, .. } if count > 1), "{:?}", w.method);
+        let apart = g.trajectory.q[..nodes - 2]
+            .iter()
+            .zip(&w.trajectory.q)
+            .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+            .fold(0.0_f64, f64::max);
+        assert!(apart <= tol, "{name}: windows and the global solve differ by {apart:e}");
+    }
+}

@@ -1,0 +1,325 @@
+//! The fallback ladder: what a solve tries when the scene's own solve does not converge
+//! or is not verified ([`crate::verify`]).
+//!
+//! 1. The scene's own solve: one global solve from the time-stepping guess, or the
+//!    scene's windows (`[time] window`). If it converged and verified, that is the answer.
+//! 2. If it did not converge (only for a global solve):
+//!    * **coarse to fine**: solve on a grid of half the nodes, interpolate that solution
+//!      onto the scene's grid (cubic Hermite in q with its velocity, linear in λ) and
+//!      start the scene's solve there;
+//!    * **wall-width continuation** (scenes with walls): solve with every wall width σ
+//!      multiplied by 8, 4 and 2 in turn, each from the previous solution, and start the
+//!      scene's solve from the last one that converged.
+//!
+//!    Both only change the initial guess: a converged result is the critical point of the
+//!    scene's own discrete action.
+//! 3. **Past the end** (a global solve only): one solve over the span extended by
+//!    [`END_MARGIN`] of it, of which the nodes up to the end time are kept: the end
+//!    closure, which carries errors backward (a contact just before the final time
+//!    pollutes the run), then lies outside the reported span.
+//! 4. **Windows** (whether or not step 1 converged): the span in windows of half the span
+//!    (or half the scene's window), each discarding its last quarter, halving the length
+//!    until a run converges and verifies or a window would have fewer than
+//!    [`MIN_WINDOW_NODES`] nodes. This cures the parasitic odd-even mode that damping or
+//!    contraction amplifies, and convergence failures of long or contact-rich spans
+//!    ([`crate::window`]).
+//!
+//! The first run that converges and verifies is reported; if none does, the converged run
+//! with the smallest verification error, else the scene's own run. Every run is listed
+//! in `summary.json` (`attempts`), the reported one marked `chosen`. `[solver] fallback =
+//! false` or `--no-fallback` stops after step 1.
+
+use std::time::Instant;
+
+use crate::model::Model;
+use crate::scenario::{Scene, Windows};
+use crate::solve::{self, Attempt, Guess, Method, Outcome, Run, SolveError};
+use crate::trajectory::{NodeSeries, Trajectory};
+use crate::verify::VerifyStatus;
+use crate::window::{self, WindowGrid};
+
+/// Windows of fewer nodes than this are not tried by the ladder.
+pub const MIN_WINDOW_NODES: usize = 24;
+/// Factors of the wall widths in the continuation, widest first.
+pub const WIDTH_FACTORS: [f64; 3] = [8.0, 4.0, 2.0];
+/// How far past the end time step 3 solves, as a fraction of the span.
+pub const END_MARGIN: f64 = 0.25;
+
+/// Solve `scene`: its own solve, then the ladder while it fails (see the module docs).
+pub fn solve(scene: &Scene) -> Result<Outcome, SolveError> {
+    let model = Model::build(scene)?;
+    let mut ladder = Ladder { scene, model: &model, tried: Vec::new() };
+    let go_on = match scene.windows {
+        Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, w))?,
+        None => ladder.attempt("one global solve", || solve::solve_global(scene, &Guess::TimeStepping))?,
+    };
+    if !go_on || !scene.solver.fallback {
+        return Ok(ladder.finish());
+    }
+    let converged = ladder.tried[0].outcome.converged();
+    if !converged && scene.windows.is_none() && (ladder.coarse_to_fine()? || ladder.width_continuation()?) {
+        return Ok(ladder.finish());
+    }
+    if scene.windows.is_none() && ladder.past_the_end()? {
+        return Ok(ladder.finish());
+    }
+    ladder.windows()?;
+    Ok(ladder.finish())
+}
+
+/// One run of the ladder and its assessment.
+struct Tried {
+    description: String,
+    outcome: Outcome,
+    wall_s: f64,
+}
+
+struct Ladder<'a> {
+    scene: &'a Scene,
+    model: &'a Model,
+    tried: Vec<Tried>,
+}
+
+impl Ladder<'_> {
+    /// Run and assess one attempt; `Ok(true)` means the ladder should go on (the run
+    /// did not converge or did not verify).
+    fn attempt(&mut self, description: &str, run: impl FnOnce() -> Result<Run, SolveError>) -> Result<bool, SolveError> {
+        let start = Instant::now();
+        let run = run()?;
+        let outcome = solve::outcome(self.scene, self.model, run);
+        let go_on = !outcome.trusted();
+        self.tried.push(Tried { description: description.to_string(), outcome, wall_s: start.elapsed().as_secs_f64() });
+        Ok(go_on)
+    }
+
+    /// Whether the last attempt converged and verified.
+    fn succeeded(&self) -> bool {
+        self.tried.last().is_some_and(|t| t.outcome.trusted())
+    }
+
+    /// Step 2a; `Ok(true)` when it succeeded.
+    fn coarse_to_fine(&mut self) -> Result<bool, SolveError> {
+        let scene = self.scene;
+        let coarse_nodes = (scene.nodes - 1) / 2 + 1;
+        if coarse_nodes < scene.operator.min_nodes().max(8) {
+            return Ok(false);
+        }
+        let coarse_scene = Scene { nodes: coarse_nodes, ..scene.clone() };
+        let coarse = solve::solve_global(&coarse_scene, &Guess::TimeStepping)?;
+        let coarse = coarse.solution;
+        if !coarse.status.is_converged() {
+            return Ok(false);
+        }
+        let (times, _) = solve::grid(scene);
+        let guess = Guess::States {
+            q: hermite(&coarse.trajectory, &times),
+            lambda: linear(&coarse.trajectory.t, &coarse.trajectory.lambda, &times),
+            description: format!("the solve on {coarse_nodes} nodes, interpolated onto the grid (cubic Hermite)"),
+        };
+        self.attempt(&format!("coarse to fine (initial guess from {coarse_nodes} nodes)"), || solve::solve_global(scene, &guess))?;
+        Ok(self.succeeded())
+    }
+
+    /// Step 2b; `Ok(true)` when it succeeded.
+    fn width_continuation(&mut self) -> Result<bool, SolveError> {
+        let scene = self.scene;
+        if scene.walls.is_empty() {
+            return Ok(false);
+        }
+        let mut guess = Guess::TimeStepping;
+        let mut widest_converged = None;
+        for factor in WIDTH_FACTORS {
+            let mut wide = scene.clone();
+            wide.walls.iter_mut().for_each(|w| w.width *= factor);
+            let run = solve::solve_global(&wide, &guess)?;
+            if run.solution.status.is_converged() {
+                guess = Guess::States {
+                    q: run.solution.trajectory.q,
+                    lambda: run.solution.trajectory.lambda,
+                    description: format!("the solve with every wall width × {factor}"),
+                };
+                widest_converged = Some(factor);
+            }
+        }
+        let Some(last) = widest_converged else { return Ok(false) };
+        self.attempt(&format!("wall-width continuation (σ × {:?} down to × {last}, then the scene's σ)", WIDTH_FACTORS), || {
+            solve::solve_global(scene, &guess)
+        })?;
+        Ok(self.succeeded())
+    }
+
+    /// Step 3: one solve extended past the end time; `Ok(true)` when it succeeded.
+    fn past_the_end(&mut self) -> Result<bool, SolveError> {
+        let span = self.scene.t_end - self.scene.t_start;
+        let windows = Windows { length: span * (1.0 + END_MARGIN), overlap: span * END_MARGIN };
+        if WindowGrid::new(self.scene, windows).is_err() {
+            return Ok(false);
+        }
+        self.attempt(&format!("one solve {:.0} % past the end time", 100.0 * END_MARGIN), || window::solve_windows(self.scene, windows))?;
+        Ok(self.succeeded())
+    }
+
+    /// Step 4: windows of halving length.
+    fn windows(&mut self) -> Result<(), SolveError> {
+        let scene = self.scene;
+        let mut length = scene.windows.map_or(scene.t_end - scene.t_start, |w| w.length) / 2.0;
+        loop {
+            let windows = Windows { length, overlap: length / 4.0 };
+            match WindowGrid::new(scene, windows) {
+                Ok(grid) if grid.nodes >= MIN_WINDOW_NODES => {}
+                _ => return Ok(()),
+            }
+            self.attempt(&format!("windows of {length:.4} s"), || window::solve_windows(scene, windows))?;
+            if self.succeeded() {
+                return Ok(());
+            }
+            length /= 2.0;
+        }
+    }
+
+    /// The reported outcome with the list of attempts and, when it cannot be trusted, a
+    /// remedy.
+    fn finish(mut self) -> Outcome {
+        let chosen = self.chosen();
+        let attempts: Vec<Attempt> = self.tried.iter().enumerate().map(|(i, t)| record(t, i == chosen)).collect();
+        let fallback_used = self.tried.len() > 1;
+        let others_s: f64 = attempts.iter().filter(|a| !a.chosen).map(|a| a.wall_s).sum();
+        let mut outcome = self.tried.swap_remove(chosen).outcome;
+        outcome.timings.other_attempts_s = others_s;
+        outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &outcome, fallback_used));
+        outcome.attempts = attempts;
+        outcome
+    }
+
+    /// Index of the reported attempt.
+    fn chosen(&self) -> usize {
+        if let Some(i) = self.tried.iter().position(|t| t.outcome.trusted()) {
+            return i;
+        }
+        self.tried
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.outcome.converged() && t.outcome.verification.max_error.is_some())
+            .min_by(|a, b| a.1.outcome.verification.max_error.partial_cmp(&b.1.outcome.verification.max_error).expect("finite errors"))
+            .map_or(0, |(i, _)| i)
+    }
+}
+
+/// The summary's record of one attempt.
+fn record(t: &Tried, chosen: bool) -> Attempt {
+    let o = &t.outcome;
+    let v = &o.verification;
+    let result = if !o.converged() {
+        format!("did not converge: {}", o.status)
+    } else {
+        format!("converged; verification {}: {}", v.status, v.reason)
+    };
+    Attempt {
+        method: format!("{}: {}", t.description, o.method),
+        result,
+        converged: o.converged(),
+        verification: o.converged().then_some(v.status),
+        max_error: v.max_error,
+        iterations: o.iterations,
+        wall_s: t.wall_s,
+        chosen,
+    }
+}
+
+/// What to do about an outcome that cannot be trusted.
+fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool) -> String {
+    let span = scene.t_end - scene.t_start;
+    let suggested_window = format!("{:.4}", span / 8.0);
+    let ladder = if fallback_used {
+        "the fallback ladder (coarse-to-fine guess, wall-width continuation, windows) did not help either; "
+    } else if !scene.solver.fallback {
+        "the fallback ladder is off (--no-fallback / [solver] fallback = false): without it, "
+    } else {
+        ""
+    };
+    if !o.converged() {
+        return format!(
+            "{ladder}refine the grid (--nodes {}), widen the walls (a larger σ), or solve in windows (--window {suggested_window})",
+            2 * scene.nodes
+        );
+    }
+    let v = &o.verification;
+    match v.status {
+        VerifyStatus::Unverified => {
+            format!("the reference could not be computed ({}); if you trust the solve regardless, --no-verify accepts it", v.reason)
+        }
+        _ if v.max_error.is_none() => "fix the scene so that every quantity stays finite along the motion".to_string(),
+        _ => {
+            let oddeven = v.max_error.is_some_and(|e| v.odd_even_max >= 0.25 * e);
+            let windows = matches!(o.method, Method::Windows { .. });
+            let cure = if oddeven && !windows {
+                format!("solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even mode's growth")
+            } else {
+                format!("refine the grid (--nodes {}) or use a higher-order operator (--operator SBP363)", 2 * scene.nodes)
+            };
+            format!("{ladder}{cure}; or, if this accuracy is enough for you, state it with `[verify] tol` or --verify-tol")
+        }
+    }
+}
+
+/// Cubic Hermite interpolation of the coordinates of `tr` (values and velocities) at `times`.
+fn hermite(tr: &Trajectory, times: &[f64]) -> NodeSeries {
+    times
+        .iter()
+        .map(|&t| {
+            let k = segment(&tr.t, t);
+            let (t0, t1) = (tr.t[k], tr.t[k + 1]);
+            let h = t1 - t0;
+            let s = (t - t0) / h;
+            let (h00, h10, h01, h11) =
+                (2.0 * s.powi(3) - 3.0 * s * s + 1.0, s.powi(3) - 2.0 * s * s + s, -2.0 * s.powi(3) + 3.0 * s * s, s.powi(3) - s * s);
+            (0..tr.q[k].len()).map(|i| h00 * tr.q[k][i] + h10 * h * tr.v[k][i] + h01 * tr.q[k + 1][i] + h11 * h * tr.v[k + 1][i]).collect()
+        })
+        .collect()
+}
+
+/// Linear interpolation of a node series at `times`.
+fn linear(t: &[f64], series: &NodeSeries, times: &[f64]) -> NodeSeries {
+    times
+        .iter()
+        .map(|&x| {
+            let k = segment(t, x);
+            let s = (x - t[k]) / (t[k + 1] - t[k]);
+            series[k].iter().zip(&series[k + 1]).map(|(a, b)| a + s * (b - a)).collect()
+        })
+        .collect()
+}
+
+/// The index k of the interval [t[k], t[k+1]] that holds `x` (clamped to the first and last).
+fn segment(t: &[f64], x: f64) -> usize {
+    t.partition_point(|&tk| tk <= x).clamp(1, t.len() - 1) - 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::trajectory::States;
+
+    #[test]
+    fn hermite_is_exact_for_cubics() {
+        let t: Vec<f64> = (0..6).map(|k| k as f64 * 0.4).collect();
+        let f = |x: f64| 1.0 - 2.0 * x + 0.5 * x * x - 0.3 * x.powi(3);
+        let df = |x: f64| -2.0 + x - 0.9 * x * x;
+        let states = States {
+            q: t.iter().map(|&x| vec![f(x)]).collect(),
+            v: t.iter().map(|&x| vec![df(x)]).collect(),
+            lambda: t.iter().map(|&x| vec![x]).collect(),
+        };
+        let mut tr = Trajectory::empty();
+        tr.t = t.clone();
+        tr.q = states.q;
+        tr.v = states.v;
+        let fine: Vec<f64> = (0..21).map(|k| k as f64 * 0.1).collect();
+        for (x, q) in fine.iter().zip(hermite(&tr, &fine)) {
+            assert!((q[0] - f(*x)).abs() < 1e-13, "{x}: {} vs {}", q[0], f(*x));
+        }
+        for (x, l) in fine.iter().zip(linear(&t, &states.lambda, &fine)) {
+            assert!((l[0] - x).abs() < 1e-14);
+        }
+    }
+}

@@ -1,0 +1,322 @@
+//! Verification of a solve: is the trajectory right, not only converged?
+//!
+//! A converged solve is a critical point of the discrete action, which can still be far
+//! from the motion: a parasitic odd-even mode of the centred SBP stencils that damping or
+//! contraction amplifies toward the final time, a contact near the final time polluting
+//! the run backward through the end closure, a spurious critical point of a wall scene,
+//! or non-finite numbers. Every solve is therefore compared with an independent solution
+//! of the *same regularized scene*: the Lagrange–d'Alembert equations integrated by
+//! [`crate::time_stepping`] (adaptive DOP853, index-reduced) at a tight tolerance,
+//! sampled at the solve's own nodes. This costs milliseconds and catches every failure
+//! class above.
+//!
+//! * `max_error` = max over coordinates and nodes of |q − q_reference|, the last
+//!   [`SKIP_LAST`] nodes excluded (they are the SBP end closure, whose equations are
+//!   boundary rows; the documentation says so everywhere an error is reported).
+//! * The tolerance is absolute, in coordinate units: the scene's `[verify] tol` or
+//!   `--verify-tol`, else [`DEFAULT_RELATIVE_TOL`] × the largest range of a coordinate
+//!   over the reference trajectory (its scale).
+//! * The odd-even amplitude of each coordinate is the amplitude of its (−1)^k component,
+//!   measured by the fourth difference `|q[k−2] − 4q[k−1] + 6q[k] − 4q[k+1] + q[k+2]| / 16`
+//!   (exactly 1 for `(−1)^k`, `Δt⁴ q''''/16` for a smooth q), maximized over the nodes
+//!   whose stencil avoids the excluded end nodes.
+//! * Any non-finite number in the trajectory or its derived columns fails verification,
+//!   even when verification is switched off.
+
+use std::fmt;
+
+use indexmap::IndexMap;
+use serde::Serialize;
+
+use crate::model::Model;
+use crate::ode::OdeOptions;
+use crate::scenario::Scene;
+use crate::time_stepping::{integrate_model, min_spacing};
+use crate::trajectory::{NodeSeries, Trajectory};
+
+/// Relative tolerance of the time-stepping reference.
+pub const REFERENCE_RTOL: f64 = 1e-10;
+/// Absolute tolerance of the time-stepping reference.
+pub const REFERENCE_ATOL: f64 = 1e-12;
+/// Default verification tolerance, relative to the largest coordinate range.
+pub const DEFAULT_RELATIVE_TOL: f64 = 1e-4;
+/// End nodes left out of the error (the SBP end closure).
+pub const SKIP_LAST: usize = 2;
+
+/// The verdict of a verification.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VerifyStatus {
+    /// Every number is finite and the error is within the tolerance.
+    Passed,
+    /// A non-finite number, or an error above the tolerance.
+    Failed,
+    /// The reference could not be computed (the reason says why).
+    Unverified,
+    /// Verification was switched off (`--no-verify`); the numbers are finite.
+    Skipped,
+}
+
+impl VerifyStatus {
+    /// Whether a solve with this verdict may exit 0 (passed, or skipped on request).
+    pub fn is_acceptable(self) -> bool {
+        matches!(self, VerifyStatus::Passed | VerifyStatus::Skipped)
+    }
+}
+
+impl fmt::Display for VerifyStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            VerifyStatus::Passed => "passed",
+            VerifyStatus::Failed => "failed",
+            VerifyStatus::Unverified => "unverified",
+            VerifyStatus::Skipped => "skipped",
+        })
+    }
+}
+
+/// The result of verifying a trajectory (the `verification` object of `summary.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Verification {
+    /// The verdict.
+    pub status: VerifyStatus,
+    /// max |q − q_reference| over coordinates and nodes (last [`SKIP_LAST`] excluded).
+    pub max_error: Option<f64>,
+    /// The same per coordinate.
+    pub errors: IndexMap<String, f64>,
+    /// The coordinate and time of the largest error.
+    pub worst: Option<(String, f64)>,
+    /// The absolute tolerance applied (coordinate units).
+    pub tolerance: Option<f64>,
+    /// Where the tolerance came from.
+    pub tolerance_source: String,
+    /// Amplitude of the (−1)^k component of each coordinate.
+    pub odd_even: IndexMap<String, f64>,
+    /// The largest odd-even amplitude.
+    pub odd_even_max: f64,
+    /// End nodes left out of the error.
+    pub skip_last: usize,
+    /// How the reference was computed.
+    pub reference: String,
+    /// The verdict in words.
+    pub reason: String,
+    /// The reference at the nodes (written as `reference.csv`).
+    #[serde(skip)]
+    pub reference_trajectory: Option<Trajectory>,
+}
+
+impl Verification {
+    /// Whether the verdict lets a converged solve exit 0.
+    pub fn is_acceptable(&self) -> bool {
+        self.status.is_acceptable()
+    }
+
+    /// Fail the verification for a reason found outside the comparison (e.g. a kinetic
+    /// matrix that is not positive definite at some node), keeping the measured errors.
+    pub fn fail(&mut self, reason: String) {
+        self.status = VerifyStatus::Failed;
+        self.reason = if self.reason.is_empty() { reason } else { format!("{reason}; {}", self.reason) };
+    }
+}
+
+/// Verify `tr`, a solution of `scene` with model `model`, against time stepping of the same
+/// scene from its initial state, sampled at `tr.t`.
+pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
+    let odd_even = odd_even_amplitudes(&scene.coordinates, &tr.q);
+    let odd_even_max = odd_even.values().copied().fold(0.0, f64::max);
+    let base = Verification {
+        status: VerifyStatus::Skipped,
+        max_error: None,
+        errors: IndexMap::new(),
+        worst: None,
+        tolerance: scene.verify.tol,
+        tolerance_source: String::new(),
+        odd_even,
+        odd_even_max,
+        skip_last: SKIP_LAST,
+        reference: String::new(),
+        reason: String::new(),
+        reference_trajectory: None,
+    };
+    if let Some(bad) = first_non_finite(scene, tr) {
+        return Verification { status: VerifyStatus::Failed, reason: bad, ..base };
+    }
+    if !scene.verify.enabled {
+        return Verification { reason: "verification switched off (--no-verify); every number is finite".into(), ..base };
+    }
+    let opts = OdeOptions { rtol: REFERENCE_RTOL, atol: REFERENCE_ATOL, max_step: min_spacing(&tr.t), ..OdeOptions::default() };
+    let reference = format!(
+        "time stepping of the same scene (DOP853, rtol {REFERENCE_RTOL:e}, atol {REFERENCE_ATOL:e}, step at most the node spacing) at the solve's nodes"
+    );
+    let states = match integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts) {
+        Ok((states, _)) => states,
+        Err(e) => {
+            return Verification {
+                status: VerifyStatus::Unverified,
+                reference,
+                reason: format!("time stepping of the same scene failed, so the solve could not be checked: {e}"),
+                ..base
+            }
+        }
+    };
+    let reference_trajectory = Trajectory::with_physical_columns(model, &tr.t, states);
+    let (tolerance, tolerance_source) = tolerance(scene, &reference_trajectory.q);
+    let compared = tr.t.len().saturating_sub(SKIP_LAST).max(1);
+    let errors = coordinate_errors(&scene.coordinates, &tr.q[..compared], &reference_trajectory.q[..compared]);
+    let (worst_name, worst_node, max_error) = errors
+        .iter()
+        .map(|(name, &(k, e))| (name.clone(), k, e))
+        .fold((String::new(), 0, 0.0_f64), |best, cur| if cur.2 > best.2 || best.0.is_empty() { cur } else { best });
+    let worst_t = tr.t[worst_node];
+    let passed = max_error <= tolerance;
+    let reason = if passed {
+        format!("max |q − q_ref| = {max_error:.3e} ({worst_name} at t = {worst_t:.6}) is within the tolerance {tolerance:.3e}")
+    } else {
+        let mut r = format!("max |q − q_ref| = {max_error:.3e} ({worst_name} at t = {worst_t:.6}) exceeds the tolerance {tolerance:.3e}");
+        if odd_even_max >= 0.25 * max_error {
+            r.push_str(&format!(
+                "; the odd-even (−1)^k component of the solution is {odd_even_max:.3e}: the parasitic mode of centred SBP stencils, \
+                 which damping or contraction amplifies toward the end of the span"
+            ));
+        }
+        r
+    };
+    Verification {
+        status: if passed { VerifyStatus::Passed } else { VerifyStatus::Failed },
+        max_error: Some(max_error),
+        errors: errors.into_iter().map(|(name, (_, e))| (name, e)).collect(),
+        worst: Some((worst_name, worst_t)),
+        tolerance: Some(tolerance),
+        tolerance_source,
+        reference,
+        reason,
+        reference_trajectory: Some(reference_trajectory),
+        ..base
+    }
+}
+
+/// The tolerance and where it came from: the scene's or the command line's, else the
+/// default relative to the reference's largest coordinate range (1 if every coordinate
+/// stays constant).
+fn tolerance(scene: &Scene, reference_q: &[Vec<f64>]) -> (f64, String) {
+    if let Some(t) = scene.verify.tol {
+        return (t, "given ([verify] tol or --verify-tol)".into());
+    }
+    let scale = coordinate_scale(reference_q);
+    let scale = if scale > 0.0 { scale } else { 1.0 };
+    (DEFAULT_RELATIVE_TOL * scale, format!("default: {DEFAULT_RELATIVE_TOL:e} × the largest coordinate range {scale:.6e}"))
+}
+
+/// The largest range (max − min) of a coordinate over the nodes.
+pub fn coordinate_scale(q: &[Vec<f64>]) -> f64 {
+    let d = q.first().map_or(0, Vec::len);
+    (0..d)
+        .map(|i| {
+            let (lo, hi) = q.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), qk| (lo.min(qk[i]), hi.max(qk[i])));
+            hi - lo
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Per coordinate: the node and value of max |a − b|.
+fn coordinate_errors(names: &[String], a: &[Vec<f64>], b: &[Vec<f64>]) -> IndexMap<String, (usize, f64)> {
+    names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let worst =
+                a.iter()
+                    .zip(b)
+                    .enumerate()
+                    .map(|(k, (x, y))| (k, (x[i] - y[i]).abs()))
+                    .fold((0, 0.0), |m, c| if c.1 > m.1 { c } else { m });
+            (name.clone(), worst)
+        })
+        .collect()
+}
+
+/// Amplitude of the (−1)^k component of each coordinate: max |Δ⁴q| / 16 over the nodes
+/// whose five-point stencil leaves out the last [`SKIP_LAST`] nodes.
+pub fn odd_even_amplitudes(names: &[String], q: &NodeSeries) -> IndexMap<String, f64> {
+    let usable = q.len().saturating_sub(SKIP_LAST);
+    names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let amp = (2..usable.saturating_sub(2))
+                .map(|k| (q[k - 2][i] - 4.0 * q[k - 1][i] + 6.0 * q[k][i] - 4.0 * q[k + 1][i] + q[k + 2][i]).abs() / 16.0)
+                .fold(0.0, f64::max);
+            (name.clone(), amp)
+        })
+        .collect()
+}
+
+/// The first non-finite number of the trajectory, as a sentence naming the column, the
+/// node and its time.
+pub fn first_non_finite(scene: &Scene, tr: &Trajectory) -> Option<String> {
+    let columns = crate::trajectory::trajectory_header(scene);
+    let rows = crate::trajectory::trajectory_rows(tr);
+    rows.iter().enumerate().find_map(|(k, row)| {
+        row.iter().position(|x| !x.is_finite()).map(|c| {
+            format!(
+                "the solution has a non-finite value: {} = {} at node {} (t = {}); check the scene's expressions at that state",
+                columns[c],
+                row[c],
+                k + 1,
+                tr.t[k]
+            )
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn odd_even_amplitude_is_one_for_the_checkerboard_and_small_for_smooth_data() {
+        let names = vec!["x".to_string(), "y".to_string()];
+        let n = 40;
+        let dt = 0.01;
+        let q: NodeSeries = (0..n).map(|k| vec![if k % 2 == 0 { 1.0 } else { -1.0 }, (k as f64 * dt).sin()]).collect();
+        let a = odd_even_amplitudes(&names, &q);
+        assert!((a["x"] - 1.0).abs() < 1e-15, "{a:?}");
+        // Δt⁴ |sin''''| / 16 ≤ 1e-8 / 16.
+        assert!(a["y"] <= 1e-8 / 16.0 * 1.0001, "{a:?}");
+    }
+
+    /// Free motion x = t: the exact trajectory passes; a NaN in a derived column fails,
+    /// even with verification switched off, and the reason names the column and node.
+    #[test]
+    fn an_exact_trajectory_passes_and_a_non_finite_value_always_fails() {
+        use crate::model::Model;
+        use crate::scenario::{Overrides, SceneFile};
+        use crate::trajectory::States;
+        let text = "[scene]\nname = \"s\"\nlagrangian = \"x_dot^2/2\"\n[[coordinates]]\nname = \"x\"\ninitial = 0\nvelocity = 1\n\
+                    [time]\nstart = 0\nend = 1\nnodes = 8\n";
+        let resolve = |ov: &Overrides| SceneFile::parse(text, "s.toml").unwrap().resolve(ov).unwrap();
+        let scene = resolve(&Overrides::default());
+        let model = Model::build(&scene).unwrap();
+        let times: Vec<f64> = (0..8).map(|k| k as f64 / 7.0).collect();
+        let states = States { q: times.iter().map(|&t| vec![t]).collect(), v: vec![vec![1.0]; 8], lambda: vec![vec![]; 8] };
+        let mut tr = Trajectory::with_physical_columns(&model, &times, states);
+        let v = verify(&scene, &model, &tr);
+        assert_eq!(v.status, VerifyStatus::Passed, "{}", v.reason);
+        assert!(v.max_error.unwrap() < 1e-12);
+        tr.energy[5] = f64::NAN;
+        for ov in [Overrides::default(), Overrides { no_verify: true, ..Default::default() }] {
+            let v = verify(&resolve(&ov), &model, &tr);
+            assert_eq!(v.status, VerifyStatus::Failed);
+            assert!(v.reason.contains("energy = NaN at node 6"), "{}", v.reason);
+        }
+        tr.energy[5] = 0.5;
+        let v = verify(&resolve(&Overrides { no_verify: true, ..Default::default() }), &model, &tr);
+        assert_eq!(v.status, VerifyStatus::Skipped);
+    }
+
+    #[test]
+    fn scale_is_the_largest_coordinate_range() {
+        let q = vec![vec![0.0, 5.0], vec![2.0, 4.0], vec![-1.0, 4.5]];
+        assert_eq!(coordinate_scale(&q), 3.0);
+    }
+}

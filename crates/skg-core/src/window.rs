@@ -1,0 +1,200 @@
+//! Windowed solves: the span is covered by successive windows, each a global solve of
+//! the scene's action over `length` seconds that starts from the state the previous
+//! window reached and keeps all but its last `overlap` seconds.
+//!
+//! Why: the centred SBP stencils carry a parasitic odd-even mode, and damping or
+//! contraction of the dynamics amplifies it toward the end of a solve like
+//! `exp(∫ rate dt)`; the end closure also carries errors backward (a contact just before
+//! the final time pollutes the run). A window bounds the amplification to one window's
+//! length, and discarding its tail keeps every reported node away from an end closure —
+//! including the last window's, which is solved past the scene's end time. The cost is
+//! linear in the span: every window has the same number of nodes, so one action (and its
+//! sparsity plans) serves all of them; only the initial state changes.
+//!
+//! Grid: the scene's nodes `t_k = t_start + k Δt` extended past `t_end` as far as the
+//! last window needs. A window of `n_w = round(length/Δt) + 1` nodes starting at global
+//! node `s` keeps nodes `s … s + r − 1` with `r ≤ n_w − 1 − round(overlap/Δt)`; the next
+//! window starts at node `s + r` from this window's `(q, Dq)` there. `r` is the largest
+//! such index whose node and its two neighbours on each side are out of contact with
+//! every wall ([`crate::contact`]), searched down to half the window, so that no window
+//! starts inside a bounce (else the largest). Each window's initial guess is time
+//! stepping from its own initial state.
+//!
+//! A window that does not converge ends the run: the nodes after its start are not
+//! computed (NaN in the trajectory) and the run's status is that window's.
+
+use std::time::Instant;
+
+use crate::backend::{BackendReport, SquareSolver};
+use crate::contact;
+use crate::scenario::{Scene, Windows};
+use crate::solve::{self, build_action_on, solve_piece, Guess, Method, Piece, Run, SolveError, Timings};
+use crate::trajectory::Trajectory;
+
+/// Nodes and restart of the windows of a scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindowGrid {
+    /// Node spacing Δt (the scene's).
+    pub dt: f64,
+    /// Nodes of each window's solve.
+    pub nodes: usize,
+    /// Nodes each window keeps at most; the next window starts at this local index or,
+    /// to avoid starting in contact, earlier.
+    pub keep: usize,
+    /// Number of windows covering the scene's nodes if every window keeps `keep` nodes.
+    pub count: usize,
+}
+
+impl WindowGrid {
+    /// The windows of `scene` for `windows`, or a message saying why they do not fit
+    /// the scene's grid (too few nodes per window for the operator, nothing kept).
+    pub fn new(scene: &Scene, windows: Windows) -> Result<WindowGrid, String> {
+        let (_, dt) = solve::grid(scene);
+        let nodes = (windows.length / dt).round() as usize + 1;
+        let dropped = (windows.overlap / dt).round() as usize;
+        let min = scene.operator.min_nodes();
+        if nodes < min {
+            return Err(format!(
+                "a window of {} s has {nodes} nodes at the scene's spacing Δt = {dt:.6e} s; {} needs at least {min}",
+                windows.length,
+                scene.operator.name()
+            ));
+        }
+        if dropped + 1 >= nodes {
+            return Err(format!("an overlap of {} s leaves nothing to keep of a {} s window", windows.overlap, windows.length));
+        }
+        let keep = nodes - 1 - dropped;
+        let count = (scene.nodes.saturating_sub(nodes)).div_ceil(keep) + 1;
+        Ok(WindowGrid { dt, nodes, keep, count })
+    }
+}
+
+/// Solve `scene` in windows.
+pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError> {
+    let grid = WindowGrid::new(scene, windows).map_err(|message| SolveError::Windows { scene: scene.file.origin.path.clone(), message })?;
+    let t_setup = Instant::now();
+    let mut action = build_action_on(scene, grid.nodes, grid.dt)?;
+    // One solver for all windows: the sparsity plans and Newton's LU analysis are made
+    // once and reused by every window.
+    let mut solver = SquareSolver::new(scene, &action);
+    let sizes = solve::sizes(scene, &action, &solver);
+    let mut timings = Timings::zero();
+    timings.setup_s = t_setup.elapsed().as_secs_f64();
+
+    let total = scene.nodes;
+    let mut trajectory = Trajectory::empty();
+    let mut time_stepping_q = Some(Vec::with_capacity(total));
+    let mut run_status = None;
+    let (mut iterations, mut history) = (0, Vec::new());
+    // The first window's backend report (it made the LU analysis), or the first that
+    // handed over to Ipopt.
+    let mut backend: Option<BackendReport> = None;
+    let (mut max_residual, mut max_eom_residual, mut max_minus_variable) = (0.0_f64, 0.0_f64, None::<f64>);
+    let (mut q0, mut v0) = (scene.initial_q.clone(), scene.initial_v.clone());
+    let (mut start, mut count) = (0, 0);
+    loop {
+        let times: Vec<f64> = (0..grid.nodes).map(|k| scene.t_start + (start + k) as f64 * grid.dt).collect();
+        action.set_window(times[0], &q0, &v0);
+        let piece = solve_piece(scene, &action, &mut solver, &times, &Guess::TimeStepping)?;
+        timings.add(&piece.timings);
+        iterations += piece.iterations;
+        history.extend(piece.history);
+        if backend.as_ref().is_none_or(|b| piece.backend.handed_over_to_ipopt && !b.handed_over_to_ipopt) {
+            backend = Some(piece.backend.clone());
+        }
+        max_residual = max_residual.max(piece.max_residual);
+        max_eom_residual = max_eom_residual.max(piece.max_eom_residual);
+        max_minus_variable = piece.max_minus_variable.map(|m| m.max(max_minus_variable.unwrap_or(0.0)));
+        let last = start + grid.nodes >= total;
+        let keep = if last { total - start } else { restart_node(scene, &piece.trajectory, grid.keep) };
+        trajectory.extend_from(&piece.trajectory, 0..keep);
+        time_stepping_q = match (time_stepping_q, &piece.time_stepping_q) {
+            (Some(mut acc), Some(ts)) => {
+                acc.extend_from_slice(&ts[..keep]);
+                Some(acc)
+            }
+            _ => None,
+        };
+        if !piece.status.is_converged() {
+            run_status = Some(piece.status);
+            count += 1;
+            for k in start + keep..total {
+                trajectory.push_not_computed(scene.t_start + k as f64 * grid.dt);
+            }
+            time_stepping_q = None;
+            break;
+        }
+        run_status.get_or_insert(piece.status);
+        count += 1;
+        if last {
+            break;
+        }
+        q0 = piece.trajectory.q[keep].clone();
+        v0 = piece.trajectory.v[keep].clone();
+        start += keep;
+    }
+    let length = (grid.nodes - 1) as f64 * grid.dt;
+    let method = Method::Windows { length, overlap: length - grid.keep as f64 * grid.dt, nodes_per_window: grid.nodes, count };
+    let solution = Piece {
+        status: run_status.expect("at least one window"),
+        iterations,
+        history,
+        backend: backend.expect("at least one window"),
+        trajectory,
+        max_residual,
+        max_eom_residual,
+        max_minus_variable,
+        time_stepping_q,
+        guess: "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) from each window's initial state"
+            .into(),
+        timings,
+    };
+    Ok(Run { method, sizes, solution })
+}
+
+/// Neighbours on each side of a restart node that must be out of contact too.
+const RESTART_CLEARANCE: usize = 2;
+
+/// The local node the next window starts from: the largest `k ≤ keep`, down to `keep / 2`,
+/// with nodes `k − 2 … k + 2` out of contact with every wall; `keep` if there is none.
+fn restart_node(scene: &Scene, tr: &Trajectory, keep: usize) -> usize {
+    let free = |k: usize| {
+        (k - RESTART_CLEARANCE..=k + RESTART_CLEARANCE)
+            .all(|m| scene.walls.iter().enumerate().all(|(j, w)| !contact::in_contact(tr.h[m][j], w.width)))
+    };
+    (keep / 2..=keep).rev().find(|&k| k >= RESTART_CLEARANCE && k + RESTART_CLEARANCE < tr.t.len() && free(k)).unwrap_or(keep)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::{Overrides, SceneFile};
+
+    fn scene(nodes: usize, end: f64) -> Scene {
+        let text = format!(
+            "[scene]\nname = \"s\"\nlagrangian = \"x_dot^2/2 - x^2/2\"\n[[coordinates]]\nname = \"x\"\ninitial = 1\nvelocity = 0\n\
+             [time]\nstart = 0\nend = {end}\nnodes = {nodes}\n"
+        );
+        SceneFile::parse(&text, "s.toml").unwrap().resolve(&Overrides::default()).unwrap()
+    }
+
+    #[test]
+    fn windows_cover_the_nodes_with_equal_sizes() {
+        // Δt = 0.01: 101 nodes per 1 s window, 25 dropped, 75 kept (nodes 0…74), next at 75.
+        let s = scene(1001, 10.0);
+        let g = WindowGrid::new(&s, Windows { length: 1.0, overlap: 0.25 }).unwrap();
+        assert_eq!((g.nodes, g.keep), (101, 75));
+        // Starts 0, 75, …, 900 (the window at 900 reaches node 1000, the last).
+        assert_eq!(g.count, 13);
+        assert_eq!(12 * g.keep + g.nodes, 1001);
+    }
+
+    #[test]
+    fn windows_too_short_for_the_operator_or_the_overlap_are_refused() {
+        let s = scene(1001, 10.0);
+        let e = WindowGrid::new(&s, Windows { length: 0.05, overlap: 0.0 }).unwrap_err();
+        assert!(e.contains("needs at least 8"), "{e}");
+        let e = WindowGrid::new(&s, Windows { length: 1.0, overlap: 0.995 }).unwrap_err();
+        assert!(e.contains("leaves nothing"), "{e}");
+    }
+}
