@@ -277,6 +277,23 @@ fn time_spans_without_distinct_node_times_are_refused() {
     }
 }
 
+/// A span of 10⁹ oscillation periods on 128 nodes (found by the long fuzz run, where
+/// the ladder spent minutes in time steppings that could not finish): the guess and the
+/// verification stop at their step budget (100 per node, at least 10⁵), the solve ends
+/// with exit 3 and says why the grid cannot represent the motion.
+#[test]
+fn a_span_far_beyond_the_grid_stops_at_the_step_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::variant(dir.path(), "knife_edge", "long.toml", &[("start = 0", "start = -4294967296")]);
+    let (code, t) = run(&[s(&scene), "-o", "out", "--no-fallback"], dir.path());
+    assert_eq!(code, Some(3), "{t}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap()).unwrap();
+    let guess = summary["settings"]["initial_guess"].as_str().unwrap();
+    assert!(guess.contains("maximum number of steps (100000)") && guess.starts_with("constant-velocity"), "{guess}");
+    let reason = summary["verification"]["reason"].as_str().unwrap();
+    assert!(reason.contains("more than 100 steps per node") && reason.contains("refine N or shorten the span"), "{reason}");
+}
+
 #[test]
 fn scene_errors_name_the_line_and_column() {
     let dir = tempfile::tempdir().unwrap();

@@ -24,7 +24,7 @@ use crate::model::Model;
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
 use crate::scenario::{Backend, ConstraintKind, Formulation, HessianMode, Scene, SceneError, Wall};
-use crate::time_stepping::{integrate_model, min_spacing};
+use crate::time_stepping::{integrate_model, min_spacing, step_budget};
 use crate::trajectory::{NodeSeries, States, Trajectory};
 use crate::verify::{self, Verification, VerifyStatus};
 use skg_ipopt as ipopt;
@@ -549,7 +549,7 @@ fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut V
             // uncapped one a tenth, with the same Newton iterations on every shipped
             // scene (docs/benchmarks.md#the-initial-guess).
             let max_step = if action.model.walls.is_empty() { None } else { min_spacing(times) };
-            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, ..OdeOptions::default() };
+            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps: step_budget(times.len()), ..OdeOptions::default() };
             let (q0, v0) = (action.q0(), action.v0());
             match integrate_model(&action.model, q0, v0, times, &opts) {
                 Ok((States { q, lambda, .. }, _)) => (

@@ -14,6 +14,23 @@ use crate::model::{DynamicsError, Model, Workspace};
 use crate::ode::{self, OdeError, OdeOptions, OdeStats, RhsError};
 use crate::trajectory::States;
 
+/// Step attempts per node allowed to the time stepping of the initial guess and of the
+/// verification ([`step_budget`]). On the shipped scenes these take one to two steps per
+/// node (the step is capped at the node spacing where it matters); a motion that needs
+/// a hundred per node is far finer than the grid can represent.
+pub const STEPS_PER_NODE: usize = 100;
+
+/// The step budget of a grid is at least this many attempts, whatever its node count.
+pub const MIN_STEPS: usize = 100_000;
+
+/// The step attempts allowed to a time stepping sampled at `nodes` nodes: it bounds the
+/// cost of the guess and the verification by the grid's size (a scene whose time span
+/// dwarfs its motion, e.g. a span of 10⁹ periods, would otherwise take seconds per
+/// attempt of the fallback ladder and still fail).
+pub fn step_budget(nodes: usize) -> usize {
+    STEPS_PER_NODE.saturating_mul(nodes).max(MIN_STEPS)
+}
+
 /// Smallest spacing of increasing sample times (None for fewer than two samples).
 pub fn min_spacing(times: &[f64]) -> Option<f64> {
     times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).reduce(f64::min)

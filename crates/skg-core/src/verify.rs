@@ -29,9 +29,9 @@ use indexmap::IndexMap;
 use serde::Serialize;
 
 use crate::model::Model;
-use crate::ode::OdeOptions;
+use crate::ode::{OdeError, OdeOptions};
 use crate::scenario::Scene;
-use crate::time_stepping::{integrate_model, min_spacing};
+use crate::time_stepping::{integrate_model, min_spacing, step_budget, STEPS_PER_NODE};
 use crate::trajectory::{NodeSeries, Trajectory};
 
 /// Relative tolerance of the time-stepping reference.
@@ -144,7 +144,13 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
     if !scene.verify.enabled {
         return Verification { reason: "verification switched off (--no-verify); every number is finite".into(), ..base };
     }
-    let opts = OdeOptions { rtol: REFERENCE_RTOL, atol: REFERENCE_ATOL, max_step: min_spacing(&tr.t), ..OdeOptions::default() };
+    let opts = OdeOptions {
+        rtol: REFERENCE_RTOL,
+        atol: REFERENCE_ATOL,
+        max_step: min_spacing(&tr.t),
+        max_steps: step_budget(tr.t.len()),
+        ..OdeOptions::default()
+    };
     let reference = format!(
         "time stepping of the same scene (DOP853, rtol {REFERENCE_RTOL:e}, atol {REFERENCE_ATOL:e}, step at most the node spacing) at the solve's nodes"
     );
@@ -154,7 +160,14 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
             return Verification {
                 status: VerifyStatus::Unverified,
                 reference,
-                reason: format!("time stepping of the same scene failed, so the solve could not be checked: {e}"),
+                reason: match e {
+                    OdeError::MaxSteps { .. } => format!(
+                        "time stepping of the same scene failed, so the solve could not be checked: {e} (more than {} steps per \
+                         node: the motion is far finer than the grid; refine N or shorten the span)",
+                        STEPS_PER_NODE
+                    ),
+                    e => format!("time stepping of the same scene failed, so the solve could not be checked: {e}"),
+                },
                 ..base
             }
         }
