@@ -7,6 +7,7 @@
 #   cargo build --workspace --examples                     the examples compile
 #   cargo run -p skg-core --example oscillator             a scene solved from code
 #   cargo test --workspace --no-fail-fast                  the test suite
+#   maturin develop, then pytest crates/skg-python/tests   the Python package (skg), in .venv
 # Extra arguments go to `cargo test`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,3 +28,10 @@ step cargo clippy --workspace --all-targets -- -D warnings
 step cargo build --workspace --examples
 step cargo run --quiet -p skg-core --example oscillator
 step cargo test --workspace --no-fail-fast "$@"
+
+# The Python package: .venv with maturin, numpy, pytest and pandas (ci/python-env.sh),
+# the extension built by maturin in the dev profile (the crates it shares with the
+# workspace are built already), and its tests, which compare with the skg-solve just built.
+step bash ci/python-env.sh
+step env VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --quiet -m crates/skg-python/Cargo.toml
+step env SKG_SOLVE="$PWD/target/debug/skg-solve" .venv/bin/python -m pytest -q crates/skg-python/tests

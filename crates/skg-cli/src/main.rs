@@ -91,17 +91,7 @@ fn main() -> ExitCode {
     }
 }
 
-/// The error and its causes, joined by `: ` like `{:#}`, each text once: many library
-/// errors already include their source's message in their own.
+/// The error and its causes ([`skg_core::error_text`]).
 fn describe(e: &anyhow::Error) -> String {
-    let mut text = String::new();
-    for cause in e.chain().map(ToString::to_string) {
-        if !text.contains(&cause) {
-            if !text.is_empty() {
-                text.push_str(": ");
-            }
-            text.push_str(&cause);
-        }
-    }
-    text
+    skg_core::error_text(e.as_ref())
 }

@@ -100,6 +100,9 @@ struct Summary<'a> {
     schema_version: u32,
     /// SHA-256 of the scene file's text (`sha256:<hex>`).
     scene_hash: String,
+    /// The scene file as the user named it (relative to the directory the solve ran in),
+    /// which `plot path` and `animate` read for the walls.
+    scene_file: String,
     #[serde(flatten)]
     outcome: &'a Outcome,
 }
@@ -121,6 +124,22 @@ impl Written {
     pub fn paths(&self) -> impl Iterator<Item = &PathBuf> {
         std::iter::once(&self.trajectory).chain(&self.reference).chain(std::iter::once(&self.summary))
     }
+}
+
+fn summary<'a>(outcome: &'a Outcome, scene: &Scene) -> Summary<'a> {
+    Summary {
+        skg_solve_version: provenance::VERSION,
+        schema_version: provenance::SCHEMA_VERSION,
+        scene_hash: scene.file.origin.content_hash(),
+        scene_file: scene.file.origin.path.clone(),
+        outcome,
+    }
+}
+
+/// The content of `summary.json` of a solve of `scene` (as [`write_outcome`] writes it),
+/// as a JSON value.
+pub fn summary_json(outcome: &Outcome, scene: &Scene) -> Result<serde_json::Value, serde_json::Error> {
+    serde_json::to_value(summary(outcome, scene))
 }
 
 /// Write `trajectory.csv`, `reference.csv` (the verification's reference, when there is
@@ -153,13 +172,7 @@ pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result
         }
     };
     outcome.timings.output_s = t.elapsed().as_secs_f64();
-    let summary = Summary {
-        skg_solve_version: provenance::VERSION,
-        schema_version: provenance::SCHEMA_VERSION,
-        scene_hash: scene.file.origin.content_hash(),
-        outcome,
-    };
-    write_json(&json_path, &summary)?;
+    write_json(&json_path, &summary(outcome, scene))?;
     Ok(Written { trajectory: csv_path, reference, summary: json_path })
 }
 
