@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use commands::{bench, check, plot, reference, solve, sweep, tune};
+use commands::{animate, bench, check, plot, reference, solve, sweep, tune};
 
 #[derive(Parser)]
 #[command(
@@ -55,6 +55,9 @@ enum Command {
     /// Find the smallest wall width σ whose energy artifact stays below a tolerance
     /// at the scene's N (bisection over solves).
     Tune(tune::TuneArgs),
+    /// An animation of a solution's motion in the plane of two coordinates (GIF, MP4
+    /// with ffmpeg, or a PNG strip of frames), with the walls and a time stamp.
+    Animate(animate::AnimateArgs),
     /// Charts (SVG and PNG) from a sweep's results.csv or from solutions.
     #[command(subcommand)]
     Plot(plot::PlotKind),
@@ -77,6 +80,7 @@ fn main() -> ExitCode {
         Some(Command::Merge(a)) => sweep::run_merge(a),
         Some(Command::Tune(a)) => tune::run(a),
         Some(Command::Plot(k)) => plot::run(k),
+        Some(Command::Animate(a)) => animate::run(a),
         Some(Command::SweepWorker { job, result }) => sweep::run_worker(&job, &result),
         Some(Command::Reference(a)) => reference::run(a),
         Some(Command::Check(a)) => check::run(a),

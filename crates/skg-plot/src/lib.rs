@@ -10,6 +10,9 @@
 //!   energy over time.
 //! * [`stability`]: a map over two grid axes, each cell converged / failed / converged
 //!   with energy artifacts / not run.
+//! * [`motion`]: the motion itself: a solution's path in the plane of two coordinates
+//!   with the walls drawn as their curves `h = 0` ([`motion::path`]), an animation
+//!   ([`motion::animate`], GIF or MP4) and a strip of frames ([`motion::strip`]).
 //!
 //! Points are judged by their [`PointStatus`] (the `status` column of results.csv).
 //! Axis values are read as numbers; where a sweep wrote them as expressions (the
@@ -45,6 +48,12 @@ pub enum PlotError {
         /// plotters' message.
         message: String,
     },
+    /// The scene of a picture of the motion is invalid.
+    #[error(transparent)]
+    Scene(#[from] skg_core::scenario::SceneError),
+    /// A trajectory or reference CSV cannot be read.
+    #[error(transparent)]
+    Table(#[from] skg_core::check::CheckError),
     /// A chart or its directory could not be written.
     #[error("cannot write {path}: {source}")]
     Io {
@@ -113,6 +122,8 @@ macro_rules! render {
         Ok(written)
     }};
 }
+
+pub mod motion;
 
 fn e2s<E: std::fmt::Display>(e: E) -> String {
     e.to_string()

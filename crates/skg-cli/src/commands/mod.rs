@@ -5,6 +5,7 @@
 //! while reading or writing files, 2 a command-line usage error (clap), 3 a solve that
 //! did not converge, 4 a tolerance exceeded (`check`).
 
+pub mod animate;
 pub mod bench;
 pub mod check;
 pub mod plot;
