@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use commands::{animate, bench, check, plot, reference, solve, sweep, tune};
+use commands::{animate, bench, check, gallery, plot, reference, solve, sweep, tune};
 
 #[derive(Parser)]
 #[command(
@@ -58,6 +58,9 @@ enum Command {
     /// An animation of a solution's motion in the plane of two coordinates (GIF, MP4
     /// with ffmpeg, or a PNG strip of frames), with the walls and a time stamp.
     Animate(animate::AnimateArgs),
+    /// Solve every shipped scene and write a Markdown page with its path, a strip of
+    /// frames, the verification's error and the time (how docs/gallery.md is made).
+    Gallery(gallery::GalleryArgs),
     /// Charts (SVG and PNG) from a sweep's results.csv or from solutions.
     #[command(subcommand)]
     Plot(plot::PlotKind),
@@ -81,6 +84,7 @@ fn main() -> ExitCode {
         Some(Command::Tune(a)) => tune::run(a),
         Some(Command::Plot(k)) => plot::run(k),
         Some(Command::Animate(a)) => animate::run(a),
+        Some(Command::Gallery(a)) => gallery::run(a),
         Some(Command::SweepWorker { job, result }) => sweep::run_worker(&job, &result),
         Some(Command::Reference(a)) => reference::run(a),
         Some(Command::Check(a)) => check::run(a),

@@ -115,3 +115,33 @@ fn bad_requests_are_clear_errors() {
         assert!(!dir.path().join("a.mp4").exists());
     }
 }
+
+#[test]
+fn gallery_page_with_pictures_and_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("docs/gallery.md");
+    let o = common::skg(
+        &[
+            "gallery",
+            common::scenario("free_fall").to_str().unwrap(),
+            common::scenario("vibrating_plate").to_str().unwrap(),
+            "-o",
+            page.to_str().unwrap(),
+            "-q",
+            "--strip",
+            "3",
+        ],
+        Path::new("."),
+    );
+    assert!(o.status.success(), "{}", common::text(&o));
+    let text = std::fs::read_to_string(&page).unwrap();
+    // free fall is exact to round-off on SBP242: its error is printed as such
+    let row = text.lines().find(|l| l.starts_with("| [free fall](#free-fall)")).unwrap();
+    assert!(row.contains("| 32 SBP242 | global | passed |") && (row.contains("e-15") || row.contains("e-16")), "{row}");
+    assert!(text.contains("## vibrating plate") && text.contains("![vibrating plate frames](img/gallery/vibrating_plate_frames.png)"));
+    for stem in ["free_fall", "vibrating_plate"] {
+        let img = dir.path().join("docs/img/gallery");
+        assert_eq!(png_size(&img.join(format!("{stem}.png"))), (720, 560));
+        assert_eq!(png_size(&img.join(format!("{stem}_frames.png"))), (3 * 260, 230));
+    }
+}

@@ -711,6 +711,20 @@ pub fn path(motion: &Motion, view: &View, stem: &Path) -> Result<Vec<PathBuf>, P
     render!(stem, PATH_SIZE, draw_path(&s))
 }
 
+/// The picture of [`path`] as one PNG file of `size` pixels (written to a temporary file
+/// beside it, then renamed).
+pub fn path_png(motion: &Motion, view: &View, size: (u32, u32), file: &Path) -> Result<PathBuf, PlotError> {
+    register_fonts();
+    let s = Scenery::new(motion, view.clone())?;
+    let tmp = tmp_beside(file)?;
+    let drawn = (|| {
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        draw(&root, &s, Shot::Path)?;
+        root.present().map_err(e2s)
+    })();
+    finish(&tmp, file, drawn)
+}
+
 fn draw_path<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>) -> Result<(), String> {
     draw(root, s, Shot::Path)
 }

@@ -8,6 +8,7 @@
 pub mod animate;
 pub mod bench;
 pub mod check;
+pub mod gallery;
 pub mod plot;
 pub mod reference;
 pub mod solve;
