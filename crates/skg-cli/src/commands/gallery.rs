@@ -54,6 +54,15 @@ fn sci(x: f64) -> String {
     format!("{x:.1e}")
 }
 
+/// A duration in seconds, as milliseconds below one second.
+fn duration(s: f64) -> String {
+    if s < 1.0 {
+        format!("{:.1} ms", s * 1e3)
+    } else {
+        format!("{s:.2} s")
+    }
+}
+
 pub fn run(args: GalleryArgs) -> Result<ExitCode> {
     let scenes = if args.scenes.is_empty() {
         let mut v: Vec<PathBuf> = std::fs::read_dir("scenarios")
@@ -166,7 +175,7 @@ how walls are drawn: `skg-solve plot path --help`.\n"
         let tol = e.tolerance.map_or(String::new(), |t| format!(" ({})", sci(t)));
         let _ = writeln!(
             s,
-            "| [{}](#{}) | {} {} | {} | {}{} | {err}{tol} | {:.2} s |",
+            "| [{}](#{}) | {} {} | {} | {}{} | {err}{tol} | {} |",
             e.name,
             anchor(&e.name),
             e.nodes,
@@ -174,7 +183,7 @@ how walls are drawn: `skg-solve plot path --help`.\n"
             e.method,
             e.verification,
             if e.trusted { "" } else { " (not trusted)" },
-            e.wall_s
+            duration(e.wall_s)
         );
     }
     for e in entries {
@@ -189,13 +198,13 @@ how walls are drawn: `skg-solve plot path --help`.\n"
         );
         let _ = writeln!(
             s,
-            "N = {}, {}, {}; verification {}, error {}; {:.2} s.\n",
+            "N = {}, {}, {}; verification {}, error {}; {}.\n",
             e.nodes,
             e.operator,
             e.method,
             e.verification,
             e.max_error.map_or("–".into(), sci),
-            e.wall_s
+            duration(e.wall_s)
         );
         let _ = writeln!(s, "![{} path](img/gallery/{}.png)\n", e.name, e.stem);
         let _ = writeln!(s, "![{} frames](img/gallery/{}_frames.png)", e.name, e.stem);
