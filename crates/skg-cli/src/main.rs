@@ -20,12 +20,15 @@ action of the scene is discretized in time with summation-by-parts operators and
 — the whole trajectory at once — is found by Ipopt with exact sparse derivatives.\n\n\
 Writes DIR/trajectory.csv (t, each coordinate and its velocity Dq, each multiplier, the energy, the \
 walls' potential energy, each constraint residual, each position constraint's drift, each wall gap), \
-DIR/reference.csv (the same scene integrated by time stepping at the same nodes) and DIR/summary.json (status, \
-verification, attempts, iterations, timings, sizes, residuals).\n\n\
+DIR/reference.csv (the same scene integrated by time stepping at the same nodes) and, last, DIR/summary.json \
+(status, verification, attempts, iterations, timings, sizes, residuals, and the SHA-256 of the files it \
+belongs with: check and plot refuse a trajectory that its summary does not describe). A second skg-solve \
+writing into the same DIR is refused.\n\n\
 Every solve is verified: the trajectory must be within the scene's [verify] tol (or --verify-tol; default \
-1e-4 x the largest coordinate range) of time stepping of the same scene, and every number finite. When the \
-solve does not converge or verify, the fallback ladder tries a coarse-to-fine guess, wall-width continuation, \
-a solve past the end time and windows of halving length (--no-fallback to skip it).\n\n\
+1e-4 x the largest coordinate range) of time stepping of the same scene, every number finite and the \
+kinetic matrix positive definite at every node. When the solve does not converge or verify, the fallback \
+ladder tries a coarse-to-fine guess, wall-width continuation, a solve past the end time and windows of \
+halving length (--no-fallback to skip it).\n\n\
 Exit status, the same for every command: 0 success (a solve: converged and verified); 1 an error in the \
 input or while reading or writing files (the message names the file, line and column); 2 a command-line \
 usage error; 3 the solve did not converge (the summary is still written, marked \"converged\": false); 4 a \

@@ -4,16 +4,9 @@ mod common;
 
 use std::path::Path;
 
-/// Write a variant of the free-fall scene with `from` replaced by `to`.
+/// A variant of a shipped scene, written to `dir/scene.toml`.
 fn variant(dir: &Path, name: &str, replacements: &[(&str, &str)]) -> String {
-    let mut s = std::fs::read_to_string(common::scenario(name)).unwrap();
-    for (from, to) in replacements {
-        assert!(s.contains(from), "{from} not in {name}");
-        s = s.replacen(from, to, 1);
-    }
-    let p = dir.join("scene.toml");
-    std::fs::write(&p, s).unwrap();
-    p.display().to_string()
+    common::variant(dir, name, "scene.toml", replacements).display().to_string()
 }
 
 /// Run on a bad scene: exit code 1, no panic, message contains every `needle`.

@@ -3,7 +3,7 @@
 
 mod common;
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -77,7 +77,9 @@ fn bad_sweep_files_are_clear_errors() {
         ("[[grid]]\nsigma = [\"1/\"]\n", &["sigma"]),
         ("[grid]\nnodes = [64]\n", &["[[grid]]"]),
         ("", &["no points"]),
-        ("[peer]\ntolerances = [2.0]\n", &["tolerances"]),
+        ("[peer]\ntolerances = [2.0]\n", &["tolerances", "sweep.toml:4:1"]),
+        ("timeout = -1\n[[grid]]\nnodes = [64]\n", &["sweep.toml:3:11", "timeout"]),
+        ("artifact_tol = 0\n[[grid]]\nnodes = [64]\n", &["sweep.toml:3:16", "artifact_tol"]),
     ];
     for (body, needles) in cases {
         let p = sweep_file(dir.path(), "tumbler", body);
@@ -95,20 +97,6 @@ fn bad_sweep_files_are_clear_errors() {
     std::fs::write(&p, "[sweep]\nscene = \"nope.toml\"\n[[grid]]\nnodes = [64]\n").unwrap();
     let err = SweepFile::load(&p).unwrap().expand().unwrap_err().to_string();
     assert!(err.contains("missing.toml:2:9") && err.contains("nope.toml"), "{err}");
-}
-
-/// Rows of a results.csv by id; every line must have the header's field count.
-fn rows_by_id(dir: &Path) -> (Results, HashMap<String, usize>) {
-    let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
-    assert!(text.ends_with('\n'), "results.csv ends with a complete line");
-    let r = Results::read(dir).unwrap();
-    let id = r.column_index("id").unwrap();
-    let mut count = HashMap::new();
-    for row in &r.rows {
-        assert_eq!(row.len(), r.header.len());
-        *count.entry(row[id].clone()).or_insert(0) += 1;
-    }
-    (r, count)
 }
 
 #[test]
@@ -141,7 +129,7 @@ fn shards_partition_the_grid_and_merge_joins_them() {
             Path::new("."),
         );
         assert!(o.status.success(), "{}", common::text(&o));
-        let (_, ids) = rows_by_id(&d);
+        let (_, ids) = common::rows_by_id(&d);
         assert_eq!(ids.len(), if k == 1 { 6 } else { 5 });
         dirs.push(d);
     }
@@ -150,8 +138,8 @@ fn shards_partition_the_grid_and_merge_joins_them() {
     args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
     let o = common::skg(&args, Path::new("."));
     assert!(o.status.success(), "{}", common::text(&o));
-    assert!(common::text(&o).contains("every point of the sweep is present"), "{}", common::text(&o));
-    let (r, ids) = rows_by_id(&merged);
+    assert!(common::text(&o).contains("every point of the sweep (11) is present"), "{}", common::text(&o));
+    let (r, ids) = common::rows_by_id(&merged);
     assert_eq!(ids.len(), all.len());
     assert!(ids.values().all(|&c| c == 1));
     let idx = r.column_index("index").unwrap();
@@ -210,7 +198,7 @@ fn killed_sweep_resumes_without_lost_or_duplicated_rows() {
     assert!(o.status.success(), "{}", common::text(&o));
     let t = common::text(&o);
     assert!(t.contains(&format!("{before} already done")), "{t}");
-    let (r, ids) = rows_by_id(&out);
+    let (r, ids) = common::rows_by_id(&out);
     assert_eq!(r.rows.len(), total, "one row per point");
     assert_eq!(ids.len(), total);
     assert!(ids.values().all(|&c| c == 1), "no duplicated rows");

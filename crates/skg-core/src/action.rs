@@ -126,6 +126,38 @@ impl GlobalLayout {
     pub fn is_plus(&self, z: u32) -> bool {
         (z as usize) < self.n_p
     }
+
+    /// The node of Z index `z` and what it is, in words (e.g. `q+ of coordinate x`,
+    /// `the multiplier of q-[N] = 0 for coordinate x`), given the names of the
+    /// coordinates and constraints.
+    pub fn describe(&self, z: usize, coordinates: &[String], constraints: &[String]) -> (usize, String) {
+        let z = z as u32;
+        let last = self.nodes - 1;
+        let node_major = |v: &[u32], names: &[String], what: &str| {
+            let per = names.len().max(1);
+            v.iter().position(|&i| i == z).map(|p| (p / per, format!("{what} {}", names[p % per])))
+        };
+        let boundary = |v: &[u32], node: usize, names: &[String], what: &str| {
+            v.iter().position(|&i| i == z).map(|c| (node, format!("{what} {}", names[c])))
+        };
+        let (q, g) = (coordinates, constraints);
+        node_major(&self.qp, q, "q+ of coordinate")
+            .or_else(|| node_major(&self.lp, g, "λ+ of constraint"))
+            .or_else(|| node_major(&self.qm, q, "q- of coordinate"))
+            .or_else(|| node_major(&self.lm, g, "λ- of constraint"))
+            .or_else(|| boundary(&self.nu_q1, 0, q, "the multiplier of q-[1] = 0 for coordinate"))
+            .or_else(|| boundary(&self.nu_qn, last, q, "the multiplier of q-[N] = 0 for coordinate"))
+            .or_else(|| boundary(&self.nu_l1, 0, g, "the multiplier of λ-[1] = 0 for constraint"))
+            .or_else(|| boundary(&self.nu_ln, last, g, "the multiplier of λ-[N] = 0 for constraint"))
+            .or_else(|| boundary(&self.nu_x, 0, q, "the multiplier of the initial position of coordinate"))
+            .or_else(|| boundary(&self.nu_v, 0, q, "the multiplier of the initial velocity of coordinate"))
+            .unwrap_or((0, format!("unknown {z}")))
+    }
+
+    /// The coordinates q+ of each node in Z.
+    pub fn coordinates(&self, z: &[f64]) -> Vec<Vec<f64>> {
+        (0..self.nodes).map(|k| (0..self.d).map(|i| z[self.qp[k * self.d + i] as usize]).collect()).collect()
+    }
 }
 
 /// Which system a residual or matrix belongs to.

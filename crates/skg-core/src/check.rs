@@ -58,6 +58,10 @@ pub enum CheckError {
     /// The two tables cannot be compared (no shared column, times out of range, …).
     #[error("cannot compare: {0}")]
     Mismatch(String),
+    /// The file does not belong to the `summary.json` beside it
+    /// ([`crate::output::verify_pairing`]).
+    #[error(transparent)]
+    Unpaired(#[from] crate::output::OutputError),
 }
 
 /// A numeric table read from CSV. The first column is `t`; `#` lines are comments.
@@ -77,9 +81,11 @@ impl Table {
         Table { columns: crate::trajectory::trajectory_header(scene), comments: Vec::new(), rows: crate::trajectory::trajectory_rows(tr) }
     }
 
-    /// Read a table; errors name the file and line.
+    /// Read a table; errors name the file and line. A file that the `summary.json`
+    /// beside it lists must be the one it lists (the pairing rule of [`crate::output`]).
     pub fn read(path: &Path) -> Result<Table, CheckError> {
         let text = std::fs::read_to_string(path).map_err(|source| CheckError::Io { path: path.to_path_buf(), source })?;
+        crate::output::verify_pairing(path, text.as_bytes())?;
         Table::parse(&text, &path.display().to_string())
     }
 
@@ -217,13 +223,17 @@ pub struct Tolerances {
 impl Comparison {
     /// Human-readable list of the exceeded tolerances (empty: passed). A per-column
     /// tolerance naming a column that was not compared is reported too.
-    pub fn violations(&self, tol: &Tolerances) -> Vec<String> {
-        let mut out = Vec::new();
+    pub fn violations(&self, tol: &Tolerances) -> Result<Vec<String>, CheckError> {
         for (name, _) in &tol.per_column {
             if !self.columns.iter().any(|c| &c.column == name) {
-                out.push(format!("tolerance given for column `{name}`, which was not compared"));
+                let compared: Vec<&str> = self.columns.iter().map(|c| c.column.as_str()).collect();
+                return Err(CheckError::Mismatch(format!(
+                    "a tolerance is given for column `{name}`, which is not compared (compared: {})",
+                    compared.join(", ")
+                )));
             }
         }
+        let mut out = Vec::new();
         for c in &self.columns {
             let bound = tol.per_column.iter().find(|(n, _)| n == &c.column).map(|(_, b)| *b).or(tol.max_abs);
             if let Some(b) = bound {
@@ -237,7 +247,7 @@ impl Comparison {
                 }
             }
         }
-        out
+        Ok(out)
     }
 }
 
@@ -465,11 +475,15 @@ mod tests {
         assert_eq!(c2.rows_compared, 10);
         // Tolerances.
         let tol = Tolerances { max_abs: Some(1e-6), rms: None, per_column: vec![("x".into(), 2e-3)] };
-        let v = c.violations(&tol);
+        let v = c.violations(&tol).unwrap();
         assert_eq!(v.len(), 1, "{v:?}");
         assert!(v[0].starts_with("energy"), "{v:?}");
-        assert!(c.violations(&Tolerances { max_abs: Some(1e-2), ..Default::default() }).is_empty());
-        assert_eq!(c.violations(&Tolerances { rms: Some(1e-4), ..Default::default() }).len(), 1);
+        assert!(c.violations(&Tolerances { max_abs: Some(1e-2), ..Default::default() }).unwrap().is_empty());
+        assert_eq!(c.violations(&Tolerances { rms: Some(1e-4), ..Default::default() }).unwrap().len(), 1);
+        // A tolerance for a column that is not compared is an error, not a violation.
+        let unknown = Tolerances { per_column: vec![("y".into(), 1e-3)], ..Default::default() };
+        let e = c.violations(&unknown).unwrap_err().to_string();
+        assert!(e.contains("`y`") && e.contains("x, x_dot, energy"), "{e}");
     }
 
     #[test]
@@ -510,6 +524,6 @@ mod tests {
         s2.rows[2][1] = f64::NAN;
         let c = compare(&s2, &r, &CheckOptions::default()).unwrap();
         assert!(c.max_abs.is_nan());
-        assert_eq!(c.violations(&Tolerances { max_abs: Some(1.0), ..Default::default() }).len(), 1);
+        assert_eq!(c.violations(&Tolerances { max_abs: Some(1.0), ..Default::default() }).unwrap().len(), 1);
     }
 }

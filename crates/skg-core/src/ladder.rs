@@ -106,6 +106,7 @@ impl Ladder<'_> {
         }
         let coarse_scene = Scene { nodes: coarse_nodes, ..scene.clone() };
         let coarse = solve::solve_global(&coarse_scene, &Guess::TimeStepping)?;
+        let coarse = coarse.solution;
         if !coarse.status.is_converged() {
             return Ok(false);
         }
@@ -131,10 +132,10 @@ impl Ladder<'_> {
             let mut wide = scene.clone();
             wide.walls.iter_mut().for_each(|w| w.width *= factor);
             let run = solve::solve_global(&wide, &guess)?;
-            if run.status.is_converged() {
+            if run.solution.status.is_converged() {
                 guess = Guess::States {
-                    q: run.trajectory.q,
-                    lambda: run.trajectory.lambda,
+                    q: run.solution.trajectory.q,
+                    lambda: run.solution.trajectory.lambda,
                     description: format!("the solve with every wall width × {factor}"),
                 };
                 widest_converged = Some(factor);

@@ -5,7 +5,8 @@
 //!
 //! 1. [`provenance`] (version, schema version, content hash), [`sbp`] (the
 //!    summation-by-parts operators) and [`scenario`]: the TOML scene, validated and
-//!    resolved to numbers ([`scenario::Scene`]).
+//!    resolved to numbers ([`scenario::Scene`]); [`memory`]: what a solve or a
+//!    reference of a scene would need, checked before anything is allocated.
 //! 2. [`model`]: the scene's expressions, their exact derivatives compiled into tapes
 //!    ([`expr`]), and the walls' geometry; [`contact`]: when a node is in contact with
 //!    a wall.
@@ -33,6 +34,7 @@ pub mod check;
 pub mod contact;
 pub mod convergence;
 pub mod ladder;
+pub mod memory;
 pub mod model;
 pub mod ode;
 pub mod output;

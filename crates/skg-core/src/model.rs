@@ -874,26 +874,47 @@ impl Model {
     }
 
     /// Checks on the initial state at the start time: a positive-definite kinetic matrix
-    /// (masses and inertias), initial positions on every position constraint, initial
-    /// velocities that satisfy every constraint, and an initial position on the allowed
-    /// side of every wall.
+    /// (masses and inertias), independent velocity constraints (∂g/∂q̇ of full row rank),
+    /// initial positions on every position constraint, initial velocities that satisfy
+    /// every constraint, and an initial position on the allowed side of every wall.
     // `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     fn validate_initial_state(&self, scene: &Scene) -> Result<(), SceneError> {
         let mut ws = self.workspace();
         let (q0, v0) = (&scene.initial_q, &scene.initial_v);
-        let ph = self.physical(scene.t_start, q0, v0, &mut ws);
-        check_finite_at_start(scene, &ph)?;
         let file = &scene.file;
-        let sym = (&ph.kinetic + ph.kinetic.transpose()) * 0.5;
-        let eig = sym.symmetric_eigenvalues();
-        let min = eig.iter().cloned().fold(f64::INFINITY, f64::min);
+        if let Some((what, location)) = self.non_finite_expression(scene, scene.t_start, q0, v0) {
+            let state = scene.coordinates.iter().zip(q0).map(|(c, x)| format!("{c} = {x}"));
+            let state = state.chain(scene.coordinates.iter().zip(v0).map(|(c, x)| format!("{c}_dot = {x}")));
+            return Err(SceneError::Invalid {
+                location,
+                message: format!(
+                    "{what} is not finite at the initial state ({}): the scene's expressions must be defined there",
+                    state.collect::<Vec<_>>().join(", ")
+                ),
+            });
+        }
+        let ph = self.physical(scene.t_start, q0, v0, &mut ws);
+        let min = smallest_eigenvalue(&ph.kinetic);
         if min.is_nan() || min <= 0.0 {
             return Err(SceneError::Invalid {
-                location: file.origin.whole(),
+                location: file.origin.locate_in(&file.scene.lagrangian, None),
                 message: format!(
-                    "the kinetic matrix ∂²L/∂q̇² is not positive definite at the initial state \
+                    "the kinetic matrix ∂²L/∂q̇² of the Lagrangian is not positive definite at the initial state \
                      (smallest eigenvalue {min:.3e}): check the masses and inertias in the Lagrangian"
+                ),
+            });
+        }
+        if let Some(a) = self.dependent_constraint(&ph.gv) {
+            return Err(SceneError::Invalid {
+                location: file.origin.locate_in(&file.constraints[a].expression, None),
+                message: format!(
+                    "constraint `{}` is redundant at the initial state: its gradient ∂g/∂q̇ is a combination of those of {} \
+                     (the constraints' Jacobian ∂g/∂q̇ has rank below {}), so its multiplier is not determined: remove it \
+                     or make the constraints independent",
+                    self.constraints[a].name,
+                    self.constraints[..a].iter().map(|c| format!("`{}`", c.name)).collect::<Vec<_>>().join(", "),
+                    self.constraints.len()
                 ),
             });
         }
@@ -943,6 +964,12 @@ impl Model {
             }
         }
         for (j, &h) in ph.h.iter().enumerate() {
+            if !h.is_finite() {
+                return Err(SceneError::Invalid {
+                    location: file.origin.locate_in(&file.walls[j].h, None),
+                    message: format!("wall `{}`: h is not finite at the initial state ({h})", self.walls[j].name),
+                });
+            }
             // An ideal wall may be touched at the start (sliding contact); a Gaussian wall
             // pushes at h = 0 already, so its scene must start strictly inside.
             let allowed = match self.wall_model {
@@ -963,6 +990,69 @@ impl Model {
         }
         Ok(())
     }
+
+    /// The first constraint whose row of `G = ∂g/∂q̇` (n×d) depends linearly on the rows
+    /// before it (relative tolerance 1e-10 on the Gram–Schmidt remainder), if any.
+    fn dependent_constraint(&self, gv: &DMatrix<f64>) -> Option<usize> {
+        let mut basis: Vec<DVector<f64>> = Vec::new();
+        for a in 0..gv.nrows() {
+            let row: DVector<f64> = gv.row(a).transpose();
+            let mut rest = row.clone();
+            for b in &basis {
+                rest -= b * b.dot(&rest);
+            }
+            if rest.norm() <= 1e-10 * row.norm() || rest.norm().is_nan() {
+                return Some(a);
+            }
+            basis.push(rest.normalize());
+        }
+        None
+    }
+
+    /// The first node `k` at which the kinetic matrix ∂²L/∂q̇² of the states `(q[k], v[k])`
+    /// at times `t[k]` is not positive definite, with its smallest eigenvalue.
+    pub fn kinetic_loss(&self, t: &[f64], q: &[Vec<f64>], v: &[Vec<f64>]) -> Option<(usize, f64)> {
+        let mut ws = self.workspace();
+        (0..q.len()).find_map(|k| {
+            let min = smallest_eigenvalue(&self.physical(t[k], &q[k], &v[k], &mut ws).kinetic);
+            (min.is_nan() || min <= 0.0).then_some((k, min))
+        })
+    }
+
+    /// Which of the scene's expressions is not finite at the state (q, v) at time t: a
+    /// description and its place in the scene file. `None` if all are finite.
+    pub fn non_finite_expression(&self, scene: &Scene, t: f64, q: &[f64], v: &[f64]) -> Option<(String, crate::scenario::Location)> {
+        let mut ws = self.workspace();
+        let ph = self.physical(t, q, v, &mut ws);
+        let file = &scene.file;
+        let at = |spanned: &Spanned<String>| file.origin.locate_in(spanned, None);
+        let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());
+        if let Some(j) = ph.h.iter().position(|h| !h.is_finite()) {
+            return Some((format!("the gap h of wall `{}`", self.walls[j].name), at(&file.walls[j].h)));
+        }
+        let row_finite = |m: &DMatrix<f64>, a: usize| m.row(a).iter().all(|x| x.is_finite());
+        if let Some(a) = (0..ph.g.len()).find(|&a| !ph.g[a].is_finite() || !row_finite(&ph.gv, a) || !row_finite(&ph.gq, a)) {
+            return Some((format!("constraint `{}` or its derivatives", self.constraints[a].name), at(&file.constraints[a].expression)));
+        }
+        if !ph.energy.is_finite() || !finite(&ph.p) || !finite(ph.kinetic.as_slice()) || !finite(ph.dpdq.as_slice()) {
+            return Some(("the Lagrangian or its derivatives".into(), at(&file.scene.lagrangian)));
+        }
+        let i = ph.force.iter().position(|f| !f.is_finite())?;
+        let name = &self.coordinates[i];
+        Some(match file.forces.get(name) {
+            Some(src) => (format!("the force on `{name}`, ∂L/∂{name} or a wall's force on it"), at(src)),
+            None => (format!("∂L/∂{name} or a wall's force on `{name}`"), at(&file.scene.lagrangian)),
+        })
+    }
+}
+
+/// The smallest eigenvalue of the symmetric part of a square matrix (NaN if it has a NaN).
+fn smallest_eigenvalue(m: &DMatrix<f64>) -> f64 {
+    if m.iter().any(|x| !x.is_finite()) {
+        return f64::NAN;
+    }
+    let sym = (m + m.transpose()) * 0.5;
+    sym.symmetric_eigenvalues().iter().cloned().fold(f64::INFINITY, f64::min)
 }
 
 /// Relative tolerance of the initial check `h(q₀, t₀) = 0` of a position constraint:
@@ -973,39 +1063,3 @@ pub const POSITION_TOLERANCE: f64 = 1e-9;
 /// A start on an ideal wall (the hard-wall reference) counts as touching it while
 /// `h ≤ 1e-12 · max(1, maxᵢ |q₀ᵢ|)`.
 pub const ON_WALL_TOLERANCE: f64 = 1e-12;
-
-/// The Lagrangian, its momenta and the forces must be numbers at the initial state: a
-/// scene that is NaN or infinite where its motion starts (e.g. `log(x)` at x < 0) is an
-/// input error, named at the expression that produced it.
-fn check_finite_at_start(scene: &Scene, ph: &Physical) -> Result<(), SceneError> {
-    let file = &scene.file;
-    let state = || {
-        let q = scene.coordinates.iter().zip(&scene.initial_q).map(|(c, x)| format!("{c} = {x}"));
-        let v = scene.coordinates.iter().zip(&scene.initial_v).map(|(c, x)| format!("{c}_dot = {x}"));
-        q.chain(v).collect::<Vec<_>>().join(", ")
-    };
-    let not_finite = |location, what: String| SceneError::Invalid {
-        location,
-        message: format!("{what} is not finite at the initial state ({}): the scene's expressions must be defined there", state()),
-    };
-    let lagrangian = file.origin.locate_in(&file.scene.lagrangian, None);
-    if !ph.energy.is_finite() {
-        return Err(not_finite(lagrangian, format!("the Lagrangian's energy q̇·∂L/∂q̇ − L = {}", ph.energy)));
-    }
-    for (i, name) in scene.coordinates.iter().enumerate() {
-        if !ph.p[i].is_finite() {
-            return Err(not_finite(lagrangian.clone(), format!("the momentum ∂L/∂{name}_dot = {}", ph.p[i])));
-        }
-        if !ph.force[i].is_finite() {
-            let location = match file.forces.get(name) {
-                Some(f) => file.origin.locate_in(f, None),
-                None => lagrangian.clone(),
-            };
-            return Err(not_finite(
-                location,
-                format!("the generalized force on `{name}` (∂L/∂{name} plus forces and walls) = {}", ph.force[i]),
-            ));
-        }
-    }
-    Ok(())
-}

@@ -10,11 +10,15 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// Version of the layout of `summary.json`, `results.csv` and `sweep.json`. Raised
 /// whenever a field is renamed, removed or changes meaning (adding one does not).
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// The hash of a file's content, written as `sha256:<64 hex digits>`.
 pub fn content_hash(bytes: &[u8]) -> String {
-    let digest = Sha256::digest(bytes);
+    hex_digest(&Sha256::digest(bytes))
+}
+
+/// A SHA-256 digest written as `sha256:<64 hex digits>`.
+pub fn hex_digest(digest: &[u8]) -> String {
     let mut s = String::with_capacity(7 + 64);
     s.push_str("sha256:");
     for b in digest {

@@ -298,6 +298,7 @@ fn check_times(scene: &Scene, times: &[f64]) -> Result<(), ReferenceError> {
     if (times[0] - scene.t_start).abs() > 1e-12 * (1.0 + scene.t_start.abs()) {
         return Err(TimesError::NotAtStart { first: times[0], start: scene.t_start }.into());
     }
+    crate::memory::check(scene, "the reference", times.len(), crate::memory::reference_bytes(scene, times.len()))?;
     Ok(())
 }
 

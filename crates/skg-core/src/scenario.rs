@@ -252,20 +252,20 @@ pub struct DiscretizationSpec {
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
     /// Ipopt's `tol` and `constr_viol_tol` (default 1e-11).
-    pub tol: Option<f64>,
+    pub tol: Option<Spanned<f64>>,
     /// Ipopt's `max_iter` (default 100).
     pub max_iter: Option<u32>,
     /// Ipopt's console `print_level` (default 0: silent).
-    pub print_level: Option<i32>,
+    pub print_level: Option<Spanned<i32>>,
     /// Ipopt's `linear_solver` (default: Ipopt's).
-    pub linear_solver: Option<String>,
+    pub linear_solver: Option<Spanned<String>>,
     /// The Hessian given to Ipopt (default zero).
-    pub hessian: Option<HessianMode>,
+    pub hessian: Option<Spanned<HessianMode>>,
     /// Ipopt log file, relative to the output directory.
     pub log_file: Option<String>,
     /// Further Ipopt options passed through verbatim, e.g. `mumps_pivot_order = 0`.
     #[serde(default)]
-    pub ipopt: IndexMap<String, IpoptValue>,
+    pub ipopt: IndexMap<String, Spanned<IpoptValue>>,
     /// When the solve fails or is not verified, try the fallback ladder (default true).
     pub fallback: Option<bool>,
 }
@@ -552,6 +552,43 @@ pub struct Scene {
     pub verify: VerifySettings,
 }
 
+/// The largest node count a scene may have (far above what fits in memory for a
+/// solve; the solve and the reference check their memory estimate separately).
+pub const MAX_NODES: usize = 100_000_000;
+
+/// The smallest time step a grid may have (1/Δt and its powers must stay finite).
+const MIN_TIME_STEP: f64 = 1e-100;
+
+/// Check that `nodes` equally spaced times from `t_start` to `t_end` are distinct and
+/// increasing in floating point: the step must exceed a few units in the last place of
+/// the larger end.
+fn check_time_resolution(t_start: f64, t_end: f64, nodes: usize) -> Result<(), String> {
+    let dt = (t_end - t_start) / (nodes as f64 - 1.0);
+    let ulp = t_start.abs().max(t_end.abs()) * f64::EPSILON;
+    if dt > 4.0 * ulp && dt > MIN_TIME_STEP && dt.is_finite() {
+        return Ok(());
+    }
+    if dt == 0.0 {
+        return Err(format!(
+            "the time span end − start = {:e} divided into {} steps gives a zero time step: lengthen the span or use fewer nodes",
+            t_end - t_start,
+            nodes - 1
+        ));
+    }
+    if dt <= MIN_TIME_STEP && dt > 4.0 * ulp {
+        return Err(format!(
+            "the time step Δt = {dt:e} is below {MIN_TIME_STEP:e}: the SBP derivative (∝ 1/Δt) would overflow; rescale time"
+        ));
+    }
+    Err(format!(
+        "the time step Δt = ({t_end:e} − {t_start:e})/{} = {dt:e} is not resolved by floating-point numbers near {:e} \
+         (their spacing there is {ulp:e}), so the {nodes} node times would not be distinct: measure time from 0 (shift start \
+         and end), or use a longer span or fewer nodes",
+        nodes - 1,
+        t_start.abs().max(t_end.abs())
+    ))
+}
+
 /// Names the expression language reserves.
 pub const RESERVED: &[&str] = &["pi", "sin", "cos", "tan", "exp", "log", "sqrt", "abs", "sinh", "cosh", "tanh", "atan"];
 
@@ -748,9 +785,13 @@ impl SceneFile {
         }
         seen.insert(TIME.to_string(), "the time `t`, a reserved name in expressions");
         for p in params.keys() {
-            check_identifier(p).map_err(|e| self.toml_error(format!("parameter `{p}`: {e}")))?;
+            let at = |message: String| match self.parameters.get(p) {
+                Some(v) => self.invalid(v, message),
+                None => self.toml_error(message),
+            };
+            check_identifier(p).map_err(|e| at(format!("parameter `{p}`: {e}")))?;
             if let Some(what) = seen.insert(p.clone(), "a parameter") {
-                return Err(self.toml_error(format!("parameter `{p}` clashes with {what}")));
+                return Err(at(format!("parameter `{p}` clashes with {what}")));
             }
         }
         if self.coordinates.is_empty() {
@@ -791,10 +832,13 @@ impl SceneFile {
                 );
             }
         }
-        let mut walls = Vec::new();
+        let mut walls: Vec<Wall> = Vec::new();
         for w in &self.walls {
             let name = w.name.get_ref().clone();
             check_identifier(&name).map_err(|e| self.invalid(&w.name, e.to_string()))?;
+            if walls.iter().any(|other| other.name == name) {
+                return Err(self.invalid(&w.name, format!("wall `{name}` declared twice (each wall names its column gap_{name})")));
+            }
             let strength = self.eval_value(&w.strength, &format!("walls.{name}.strength"), &params)?;
             if strength < 0.0 {
                 return Err(self.invalid(&w.strength, format!("wall `{name}`: strength must be ≥ 0, got {strength}")));
@@ -823,16 +867,16 @@ impl SceneFile {
             };
             if let Some(dir) = &w.friction_direction {
                 if dir.len() != coordinates.len() {
-                    let location = match dir.first() {
-                        Some(c) => self.origin.locate_in(c, None),
-                        None => self.origin.locate_in(&w.name, None),
-                    };
                     let message = format!(
-                        "wall `{name}`: friction_direction has {} components, the scene has {} coordinates",
+                        "wall `{name}`: friction_direction has {} components, the scene has {} coordinates ({})",
                         dir.len(),
-                        coordinates.len()
+                        coordinates.len(),
+                        coordinates.join(", ")
                     );
-                    return Err(SceneError::Invalid { location, message });
+                    return Err(match dir.first() {
+                        Some(first) => self.invalid(first, message),
+                        None => self.invalid(&w.name, message),
+                    });
                 }
             }
             walls.push(Wall { name, strength, width, friction, friction_velocity });
@@ -849,38 +893,51 @@ impl SceneFile {
             (None, None) => OperatorKind::Sbp242,
         };
         let nodes_raw = match ov.nodes {
-            Some(n) => n as i64,
-            None => *self.time.nodes.get_ref(),
+            Some(n) => n as i128,
+            None => *self.time.nodes.get_ref() as i128,
         };
-        if nodes_raw < operator.min_nodes() as i64 {
+        let nodes_origin = if ov.nodes.is_some() { " (set by --nodes or a sweep point)" } else { "" };
+        if nodes_raw < operator.min_nodes() as i128 {
             return Err(self.invalid(
                 &self.time.nodes,
-                format!("{} needs at least {} nodes, got {}", operator.name(), operator.min_nodes(), nodes_raw),
+                format!("{} needs at least {} nodes, got {nodes_raw}{nodes_origin}", operator.name(), operator.min_nodes()),
             ));
         }
+        if nodes_raw > MAX_NODES as i128 {
+            return Err(self.invalid(&self.time.nodes, format!("at most {MAX_NODES} nodes are supported, got {nodes_raw}{nodes_origin}")));
+        }
+        let nodes = nodes_raw as usize;
+        check_time_resolution(t_start, t_end, nodes).map_err(|m| self.invalid(&self.time.end, format!("{m}{nodes_origin}")))?;
         let formulation = ov.formulation.or(self.discretization.formulation).unwrap_or_default();
         let s = &self.solver;
-        let tol = s.tol.unwrap_or(1e-11);
+        let tol = s.tol.as_ref().map_or(1e-11, |t| *t.get_ref());
         if !(tol > 0.0 && tol.is_finite()) {
-            return Err(self.toml_error(format!("solver.tol must be a positive number, got {tol}")));
+            let t = s.tol.as_ref().expect("the default is positive");
+            return Err(self.invalid(t, format!("solver.tol must be a positive number, got {tol}")));
         }
-        let hessian = ov.hessian.or(s.hessian).unwrap_or_default();
+        let hessian = ov.hessian.or(s.hessian.as_ref().map(|h| *h.get_ref())).unwrap_or_default();
         if hessian == HessianMode::Exact && formulation == Formulation::Full {
-            return Err(self.toml_error(
-                "solver.hessian = \"exact\" is available for the reduced formulation only \
+            let message = "solver.hessian = \"exact\" is available for the reduced formulation only \
                  (the full formulation's Lagrangian Hessian would need fourth derivatives of L; \
-                 for a square system Ipopt's step does not depend on it)"
-                    .into(),
-            ));
+                 for a square system Ipopt's step does not depend on it)";
+            return Err(match (&s.hessian, ov.hessian) {
+                (Some(h), None) => self.invalid(h, message),
+                _ => self.toml_error(format!("{message} (the exact Hessian or the full formulation was asked for on the command line)")),
+            });
+        }
+        let print_level = s.print_level.as_ref().map_or(0, |p| *p.get_ref());
+        if !(0..=12).contains(&print_level) {
+            let p = s.print_level.as_ref().expect("the default is in range");
+            return Err(self.invalid(p, format!("solver.print_level must be 0 (silent) … 12 (Ipopt's range), got {print_level}")));
         }
         let solver = SolverSettings {
             tol,
             max_iter: ov.max_iter.or(s.max_iter).unwrap_or(100),
-            print_level: s.print_level.unwrap_or(0),
-            linear_solver: s.linear_solver.clone(),
+            print_level,
+            linear_solver: s.linear_solver.as_ref().map(|l| l.get_ref().clone()),
             hessian,
             log_file: s.log_file.as_ref().map(PathBuf::from),
-            ipopt: s.ipopt.clone(),
+            ipopt: s.ipopt.iter().map(|(k, v)| (k.clone(), v.get_ref().clone())).collect(),
             fallback: !ov.no_fallback && s.fallback.unwrap_or(true),
         };
         let windows = self.resolve_windows(ov, &params, t_end - t_start)?;
@@ -895,7 +952,7 @@ impl SceneFile {
             walls,
             t_start,
             t_end,
-            nodes: nodes_raw as usize,
+            nodes,
             operator,
             formulation,
             solver,
@@ -955,6 +1012,22 @@ impl SceneFile {
             }
         }
         Ok(VerifySettings { enabled: !ov.no_verify, tol })
+    }
+
+    /// Where the scene sets the Ipopt option `name` (`[solver]` or `[solver.ipopt]`);
+    /// the whole file if it does not (an option skg-solve sets itself).
+    pub fn solver_option_location(&self, name: &str) -> Location {
+        let s = &self.solver;
+        let spanned = match name {
+            "tol" | "constr_viol_tol" => s.tol.as_ref().map(|v| v.span()),
+            "print_level" => s.print_level.as_ref().map(|v| v.span()),
+            "linear_solver" => s.linear_solver.as_ref().map(|v| v.span()),
+            _ => None,
+        };
+        match spanned.or_else(|| s.ipopt.get(name).map(|v| v.span())) {
+            Some(span) => self.origin.locate(span.start),
+            None => self.origin.whole(),
+        }
     }
 
     fn toml_error(&self, message: String) -> SceneError {

@@ -182,6 +182,34 @@ pub struct Diagnostics {
     pub contact_episodes_time_stepping: Option<IndexMap<String, usize>>,
     /// max |q-|, |λ-| of the full formulation's solution (0 in the physical limit).
     pub max_minus_variable: Option<f64>,
+    /// The first node at which the kinetic matrix ∂²L/∂q̇² of the solution is not
+    /// positive definite (the Lagrangian stops describing a mechanical system there: a
+    /// mass or inertia turned zero or negative); `null` if it is positive definite at
+    /// every node. A converged solve with such a node fails verification.
+    pub kinetic_loss: Option<KineticLoss>,
+}
+
+/// Where the solution's kinetic matrix stops being positive definite.
+#[derive(Debug, Clone, Serialize)]
+pub struct KineticLoss {
+    /// The node (0-based).
+    pub node: usize,
+    /// Its time.
+    pub t: f64,
+    /// The smallest eigenvalue of ∂²L/∂q̇² there (≤ 0 or NaN).
+    pub min_eigenvalue: f64,
+}
+
+impl fmt::Display for KineticLoss {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the kinetic matrix ∂²L/∂q̇² is not positive definite at node {} (t = {}, smallest eigenvalue {:.3e}): \
+             the Lagrangian stops describing a mechanical system there (a mass or inertia turned zero or negative), \
+             so the solution is not physical from there on",
+            self.node, self.t, self.min_eigenvalue
+        )
+    }
 }
 
 /// The settings a solve ran with.
@@ -474,7 +502,11 @@ pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, S
 /// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
 /// verified against time stepping ([`crate::verify`]) and, when it fails to converge or
 /// to verify, the fallback ladder ([`crate::ladder`]).
+///
+/// Refused before anything is allocated if its memory estimate exceeds the available
+/// memory ([`crate::memory`]).
 pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    crate::memory::check(scene, "the solve", scene.nodes, crate::memory::solve_bytes(scene))?;
     crate::ladder::solve(scene)
 }
 
@@ -546,9 +578,13 @@ pub fn solve_piece(scene: &Scene, action: &Action, plans: &Plans, times: &[f64],
     let t_guess = Instant::now();
     let mut warnings = Vec::new();
     let (z0, guess_desc, ts_q) = initial_guess(action, times, guess, &mut warnings);
+    check_initial_guess(scene, action, times, &z0)?;
     let initial_guess_s = t_guess.elapsed().as_secs_f64();
 
-    let (solution, z) = run_ipopt(scene.formulation, action, plans, &z0, &ipopt_options(scene))?;
+    let (solution, z) = run_ipopt(scene.formulation, action, plans, &z0, &ipopt_options(scene)).map_err(|e| rejected_option(scene, e))?;
+    if solution.status == ipopt::Status::InvalidOption {
+        return Err(unusable_option(scene));
+    }
 
     let t_post = Instant::now();
     let (trajectory, max_eom_residual) = evaluate(action, times, &z);
@@ -607,6 +643,62 @@ fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut V
         }
     };
     (point_from_states(action, &q, &lambda), desc, ts_q)
+}
+
+/// Refuse an initial guess with a value that is not finite, naming the node, the state
+/// and the scene's expression that is undefined there (Ipopt would only say "starting
+/// point x0[i] = NaN").
+fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64]) -> Result<(), SolveError> {
+    let Some(bad) = z0.iter().position(|x| !x.is_finite()) else { return Ok(()) };
+    let names: Vec<String> = scene.constraints.iter().map(|c| c.name.clone()).collect();
+    let (k, what) = action.layout.describe(bad, &scene.coordinates, &names);
+    let q = action.layout.coordinates(z0);
+    let v = apply_d(&action.op, &q);
+    let source = action.model.non_finite_expression(scene, times[k], &q[k], &v[k]);
+    let state = |xs: &[f64]| xs.iter().map(|x| format!("{x:.6e}")).collect::<Vec<_>>().join(", ");
+    let message = format!(
+        "the initial guess (time stepping from the initial state) is not finite: {what} at node {k} (t = {}) is {}; \
+         at that node q = ({}), q̇ = ({}){}",
+        times[k],
+        z0[bad],
+        state(&q[k]),
+        state(&v[k]),
+        match &source {
+            Some((expr, _)) => format!(", where {expr} is not finite (e.g. sqrt or log of a negative number, a division by zero)"),
+            None => String::new(),
+        }
+    );
+    let location = source.map_or_else(|| scene.file.origin.whole(), |(_, at)| at);
+    Err(SceneError::Invalid { location, message }.into())
+}
+
+/// An option Ipopt refused when it was set, as an input error at the option's place in
+/// the scene file; other errors pass through.
+fn rejected_option(scene: &Scene, e: SolveError) -> SolveError {
+    let SolveError::Ipopt(ipopt::SolveError::BadOption { name, value }) = &e else { return e };
+    let message = format!(
+        "Ipopt refused the option {name} = {value}: it has no such option, or the value has the wrong type or is outside \
+         the option's range (Ipopt prints its reason on stdout)"
+    );
+    SceneError::Invalid { location: scene.file.solver_option_location(name), message }.into()
+}
+
+/// Ipopt's `Invalid_Option` at the start of a solve (an option value it accepted but
+/// cannot use, e.g. a linear solver whose library it cannot load), as an input error.
+fn unusable_option(scene: &Scene) -> SolveError {
+    let (location, message) = match &scene.solver.linear_solver {
+        Some(solver) => (
+            scene.file.solver_option_location("linear_solver"),
+            format!(
+                "Ipopt cannot use linear_solver = \"{solver}\" (Invalid_Option: its library could not be loaded); Debian's \
+                 Ipopt has only MUMPS: use linear_solver = \"mumps\" or remove the key"
+            ),
+        ),
+        None => {
+            (scene.file.origin.whole(), "Ipopt stopped with Invalid_Option: an option of [solver.ipopt] has a value it cannot use".into())
+        }
+    };
+    SceneError::Invalid { location, message }.into()
 }
 
 /// The unknown vector Z with the given coordinates and multipliers at the nodes, the
@@ -763,57 +855,18 @@ impl fmt::Display for Method {
     }
 }
 
-/// One attempt at the whole span: a global solve or a sequence of windows, with the
+/// One attempt at the whole span: a global solve or a sequence of windows, on the
 /// scene's grid.
 #[derive(Debug, Clone)]
 pub struct Run {
     /// How the span was covered.
     pub method: Method,
-    /// How the solve ended: converged only if every piece converged (else the first
-    /// piece that did not).
-    pub status: SolveStatus,
-    /// Ipopt's iterations, summed over the pieces.
-    pub iterations: usize,
-    /// Ipopt's iteration tables, one after the other.
-    pub history: Vec<ipopt::IterationStat>,
-    /// The solution at the scene's nodes.
-    pub trajectory: Trajectory,
-    /// max |c| over the pieces.
-    pub max_residual: f64,
-    /// max |equation of motion| at interior nodes of the pieces.
-    pub max_eom_residual: f64,
-    /// max |q-|, |λ-| for the full formulation.
-    pub max_minus_variable: Option<f64>,
-    /// Time-stepping coordinates at the scene's nodes, when every guess made them.
-    pub time_stepping_q: Option<NodeSeries>,
-    /// How the initial guess was made.
-    pub guess: String,
-    /// Where the time went (summed over the pieces).
-    pub timings: Timings,
     /// The sizes of one piece's system.
     pub sizes: Sizes,
-}
-
-impl Run {
-    /// A global run: the scene's whole span solved as one piece.
-    pub fn global(piece: Piece, sizes: Sizes, setup_s: f64) -> Run {
-        let mut timings = piece.timings.clone();
-        timings.setup_s = setup_s;
-        Run {
-            method: Method::Global,
-            status: piece.status,
-            iterations: piece.iterations,
-            history: piece.history,
-            trajectory: piece.trajectory,
-            max_residual: piece.max_residual,
-            max_eom_residual: piece.max_eom_residual,
-            max_minus_variable: piece.max_minus_variable,
-            time_stepping_q: piece.time_stepping_q,
-            guess: piece.guess,
-            timings,
-            sizes,
-        }
-    }
+    /// The solution over the whole span. For windows, the pieces joined: converged only
+    /// if every window converged (else the status of the first that did not),
+    /// iterations, iteration tables and times one after the other, residuals maximized.
+    pub solution: Piece,
 }
 
 /// Solve the scene's whole span in one piece from `guess`.
@@ -823,28 +876,34 @@ pub fn solve_global(scene: &Scene, guess: &Guess) -> Result<Run, SolveError> {
     let plans = Plans::new(scene, &action);
     let setup_s = t_setup.elapsed().as_secs_f64();
     let (times, _) = grid(scene);
-    let piece = solve_piece(scene, &action, &plans, &times, guess)?;
-    Ok(Run::global(piece, sizes(scene, &action, &plans), setup_s))
+    let mut solution = solve_piece(scene, &action, &plans, &times, guess)?;
+    solution.timings.setup_s = setup_s;
+    Ok(Run { method: Method::Global, sizes: sizes(scene, &action, &plans), solution })
 }
 
 /// The outcome of a run: its diagnostics, verification and warnings (the ladder adds
 /// the attempts and a remedy).
 pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
+    let Run { method, sizes, solution: run } = run;
     let t = Instant::now();
-    let verification = verify::verify(scene, model, &run.trajectory);
+    let mut verification = verify::verify(scene, model, &run.trajectory);
     let mut timings = run.timings.clone();
     timings.verification_s = t.elapsed().as_secs_f64();
     let diagnostics = diagnose(model, &run);
-    let warnings = suspicions(&diagnostics, run.time_stepping_q.as_deref(), run.status);
+    let mut warnings = suspicions(&diagnostics, run.time_stepping_q.as_deref(), run.status);
+    if let Some(loss) = &diagnostics.kinetic_loss {
+        verification.fail(loss.to_string());
+        warnings.push(loss.to_string());
+    }
     Outcome {
         scene: scene.name.clone(),
         status: run.status,
         verification,
-        method: run.method,
+        method,
         ipopt_version: ipopt::ipopt_version().to_string(),
         iterations: run.iterations,
         settings: settings(scene, &run.trajectory.t, run.guess),
-        sizes: run.sizes,
+        sizes,
         timings,
         diagnostics,
         warnings,
@@ -949,7 +1008,7 @@ fn end_multipliers(ph: &crate::model::Physical, dp: &[f64]) -> Vec<f64> {
     }
 }
 
-fn diagnose(model: &Model, run: &Run) -> Diagnostics {
+fn diagnose(model: &Model, run: &Piece) -> Diagnostics {
     let tr = &run.trajectory;
     let nodes = tr.t.len();
     let max_abs = |rows: &[Vec<f64>]| rows.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
@@ -980,6 +1039,11 @@ fn diagnose(model: &Model, run: &Run) -> Diagnostics {
         contact_episodes: contact_episodes(model, &tr.h),
         contact_episodes_time_stepping,
         max_minus_variable: run.max_minus_variable,
+        kinetic_loss: model.kinetic_loss(&tr.t, &tr.q, &tr.v).map(|(node, min_eigenvalue)| KineticLoss {
+            node,
+            t: tr.t[node],
+            min_eigenvalue,
+        }),
     }
 }
 

@@ -158,6 +158,14 @@ pub enum TuneError {
     /// The tolerance on the artifact is not positive.
     #[error("the tolerance must be positive, got {0}")]
     BadTolerance(f64),
+    /// A bracket end or the bracket's relative width is not a positive number.
+    #[error("{name} must be a positive number, got {value}")]
+    BadSearchOption {
+        /// The option (`lo`, `hi`, `rel`).
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
     /// The parameter to tune is not one of the scene's.
     #[error("the scene has no parameter `{param}` (parameters: {})", .known.join(", "))]
     UnknownParameter {
@@ -224,6 +232,11 @@ pub fn tune_width(
     };
     if opts.tol.is_nan() || opts.tol <= 0.0 {
         return Err(TuneError::BadTolerance(opts.tol));
+    }
+    for (name, value) in [("lo", opts.lo), ("hi", opts.hi), ("rel", Some(opts.rel))] {
+        if let Some(value) = value.filter(|v| !(*v > 0.0 && v.is_finite())) {
+            return Err(TuneError::BadSearchOption { name, value });
+        }
     }
     let base = file.clone().resolve(ov)?;
     if crate::model::Model::build(&base)?.depends_on_time {

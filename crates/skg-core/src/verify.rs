@@ -110,6 +110,13 @@ impl Verification {
     pub fn is_acceptable(&self) -> bool {
         self.status.is_acceptable()
     }
+
+    /// Fail the verification for a reason found outside the comparison (e.g. a kinetic
+    /// matrix that is not positive definite at some node), keeping the measured errors.
+    pub fn fail(&mut self, reason: String) {
+        self.status = VerifyStatus::Failed;
+        self.reason = if self.reason.is_empty() { reason } else { format!("{reason}; {}", self.reason) };
+    }
 }
 
 /// Verify `tr`, a solution of `scene` with model `model`, against time stepping of the same

@@ -27,7 +27,7 @@ use std::time::Instant;
 
 use crate::contact;
 use crate::scenario::{Scene, Windows};
-use crate::solve::{self, build_action_on, solve_piece, Guess, Method, Plans, Run, SolveError, Timings};
+use crate::solve::{self, build_action_on, solve_piece, Guess, Method, Piece, Plans, Run, SolveError, Timings};
 use crate::trajectory::Trajectory;
 
 /// Nodes and restart of the windows of a scene.
@@ -125,8 +125,8 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
         start += keep;
     }
     let length = (grid.nodes - 1) as f64 * grid.dt;
-    Ok(Run {
-        method: Method::Windows { length, overlap: length - grid.keep as f64 * grid.dt, nodes_per_window: grid.nodes, count },
+    let method = Method::Windows { length, overlap: length - grid.keep as f64 * grid.dt, nodes_per_window: grid.nodes, count };
+    let solution = Piece {
         status: run_status.expect("at least one window"),
         iterations,
         history,
@@ -138,8 +138,8 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
         guess: "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) from each window's initial state"
             .into(),
         timings,
-        sizes,
-    })
+    };
+    Ok(Run { method, sizes, solution })
 }
 
 /// Neighbours on each side of a restart node that must be out of contact too.

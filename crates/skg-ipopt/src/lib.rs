@@ -491,10 +491,12 @@ pub enum SolveError {
     Create(String),
     /// Ipopt refused an option (unknown name, wrong type or value out of range). Ipopt
     /// itself prints the reason to stdout.
-    #[error("Ipopt rejected option {name}")]
+    #[error("Ipopt rejected option {name} = {value}")]
     BadOption {
         /// The option's name.
         name: String,
+        /// The value given, as text.
+        value: String,
     },
     /// A callback returned `Err` and Ipopt did not succeed; the first error.
     #[error("evaluation failed: {0}")]
@@ -566,31 +568,35 @@ impl Handle {
         self.raw.as_ptr()
     }
 
-    fn c_name(name: &str) -> Result<CString, SolveError> {
-        CString::new(name).map_err(|_| SolveError::BadOption { name: name.to_owned() })
+    fn c_name(name: &str, value: &dyn fmt::Display) -> Result<CString, SolveError> {
+        CString::new(name).map_err(|_| Self::bad(name, value))
+    }
+
+    fn bad(name: &str, value: &dyn fmt::Display) -> SolveError {
+        SolveError::BadOption { name: name.to_owned(), value: value.to_string() }
     }
 
     fn set_str(&self, name: &str, value: &str) -> Result<(), SolveError> {
-        let key = Self::c_name(name)?;
-        let val = CString::new(value).map_err(|_| SolveError::BadOption { name: name.to_owned() })?;
+        let key = Self::c_name(name, &value)?;
+        let val = CString::new(value).map_err(|_| Self::bad(name, &value))?;
         // SAFETY: valid problem; both strings are NUL-terminated and outlive the call;
         // Ipopt only reads them (the C prototype lacks `const`) and copies them.
         let ok = unsafe { ffi::AddIpoptStrOption(self.raw(), key.as_ptr() as *mut c_char, val.as_ptr() as *mut c_char) };
-        Self::check(ok, name)
+        Self::check(ok, name, &format!("{value:?}"))
     }
 
     fn set_num(&self, name: &str, value: f64) -> Result<(), SolveError> {
-        let key = Self::c_name(name)?;
+        let key = Self::c_name(name, &value)?;
         // SAFETY: valid problem; NUL-terminated key that outlives the call, only read.
         let ok = unsafe { ffi::AddIpoptNumOption(self.raw(), key.as_ptr() as *mut c_char, value) };
-        Self::check(ok, name)
+        Self::check(ok, name, &value)
     }
 
     fn set_int(&self, name: &str, value: i32) -> Result<(), SolveError> {
-        let key = Self::c_name(name)?;
+        let key = Self::c_name(name, &value)?;
         // SAFETY: valid problem; NUL-terminated key that outlives the call, only read.
         let ok = unsafe { ffi::AddIpoptIntOption(self.raw(), key.as_ptr() as *mut c_char, value) };
-        Self::check(ok, name)
+        Self::check(ok, name, &value)
     }
 
     fn set(&self, name: &str, value: &OptionValue) -> Result<(), SolveError> {
@@ -601,9 +607,9 @@ impl Handle {
         }
     }
 
-    fn check(ok: Bool, name: &str) -> Result<(), SolveError> {
+    fn check(ok: Bool, name: &str, value: &dyn fmt::Display) -> Result<(), SolveError> {
         if ok == FALSE {
-            Err(SolveError::BadOption { name: name.to_owned() })
+            Err(Self::bad(name, value))
         } else {
             Ok(())
         }
@@ -630,7 +636,7 @@ impl Handle {
         }
         self.set_num("tol", options.tol)?;
         self.set_num("constr_viol_tol", options.constr_viol_tol)?;
-        let max_iter = i32::try_from(options.max_iter).map_err(|_| SolveError::BadOption { name: "max_iter".to_owned() })?;
+        let max_iter = i32::try_from(options.max_iter).map_err(|_| Self::bad("max_iter", &options.max_iter))?;
         self.set_int("max_iter", max_iter)?;
         if !options.scaling {
             self.set_str("nlp_scaling_method", "none")?;
@@ -1572,7 +1578,7 @@ mod tests {
         let mut p = Circle::new(2.0, Mode::Normal);
         let opts = Options { extra: vec![("no_such_option".into(), OptionValue::Int(3))], ..Options::default() };
         match solve(&mut p, &[1.0, 0.5], &opts) {
-            Err(SolveError::BadOption { name }) => assert_eq!(name, "no_such_option"),
+            Err(SolveError::BadOption { name, .. }) => assert_eq!(name, "no_such_option"),
             other => panic!("expected BadOption, got {:?}", other.map(|s| s.status)),
         }
         let opts = Options { print_level: 99, ..Options::default() };

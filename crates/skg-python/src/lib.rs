@@ -330,8 +330,10 @@ fn run_sweep<'py>(
         shard,
         worker_exe: exe,
         progress,
+        retry_failed: false,
+        new_results: false,
     };
-    let r = py.detach(|| sweep::run_sweep(&file, &opts)).map_err(|e| sweep_err(py, &e))?;
+    let r = py.detach(|| file.expand().and_then(|expanded| sweep::run_sweep(&file, &expanded, &opts))).map_err(|e| sweep_err(py, &e))?;
     let d = PyDict::new(py);
     d.set_item("name", file.name())?;
     d.set_item("total", r.total)?;

@@ -14,12 +14,18 @@
 //!   child dies with the driver (`PR_SET_PDEATHSIG`), and Ctrl-C reaches the whole
 //!   process group.
 //! * **Results**: the driver alone appends to `results.csv`, one whole line per
-//!   finished point, flushed and fsync'd. On a rerun a trailing partial line (from a
-//!   kill in the middle of a write) is cut off and points whose id is present are skipped:
-//!   no row is lost or duplicated. A rerun refuses a `results.csv` whose rows come from a
-//!   base scene with other content (their `scene_hash`).
+//!   finished point, flushed and fsync'd, and holds the output directory's lock
+//!   ([`output::OutputDir`]) meanwhile, so a second sweep into it is refused. On a rerun
+//!   a trailing partial line (from a kill in the middle of a write) is cut off and points
+//!   whose id is present are skipped: no row is lost or duplicated; with
+//!   [`SweepOptions::retry_failed`] the rows of points that did not converge are removed
+//!   first, so they run again.
+//! * **Identity of the inputs**: rows carry the hashes of the base scene and of the
+//!   reference file, `sweep.json` the [`RowSettings`]; a rerun with other inputs is
+//!   refused ([`SweepOptions::new_results`] moves the old result set aside instead).
 //! * **Shards**: `--shard k/n` keeps the points whose index is `k−1 mod n`; [`merge`]
-//!   joins the shards' `results.csv` files (of one base scene and one schema).
+//!   joins the shards' `results.csv` files (of one sweep, one input content and one
+//!   schema) and refuses an incomplete set unless asked for a partial merge.
 //!
 //! **`results.csv`** is a plain CSV (one header line, no comments: `pd.read_csv` reads
 //! it). Its columns ([`results_columns`]), in order:
@@ -40,14 +46,15 @@
 //!   `energy_drift`, `energy_artifact` (empty unless the energy is conserved:
 //!   [`skg_core::tune::conserves_energy`]), `artifacts`, `max_residual`, `message`;
 //! * the provenance ([`Provenance`]): `skg_solve_version`, `schema_version` and
-//!   `scene_hash` (`sha256:…` of the base scene file's content, as the worker read it).
+//!   `scene_hash` (`sha256:…` of the base scene file's content, as the worker read it),
+//!   `reference_hash` (of the reference file's content; empty without one).
 //!
 //! [`Results::read`] refuses a file of another schema version (or one without the
 //! `schema_version` column, written before it existed) with a message naming the file.
 //!
 //! **`sweep.json`**, beside `results.csv` ([`SweepInfo`]): the sweep's name, the sweep
-//! file, the base scene, `skg_solve_version`, `schema_version`, `scene_hash`, the number
-//! of points of the whole sweep, the shard and the ids of this run's points.
+//! file, the base scene, the provenance, the row settings, the number of points of the
+//! whole sweep, the shard, the ids of this run's points and of every point.
 
 #![warn(missing_docs)]
 // Errors carry file:line:column text, as in the core modules.
@@ -62,7 +69,7 @@ pub use results::{
 };
 pub use status::{PointStatus, UnknownStatus};
 
-use std::collections::{BTreeMap, HashSet, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, HashSet, VecDeque};
 use std::fmt;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -116,6 +123,22 @@ pub enum SweepError {
     /// Writing `sweep.json`, a job file or `results.csv` failed.
     #[error(transparent)]
     Output(#[from] output::OutputError),
+    /// The shards given to [`merge`] do not hold every point of the sweep.
+    #[error(
+        "the shards hold {present} of the sweep's {total} points{}; missing: {}. Run the missing shards, or merge what there is with --partial",
+        if shards.is_empty() { String::new() } else { format!(" (shards given: {})", shards.join(", ")) },
+        list_points(missing)
+    )]
+    Incomplete {
+        /// Points present.
+        present: usize,
+        /// Points of the sweep.
+        total: usize,
+        /// The shards given (`k/n`).
+        shards: Vec<String>,
+        /// (index, id) of every missing point.
+        missing: Vec<(usize, String)>,
+    },
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
@@ -180,16 +203,17 @@ pub enum ReferenceSpec {
 pub struct SweepMeta {
     /// Base scene file, relative to the sweep file.
     pub scene: Spanned<String>,
-    /// Name (default: the sweep file's name).
+    /// Name (default: the sweep file's name); a plain file name, since it names the
+    /// default output directory `out/sweeps/<name>`.
     #[serde(default)]
-    pub name: Option<String>,
+    pub name: Option<Spanned<String>>,
     /// Reference to measure errors against: a CSV path relative to the sweep file, or
     /// `"integrate"`. Without it the error columns stay empty.
     #[serde(default)]
     pub reference: Option<Spanned<String>>,
     /// Columns compared with the reference (default: the scene's coordinates).
     #[serde(default)]
-    pub compare: Option<Vec<String>>,
+    pub compare: Option<Spanned<Vec<String>>>,
     /// Nodes at the end excluded from errors and the energy artifact (default 2: the
     /// benign boundary nodes, docs/solver.md).
     #[serde(default)]
@@ -197,7 +221,7 @@ pub struct SweepMeta {
     /// Tolerance on the energy artifact: above it a converged point counts as
     /// "converged with energy artifacts" (default 1e-5, relative; see [`skg_core::tune`]).
     #[serde(default)]
-    pub artifact_tol: Option<f64>,
+    pub artifact_tol: Option<Spanned<f64>>,
     /// Keep each point's `trajectory.csv` and `summary.json` under `points/<id>/`.
     #[serde(default)]
     pub keep_trajectories: bool,
@@ -208,7 +232,7 @@ pub struct SweepMeta {
     /// Wall-time limit of one point in seconds: a worker still running then is killed and
     /// the point recorded as [`PointStatus::TimedOut`] (default: no limit).
     #[serde(default)]
-    pub timeout: Option<f64>,
+    pub timeout: Option<Spanned<f64>>,
 }
 
 /// `[peer]`: the time-stepping reference integrator at a ladder of tolerances.
@@ -241,6 +265,13 @@ pub struct SweepFile {
     #[serde(skip)]
     pub origin: Origin,
 }
+
+/// The most points one sweep file may expand to (a larger grid is refused before it is
+/// materialized).
+pub const MAX_POINTS: usize = 10_000_000;
+
+/// Above this many points to run, a sweep starts only when confirmed (`--yes`).
+pub const CONFIRM_ABOVE: usize = 10_000;
 
 /// Axes that are not scene parameters.
 pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "hessian", "max_iter"];
@@ -383,6 +414,8 @@ pub struct Expanded {
     pub duplicates: usize,
     /// SHA-256 of the base scene file's content (`sha256:…`).
     pub scene_hash: String,
+    /// SHA-256 of the reference file's content, when errors are measured against a file.
+    pub reference_hash: Option<String>,
 }
 
 impl Expanded {
@@ -470,10 +503,58 @@ impl SweepFile {
 
     /// The sweep's name: `[sweep] name`, else the sweep file's name without `.toml`.
     pub fn name(&self) -> String {
-        self.sweep
-            .name
-            .clone()
-            .unwrap_or_else(|| Path::new(&self.origin.path).file_stem().map_or("sweep".into(), |s| s.to_string_lossy().into_owned()))
+        match &self.sweep.name {
+            Some(name) => name.get_ref().clone(),
+            None => Path::new(&self.origin.path).file_stem().map_or("sweep".into(), |s| s.to_string_lossy().into_owned()),
+        }
+    }
+
+    /// Refuse a `[sweep] name` that is not a plain file name: it names the default
+    /// output directory `out/sweeps/<name>`, which must not be the parent directory or
+    /// lie outside.
+    fn check_name(&self) -> Result<(), SweepError> {
+        let Some(name) = &self.sweep.name else { return Ok(()) };
+        let n = name.get_ref();
+        let plain = !n.trim().is_empty() && n != "." && n != ".." && !n.contains(['/', '\\', '\0']);
+        if plain {
+            return Ok(());
+        }
+        Err(self.invalid(name, format!("sweep.name = {n:?} must be a plain file name (no `/`, not empty, not `.` or `..`): it names the output directory out/sweeps/<name>")))
+    }
+
+    /// Refuse `compare` columns that a trajectory of the base scene, or the reference
+    /// file, does not have, before any point runs.
+    fn check_compare_columns(&self, scene: &Scene) -> Result<(), SweepError> {
+        let Some(compare) = &self.sweep.compare else { return Ok(()) };
+        let produced = skg_core::trajectory::trajectory_header(scene);
+        let reference = match self.reference() {
+            Some(ReferenceSpec::File(p)) => Some((
+                Table::read(&p).map_err(|e| self.invalid(self.sweep.reference.as_ref().expect("a file reference"), e.to_string()))?.columns,
+                p,
+            )),
+            _ => None,
+        };
+        if compare.get_ref().is_empty() {
+            return Err(self.invalid(compare, "sweep.compare is empty: name at least one column (default: the coordinates)"));
+        }
+        for c in compare.get_ref() {
+            if c == "t" || !produced.contains(c) {
+                let choices: Vec<&str> = produced.iter().skip(1).map(String::as_str).collect();
+                return Err(self.invalid(
+                    compare,
+                    format!("sweep.compare: a trajectory of this scene has no column `{c}` (columns: {})", choices.join(", ")),
+                ));
+            }
+            if let Some((columns, path)) = &reference {
+                if !columns.contains(c) {
+                    return Err(self.invalid(
+                        compare,
+                        format!("sweep.compare: the reference {} has no column `{c}` (columns: {})", path.display(), columns.join(", ")),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Where errors are measured against, if anywhere (`[sweep] reference`).
@@ -494,33 +575,30 @@ impl SweepFile {
 
     /// Tolerance on the energy artifact (default [`skg_core::tune::DEFAULT_ARTIFACT_TOL`]).
     pub fn artifact_tol(&self) -> f64 {
-        self.sweep.artifact_tol.unwrap_or(skg_core::tune::DEFAULT_ARTIFACT_TOL)
+        self.sweep.artifact_tol.as_ref().map_or(skg_core::tune::DEFAULT_ARTIFACT_TOL, |t| *t.get_ref())
     }
 
     /// Expand the grids, explicit points and peer ladder, and check every point against
     /// the base scene (parameter names, values, node counts) before anything runs.
     pub fn expand(&self) -> Result<Expanded, SweepError> {
+        self.check_name()?;
         let base = SceneFile::load(&self.scene_path()).map_err(|e| SweepError::Invalid {
             location: self.origin.locate_in(&self.sweep.scene, None),
             message: format!("base scene: {e}"),
         })?;
-        if let Some(tol) = self.sweep.artifact_tol {
-            if !(tol > 0.0 && tol.is_finite()) {
-                return Err(SweepError::Invalid {
-                    location: self.origin.whole(),
-                    message: format!("sweep.artifact_tol must be a positive number, got {tol}"),
-                });
+        if let Some(tol) = &self.sweep.artifact_tol {
+            if !(*tol.get_ref() > 0.0 && tol.get_ref().is_finite()) {
+                return Err(self.invalid(tol, format!("sweep.artifact_tol must be a positive number, got {}", tol.get_ref())));
             }
         }
-        if let Some(t) = self.sweep.timeout {
-            if !(t > 0.0 && t.is_finite()) {
-                return Err(SweepError::Invalid {
-                    location: self.origin.whole(),
-                    message: format!("sweep.timeout must be a positive number of seconds, got {t}"),
-                });
+        if let Some(t) = &self.sweep.timeout {
+            if !(*t.get_ref() > 0.0 && t.get_ref().is_finite()) {
+                return Err(self.invalid(t, format!("sweep.timeout must be a positive number of seconds, got {}", t.get_ref())));
             }
         }
+        let mut reference_hash = None;
         if let Some(ReferenceSpec::File(p)) = self.reference() {
+            reference_hash = std::fs::read(&p).ok().map(|bytes| skg_core::provenance::content_hash(&bytes));
             if !p.is_file() {
                 let r = self.sweep.reference.as_ref().expect("reference given");
                 return Err(self.invalid(
@@ -548,6 +626,17 @@ impl SweepFile {
                 )))
             }
         };
+        let mut grid_points = self.grid.iter().map(|g| g.get_ref().values().map(|v| v.values().len()).try_fold(1usize, usize::checked_mul));
+        let listed = grid_points.try_fold(self.points.len(), |sum, n| n.and_then(|n| sum.checked_add(n)));
+        if listed.is_none_or(|n| n > MAX_POINTS) {
+            return Err(SweepError::Invalid {
+                location: self.origin.whole(),
+                message: format!(
+                    "the sweep has {} points, more than the {MAX_POINTS} one sweep file may have: split it into several sweep files",
+                    listed.map_or("more than 2^64".to_string(), |n| n.to_string())
+                ),
+            });
+        }
         for g in &self.grid {
             let mut combos: Vec<Vec<(String, String)>> = vec![Vec::new()];
             for (axis, values) in g.get_ref() {
@@ -591,7 +680,7 @@ impl SweepFile {
             for &rtol in &peer.tolerances {
                 if !(rtol > 0.0 && rtol < 1.0) {
                     return Err(SweepError::Invalid {
-                        location: self.origin.whole(),
+                        location: self.locate_key(spanned, "tolerances"),
                         message: format!("peer.tolerances: {rtol} is not in (0, 1)"),
                     });
                 }
@@ -620,6 +709,13 @@ impl SweepFile {
                 .clone()
                 .resolve(&ov)
                 .map_err(|e| SweepError::Invalid { location: loc.clone(), message: format!("point {}: {e}", p.canonical()) })?;
+            let memory = match p.method {
+                Method::Skg => skg_core::memory::check(&scene, "the solve", scene.nodes, skg_core::memory::solve_bytes(&scene)),
+                Method::Ode { .. } => {
+                    skg_core::memory::check(&scene, "the reference", scene.nodes, skg_core::memory::reference_bytes(&scene, scene.nodes))
+                }
+            };
+            memory.map_err(|e| SweepError::Invalid { location: loc.clone(), message: format!("point {}: {e}", p.canonical()) })?;
             if seen.insert(p.id()) {
                 p.evaluated = evaluated_parameters(&p, &scene);
                 costs.push(estimated_cost(&scene, &p.method));
@@ -628,8 +724,14 @@ impl SweepFile {
                 duplicates += 1;
             }
         }
+        let first = base
+            .clone()
+            .resolve(&points[0].overrides().unwrap_or_default())
+            .map_err(|e| SweepError::Invalid { location: self.origin.whole(), message: e.to_string() })?;
+        self.check_compare_columns(&first)?;
         let expression_axes = expression_axes(&axes, &points);
-        let expanded = Expanded { points, costs, axes, expression_axes, duplicates, scene_hash: base.origin.content_hash() };
+        let expanded =
+            Expanded { points, costs, axes, expression_axes, duplicates, scene_hash: base.origin.content_hash(), reference_hash };
         self.check_column_names(&expanded.columns())?;
         Ok(expanded)
     }
@@ -667,6 +769,22 @@ pub fn estimated_cost(scene: &Scene, method: &Method) -> f64 {
             n * width * full
         }
     }
+}
+
+/// Seconds of one worker per unit of [`estimated_cost`], and per point (process start,
+/// scene setup): a rough fit to the release-build timings of docs/benchmarks.md. It
+/// gives 0.08 s for the tumbler at N = 256 (measured: 0.01 s plus the process start),
+/// 3.3 s at N = 16384 (1.5 s) and 0.85 s for the rolling disk at N = 4096 (1.7 s: the
+/// cost of a scene with more unknowns per node grows faster), so within a factor of
+/// about 2 for the shipped scenes: enough to tell minutes from days.
+const SECONDS_PER_COST: f64 = 1.0e-4;
+const SECONDS_PER_POINT: f64 = 0.03;
+
+/// A rough estimate of the wall time of running `points` with `jobs` workers (only to
+/// tell the user what a sweep will take before it starts).
+pub fn estimated_wall_s(expanded: &Expanded, points: &[&Point], jobs: usize) -> f64 {
+    let serial: f64 = points.iter().map(|p| SECONDS_PER_POINT + SECONDS_PER_COST * expanded.costs[p.index]).sum();
+    serial / jobs.max(1) as f64
 }
 
 // ---------------------------------------------------------------------------------------
@@ -885,6 +1003,12 @@ pub struct SweepOptions {
     pub worker_exe: PathBuf,
     /// Show a progress bar (hidden anyway when stderr is not a terminal).
     pub progress: bool,
+    /// Run again the points whose rows say they did not converge (crashed, timed out,
+    /// failed): their rows are replaced.
+    pub retry_failed: bool,
+    /// Start a new result set: move the output directory's results (results.csv,
+    /// sweep.json, points/) into `superseded-<unix time>/` first.
+    pub new_results: bool,
 }
 
 /// Summary of a sweep run.
@@ -906,6 +1030,8 @@ pub struct SweepReport {
     pub results: PathBuf,
     /// Wall time of the run in seconds.
     pub wall_s: f64,
+    /// Where the previous results went (`--new-results`).
+    pub superseded: Option<PathBuf>,
 }
 
 struct Running {
@@ -915,6 +1041,20 @@ struct Running {
     job_path: PathBuf,
     result_path: PathBuf,
     err_path: PathBuf,
+}
+
+/// The settings of `[sweep]` that change the values of a row (recorded in `sweep.json`;
+/// a resumed run with other settings is refused).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RowSettings {
+    /// `reference` as written.
+    pub reference: Option<String>,
+    /// `compare` as written.
+    pub compare: Option<Vec<String>>,
+    /// `skip_last`, resolved.
+    pub skip_last: usize,
+    /// `artifact_tol`, resolved.
+    pub artifact_tol: f64,
 }
 
 /// `sweep.json`, written beside results.csv: what was swept, from which scene content,
@@ -934,26 +1074,90 @@ pub struct SweepInfo {
     pub total_points: usize,
     /// `k/n` when run as a shard.
     pub shard: Option<String>,
+    /// The settings that change a row's values.
+    pub settings: RowSettings,
     /// Ids of this run's points (the shard's, or all).
     pub ids: Vec<String>,
+    /// Ids of every point of the whole sweep, in index order (what [`merge`] checks for
+    /// completeness).
+    pub all_ids: Vec<String>,
 }
 
-/// Run (or resume) a sweep.
-pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, SweepError> {
+impl SweepInfo {
+    /// Read `sweep.json` from a results directory.
+    pub fn read(dir: &Path) -> Result<SweepInfo, SweepError> {
+        let path = dir.join("sweep.json");
+        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        serde_json::from_str(&text).map_err(|e| SweepError::Results { path, message: format!("not a sweep.json of this skg-solve: {e}") })
+    }
+}
+
+impl SweepFile {
+    /// The settings of this file that change a row's values.
+    pub fn row_settings(&self) -> RowSettings {
+        RowSettings {
+            reference: self.sweep.reference.as_ref().map(|r| r.get_ref().clone()),
+            compare: self.sweep.compare.as_ref().map(|c| c.get_ref().clone()),
+            skip_last: self.skip_last(),
+            artifact_tol: self.artifact_tol(),
+        }
+    }
+}
+
+/// Refuse to resume into `dir` when its `sweep.json` (if any) records other row settings.
+fn check_row_settings(dir: &Path, settings: &RowSettings) -> Result<(), SweepError> {
+    if !dir.join("sweep.json").is_file() {
+        return Ok(());
+    }
+    let old = SweepInfo::read(dir)?;
+    if old.settings == *settings {
+        return Ok(());
+    }
+    Err(SweepError::Results {
+        path: dir.join("sweep.json"),
+        message: format!(
+            "the results here were computed with other [sweep] settings ({}; now {}): restore them, use another output \
+             directory, or start a new result set with --new-results",
+            serde_json::to_string(&old.settings).unwrap_or_default(),
+            serde_json::to_string(settings).unwrap_or_default()
+        ),
+    })
+}
+
+/// Move the results of `dir` (results.csv, sweep.json, points/) into
+/// `dir/superseded-<unix time>/`; returns that directory if there was anything to move.
+fn supersede_results(dir: &Path) -> Result<Option<PathBuf>, SweepError> {
+    let present: Vec<&str> = ["results.csv", "sweep.json", "points"].into_iter().filter(|n| dir.join(n).exists()).collect();
+    if present.is_empty() {
+        return Ok(None);
+    }
+    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let target = dir.join(format!("superseded-{secs}"));
+    std::fs::create_dir_all(&target).map_err(io_err(&target))?;
+    for name in present {
+        std::fs::rename(dir.join(name), target.join(name)).map_err(io_err(&dir.join(name)))?;
+    }
+    Ok(Some(target))
+}
+
+/// Run (or resume) a sweep whose points `expanded` are ([`SweepFile::expand`]).
+pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> Result<SweepReport, SweepError> {
     let started = Instant::now();
-    let expanded = file.expand()?;
     let columns = expanded.columns();
-    let provenance = Provenance::current(expanded.scene_hash.clone());
+    let provenance = Provenance::current(expanded.scene_hash.clone(), expanded.reference_hash.clone());
     let dir = &opts.out_dir;
-    std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+    let _lock = output::OutputDir::lock(dir)?;
+    let superseded = if opts.new_results { supersede_results(dir)? } else { None };
+    let settings = file.row_settings();
+    check_row_settings(dir, &settings)?;
     // Worker files left by an interrupted run are stale: start from an empty .work.
     let work = dir.join(".work");
     let _ = std::fs::remove_dir_all(&work);
     std::fs::create_dir_all(&work).map_err(io_err(&work))?;
     let results_path = dir.join("results.csv");
-    let (mut results, done) = results::open_results(&results_path, &header_names(&columns), &provenance.scene_hash)?;
+    let (mut results, done) = results::open_results(&results_path, &header_names(&columns), &provenance, opts.retry_failed)?;
 
-    let mine: Vec<Point> = expanded.points.iter().filter(|p| opts.shard.map_or(true, |s| s.contains(p.index))).cloned().collect();
+    let mine: Vec<&Point> = expanded.points.iter().filter(|p| opts.shard.is_none_or(|s| s.contains(p.index))).collect();
     let info = SweepInfo {
         name: file.name(),
         sweep_file: file.origin.path.clone(),
@@ -961,11 +1165,13 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
         provenance: provenance.clone(),
         total_points: expanded.points.len(),
         shard: opts.shard.map(|s| format!("{}/{}", s.k, s.n)),
-        ids: mine.iter().map(Point::id).collect(),
+        settings,
+        ids: mine.iter().map(|p| p.id()).collect(),
+        all_ids: expanded.points.iter().map(Point::id).collect(),
     };
     output::write_json(&dir.join("sweep.json"), &info)?;
     // Largest first (stable: equal costs keep the file's order); rows carry their index.
-    let mut todo: Vec<Point> = mine.iter().filter(|p| !done.contains(&p.id())).cloned().collect();
+    let mut todo: Vec<Point> = mine.iter().filter(|p| !done.contains(&p.id())).map(|&p| p.clone()).collect();
     todo.sort_by(|a, b| expanded.costs[b.index].total_cmp(&expanded.costs[a.index]));
     let mut queue: VecDeque<Point> = todo.into();
     let mut report = SweepReport {
@@ -974,14 +1180,14 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
         skipped: mine.len() - queue.len(),
         duplicates: expanded.duplicates,
         results: results_path.clone(),
+        superseded,
         ..SweepReport::default()
     };
-
     let bar = progress_bar(opts.progress, mine.len(), report.skipped);
     let jobs = opts.jobs.max(1);
     let mut running: Vec<Running> = Vec::new();
     let artifact_tol = file.artifact_tol();
-    let timeout = file.sweep.timeout;
+    let timeout = file.sweep.timeout.as_ref().map(|t| *t.get_ref());
     let reference = file.reference();
     let scene_path = std::path::absolute(file.scene_path()).unwrap_or(file.scene_path());
     while !queue.is_empty() || !running.is_empty() {
@@ -992,7 +1198,7 @@ pub fn run_sweep(file: &SweepFile, opts: &SweepOptions) -> Result<SweepReport, S
                 scene: scene_path.clone(),
                 point,
                 reference: reference.clone(),
-                compare: file.sweep.compare.clone(),
+                compare: file.sweep.compare.as_ref().map(|c| c.get_ref().clone()),
                 skip_last: file.skip_last(),
                 keep_dir: file.sweep.keep_trajectories.then(|| dir.join("points").join(&id)),
                 fallback: file.sweep.fallback,
@@ -1109,76 +1315,93 @@ pub struct MergeReport {
     pub rows: usize,
     /// Rows whose id appeared in an earlier input (dropped).
     pub duplicates: usize,
-    /// Points of the sweep (from the shards' sweep.json) with no row, when known.
-    pub missing: Option<usize>,
+    /// Points of the whole sweep.
+    pub total: usize,
+    /// Points of the sweep without a row (index, id), in index order; empty unless
+    /// merged with `partial`.
+    pub missing: Vec<(usize, String)>,
 }
 
-/// Join shards' results (each a results.csv or a directory holding one) into
-/// `output` (a directory: writes `output/results.csv`), sorted by point index. The
-/// inputs must have the same columns and come from the same base scene content.
-pub fn merge(inputs: &[PathBuf], output_dir: &Path) -> Result<MergeReport, SweepError> {
-    let mut header: Option<Vec<String>> = None;
-    let mut scene_hash: Option<String> = None;
+/// Join shards' results (each a results.csv or a directory holding one, with the
+/// `sweep.json` beside it) into `output_dir` (writes `results.csv` and `sweep.json`
+/// there), sorted by point index. The inputs must be shards of one sweep (same columns,
+/// same inputs, same points) and together hold every point, else nothing is written and
+/// the error lists the missing points; with `partial` the rows present are merged
+/// anyway and [`MergeReport::missing`] lists the others.
+pub fn merge(inputs: &[PathBuf], output_dir: &Path, partial: bool) -> Result<MergeReport, SweepError> {
+    let mut first: Option<(Results, SweepInfo)> = None;
     let mut rows: Vec<Vec<String>> = Vec::new();
     let mut ids = HashSet::new();
+    let mut shards = BTreeSet::new();
     let mut report = MergeReport::default();
-    let mut all_ids: Option<HashSet<String>> = None;
     for input in inputs {
         let res = Results::read(input)?;
         let path = res.path.clone();
-        for hash in res.scene_hashes() {
-            match &scene_hash {
-                None => scene_hash = Some(hash),
-                Some(first) if *first != hash => {
-                    return Err(SweepError::Results {
-                        path,
-                        message: format!(
-                            "has rows of a base scene with content {hash}, the first rows' is {first}: not shards of one sweep"
-                        ),
-                    })
-                }
-                Some(_) => {}
+        let info = SweepInfo::read(path.parent().unwrap_or(Path::new(".")))?;
+        let not_shards =
+            |message: String| SweepError::Results { path: path.clone(), message: format!("{message}: not shards of one sweep") };
+        if let Some((r0, i0)) = &first {
+            if let Some(other) = res.conflict(&i0.provenance).or_else(|| r0.conflict(&info.provenance)) {
+                return Err(not_shards(format!("has rows computed from {other}")));
             }
-        }
-        match &header {
-            None => header = Some(res.header.clone()),
-            Some(h) if *h != res.header => {
-                return Err(SweepError::Results {
-                    path,
-                    message: "its columns differ from the first input's: not shards of one sweep".into(),
-                })
+            if r0.header != res.header {
+                return Err(not_shards("its columns differ from the first input's".into()));
             }
-            Some(_) => {}
+            if i0.all_ids != info.all_ids {
+                return Err(not_shards(format!("its sweep.json lists other points than {}'s", r0.path.display())));
+            }
+            if i0.settings != info.settings {
+                return Err(not_shards(format!("its sweep.json records other [sweep] settings than {}'s", r0.path.display())));
+            }
+        } else if let Some(other) = res.conflict(&info.provenance) {
+            return Err(SweepError::Results { path, message: format!("has rows computed from {other}, unlike its sweep.json") });
         }
+        shards.extend(info.shard.clone());
         let id_col = res.require_column("id")?;
-        for row in res.rows {
+        for row in &res.rows {
             if ids.insert(row[id_col].clone()) {
-                rows.push(row);
+                rows.push(row.clone());
             } else {
                 report.duplicates += 1;
             }
         }
-        let info_path = path.parent().unwrap_or(Path::new(".")).join("sweep.json");
-        if let Some(info) = std::fs::read_to_string(&info_path).ok().and_then(|t| serde_json::from_str::<SweepInfo>(&t).ok()) {
-            all_ids.get_or_insert_with(HashSet::new).extend(info.ids);
-        }
+        first.get_or_insert((res, info));
     }
-    let header = header.ok_or_else(|| SweepError::Results { path: output_dir.to_path_buf(), message: "nothing to merge".into() })?;
-    let idx = header.iter().position(|h| h == "index");
-    if let Some(i) = idx {
-        rows.sort_by_key(|r| r[i].parse::<usize>().unwrap_or(usize::MAX));
+    let (first, info) = first.ok_or_else(|| SweepError::Results { path: output_dir.to_path_buf(), message: "nothing to merge".into() })?;
+    report.total = info.all_ids.len();
+    report.missing = info.all_ids.iter().enumerate().filter(|(_, id)| !ids.contains(*id)).map(|(k, id)| (k, id.clone())).collect();
+    if !report.missing.is_empty() && !partial {
+        return Err(SweepError::Incomplete {
+            present: report.total - report.missing.len(),
+            total: report.total,
+            shards: shards.into_iter().collect(),
+            missing: report.missing,
+        });
     }
+    let idx = first.require_column("index")?;
+    rows.sort_by_key(|r| r[idx].parse::<usize>().unwrap_or(usize::MAX));
     report.rows = rows.len();
-    report.missing = all_ids.map(|all| all.difference(&ids).count());
-    let out = output_dir.join("results.csv");
-    output::write_atomic(&out, |w| {
-        w.write_all(&csv_line(&header))?;
-        for r in &rows {
-            w.write_all(&csv_line(r))?;
-        }
-        Ok(())
+    let _lock = output::OutputDir::lock(output_dir)?;
+    output::write_atomic(&output_dir.join("results.csv"), |w| {
+        w.write_all(&csv_line(&first.header))?;
+        rows.iter().try_for_each(|r| w.write_all(&csv_line(r)))
     })?;
+    let id_col = first.require_column("id")?;
+    let merged = SweepInfo { shard: None, ids: rows.iter().map(|r| r[id_col].clone()).collect(), ..info };
+    output::write_json(&output_dir.join("sweep.json"), &merged)?;
     Ok(report)
+}
+
+/// At most this many missing points are listed in a message.
+const LISTED_MISSING: usize = 10;
+
+/// `index 3 (id …), …` for a message: the first ten (index, id) pairs and how many more.
+pub fn list_points(points: &[(usize, String)]) -> String {
+    let mut text: Vec<String> = points.iter().take(LISTED_MISSING).map(|(k, id)| format!("index {k} (id {id})")).collect();
+    if points.len() > LISTED_MISSING {
+        text.push(format!("and {} more", points.len() - LISTED_MISSING));
+    }
+    text.join(", ")
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use skg_core::output;
 use skg_core::provenance;
 use skg_core::scenario::Location;
 
@@ -14,7 +15,7 @@ use crate::{io_err, Method, Point, PointStatus, Record, SweepError};
 
 /// Where a sweep's rows come from. Every row of `results.csv` carries these three
 /// columns, and `sweep.json` records them too.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct Provenance {
     /// The skg-solve version that computed the row ([`provenance::VERSION`]).
     pub skg_solve_version: String,
@@ -22,12 +23,34 @@ pub struct Provenance {
     pub schema_version: u32,
     /// SHA-256 of the base scene file's content, `sha256:<64 hex digits>`.
     pub scene_hash: String,
+    /// SHA-256 of the reference file's content when errors are measured against a file
+    /// (empty otherwise).
+    pub reference_hash: String,
 }
 
 impl Provenance {
-    /// This skg-solve's version and schema, with the hash of a base scene's content.
-    pub fn current(scene_hash: String) -> Provenance {
-        Provenance { skg_solve_version: provenance::VERSION.to_string(), schema_version: provenance::SCHEMA_VERSION, scene_hash }
+    /// This skg-solve's version and schema, with the hashes of a base scene's and a
+    /// reference file's content.
+    pub fn current(scene_hash: String, reference_hash: Option<String>) -> Provenance {
+        Provenance {
+            skg_solve_version: provenance::VERSION.to_string(),
+            schema_version: provenance::SCHEMA_VERSION,
+            scene_hash,
+            reference_hash: reference_hash.unwrap_or_default(),
+        }
+    }
+
+    /// Why rows of `row` (the provenance cells of a row) cannot join rows of `self`:
+    /// another base scene content or another reference content.
+    pub fn conflict(&self, row: &Provenance) -> Option<String> {
+        if row.scene_hash != self.scene_hash {
+            Some(format!("a base scene with content {} (this one is {})", row.scene_hash, self.scene_hash))
+        } else if row.reference_hash != self.reference_hash {
+            let name = |h: &str| if h.is_empty() { "no reference file".to_string() } else { format!("a reference file with content {h}") };
+            Some(format!("{} (this one has {})", name(&row.reference_hash), name(&self.reference_hash)))
+        } else {
+            None
+        }
     }
 }
 
@@ -55,7 +78,7 @@ pub const RESULT_COLUMNS: &[&str] = &[
 ];
 
 /// Provenance columns, last in every row (see [`Provenance`]).
-pub const PROVENANCE_COLUMNS: &[&str] = &["skg_solve_version", "schema_version", "scene_hash"];
+pub const PROVENANCE_COLUMNS: &[&str] = &["skg_solve_version", "schema_version", "scene_hash", "reference_hash"];
 
 /// Suffix of the column that keeps an axis's values as written: `sigma` → `sigma_expr`.
 pub const EXPR_SUFFIX: &str = "_expr";
@@ -168,6 +191,7 @@ fn fixed_cell(name: &str, point: &Point, rec: &Record, artifact_tol: f64, proven
         "skg_solve_version" => provenance.skg_solve_version.clone(),
         "schema_version" => provenance.schema_version.to_string(),
         "scene_hash" => rec.scene_hash.clone().unwrap_or_else(|| provenance.scene_hash.clone()),
+        "reference_hash" => provenance.reference_hash.clone(),
         other => unreachable!("`{other}` is not a fixed column of results.csv"),
     }
 }
@@ -265,12 +289,23 @@ impl Results {
         }
     }
 
-    /// The base-scene hashes the rows carry (column `scene_hash`).
-    pub fn scene_hashes(&self) -> BTreeSet<String> {
-        match self.column_index("scene_hash") {
-            Some(i) => self.rows.iter().map(|r| r[i].clone()).collect(),
-            None => BTreeSet::new(),
-        }
+    /// The distinct provenances of the rows (which skg-solve version computed a row
+    /// does not matter: it is set to this one's).
+    pub fn provenances(&self) -> BTreeSet<Provenance> {
+        let cell = |row: &[String], name: &str| self.column_index(name).map_or(String::new(), |i| row[i].clone());
+        self.rows
+            .iter()
+            .map(|r| Provenance {
+                scene_hash: cell(r, "scene_hash"),
+                reference_hash: cell(r, "reference_hash"),
+                ..Provenance::current(String::new(), None)
+            })
+            .collect()
+    }
+
+    /// The first row provenance that conflicts with `expected` ([`Provenance::conflict`]).
+    pub fn conflict(&self, expected: &Provenance) -> Option<String> {
+        self.provenances().iter().find_map(|p| expected.conflict(p))
     }
 }
 
@@ -305,8 +340,15 @@ fn check_schema_version(cell: &str) -> Result<(), String> {
 
 /// Open `results.csv` for appending, recovering from an interrupted run: a trailing
 /// partial line is cut off; the header must match and every row must come from the
-/// same base scene. Returns the file and the ids already present.
-pub(crate) fn open_results(path: &Path, header: &[String], scene_hash: &str) -> Result<(std::fs::File, HashSet<String>), SweepError> {
+/// same inputs (`expected`'s scene and reference content). With `retry_failed`, the rows
+/// of points that did not converge are removed first (the file is rewritten
+/// atomically), so that those points run again. Returns the file and the ids present.
+pub(crate) fn open_results(
+    path: &Path,
+    header: &[String],
+    expected: &Provenance,
+    retry_failed: bool,
+) -> Result<(std::fs::File, HashSet<String>), SweepError> {
     let mut f = std::fs::OpenOptions::new().read(true).append(true).create(true).open(path).map_err(io_err(path))?;
     let mut text = Vec::new();
     f.read_to_end(&mut text).map_err(io_err(path))?;
@@ -322,25 +364,39 @@ pub(crate) fn open_results(path: &Path, header: &[String], scene_hash: &str) -> 
         return Ok((f, HashSet::new()));
     }
     let text = String::from_utf8_lossy(&text);
-    let existing = Results::parse(&text, path)?;
+    let mut existing = Results::parse(&text, path)?;
     if existing.header != header {
         return Err(SweepError::Results {
             path: path.to_path_buf(),
             message: format!(
-                "was written by a different sweep (columns {}; this sweep writes {}): use another output directory",
+                "was written by a different sweep (columns {}; this sweep writes {}): use another output directory, \
+                 or start a new result set with --new-results",
                 existing.header.join(","),
                 header.join(",")
             ),
         });
     }
-    if let Some(other) = existing.scene_hashes().into_iter().find(|h| h != scene_hash) {
+    if let Some(other) = existing.conflict(expected) {
         return Err(SweepError::Results {
             path: path.to_path_buf(),
             message: format!(
-                "holds points of a base scene with content {other}, but the base scene is now {scene_hash}: \
-                 use another output directory (or restore the scene)"
+                "holds points computed from {other}: the inputs changed since. Restore them, use another output \
+                 directory, or start a new result set with --new-results (the old results are kept in a subdirectory)"
             ),
         });
+    }
+    if retry_failed {
+        let status = existing.require_column("status")?;
+        let before = existing.rows.len();
+        existing.rows.retain(|row| row[status] == PointStatus::Converged.name());
+        if existing.rows.len() < before {
+            drop(f);
+            output::write_atomic(path, |w| {
+                w.write_all(&csv_line(header))?;
+                existing.rows.iter().try_for_each(|row| w.write_all(&csv_line(row)))
+            })?;
+            f = std::fs::OpenOptions::new().append(true).open(path).map_err(io_err(path))?;
+        }
     }
     Ok((f, existing.ids()))
 }

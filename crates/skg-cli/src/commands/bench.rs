@@ -43,7 +43,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
             let outcome = solve::solve_scene(&scene)?;
             let wall = start.elapsed().as_secs_f64();
             bar.inc(1);
-            if best.as_ref().map_or(true, |(w, _)| wall < *w) {
+            if best.as_ref().is_none_or(|(w, _)| wall < *w) {
                 best = Some((wall, outcome));
             }
         }

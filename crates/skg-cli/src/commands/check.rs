@@ -26,10 +26,10 @@ pub struct CheckArgs {
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     pub columns: Option<Vec<String>>,
     /// Tolerance on every compared column's max |error|.
-    #[arg(long, value_name = "TOL")]
+    #[arg(long, allow_negative_numbers = true, value_name = "TOL")]
     pub tol: Option<f64>,
     /// Tolerance on every compared column's RMS error.
-    #[arg(long, value_name = "TOL")]
+    #[arg(long, allow_negative_numbers = true, value_name = "TOL")]
     pub tol_rms: Option<f64>,
     /// Tolerance on one column's max |error| (repeatable; overrides --tol for it).
     #[arg(long, value_name = "COLUMN=TOL")]
@@ -40,6 +40,16 @@ pub struct CheckArgs {
     /// Print only errors and exceeded tolerances.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// A tolerance from the command line: a number ≥ 0 (NaN would silently pass every
+/// comparison).
+fn tolerance(option: &str, value: f64) -> Result<f64> {
+    if value >= 0.0 && !value.is_nan() {
+        Ok(value)
+    } else {
+        anyhow::bail!("{option}: a tolerance must be a number ≥ 0, got {value}")
+    }
 }
 
 #[derive(serde::Serialize)]
@@ -61,12 +71,16 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
     for a in &args.tol_column {
         let (name, value) = a.split_once('=').with_context(|| format!("--tol-column `{a}`: expected COLUMN=TOL"))?;
         let v: f64 = value.trim().parse().with_context(|| format!("--tol-column `{a}`: `{value}` is not a number"))?;
-        per_column.push((name.trim().to_string(), v));
+        per_column.push((name.trim().to_string(), tolerance(&format!("--tol-column {a}"), v)?));
     }
-    let tol = Tolerances { max_abs: args.tol, rms: args.tol_rms, per_column };
+    let tol = Tolerances {
+        max_abs: args.tol.map(|t| tolerance("--tol", t)).transpose()?,
+        rms: args.tol_rms.map(|t| tolerance("--tol-rms", t)).transpose()?,
+        per_column,
+    };
     let cmp = check::compare(&solution, &reference, &opts)
         .with_context(|| format!("comparing {} with {}", args.solution.display(), args.reference.display()))?;
-    let violations = cmp.violations(&tol);
+    let violations = cmp.violations(&tol)?;
     let json = args.json.clone().unwrap_or_else(|| args.solution.with_extension("check.json"));
     let report = CheckReport {
         solution: args.solution.display().to_string(),

@@ -19,14 +19,15 @@ pub struct ReferenceArgs {
     /// Scene file (TOML).
     #[arg(value_name = "SCENARIO.toml")]
     pub scenario: PathBuf,
-    /// Output CSV [default: out/<scene>/reference.csv, or reference.hard.csv with --hard-walls].
+    /// Output CSV [default: out/<scene>/reference.regularized.csv, or reference.hard.csv with
+    /// --hard-walls; not reference.csv, which is a solve's own verification reference].
     #[arg(short, long, value_name = "FILE.csv")]
     pub output: Option<PathBuf>,
     /// Relative tolerance of the integrator.
-    #[arg(long, default_value_t = 1e-12, value_name = "RTOL")]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1e-12, value_name = "RTOL")]
     pub rtol: f64,
     /// Absolute tolerance of the integrator [default: the relative tolerance].
-    #[arg(long, value_name = "ATOL")]
+    #[arg(long, allow_negative_numbers = true, value_name = "ATOL")]
     pub atol: Option<f64>,
     /// Ideal elastic walls (event location at h = 0, specular reflection) instead of the
     /// scene's Gaussian walls: the reference for the model error.
@@ -60,11 +61,15 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
     if !(args.rtol > 0.0 && args.rtol.is_finite()) {
         anyhow::bail!("--rtol must be a positive number, got {}", args.rtol);
     }
-    let opts = ReferenceOptions { rtol: args.rtol, atol: args.atol.unwrap_or(args.rtol) };
+    let atol = args.atol.unwrap_or(args.rtol);
+    if !(atol >= 0.0 && atol.is_finite()) {
+        anyhow::bail!("--atol must be a number ≥ 0, got {atol}");
+    }
+    let opts = ReferenceOptions { rtol: args.rtol, atol };
     let r = if args.hard_walls { reference::hard_wall(&scene, &times, &opts)? } else { reference::regularized(&scene, &times, &opts)? };
     let out = args.output.unwrap_or_else(|| {
         let stem = args.scenario.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-        PathBuf::from("out").join(stem).join(if args.hard_walls { "reference.hard.csv" } else { "reference.csv" })
+        PathBuf::from("out").join(stem).join(if args.hard_walls { "reference.hard.csv" } else { "reference.regularized.csv" })
     });
     output::write_reference(&out, &scene, &args.scenario.display().to_string(), &r)?;
     if !args.quiet {

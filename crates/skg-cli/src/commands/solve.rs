@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 
 use skg_core::{output, solve};
@@ -36,12 +36,23 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
-    if let Some(log) = &scene.solver.log_file {
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        scene.solver.log_file = Some(dir.join(log));
+    let out = output::OutputDir::lock(&dir)?;
+    // Ipopt writes its log into a staged file, moved over the old log when the solve
+    // returns: a killed run leaves the old log complete.
+    let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
+    scene.solver.log_file = log.as_ref().map(|(_, staged)| staged.clone());
+    let outcome = solve::solve_scene(&scene);
+    if let Some((target, staged)) = &log {
+        out.commit(staged, target)?;
     }
-    let mut outcome = solve::solve_scene(&scene)?;
-    let written = output::write_outcome(&dir, &mut outcome, &scene).context("writing the results")?;
+    let mut outcome = match outcome {
+        Ok(outcome) => outcome,
+        Err(e) => {
+            out.abandon();
+            return Err(e.into());
+        }
+    };
+    let written = output::write_outcome(&dir, &mut outcome, &scene)?;
     for w in &outcome.warnings {
         eprintln!("warning: {w}");
     }

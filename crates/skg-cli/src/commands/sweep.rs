@@ -20,17 +20,22 @@ pub fn sweep_long_about() -> String {
     let statuses: Vec<&str> = sweep::PointStatus::ALL.iter().map(|s| s.name()).collect();
     format!(
         "Run a parameter sweep: every point of the sweep file's grid in its own worker process, each finished point \
-         appended to DIR/results.csv. Rerunning resumes (points already in results.csv are skipped; rows of a base \
-         scene whose content has changed since are refused).\n\n\
+         appended to DIR/results.csv. Rerunning resumes (points already in results.csv are skipped; --retry-failed runs \
+         the failed ones again). A rerun after the base scene, the reference file or the [sweep] settings that \
+         change a row were edited is refused (--new-results starts a new result set). A second sweep into the same \
+         DIR is refused. Above {} points the sweep starts only with --yes.\n\n\
          results.csv is a plain CSV, one row per point, with the columns {}; one column per grid axis; {}; and the \
          provenance {}. status is one of {} (converged is true exactly for `converged`); solver_status is Ipopt's \
-         status name (ODE_Succeeded for a peer point); scene_hash is the SHA-256 of the base scene file's content.\n\n\
+         status name (ODE_Succeeded for a peer point); scene_hash and reference_hash are the SHA-256 of the base \
+         scene file's and the reference file's content.\n\n\
          A grid axis that is a scene parameter holds the number the point's scene has (sigma = \"1/110\" gives \
          0.00909090909090909, the shortest text that reads back to the same double). If any of its values is \
          written as an expression, the column <axis>{} follows it with every value as written (1/110); an axis of \
          plain numbers has none. `skg-solve plot ... --where sigma=1/110` matches either.\n\n\
-         DIR/sweep.json records the sweep's name, the sweep file, the base scene, the same provenance, the number \
-         of points, the shard and the ids of the shard's points.",
+         DIR/sweep.json records the sweep's name, the sweep file, the base scene, the same provenance, the settings \
+         that change a row, the number of points, the shard, the ids of the shard's points and of every point (merge \
+         uses them to find missing points).",
+        sweep::CONFIRM_ABOVE,
         sweep::LEADING_COLUMNS.join(", "),
         sweep::RESULT_COLUMNS.join(", "),
         sweep::PROVENANCE_COLUMNS.join(", "),
@@ -56,6 +61,19 @@ pub struct SweepArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Run again the points that did not converge in an earlier run (crashed, timed out,
+    /// errors, not converged): their rows in results.csv are replaced.
+    #[arg(long)]
+    pub retry_failed: bool,
+    /// Start a new result set in DIR: the old results.csv, sweep.json and points/ move
+    /// to DIR/superseded-<unix time>/ (needed after the base scene, the reference file
+    /// or the [sweep] settings changed; a plain rerun refuses to mix them).
+    #[arg(long)]
+    pub new_results: bool,
+    /// Start even when more than 10000 points would run (the point count and a rough
+    /// time estimate are printed first).
+    #[arg(short, long)]
+    pub yes: bool,
 }
 
 #[derive(Args)]
@@ -66,21 +84,47 @@ pub struct MergeArgs {
     /// Output directory of the merged results.csv.
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
+    /// Merge even when points of the sweep are missing (they are listed); without it an
+    /// incomplete merge writes nothing and exits 1.
+    #[arg(long)]
+    pub partial: bool,
 }
 
 pub fn run(args: SweepArgs) -> Result<ExitCode> {
     let file = sweep::SweepFile::load(&args.sweep)?;
+    let expanded = file.expand()?;
     let out = args.output.unwrap_or_else(|| PathBuf::from("out/sweeps").join(file.name()));
-    let jobs = args.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let jobs = args.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
+    let mine: Vec<&sweep::Point> = expanded.points.iter().filter(|p| args.shard.is_none_or(|s| s.contains(p.index))).collect();
+    let estimate = sweep::estimated_wall_s(&expanded, &mine, jobs);
+    let plan = format!(
+        "{}: {} points{}, roughly {} with {jobs} worker(s) (points already in {} are skipped)",
+        file.name(),
+        mine.len(),
+        args.shard.map_or(String::new(), |s| format!(" in shard {}/{} of {}", s.k, s.n, expanded.points.len())),
+        duration_text(estimate),
+        out.join("results.csv").display()
+    );
+    if mine.len() > sweep::CONFIRM_ABOVE && !args.yes {
+        anyhow::bail!("{plan}: more than {} points start only with --yes (or split the sweep with --shard)", sweep::CONFIRM_ABOVE);
+    }
+    if !args.quiet {
+        eprintln!("{plan}");
+    }
     let opts = sweep::SweepOptions {
         out_dir: out,
         jobs,
         shard: args.shard,
         worker_exe: std::env::current_exe().context("locating the skg-solve executable for the workers")?,
         progress: !args.quiet,
+        retry_failed: args.retry_failed,
+        new_results: args.new_results,
     };
-    let r = sweep::run_sweep(&file, &opts)?;
+    let r = sweep::run_sweep(&file, &expanded, &opts)?;
     if !args.quiet {
+        if let Some(old) = &r.superseded {
+            println!("  moved the previous results to {}", old.display());
+        }
         println!(
             "{}: {} points{}, {} already done, {} run ({} failed) with {} worker(s) in {:.1} s{}",
             file.name(),
@@ -98,6 +142,17 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// A duration in seconds as `12 s`, `3.5 min` or `2.1 h`.
+fn duration_text(s: f64) -> String {
+    if s < 120.0 {
+        format!("{s:.0} s")
+    } else if s < 7200.0 {
+        format!("{:.1} min", s / 60.0)
+    } else {
+        format!("{:.1} h", s / 3600.0)
+    }
+}
+
 pub fn run_worker(job: &Path, result: &Path) -> Result<ExitCode> {
     let text = std::fs::read_to_string(job).with_context(|| format!("reading {}", job.display()))?;
     let job: sweep::Job = serde_json::from_str(&text).with_context(|| format!("parsing {}", job.display()))?;
@@ -107,17 +162,22 @@ pub fn run_worker(job: &Path, result: &Path) -> Result<ExitCode> {
 }
 
 pub fn run_merge(args: MergeArgs) -> Result<ExitCode> {
-    let r = sweep::merge(&args.inputs, &args.output)?;
+    let r = sweep::merge(&args.inputs, &args.output, args.partial)?;
     println!(
-        "merged {} rows into {}{}{}",
+        "merged {} rows into {}{}",
         r.rows,
         args.output.join("results.csv").display(),
         if r.duplicates > 0 { format!("; {} duplicate rows dropped", r.duplicates) } else { String::new() },
-        match r.missing {
-            Some(0) => "; every point of the sweep is present".to_string(),
-            Some(m) => format!("; {m} points of the sweep have no row yet"),
-            None => String::new(),
-        }
     );
+    if r.missing.is_empty() {
+        println!("every point of the sweep ({}) is present", r.total);
+    } else {
+        eprintln!(
+            "warning: {} of the sweep's {} points are missing (--partial): {}",
+            r.missing.len(),
+            r.total,
+            sweep::list_points(&r.missing)
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }

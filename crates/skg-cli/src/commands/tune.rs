@@ -23,16 +23,16 @@ pub struct TuneArgs {
     #[arg(long, value_name = "NAME")]
     pub param: Option<String>,
     /// Tolerance on the relative energy artifact.
-    #[arg(long, default_value_t = skg_core::tune::DEFAULT_ARTIFACT_TOL)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = skg_core::tune::DEFAULT_ARTIFACT_TOL)]
     pub tol: f64,
     /// Lower end of the initial bracket [default: the scene's value / 8].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub lo: Option<f64>,
     /// Upper end of the initial bracket [default: the scene's value].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub hi: Option<f64>,
     /// Stop when the bracket's ratio hi/lo is below 1 + REL.
-    #[arg(long, default_value_t = 0.02)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.02)]
     pub rel: f64,
     /// Write the search (every step) as JSON here.
     #[arg(short, long, value_name = "FILE")]

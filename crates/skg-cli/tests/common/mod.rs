@@ -116,3 +116,55 @@ pub fn test_scene(name: &str) -> PathBuf {
 pub fn load_test_scene(name: &str, ov: &Overrides) -> Scene {
     SceneFile::load(&test_scene(name)).unwrap().resolve(ov).unwrap()
 }
+
+/// A variant of a shipped scene with text replaced (each `from` must occur), written to
+/// `dir/name`.
+pub fn variant(dir: &Path, scene: &str, name: &str, replacements: &[(&str, &str)]) -> PathBuf {
+    let mut s = std::fs::read_to_string(scenario(scene)).unwrap();
+    for (from, to) in replacements {
+        assert!(s.contains(from), "{from} not in {scene}");
+        s = s.replacen(from, to, 1);
+    }
+    let p = dir.join(name);
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+/// A small seeded generator (xorshift64*), so that randomized tests are reproducible
+/// and need no dependency.
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// The next 64 random bits.
+    pub fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+
+    /// Uniform in [0, n) (0 for n = 0).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Rows of a results directory's `results.csv` by id (each line must have the header's
+/// field count and the file must end with a complete line).
+pub fn rows_by_id(dir: &Path) -> (skg_sweep::Results, std::collections::HashMap<String, usize>) {
+    let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    assert!(text.ends_with('\n'), "results.csv ends with a complete line");
+    let r = skg_sweep::Results::read(dir).unwrap();
+    let id = r.column_index("id").unwrap();
+    let mut count = std::collections::HashMap::new();
+    for row in &r.rows {
+        assert_eq!(row.len(), r.header.len());
+        *count.entry(row[id].clone()).or_insert(0) += 1;
+    }
+    (r, count)
+}

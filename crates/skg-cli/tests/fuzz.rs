@@ -1,0 +1,300 @@
+//! Mutation fuzzing of scene files: seeded mutants of the shipped scenes go through
+//! everything a solve does — parse, resolve, model, a short capped solve — in this
+//! process. Asserted: no panic (each mutant runs under `catch_unwind`), no signal (it
+//! would end the test process) and no hang (a watchdog fails the test when one mutant
+//! uses more than [`TIME_LIMIT`] of CPU time: CPU rather than wall time, so that a
+//! machine busy with other work does not turn a slow mutant into a false hang). Errors
+//! are the expected outcome of most mutants.
+//!
+//! The suite runs [`SUITE_MUTANTS`] mutants. The longer run (10⁵ mutants, about half an
+//! hour on 2 cores) is the ignored test, with the count and seed from the environment:
+//!
+//! ```sh
+//! SKG_FUZZ_MUTANTS=100000 SKG_FUZZ_SEED=1 cargo test -p skg-cli --test fuzz -- --ignored --nocapture
+//! ```
+//!
+//! A failure names the seed and the mutant's number and writes the mutant's text to
+//! the temporary directory, so it can be reproduced with `skg-solve FILE`.
+
+mod common;
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use common::Rng;
+use skg_core::scenario::{Overrides, SceneFile};
+
+/// Mutants per suite run.
+const SUITE_MUTANTS: usize = 300;
+/// The most CPU time a mutant may use before it counts as a hang (the slowest mutants
+/// seen, whose time stepping ends in a step-size underflow after many steps, take ~7 s).
+const TIME_LIMIT: Duration = Duration::from_secs(60);
+/// Node count and iteration cap of the solve of a mutant that resolves.
+const SOLVE_NODES: usize = 40;
+const SOLVE_MAX_ITER: u32 = 8;
+
+/// Picks from a list.
+trait Pick {
+    fn pick<'a>(&mut self, xs: &[&'a str]) -> &'a str;
+}
+
+impl Pick for Rng {
+    fn pick<'a>(&mut self, xs: &[&'a str]) -> &'a str {
+        xs[self.below(xs.len())]
+    }
+}
+
+const NUMBERS: &[&str] = &[
+    "0",
+    "-0.0",
+    "1",
+    "-1",
+    "2",
+    "3",
+    "0.5",
+    "1e-9",
+    "1e-320",
+    "5e-324",
+    "1e20",
+    "1e308",
+    "-1e308",
+    "1.7976931348623157e308",
+    "nan",
+    "inf",
+    "-inf",
+    "9223372036854775807",
+    "-9223372036854775808",
+    "18446744073709551615",
+    "4294967296",
+    "1e6",
+    "7",
+];
+const EXPRESSIONS: &[&str] = &[
+    "1/0",
+    "0/0",
+    "sqrt(-1)",
+    "log(0)",
+    "log(-x)",
+    "exp(1000)",
+    "x^1e6",
+    "",
+    "(",
+    ")",
+    "1/(x-x)",
+    "atan2(0, 0)",
+    "0^0",
+    "-x",
+    "x_dot^2",
+    "x*y_dot",
+    "sin(",
+    "pi/0",
+    "1e308*1e308",
+    "abs(x_dot)",
+    "tanh(x)*1e300",
+    "x_dot/x",
+    "((((x))))",
+    "2^3^4^5",
+    "unknown_name",
+];
+const FRAGMENTS: &[&str] = &["[", "]", "=", "\"", "\n", "[[walls]]\n", "[[constraints]]\n", "#", ",", "'", "\\", "{", "}", "\u{0}", "é"];
+
+/// Positions of the numbers (digits, optional sign, fraction, exponent) in `text`.
+fn number_spans(text: &str) -> Vec<(usize, usize)> {
+    let b = text.as_bytes();
+    let mut spans = Vec::new();
+    let mut i = 0;
+    while i < b.len() {
+        if b[i].is_ascii_digit() && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_')) {
+            let start = i;
+            while i < b.len() && (b[i].is_ascii_digit() || b[i] == b'.' || b[i] == b'e' || b[i] == b'E' || b[i] == b'-') {
+                i += 1;
+            }
+            spans.push((start, i));
+        } else {
+            i += 1;
+        }
+    }
+    spans
+}
+
+/// Positions of the contents of the double-quoted strings in `text`.
+fn string_spans(text: &str) -> Vec<(usize, usize)> {
+    let quotes: Vec<usize> = text.match_indices('"').map(|(i, _)| i).collect();
+    quotes.chunks(2).filter(|c| c.len() == 2).map(|c| (c[0] + 1, c[1])).collect()
+}
+
+/// One mutation of `text`.
+fn mutate(text: &str, rng: &mut Rng) -> String {
+    let lines: Vec<&str> = text.lines().collect();
+    if lines.is_empty() {
+        return rng.pick(FRAGMENTS).to_string();
+    }
+    let splice = |(a, b): (usize, usize), with: &str| format!("{}{with}{}", &text[..a], &text[b..]);
+    match rng.below(9) {
+        0..=2 => match number_spans(text) {
+            spans if !spans.is_empty() => splice(spans[rng.below(spans.len())], rng.pick(NUMBERS)),
+            _ => text.to_string(),
+        },
+        3 | 4 => match string_spans(text) {
+            spans if !spans.is_empty() => splice(spans[rng.below(spans.len())], rng.pick(EXPRESSIONS)),
+            _ => text.to_string(),
+        },
+        5 => {
+            let k = rng.below(lines.len());
+            lines.iter().enumerate().filter(|&(i, _)| i != k).map(|(_, l)| format!("{l}\n")).collect()
+        }
+        6 => {
+            let (k, at) = (rng.below(lines.len()), rng.below(lines.len()));
+            let mut out: Vec<&str> = lines.clone();
+            out.insert(at, lines[k]);
+            out.join("\n") + "\n"
+        }
+        7 => {
+            let mut at = rng.below(text.len() + 1);
+            while !text.is_char_boundary(at) {
+                at -= 1;
+            }
+            format!("{}{}{}", &text[..at], rng.pick(FRAGMENTS), &text[at..])
+        }
+        _ => {
+            let mut at = rng.below(text.len() + 1);
+            while !text.is_char_boundary(at) {
+                at -= 1;
+            }
+            text[..at].to_string()
+        }
+    }
+}
+
+/// How far a mutant got.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Debug)]
+enum Stage {
+    /// Not valid TOML of a scene.
+    Rejected,
+    /// Parsed, refused by resolution.
+    Parsed,
+    /// Resolved, refused by the model or the solve setup.
+    Resolved,
+    /// Solved (converged or not) and written.
+    Solved,
+}
+
+/// Everything a solve does with a scene text, capped in size; the errors are expected.
+fn exercise(text: &str) -> Stage {
+    let Ok(file) = SceneFile::parse(text, "mutant.toml") else { return Stage::Rejected };
+    let Ok(scene) = file.clone().resolve(&Overrides::default()) else { return Stage::Parsed };
+    let _ = skg_core::solve::grid(&scene);
+    let capped = Overrides { nodes: Some(scene.nodes.min(SOLVE_NODES)), max_iter: Some(SOLVE_MAX_ITER), ..Overrides::default() };
+    let Ok(mut scene) = file.resolve(&capped) else { return Stage::Resolved };
+    // Never let a mutant make Ipopt print or write files.
+    scene.solver.print_level = 0;
+    scene.solver.log_file = None;
+    let Ok(mut outcome) = skg_core::solve::solve_scene(&scene) else { return Stage::Resolved };
+    let dir = tempfile::tempdir().unwrap();
+    skg_core::output::write_outcome(dir.path(), &mut outcome, &scene).unwrap();
+    skg_core::check::Table::read(&dir.path().join("trajectory.csv")).unwrap();
+    Stage::Solved
+}
+
+/// What a fuzz run found: the failures (mutant number, what happened) and how many
+/// mutants reached each [`Stage`].
+struct Report {
+    failures: Vec<(usize, String)>,
+    stages: std::collections::BTreeMap<Stage, usize>,
+}
+
+/// CPU time (user + system) of this process in milliseconds, from `/proc/self/stat`
+/// (fields 14 and 15, in clock ticks of 1/100 s, the Linux default).
+fn cpu_ms() -> u64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let fields: Vec<&str> = stat.rsplit_once(')').map_or(vec![], |(_, rest)| rest.split_whitespace().collect());
+    // After the `)`, field 3 (state) is at 0, so utime (14) and stime (15) are at 11 and 12.
+    let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<u64>().ok()).unwrap_or(0);
+    (ticks(11) + ticks(12)) * 10
+}
+
+/// Run `count` mutants from `seed`.
+fn fuzz(count: usize, seed: u64) -> Report {
+    let seeds: Vec<String> = common::SHIPPED.iter().map(|s| std::fs::read_to_string(common::scenario(s)).unwrap()).collect();
+    let mut rng = Rng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
+    // The watchdog: the mutant in progress and the CPU time when it started.
+    let current = Arc::new((AtomicU64::new(u64::MAX), AtomicU64::new(0)));
+    let watch = Arc::clone(&current);
+    let dump = std::env::temp_dir().join(format!("skg-fuzz-{seed}"));
+    std::fs::create_dir_all(&dump).unwrap();
+    let dump_watch = dump.clone();
+    std::thread::spawn(move || loop {
+        std::thread::sleep(Duration::from_millis(200));
+        let (k, since) = (watch.0.load(Ordering::SeqCst), watch.1.load(Ordering::SeqCst));
+        if k != u64::MAX && cpu_ms().saturating_sub(since) > TIME_LIMIT.as_millis() as u64 {
+            eprintln!("mutant {k} of seed {seed} used more than {TIME_LIMIT:?} of CPU time: {}/hang-{k}.toml", dump_watch.display());
+            std::process::abort();
+        }
+    });
+    let started = Instant::now();
+    let mut failures = Vec::new();
+    let mut stages = std::collections::BTreeMap::new();
+    for k in 0..count {
+        let base = &seeds[rng.below(seeds.len())];
+        let mut text = base.clone();
+        for _ in 0..1 + rng.below(3) {
+            text = mutate(&text, &mut rng);
+        }
+        std::fs::write(dump.join(format!("hang-{k}.toml")), &text).unwrap();
+        current.1.store(cpu_ms(), Ordering::SeqCst);
+        current.0.store(k as u64, Ordering::SeqCst);
+        match catch_unwind(AssertUnwindSafe(|| exercise(&text))) {
+            Ok(stage) => *stages.entry(stage).or_insert(0) += 1,
+            Err(payload) => {
+                let message = payload.downcast_ref::<String>().cloned().or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()));
+                let path = dump.join(format!("panic-{k}.toml"));
+                std::fs::write(&path, &text).unwrap();
+                failures.push((k, format!("panicked: {} ({})", message.unwrap_or_default(), path.display())));
+            }
+        }
+        current.0.store(u64::MAX, Ordering::SeqCst);
+        let _ = std::fs::remove_file(dump.join(format!("hang-{k}.toml")));
+        if (k + 1) % 10_000 == 0 {
+            eprintln!("{} mutants, {} failures, {:.0} s", k + 1, failures.len(), started.elapsed().as_secs_f64());
+        }
+    }
+    eprintln!("{count} mutants of seed {seed}: {} failures in {:.1} s; stages {stages:?}", failures.len(), started.elapsed().as_secs_f64());
+    Report { failures, stages }
+}
+
+#[test]
+fn mutants_of_the_shipped_scenes_never_panic_or_hang() {
+    let r = fuzz(SUITE_MUTANTS, 11);
+    assert!(r.failures.is_empty(), "{:#?}", r.failures);
+    // The mutants reach every stage, a good share of them the solve.
+    let solved = r.stages.get(&Stage::Solved).copied().unwrap_or(0);
+    assert!(r.stages.len() == 4 && solved >= SUITE_MUTANTS / 5, "{:?}", r.stages);
+}
+
+/// The long run (see the module docs): `SKG_FUZZ_MUTANTS` mutants (default 10⁵) from
+/// `SKG_FUZZ_SEED` (default 1).
+#[test]
+#[ignore]
+fn mutation_fuzz_long_run() {
+    let env = |name: &str, default: u64| std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default);
+    let r = fuzz(env("SKG_FUZZ_MUTANTS", 100_000) as usize, env("SKG_FUZZ_SEED", 1));
+    assert!(r.failures.is_empty(), "{:#?}", r.failures);
+}
+
+#[test]
+fn mutations_are_reproducible_from_the_seed() {
+    let text = std::fs::read_to_string(common::scenario("tumbler")).unwrap();
+    let run = |seed| {
+        let mut rng = Rng(seed);
+        (0..20).map(|_| mutate(&text, &mut rng)).collect::<Vec<_>>()
+    };
+    assert_eq!(run(7), run(7));
+    assert_ne!(run(7), run(8));
+    assert!(run(7).iter().any(|m| m != &text), "mutations change the text");
+    // The watchdog's clock runs (this test process has used CPU time by now).
+    let spin = Instant::now();
+    while cpu_ms() == 0 && spin.elapsed() < Duration::from_secs(5) {}
+    assert!(cpu_ms() > 0, "the watchdog reads the CPU time from /proc/self/stat");
+}

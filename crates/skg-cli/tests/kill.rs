@@ -1,0 +1,151 @@
+//! Kill tests: a solve and a sweep are killed (SIGKILL) at seeded random moments and
+//! run again. After every kill the files that are there must obey the pairing rule
+//! (a `summary.json` describes exactly the `trajectory.csv` beside it), the Ipopt log
+//! must be a complete one, and the complete lines of `results.csv` must hold each point
+//! at most once; after the final run every point is there exactly once and no
+//! temporary file is left. The moments are drawn from a fixed seed over the measured
+//! duration of an uninterrupted run, so a slow machine shifts them but every assertion
+//! holds at any moment.
+
+mod common;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::Rng;
+use sha2::{Digest, Sha256};
+
+fn skg(args: &[&str]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_skg-solve"));
+    c.args(args).stdout(Stdio::null()).stderr(Stdio::null());
+    c
+}
+
+/// Run to completion; the wall time.
+fn complete(args: &[&str]) -> Duration {
+    let start = Instant::now();
+    let status = skg(args).status().unwrap();
+    assert!(status.success(), "{args:?}: {status}");
+    start.elapsed()
+}
+
+/// Start, wait `delay`, SIGKILL; whether the process was still running when killed.
+fn kill_after(args: &[&str], delay: Duration) -> bool {
+    let mut child = skg(args).spawn().unwrap();
+    std::thread::sleep(delay);
+    let running = child.try_wait().unwrap().is_none();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    running
+}
+
+/// The pairing rule in `dir`, checked with an independent SHA-256: a summary.json lists
+/// the trajectory.csv beside it with its exact bytes and row count.
+fn assert_paired(dir: &Path) {
+    let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else { return };
+    let summary: serde_json::Value = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+    let bytes = std::fs::read(dir.join("trajectory.csv")).expect("a summary is written after its trajectory");
+    let hex: String = Sha256::digest(&bytes).iter().map(|b| format!("{b:02x}")).collect();
+    let listed = &summary["files"]["trajectory.csv"];
+    assert_eq!(listed["sha256"], format!("sha256:{hex}"), "{}", dir.display());
+    let rows = String::from_utf8_lossy(&bytes).lines().filter(|l| !l.starts_with('#')).count() - 1;
+    assert_eq!(listed["rows"], rows, "{}", dir.display());
+}
+
+/// Temporary files (`.skg-tmp-*`) anywhere under `dir`.
+fn temporaries(dir: &Path) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if e.file_name().to_string_lossy().starts_with(".skg-tmp-") {
+                found.push(p);
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn a_solve_killed_at_random_moments_keeps_its_files_paired_and_its_log_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(common::scenario("tumbler")).unwrap().replace("nodes = 256", "nodes = 1024")
+        + "\n[solver]\nlog_file = \"ipopt.log\"\n";
+    let scene = dir.path().join("tumbler.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.path().join("out");
+    let args = [scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"];
+    // The faster of two runs: the first may pay for a cold start.
+    let full = complete(&args).min(complete(&args));
+    let log_is_whole = || std::fs::read_to_string(out.join("ipopt.log")).unwrap().contains("EXIT: Optimal Solution Found");
+    let mut rng = Rng(0x5eed_0014);
+    let mut killed_running = 0;
+    for _ in 0..12 {
+        let delay = full.mul_f64(rng.uniform());
+        killed_running += kill_after(&args, delay) as usize;
+        assert_paired(&out);
+        assert!(log_is_whole(), "a kill leaves the previous complete log");
+    }
+    eprintln!("{killed_running} of 12 kills hit a running solve");
+    assert!(killed_running >= 6, "only {killed_running} of 12 kills hit a running solve");
+    complete(&args);
+    assert_paired(&out);
+    assert!(log_is_whole());
+    assert_eq!(temporaries(&out), Vec::<PathBuf>::new(), "the rerun removes the killed runs' temporary files");
+}
+
+/// Ids of the complete lines of `results.csv` (a kill may leave a partial last line).
+fn complete_row_ids(dir: &Path) -> HashMap<String, usize> {
+    let Ok(text) = std::fs::read_to_string(dir.join("results.csv")) else { return HashMap::new() };
+    let complete = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
+    let mut ids = HashMap::new();
+    for line in complete.lines().skip(1) {
+        *ids.entry(line.split(',').next().unwrap().to_string()).or_insert(0) += 1;
+    }
+    ids
+}
+
+#[test]
+fn a_sweep_killed_at_random_moments_and_resumed_has_each_point_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = common::sweep_file(
+        dir.path(),
+        &common::scenario("tumbler"),
+        "keep_trajectories = true\n[[grid]]\nnodes = [128, 160, 192, 224, 256, 288]\nsigma = [\"1/80\", \"1/110\"]\n",
+    );
+    let points = skg_sweep::SweepFile::load(&sweep).unwrap().expand().unwrap().points;
+    assert_eq!(points.len(), 12);
+    // An uninterrupted run elsewhere gives the time scale of the kill moments.
+    let scratch = dir.path().join("scratch");
+    let full = complete(&["sweep", sweep.to_str().unwrap(), "-o", scratch.to_str().unwrap(), "-j", "2", "-q"]);
+    let out = dir.path().join("out");
+    let args = ["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "2", "-q"];
+    let mut rng = Rng(0x5eed_0141);
+    let mut killed_running = 0;
+    for _ in 0..6 {
+        // Each resumed run has less to do: kill within the time its remaining points take.
+        let remaining = (points.len() - complete_row_ids(&out).len()) as f64 / points.len() as f64;
+        killed_running += kill_after(&args, full.mul_f64(0.9 * remaining * rng.uniform())) as usize;
+        let ids = complete_row_ids(&out);
+        assert!(ids.values().all(|&c| c == 1), "a point twice after a kill: {ids:?}");
+        for id in ids.keys() {
+            assert_paired(&out.join("points").join(id));
+        }
+    }
+    eprintln!("{killed_running} of 6 kills hit a running sweep");
+    assert!(killed_running >= 2, "only {killed_running} of 6 kills hit a running sweep");
+    complete(&args);
+    let ids = complete_row_ids(&out);
+    assert_eq!(ids.len(), points.len(), "{ids:?}");
+    assert!(ids.values().all(|&c| c == 1), "{ids:?}");
+    for p in &points {
+        assert_paired(&out.join("points").join(p.id()));
+    }
+    assert!(!out.join(".work").exists());
+    assert_eq!(temporaries(&out), Vec::<PathBuf>::new());
+}

@@ -1,0 +1,475 @@
+//! Reliability (issue 11): no lost, mixed or duplicated results, no panics, and exit
+//! codes and messages a script can rely on. Each test fails without its fix.
+
+mod common;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+use skg_sweep::Results;
+
+/// Run the binary in `dir`; returns (exit code, everything it printed).
+fn run(args: &[&str], dir: &Path) -> (Option<i32>, String) {
+    let o: Output = common::skg(args, dir);
+    let t = common::text(&o);
+    assert!(!t.contains("panicked"), "{args:?} panicked: {t}");
+    (o.status.code(), t)
+}
+
+/// The 1-based line of the first occurrence of `needle` in the file.
+fn line_of(path: &Path, needle: &str) -> usize {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines().position(|l| l.contains(needle)).unwrap_or_else(|| panic!("{needle} not in {}", path.display())) + 1
+}
+
+/// Rows per id of a results directory (every row once is the invariant).
+fn ids(dir: &Path) -> HashMap<String, usize> {
+    common::rows_by_id(dir).1
+}
+
+/// A free-fall sweep of `points` points (node counts 16, 17, …; fast to solve).
+fn free_fall_sweep(dir: &Path, points: usize, extra: &str) -> PathBuf {
+    let nodes: Vec<String> = (0..points).map(|k| (16 + k).to_string()).collect();
+    common::sweep_file(dir, &common::scenario("free_fall"), &format!("{extra}[[grid]]\nnodes = [{}]\n", nodes.join(", ")))
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn merge_of_incomplete_shards_lists_the_missing_points_and_exits_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = free_fall_sweep(dir.path(), 9, "");
+    let shard = |k: usize| {
+        let out = dir.path().join(format!("shard{k}"));
+        let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "--shard", &format!("{k}/3"), "-j", "2", "-q"], Path::new("."));
+        assert_eq!(code, Some(0), "{t}");
+        out
+    };
+    let (one, two) = (shard(1), shard(2));
+    let merged = dir.path().join("merged");
+    let (code, t) = run(&["merge", "-o", s(&merged), s(&one), s(&two)], Path::new("."));
+    assert_eq!(code, Some(1), "{t}");
+    // Shard 3/3 holds the points whose index is 2 mod 3.
+    assert!(t.contains("hold 6 of the sweep's 9 points") && t.contains("1/3, 2/3"), "{t}");
+    for k in [2, 5, 8] {
+        assert!(t.contains(&format!("index {k} (id ")), "index {k} not listed: {t}");
+    }
+    assert!(!merged.join("results.csv").exists(), "an incomplete merge writes nothing");
+    // --partial merges what there is and still names what is missing.
+    let (code, t) = run(&["merge", "--partial", "-o", s(&merged), s(&one), s(&two)], Path::new("."));
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("3 of the sweep's 9 points are missing"), "{t}");
+    assert_eq!(ids(&merged).len(), 6);
+    // With the last shard the merge is complete.
+    let three = shard(3);
+    let (code, t) = run(&["merge", "-o", s(&merged), s(&one), s(&two), s(&three)], Path::new("."));
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("every point of the sweep (9) is present"), "{t}");
+    let all = ids(&merged);
+    assert_eq!(all.len(), 9);
+    assert!(all.values().all(|&c| c == 1));
+    // A results.csv without its sweep.json cannot be checked for completeness.
+    std::fs::remove_file(three.join("sweep.json")).unwrap();
+    let (code, t) = run(&["merge", "-o", s(&merged), s(&one), s(&two), s(&three)], Path::new("."));
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("sweep.json"), "{t}");
+}
+
+#[test]
+fn resuming_after_the_inputs_changed_is_refused_or_starts_a_new_result_set() {
+    let dir = tempfile::tempdir().unwrap();
+    // A reference file of the free fall (its closed form is a parabola; any table will do
+    // for the identity), sampled finely.
+    let reference = dir.path().join("ref.csv");
+    let mut text = String::from("t,x,x_dot\n");
+    for k in 0..=400 {
+        let t = 2.0 * k as f64 / 400.0;
+        text.push_str(&format!("{t:?},{:?},{:?}\n", 10.0 + 3.0 * t - 4.9 * t * t, 3.0 - 9.8 * t));
+    }
+    std::fs::write(&reference, &text).unwrap();
+    let sweep = free_fall_sweep(dir.path(), 2, "reference = \"ref.csv\"\n");
+    let out = dir.path().join("out");
+    let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "-q"], Path::new("."));
+    assert_eq!(code, Some(0), "{t}");
+    let r = Results::read(&out).unwrap();
+    let hash = |p: &Path| skg_core::provenance::content_hash(&std::fs::read(p).unwrap());
+    let old_hash = hash(&reference);
+    assert!(r.rows.iter().all(|row| row[r.column_index("reference_hash").unwrap()] == old_hash));
+    // The closed form is the reference: free fall on SBP242 is exact.
+    let e = r.column_index("error_max").unwrap();
+    assert!(r.rows.iter().all(|row| row[e].parse::<f64>().unwrap() < 1e-9), "{:?}", r.rows);
+
+    // An edited reference file: a plain rerun refuses, naming both contents.
+    std::fs::write(&reference, text.replace("t,x,x_dot\n", "# edited\nt,x,x_dot\n")).unwrap();
+    let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "-q"], Path::new("."));
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains(&old_hash) && t.contains(&hash(&reference)) && t.contains("--new-results"), "{t}");
+    // Other [sweep] settings that change a row's values are refused too.
+    let edited = std::fs::read_to_string(&sweep).unwrap().replace("reference = \"ref.csv\"\n", "reference = \"ref.csv\"\nskip_last = 5\n");
+    std::fs::write(&sweep, edited).unwrap();
+    std::fs::write(&reference, &text).unwrap();
+    let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "-q"], Path::new("."));
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("other [sweep] settings") && t.contains("\"skip_last\":5"), "{t}");
+    // --new-results moves the old result set aside and starts over.
+    let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "--new-results"], Path::new("."));
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("moved the previous results to"), "{t}");
+    let old: Vec<PathBuf> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir() && p.to_string_lossy().contains("superseded-"))
+        .collect();
+    assert_eq!(old.len(), 1);
+    assert_eq!(ids(&old[0]).len(), 2, "the old rows are kept");
+    assert_eq!(ids(&out).len(), 2);
+}
+
+#[test]
+fn a_second_sweep_into_a_locked_directory_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = free_fall_sweep(dir.path(), 3, "");
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // Hold the directory's lock as a running sweep does.
+    let lock = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(out.join(".skg-lock")).unwrap();
+    lock.try_lock().unwrap();
+    let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "-q"], Path::new("."));
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("another skg-solve is writing into"), "{t}");
+    assert!(!out.join("results.csv").exists());
+    // A solve into that directory is refused the same way.
+    let (code, t) = run(&[s(&common::scenario("free_fall")), "-o", s(&out), "-q"], Path::new("."));
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("another skg-solve is writing into"), "{t}");
+    drop(lock);
+    // Two sweeps started at once: each point has exactly one row, and a run that found
+    // the directory locked says so.
+    let start = || {
+        Command::new(env!("CARGO_BIN_EXE_skg-solve"))
+            .args(["sweep", s(&sweep), "-o", s(&out), "-q", "-j", "1"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (a, b) = (start(), start());
+    for o in [a.wait_with_output().unwrap(), b.wait_with_output().unwrap()] {
+        let t = common::text(&o);
+        assert!(o.status.success() || (o.status.code() == Some(1) && t.contains("another skg-solve")), "{t}");
+    }
+    let rows = ids(&out);
+    assert_eq!(rows.len(), 3);
+    assert!(rows.values().all(|&c| c == 1), "{rows:?}");
+}
+
+#[test]
+fn retry_failed_runs_crashed_and_failed_points_again() {
+    let dir = tempfile::tempdir().unwrap();
+    // max_iter = 1 cannot converge the tumbler; max_iter = 100 does (and verifies at N = 256).
+    let sweep = common::sweep_file(dir.path(), &common::scenario("tumbler"), "[[grid]]\nnodes = [256]\nmax_iter = [1, 100]\n");
+    let out = dir.path().join("out");
+    let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "-q"], Path::new("."));
+    assert_eq!(code, Some(0), "{t}");
+    // Mark the converged point as crashed, as a killed worker leaves it.
+    let path = out.join("results.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let crashed = text.replacen(",true,converged,", ",false,crashed,", 1);
+    assert_ne!(crashed, text);
+    std::fs::write(&path, crashed).unwrap();
+    // A plain rerun keeps both rows; --retry-failed runs both points again.
+    let (_, t) = run(&["sweep", s(&sweep), "-o", s(&out)], Path::new("."));
+    assert!(t.contains("2 already done, 0 run"), "{t}");
+    let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "--retry-failed"], Path::new("."));
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("0 already done, 2 run (1 failed)"), "{t}");
+    let r = Results::read(&out).unwrap();
+    let status = r.column_index("status").unwrap();
+    let mut statuses: Vec<&str> = r.rows.iter().map(|row| row[status].as_str()).collect();
+    statuses.sort();
+    assert_eq!(statuses, ["converged", "not_converged"]);
+}
+
+#[test]
+fn sweep_names_and_compare_columns_are_checked_before_anything_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["../../x", "", ".", "..", "a/b"] {
+        let sweep = free_fall_sweep(dir.path(), 1, &format!("name = {name:?}\n"));
+        let (code, t) = run(&["sweep", s(&sweep)], dir.path());
+        assert_eq!(code, Some(1), "{name:?}: {t}");
+        assert!(t.contains("sweep.toml:3:8") && t.contains("plain file name"), "{name:?}: {t}");
+    }
+    let written: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(written, ["sweep.toml"], "nothing written anywhere");
+    let sweep = free_fall_sweep(dir.path(), 1, "reference = \"integrate\"\ncompare = [\"x\", \"y\"]\n");
+    let (code, t) = run(&["sweep", s(&sweep), "-o", "out"], dir.path());
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("sweep.toml:4:11") && t.contains("no column `y`") && t.contains("x, x_dot, energy"), "{t}");
+    assert!(!dir.path().join("out").exists(), "no point ran");
+}
+
+#[test]
+fn large_sweeps_state_their_size_and_need_yes() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = "[[grid]]\nnodes = [16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26]\ng = [".to_string()
+        + &(0..1000).map(|k| format!("{}", 9.0 + k as f64 / 1000.0)).collect::<Vec<_>>().join(", ")
+        + "]\n";
+    let sweep = common::sweep_file(dir.path(), &common::scenario("free_fall"), &body);
+    let (code, t) = run(&["sweep", s(&sweep), "-o", "out"], dir.path());
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("11000 points") && t.contains("roughly") && t.contains("--yes"), "{t}");
+    assert!(!dir.path().join("out").exists());
+    // A grid beyond what one sweep file may hold is refused before it is materialized.
+    let huge = "[[grid]]\nnodes = [16, 17, 18, 19, 20, 21, 22, 23, 24, 25]\n".to_string()
+        + &(0..7).map(|k| format!("x{k} = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]\n")).collect::<String>();
+    let sweep = common::sweep_file(dir.path(), &common::scenario("free_fall"), &huge.replace("x0", "g").replace("x1", "m"));
+    let (code, t) = run(&["sweep", s(&sweep), "-o", "out", "--yes"], dir.path());
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("more than the 10000000"), "{t}");
+}
+
+#[test]
+fn huge_node_counts_are_refused_with_the_estimate_and_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scenario("rolling_disk");
+    for n in ["9223372036854775807", "18446744073709551615", "1000000000"] {
+        for cmd in [&[][..], &["reference"], &["bench", "--repeat", "1"]] {
+            let mut args: Vec<&str> = cmd.to_vec();
+            args.extend([s(&scene), "--nodes", n]);
+            let (code, t) = run(&args, dir.path());
+            assert_eq!(code, Some(1), "{args:?}: {t}");
+            assert!(t.contains("at most 100000000 nodes") && t.contains(n), "{args:?}: {t}");
+        }
+    }
+    // Within the structural limit but beyond memory: the estimate and the limit are stated.
+    let (code, t) = run(&[s(&scene), "--nodes", "10000000"], dir.path());
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("needs an estimated") && t.contains(" TB of memory, more than the") && t.contains("GB available"), "{t}");
+    assert!(t.contains("rolling_disk.toml:") && !dir.path().join("out").exists(), "{t}");
+    // In a scene file, and as a sweep point.
+    let big = common::variant(dir.path(), "free_fall", "big.toml", &[("nodes = 32", "nodes = 9223372036854775807")]);
+    let (code, t) = run(&[s(&big)], dir.path());
+    assert_eq!((code, t.contains(&format!("big.toml:{}:9", line_of(&big, "nodes =")))), (Some(1), true), "{t}");
+    for (nodes, needle) in [("9223372036854775807", "at most 100000000 nodes"), ("10000000", "needs an estimated")] {
+        let sweep = common::sweep_file(dir.path(), &common::scenario("rolling_disk"), &format!("[[grid]]\nnodes = [32, {nodes}]\n"));
+        let (code, t) = run(&["sweep", s(&sweep), "-o", "out"], dir.path());
+        assert_eq!(code, Some(1), "{t}");
+        assert!(t.contains(needle) && t.contains("sweep.toml:3:1"), "{t}");
+        assert!(!dir.path().join("out").exists(), "no point ran");
+    }
+}
+
+#[test]
+fn time_spans_without_distinct_node_times_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (("start = 0", "start = 1e20"), ("end = 2", "end = 1.0000000000000001e20"), "would not be distinct"),
+        (("start = 0", "start = 0"), ("end = 2", "end = 5e-324"), "zero time step"),
+    ];
+    for ((a, b), (c, d), needle) in cases {
+        let scene = common::variant(dir.path(), "free_fall", "t.toml", &[(a, b), (c, d)]);
+        let (code, t) = run(&[s(&scene)], dir.path());
+        assert_eq!(code, Some(1), "{t}");
+        assert!(t.contains(needle) && t.contains(&format!("t.toml:{}:7", line_of(&scene, "end ="))), "{t}");
+    }
+}
+
+#[test]
+fn scene_errors_name_the_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    // (scene, replacements, the line's text, message)
+    type Case<'a> = (&'a str, Vec<(&'a str, &'a str)>, &'a str, &'a str);
+    let cases: Vec<Case> = vec![
+        ("free_fall", vec![("m = 2", "m = 2\nsin = 3")], "sin = 3", "clashes with a built-in name"),
+        ("free_fall", vec![("m = 2", "m = 2\npi = 3")], "pi = 3", "clashes with a built-in name"),
+        ("free_fall", vec![("m = 2", "m = -2")], "lagrangian =", "not positive definite"),
+        ("free_fall", vec![("[discretization]", "[solver]\ntol = -1\n[discretization]")], "tol = -1", "solver.tol must be a positive"),
+        ("free_fall", vec![("[discretization]", "[solver]\nprint_level = 99\n[discretization]")], "print_level", "0 (silent) … 12"),
+        (
+            "free_fall",
+            vec![("operator = \"SBP242\"", "operator = \"SBP242\"\nformulation = \"full\"\n[solver]\nhessian = \"exact\"")],
+            "hessian =",
+            "reduced formulation only",
+        ),
+        (
+            "incline_friction",
+            vec![("friction_direction = [\"1\", \"tan(alpha)\"]", "friction_direction = [\"1\"]")],
+            "friction_direction = [",
+            "1 components",
+        ),
+        (
+            "tumbler",
+            vec![("[time]", "[[walls]]\nname = \"drum\"\nh = \"x - 10\"\nstrength = 1\nwidth = 0.1\n\n[time]")],
+            "name = \"drum\"\nh = \"x - 10\"",
+            "wall `drum` declared twice",
+        ),
+        (
+            "rolling_disk",
+            vec![("[time]", "[[constraints]]\nname = \"g3\"\nexpression = \"2*(x_dot*sin(phi) - y_dot*cos(phi))\"\n\n[time]")],
+            "expression = \"2*(",
+            "constraint `g3` is redundant",
+        ),
+        (
+            "free_fall",
+            vec![
+                ("lagrangian = \"1/2*m*x_dot^2 - m*g*x\"", "lagrangian = \"1/2*m*x_dot^2 - m*g*sqrt(x)\""),
+                ("initial = 10\nvelocity = 3", "initial = 0.5\nvelocity = -3"),
+            ],
+            "lagrangian =",
+            "the initial guess (time stepping from the initial state) is not finite",
+        ),
+        (
+            "free_fall",
+            vec![("[discretization]", "[solver]\nlinear_solver = \"ma57\"\n[discretization]")],
+            "linear_solver",
+            "has only MUMPS",
+        ),
+        (
+            "free_fall",
+            vec![("[discretization]", "[solver.ipopt]\nmu_init = -1.0\n[discretization]")],
+            "mu_init",
+            "Ipopt refused the option mu_init = -1",
+        ),
+    ];
+    for (scene, replacements, line_text, message) in cases {
+        let p = common::variant(dir.path(), scene, "scene.toml", &replacements);
+        let (code, t) = run(&[s(&p), "-o", "out"], dir.path());
+        let first = line_text.lines().next().unwrap();
+        let mut line = line_of(&p, first);
+        if line_text.contains('\n') {
+            // The second of two such lines (a duplicate).
+            let text = std::fs::read_to_string(&p).unwrap();
+            line = text.lines().enumerate().filter(|(_, l)| l.contains(first)).nth(1).map_or(line, |(k, _)| k + 1);
+        }
+        assert_eq!(code, Some(1), "{message}: {t}");
+        assert!(t.contains(message) && t.contains(&format!("scene.toml:{line}:")), "expected `{message}` at line {line}: {t}");
+        assert!(!dir.path().join("out").exists(), "{message}: no output directory is left");
+    }
+}
+
+#[test]
+fn a_kinetic_matrix_that_loses_definiteness_fails_verification() {
+    let dir = tempfile::tempdir().unwrap();
+    // L = ½ (1 − x) ẋ²: the mass 1 − x vanishes at x = 1, which the motion from x = 0
+    // with ẋ = 3 reaches (free motion conserves (1 − x) ẋ² = 9).
+    let scene = common::variant(
+        dir.path(),
+        "free_fall",
+        "mass.toml",
+        &[
+            ("lagrangian = \"1/2*m*x_dot^2 - m*g*x\"", "lagrangian = \"1/2*(1 - x)*x_dot^2\""),
+            ("initial = 10", "initial = 0"),
+            ("nodes = 32", "nodes = 16"),
+        ],
+    );
+    let (code, t) = run(&[s(&scene), "-o", "out"], dir.path());
+    assert_eq!(code, Some(4), "{t}");
+    assert!(t.contains("not positive definite at node") && t.contains("verification failed"), "{t}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["converged"], true);
+    let node = summary["diagnostics"]["kinetic_loss"]["node"].as_u64().unwrap() as usize;
+    // Independent check of the reported node: there, x ≥ 1 (mass ≤ 0), before it x < 1.
+    let table = skg_core::check::Table::read(&dir.path().join("out/trajectory.csv")).unwrap();
+    let x = table.column("x").unwrap();
+    assert!(x[node] >= 1.0 && x[..node].iter().all(|&x| x < 1.0), "node {node}: {x:?}");
+}
+
+#[test]
+fn check_refuses_nan_tolerances_and_unknown_columns_as_input_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let (code, t) = run(&[s(&common::scenario("free_fall")), "-o", "out", "-q"], dir.path());
+    assert_eq!(code, Some(0), "{t}");
+    let reference = common::root().join("references/free_fall.csv");
+    let base = ["check", "out/trajectory.csv", s(&reference)];
+    for (extra, needle) in [
+        (&["--tol", "nan"][..], "--tol: a tolerance must be a number ≥ 0, got NaN"),
+        (&["--tol=-1"], "--tol: a tolerance must be a number ≥ 0, got -1"),
+        (&["--tol-rms", "NaN"], "--tol-rms"),
+        (&["--tol-column", "x=nan"], "--tol-column x=nan"),
+        (&["--tol-column", "unknown=1e-3"], "`unknown`, which is not compared"),
+    ] {
+        let mut args = base.to_vec();
+        args.extend_from_slice(extra);
+        let (code, t) = run(&args, dir.path());
+        assert_eq!(code, Some(1), "{extra:?}: {t}");
+        assert!(t.contains(needle), "{extra:?}: {t}");
+    }
+    // A tolerance that is exceeded is 4, a usage error 2.
+    let mut args = base.to_vec();
+    args.extend(["--tol", "0", "--columns", "energy"]);
+    assert_eq!(run(&args, dir.path()).0, Some(4));
+    assert_eq!(run(&["check", "out/trajectory.csv", s(&reference), "--tol", "x"], dir.path()).0, Some(2));
+}
+
+#[test]
+fn readers_refuse_a_trajectory_that_is_not_its_summarys() {
+    let dir = tempfile::tempdir().unwrap();
+    let (code, t) = run(&[s(&common::scenario("free_fall")), "-o", "out", "-q"], dir.path());
+    assert_eq!(code, Some(0), "{t}");
+    let csv = dir.path().join("out/trajectory.csv");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap()).unwrap();
+    let listed = &summary["files"]["trajectory.csv"];
+    assert_eq!(listed["rows"], 32);
+    assert_eq!(listed["sha256"], skg_core::provenance::content_hash(&std::fs::read(&csv).unwrap()));
+    // Another run's trajectory beside this summary (a write that went half-way).
+    let other = std::fs::read_to_string(&csv).unwrap().replacen("\n0.0,", "\n0.0,1", 1);
+    std::fs::write(&csv, other).unwrap();
+    let reference = common::root().join("references/free_fall.csv");
+    for args in [&["check", "out/trajectory.csv", s(&reference)][..], &["plot", "trajectory", "out", "-o", "chart"]] {
+        let (code, t) = run(args, dir.path());
+        assert_eq!(code, Some(1), "{args:?}: {t}");
+        assert!(t.contains("is not the file that out/summary.json describes") && t.contains("run the solve again"), "{t}");
+    }
+    // The next solve writes a consistent pair again.
+    assert_eq!(run(&[s(&common::scenario("free_fall")), "-o", "out", "-q"], dir.path()).0, Some(0));
+    assert_eq!(run(&["check", "out/trajectory.csv", s(&reference), "-q"], dir.path()).0, Some(0));
+}
+
+#[test]
+fn stale_temporary_files_are_removed_and_live_ones_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // pid_max is at most 2^22 on Linux: no process has this id.
+    let stale = out.join(".skg-tmp-4194304-trajectory");
+    let no_pid = out.join(".skg-tmp-Ab12cd");
+    let live = out.join(format!(".skg-tmp-{}-writing", std::process::id()));
+    for p in [&stale, &no_pid, &live] {
+        std::fs::write(p, "partial").unwrap();
+    }
+    let scene = common::variant(
+        dir.path(),
+        "free_fall",
+        "log.toml",
+        &[("[discretization]", "[solver]\nlog_file = \"ipopt.log\"\n[discretization]")],
+    );
+    let (code, t) = run(&[s(&scene), "-o", "out", "-q"], dir.path());
+    assert_eq!(code, Some(0), "{t}");
+    assert!(!stale.exists() && !no_pid.exists(), "stale temporary files are removed");
+    assert!(live.exists(), "a running writer's temporary file is kept");
+    let log = std::fs::read_to_string(out.join("ipopt.log")).unwrap();
+    assert!(log.contains("EXIT: Optimal Solution Found"), "{log}");
+}
+
+#[test]
+fn negative_or_nan_numeric_options_are_input_errors_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let (tumbler, free_fall) = (common::scenario("tumbler"), common::scenario("free_fall"));
+    let reference = common::root().join("references/free_fall.csv");
+    let cases: [(&[&str], &str); 5] = [
+        (&["reference", s(&free_fall), "--atol", "-1", "-o", "r.csv"], "--atol must be a number ≥ 0, got -1"),
+        (&["reference", s(&free_fall), "--rtol", "nan", "-o", "r.csv"], "--rtol must be a positive number"),
+        (&["tune", s(&tumbler), "--lo", "-1", "-o", "t.json"], "lo must be a positive number, got -1"),
+        (&["tune", s(&tumbler), "--rel", "0", "-o", "t.json"], "rel must be a positive number, got 0"),
+        (&["check", s(&reference), s(&reference), "--tol", "-1", "--json", "c.json"], "--tol: a tolerance must be a number ≥ 0"),
+    ];
+    for (args, needle) in cases {
+        let (code, t) = run(args, dir.path());
+        assert_eq!(code, Some(1), "{args:?}: {t}");
+        assert!(t.contains(needle) && !t.contains("converged"), "{args:?}: {t}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written");
+}
