@@ -35,7 +35,7 @@ use sha2::{Digest, Sha256};
 use crate::provenance;
 use crate::reference::{self, Reference};
 use crate::scenario::Scene;
-use crate::solve::Outcome;
+use crate::solve::{self, Outcome, SolveError};
 use crate::trajectory::{trajectory_header, trajectory_rows};
 
 /// Why an output file could not be written.
@@ -352,6 +352,8 @@ pub struct Written {
     pub reference: Option<PathBuf>,
     /// `summary.json`, written last.
     pub summary: PathBuf,
+    /// The data files as `summary.json` lists them.
+    pub files: IndexMap<&'static str, DataFile>,
 }
 
 impl Written {
@@ -372,10 +374,10 @@ fn summary<'a>(outcome: &'a Outcome, scene: &Scene, files: IndexMap<&'static str
     }
 }
 
-/// The content of `summary.json` of a solve of `scene` (as [`write_outcome`] writes it,
-/// but with an empty `files` map: nothing written), as a JSON value.
-pub fn summary_json(outcome: &Outcome, scene: &Scene) -> Result<serde_json::Value, serde_json::Error> {
-    serde_json::to_value(summary(outcome, scene, IndexMap::new()))
+/// The text of `summary.json` of a solve of `scene`: what [`write_outcome`] writes, with
+/// the `files` it wrote (an empty map for a solve not written).
+pub fn summary_json(outcome: &Outcome, scene: &Scene, written: Option<&Written>) -> Result<String, serde_json::Error> {
+    serde_json::to_string_pretty(&summary(outcome, scene, written.map(|w| w.files.clone()).unwrap_or_default()))
 }
 
 /// Write `trajectory.csv`, `reference.csv` (the verification's reference, when there is
@@ -407,8 +409,44 @@ pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result
         }
     };
     outcome.timings.output_s = t.elapsed().as_secs_f64();
-    write_json(&json_path, &summary(outcome, scene, files))?;
-    Ok(Written { trajectory: csv_path, reference, summary: json_path })
+    write_json(&json_path, &summary(outcome, scene, files.clone()))?;
+    Ok(Written { trajectory: csv_path, reference, summary: json_path, files })
+}
+
+/// Why [`solve_into`] failed: the solve could not run, or its files not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum SolveIntoError {
+    /// The solve could not be attempted or completed.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    /// The output directory is locked by another process, or a file could not be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+}
+
+/// Solve `scene` and write its files into `dir` as `skg-solve SCENE -o DIR` does: the
+/// directory is locked ([`OutputDir`]) for the whole solve; Ipopt writes the scene's
+/// `log_file` (relative to `dir`) into a staged file that is moved over the old log when
+/// the solve returns, so a killed run leaves the old log complete; the files are written
+/// by [`write_outcome`]. A solve that cannot run leaves no directory it created.
+pub fn solve_into(dir: &Path, scene: &mut Scene) -> Result<(Outcome, Written), SolveIntoError> {
+    let out = OutputDir::lock(dir)?;
+    let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
+    let named = std::mem::replace(&mut scene.solver.log_file, log.as_ref().map(|(_, staged)| staged.clone()));
+    let outcome = solve::solve_scene(scene);
+    scene.solver.log_file = named;
+    if let Some((target, staged)) = &log {
+        out.commit(staged, target)?;
+    }
+    let mut outcome = match outcome {
+        Ok(outcome) => outcome,
+        Err(e) => {
+            out.abandon();
+            return Err(e.into());
+        }
+    };
+    let written = write_outcome(dir, &mut outcome, scene)?;
+    Ok((outcome, written))
 }
 
 /// Write a reference as a trajectory CSV with its provenance ([`reference::provenance`])

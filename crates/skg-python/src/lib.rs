@@ -3,7 +3,8 @@
 //! Every function here calls the same code as the `skg-solve` command line: a scene is
 //! loaded and resolved by `skg_core::scenario`, solved by `skg_core::solve::solve_scene`
 //! (verification and fallback ladder included), integrated by `skg_core::reference`,
-//! written by `skg_core::output`, swept by `skg_sweep::run_sweep`. Errors are raised as
+//! written (into a locked directory) by `skg_core::output`, swept by
+//! `skg_sweep::run_sweep`. Errors are raised as
 //! the exceptions of `skg._errors` with the command line's message
 //! ([`skg_core::error_text`]). The GIL is released while Rust computes.
 //!
@@ -60,6 +61,17 @@ fn reference_err(py: Python<'_>, e: &ReferenceError) -> PyErr {
 
 fn output_err(py: Python<'_>, e: &output::OutputError) -> PyErr {
     raise(py, "OutputError", e)
+}
+
+fn solve_into_err(py: Python<'_>, e: &output::SolveIntoError) -> PyErr {
+    match e {
+        output::SolveIntoError::Solve(e) => solve_err(py, e),
+        output::SolveIntoError::Output(e) => output_err(py, e),
+    }
+}
+
+fn sweep_err(py: Python<'_>, e: &sweep::SweepError) -> PyErr {
+    raise(py, "SweepError", e)
 }
 
 /// `set={"sigma": 1/200, "V0": "2*g"}` as `--set` assignments: a number by its shortest
@@ -128,72 +140,72 @@ fn trajectory_dict<'py>(py: Python<'py>, scene: &Scene, tr: &Trajectory) -> PyRe
     Ok(d)
 }
 
-fn json_to_py<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
-    let text = serde_json::to_string(value).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    py.import("json")?.call_method1("loads", (text,))
-}
-
-/// The result of [`solve`]: the outcome and the scene it solved, so that `write`
-/// produces exactly the files of the command line.
+/// The result of [`solve`]: the outcome, the scene it solved and the files last written,
+/// so that `write` produces exactly the files of the command line and `summary` lists them.
 #[pyclass(module = "skg._skg", frozen)]
 struct NativeSolution {
     scene: Scene,
-    outcome: std::sync::Mutex<Outcome>,
+    state: std::sync::Mutex<(Outcome, Option<output::Written>)>,
 }
 
 #[pymethods]
 impl NativeSolution {
     /// The trajectory as a dict of arrays ([`trajectory_dict`]).
     fn trajectory<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let o = self.outcome.lock().expect("not poisoned");
+        let (o, _) = &*self.state.lock().expect("not poisoned");
         trajectory_dict(py, &self.scene, &o.trajectory)
     }
 
     /// The verification's time-stepping reference at the same nodes, or None.
     fn reference<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let o = self.outcome.lock().expect("not poisoned");
+        let (o, _) = &*self.state.lock().expect("not poisoned");
         o.verification.reference_trajectory.as_ref().map(|r| trajectory_dict(py, &self.scene, r)).transpose()
     }
 
-    /// summary.json's content as a dict.
+    /// summary.json's content as a dict, its keys in the file's order (`files`: those of
+    /// the last write, else empty).
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let o = self.outcome.lock().expect("not poisoned");
-        let v = output::summary_json(&o, &self.scene).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        json_to_py(py, &v)
+        let (o, written) = &*self.state.lock().expect("not poisoned");
+        let text = output::summary_json(o, &self.scene, written.as_ref()).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (text,))
     }
 
     /// Whether the solve converged.
     #[getter]
     fn converged(&self) -> bool {
-        self.outcome.lock().expect("not poisoned").converged()
+        self.state.lock().expect("not poisoned").0.converged()
     }
 
     /// Converged and verified (exit status 0 of the command line).
     #[getter]
     fn trusted(&self) -> bool {
-        self.outcome.lock().expect("not poisoned").trusted()
+        self.state.lock().expect("not poisoned").0.trusted()
     }
 
-    /// Write trajectory.csv, reference.csv and summary.json into `dir` (as the command
-    /// line does); returns the paths written.
+    /// Write trajectory.csv, reference.csv and summary.json into `dir` as the command line
+    /// does, holding the directory's lock meanwhile; returns the paths written.
     fn write(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
         let written = py.detach(|| {
-            let mut o = self.outcome.lock().expect("not poisoned");
-            output::write_outcome(&dir, &mut o, &self.scene)
+            let _lock = output::OutputDir::lock(&dir)?;
+            let (o, written) = &mut *self.state.lock().expect("not poisoned");
+            let w = output::write_outcome(&dir, o, &self.scene)?;
+            Ok::<_, output::OutputError>(written.insert(w).paths().cloned().collect())
         });
-        written.map(|w| w.paths().cloned().collect()).map_err(|e| output_err(py, &e))
+        written.map_err(|e| output_err(py, &e))
     }
 }
 
-/// Solve a scene file as `skg-solve SCENE` does (without writing files).
+/// Solve a scene file as `skg-solve SCENE` does; with `out`, into that directory as
+/// `skg-solve SCENE -o OUT` does ([`output::solve_into`]), else without writing files.
 #[pyfunction]
-#[pyo3(signature = (path, *, nodes=None, set=None, operator=None, formulation=None, hessian=None, max_iter=None,
+#[pyo3(signature = (path, *, out=None, nodes=None, set=None, operator=None, formulation=None, hessian=None, max_iter=None,
     window=None, overlap=None, verify_tol=None, no_verify=false, no_fallback=false))]
 #[pyo3(name = "solve")]
 #[allow(clippy::too_many_arguments)]
 fn solve_scene(
     py: Python<'_>,
     path: PathBuf,
+    out: Option<PathBuf>,
     nodes: Option<usize>,
     set: Option<&Bound<'_, PyDict>>,
     operator: Option<&str>,
@@ -228,9 +240,25 @@ fn solve_scene(
         no_verify,
         no_fallback,
     };
-    let scene = load(py, &path, &ov)?;
-    let outcome = py.detach(|| solve::solve_scene(&scene)).map_err(|e| solve_err(py, &e))?;
-    Ok(NativeSolution { scene, outcome: std::sync::Mutex::new(outcome) })
+    let mut scene = load(py, &path, &ov)?;
+    let state = match out {
+        Some(dir) => {
+            let (outcome, written) = py.detach(|| output::solve_into(&dir, &mut scene)).map_err(|e| solve_into_err(py, &e))?;
+            (outcome, Some(written))
+        }
+        None => {
+            // Ipopt's log is relative to an output directory, and there is none.
+            let log = scene.solver.log_file.take();
+            let mut outcome = py.detach(|| solve::solve_scene(&scene)).map_err(|e| solve_err(py, &e))?;
+            if let Some(name) = log {
+                outcome
+                    .warnings
+                    .push(format!("the scene's [solver] log_file ({}) is written only by a solve into a directory (out=)", name.display()));
+            }
+            (outcome, None)
+        }
+    };
+    Ok(NativeSolution { scene, state: std::sync::Mutex::new(state) })
 }
 
 /// A reference of a scene and what `write` needs to write the command line's CSV.
@@ -321,7 +349,6 @@ fn run_sweep<'py>(
     shard: Option<&str>,
     progress: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let sweep_err = |py: Python<'_>, e: &sweep::SweepError| raise(py, "SweepError", e);
     let file = py.detach(|| sweep::SweepFile::load(&path)).map_err(|e| sweep_err(py, &e))?;
     let shard = shard.map(|s| s.parse::<sweep::Shard>().map_err(|e| PyValueError::new_err(format!("shard: {e}")))).transpose()?;
     let opts = sweep::SweepOptions {
@@ -352,7 +379,7 @@ fn run_sweep<'py>(
 /// `(header, rows)` with every cell as text.
 #[pyfunction]
 fn read_results(py: Python<'_>, path: PathBuf) -> PyResult<(Vec<String>, Vec<Vec<String>>)> {
-    let r = py.detach(|| sweep::Results::read(&path)).map_err(|e| raise(py, "SweepError", &e))?;
+    let r = py.detach(|| sweep::Results::read(&path)).map_err(|e| sweep_err(py, &e))?;
     Ok((r.header, r.rows))
 }
 

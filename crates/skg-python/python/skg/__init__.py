@@ -10,6 +10,7 @@ command line does, and errors carry its messages.
 >>> sol.t, sol.q, sol["x_dot"]            # NumPy arrays; columns by their CSV names
 >>> sol.to_pandas()                        # needs pandas
 >>> sol.write("out/tumbler")               # trajectory.csv, reference.csv, summary.json
+>>> skg.solve("scenarios/tumbler.toml", out="out/tumbler")   # solve into a directory, as the CLI does
 
 * :func:`solve` returns a :class:`Solution`, :func:`reference` a :class:`Reference`,
   :func:`read_trajectory` a :class:`Trajectory` from a CSV; all three share the
@@ -212,7 +213,9 @@ class Solution(Trajectory):
       :class:`NotConverged` or :class:`NotVerified` otherwise;
     * ``reference``: the verification's time-stepping reference at the same nodes
       (a :class:`Trajectory`, or None);
-    * ``write(dir)``: trajectory.csv, reference.csv and summary.json, as the command line writes them.
+    * ``write(dir)``: trajectory.csv, reference.csv and summary.json, as the command line
+      writes them (``summary["files"]`` then lists the data files with their SHA-256; it is
+      empty for a solve not written).
     """
 
     def __init__(self, native: Any):
@@ -259,7 +262,10 @@ class Solution(Trajectory):
 
     def write(self, directory: PathLike) -> List[Path]:
         """Write trajectory.csv, reference.csv (when verification computed one) and, last,
-        summary.json into ``directory``, each atomically; returns the paths written."""
+        summary.json into ``directory`` by the command line's pairing rule, each
+        atomically, holding the directory's lock (``.skg-lock``) meanwhile; returns the
+        paths written. Raises :class:`OutputError` when another skg-solve (or skg) is
+        writing into the directory."""
         paths = [Path(p) for p in self._native.write(str(directory))]
         self.summary = self._native.summary()
         return paths
@@ -327,6 +333,7 @@ def _set_dict(set: Optional[Mapping[str, Number]]) -> Optional[Dict[str, Number]
 def solve(
     scene: PathLike,
     *,
+    out: Optional[PathLike] = None,
     nodes: Optional[int] = None,
     set: Optional[Mapping[str, Number]] = None,
     operator: Optional[str] = None,
@@ -339,7 +346,13 @@ def solve(
     no_verify: bool = False,
     no_fallback: bool = False,
 ) -> Solution:
-    """Solve a scene file as ``skg-solve SCENE`` does, without writing files.
+    """Solve a scene file as ``skg-solve SCENE`` does; without ``out``, no file is written.
+
+    With ``out``, the solve runs as ``skg-solve SCENE -o OUT``: the directory is locked
+    for the whole solve (a second writer is refused with :class:`OutputError`), the
+    scene's Ipopt ``log_file`` is written there (staged, moved over the old log when the
+    solve returns), then trajectory.csv, reference.csv and summary.json. Without ``out``
+    Ipopt's ``log_file`` is not written (it is relative to an output directory).
 
     The keyword arguments are the command line's options: ``nodes`` (``--nodes``),
     ``set`` (``--set``, a mapping such as ``{"sigma": 1/200, "V0": "2*g"}``: numbers, or
@@ -356,6 +369,7 @@ def solve(
     """
     native = _skg.solve(
         os.fspath(scene),
+        out=None if out is None else os.fspath(out),
         nodes=nodes,
         set=_set_dict(set),
         operator=operator,
