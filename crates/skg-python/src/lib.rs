@@ -3,8 +3,8 @@
 //! Every function here calls the same code as the `skg-solve` command line: a scene is
 //! loaded and resolved by `skg_core::scenario`, solved by `skg_core::solve::solve_scene`
 //! (verification and fallback ladder included), integrated by `skg_core::reference`,
-//! written (into a locked directory) by `skg_core::output`, swept by
-//! `skg_sweep::run_sweep`. Errors are raised as
+//! written (into a locked directory) by `skg_core::output`, planned and swept by
+//! `skg_sweep::plan` and `skg_sweep::run_sweep`. Errors are raised as
 //! the exceptions of `skg._errors` with the command line's message
 //! ([`skg_core::error_text`]). The GIL is released while Rust computes.
 //!
@@ -336,43 +336,85 @@ fn integrate_reference(
     Ok(NativeReference { scene, path: path.display().to_string(), reference: r })
 }
 
-/// Run (or resume) a sweep as `skg-solve sweep` does, its points in worker processes of
-/// the `skg-solve` executable `exe`; returns the run's report as a dict.
+/// A sweep about to run: what [`plan_sweep`] found and what `run` needs.
+#[pyclass(module = "skg._skg", frozen)]
+struct NativeSweepPlan {
+    file: sweep::SweepFile,
+    plan: sweep::Plan,
+    opts: sweep::SweepOptions,
+}
+
+#[pymethods]
+impl NativeSweepPlan {
+    /// The line `skg-solve sweep` prints before it starts.
+    #[getter]
+    fn text(&self) -> &str {
+        &self.plan.text
+    }
+
+    /// Points this run owns.
+    #[getter]
+    fn in_shard(&self) -> usize {
+        self.plan.in_shard
+    }
+
+    /// The rough estimate of the run's wall time, seconds.
+    #[getter]
+    fn estimate_s(&self) -> f64 {
+        self.plan.estimate_s
+    }
+
+    /// Run (or resume) the sweep; returns the run's report as a dict.
+    fn run<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let r = py.detach(|| sweep::run_sweep(&self.file, &self.plan.expanded, &self.opts)).map_err(|e| sweep_err(py, &e))?;
+        let d = PyDict::new(py);
+        d.set_item("name", self.file.name())?;
+        d.set_item("total", r.total)?;
+        d.set_item("in_shard", r.in_shard)?;
+        d.set_item("skipped", r.skipped)?;
+        d.set_item("ran", r.ran)?;
+        d.set_item("failed", r.failed)?;
+        d.set_item("duplicates", r.duplicates)?;
+        d.set_item("results", r.results)?;
+        d.set_item("superseded", r.superseded)?;
+        d.set_item("wall_s", r.wall_s)?;
+        d.set_item("estimate_s", self.plan.estimate_s)?;
+        d.set_item("jobs", self.opts.jobs)?;
+        Ok(d)
+    }
+}
+
+/// Load and expand a sweep file as `skg-solve sweep` does before it starts
+/// ([`sweep::plan`]): its points run in worker processes of the `skg-solve` executable
+/// `exe`.
 #[pyfunction]
-#[pyo3(signature = (path, *, exe, out=None, jobs=None, shard=None, progress=true))]
-fn run_sweep<'py>(
-    py: Python<'py>,
+#[pyo3(signature = (path, *, exe, out=None, jobs=None, shard=None, retry_failed=false, new_results=false, yes=false, progress=true))]
+#[allow(clippy::too_many_arguments)]
+fn plan_sweep(
+    py: Python<'_>,
     path: PathBuf,
     exe: PathBuf,
     out: Option<PathBuf>,
     jobs: Option<usize>,
     shard: Option<&str>,
+    retry_failed: bool,
+    new_results: bool,
+    yes: bool,
     progress: bool,
-) -> PyResult<Bound<'py, PyDict>> {
-    let file = py.detach(|| sweep::SweepFile::load(&path)).map_err(|e| sweep_err(py, &e))?;
+) -> PyResult<NativeSweepPlan> {
     let shard = shard.map(|s| s.parse::<sweep::Shard>().map_err(|e| PyValueError::new_err(format!("shard: {e}")))).transpose()?;
+    let file = py.detach(|| sweep::SweepFile::load(&path)).map_err(|e| sweep_err(py, &e))?;
     let opts = sweep::SweepOptions {
-        out_dir: out.unwrap_or_else(|| PathBuf::from("out/sweeps").join(file.name())),
-        jobs: jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1),
+        out_dir: out.unwrap_or_else(|| sweep::default_out_dir(&file)),
+        jobs: jobs.unwrap_or_else(sweep::default_jobs).max(1),
         shard,
         worker_exe: exe,
         progress,
-        retry_failed: false,
-        new_results: false,
+        retry_failed,
+        new_results,
     };
-    let r = py.detach(|| file.expand().and_then(|expanded| sweep::run_sweep(&file, &expanded, &opts))).map_err(|e| sweep_err(py, &e))?;
-    let d = PyDict::new(py);
-    d.set_item("name", file.name())?;
-    d.set_item("total", r.total)?;
-    d.set_item("in_shard", r.in_shard)?;
-    d.set_item("skipped", r.skipped)?;
-    d.set_item("ran", r.ran)?;
-    d.set_item("failed", r.failed)?;
-    d.set_item("duplicates", r.duplicates)?;
-    d.set_item("results", r.results)?;
-    d.set_item("wall_s", r.wall_s)?;
-    d.set_item("jobs", opts.jobs)?;
-    Ok(d)
+    let plan = py.detach(|| sweep::plan(&file, &opts, yes)).map_err(|e| sweep_err(py, &e))?;
+    Ok(NativeSweepPlan { file, plan, opts })
 }
 
 /// A sweep's results.csv (or its directory), checked as `plot` and `merge` read it:
@@ -397,11 +439,12 @@ fn read_table<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Vec<String>, Bou
 fn _skg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_scene, m)?)?;
     m.add_function(wrap_pyfunction!(integrate_reference, m)?)?;
-    m.add_function(wrap_pyfunction!(run_sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(read_results, m)?)?;
     m.add_function(wrap_pyfunction!(read_table, m)?)?;
     m.add_class::<NativeSolution>()?;
     m.add_class::<NativeReference>()?;
+    m.add_class::<NativeSweepPlan>()?;
     m.add("VERSION", provenance::VERSION)?;
     m.add("SCHEMA_VERSION", provenance::SCHEMA_VERSION)?;
     // Where this module was built from: the workspace's target directory holds an

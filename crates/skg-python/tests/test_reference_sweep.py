@@ -65,3 +65,45 @@ def test_sweep_without_an_executable_says_where_it_looked(scene, tmp_path, monke
         monkeypatch.setenv("SKG_SOLVE", str(tmp_path / "no-such-skg-solve"))
         skg.sweep(f, out=tmp_path / "out")
     assert not (tmp_path / "out").exists()
+
+
+def test_sweep_refuses_changed_settings_like_the_command_line(cli_error, scene, skg_solve, tmp_path):
+    f = tmp_path / "sweep.toml"
+    f.write_text(SWEEP.format(scene=scene("free_fall")))
+    out = tmp_path / "out"
+    first = skg.sweep(f, out=out, jobs=2, exe=skg_solve, progress=False)
+    assert first.report["ran"] == 6 and first.report["superseded"] is None and first.report["estimate_s"] > 0
+    # another [sweep] setting that changes a row: a plain rerun mixes nothing and is refused
+    f.write_text(SWEEP.format(scene=scene("free_fall")).replace('reference = "integrate"', 'reference = "integrate"\nskip_last = 3'))
+    message, status = cli_error("sweep", f, "-o", out, "-q")
+    with pytest.raises(skg.SweepError) as e:
+        skg.sweep(f, out=out, exe=skg_solve, progress=False)
+    assert status == 1 and str(e.value) == message and "--new-results" in message
+    again = skg.sweep(f, out=out, jobs=2, exe=skg_solve, progress=False, new_results=True)
+    assert again.report["ran"] == 6 and again.report["superseded"] is not None
+    assert (again.report["superseded"] / "results.csv").is_file()
+    assert np.nanmax(again["error_max"]) < 1e-9  # still exact against the integrated reference
+
+
+def test_sweep_retries_failed_points(scene, skg_solve, tmp_path):
+    f = tmp_path / "sweep.toml"
+    # a negative mass: the kinetic matrix is not positive definite, every point is an error
+    f.write_text(SWEEP.format(scene=scene("free_fall")).replace("[[grid]]", "[[grid]]\nm = [-2]"))
+    out = tmp_path / "out"
+    res = skg.sweep(f, out=out, jobs=2, exe=skg_solve, progress=False)
+    assert res.report["failed"] == 6 and not res["converged"].any()
+    again = skg.sweep(f, out=out, exe=skg_solve, progress=False)
+    assert again.report["ran"] == 0
+    retried = skg.sweep(f, out=out, jobs=2, exe=skg_solve, progress=False, retry_failed=True)
+    assert retried.report["ran"] == 6 and retried.report["failed"] == 6 and len(retried) == 6
+
+
+def test_a_sweep_too_large_to_start_unasked(cli_error, scene, skg_solve, tmp_path):
+    f = tmp_path / "big.toml"
+    values = ", ".join(str(1 + k / 1000) for k in range(101))
+    f.write_text(f'[sweep]\nscene = "{scene("free_fall")}"\n\n[[grid]]\ng = [{values}]\nm = [{values}]\n')
+    message, status = cli_error("sweep", f, "-o", tmp_path / "out")
+    with pytest.raises(skg.SweepError) as e:
+        skg.sweep(f, out=tmp_path / "out", exe=skg_solve)
+    assert status == 1 and str(e.value) == message and "10201 points" in message and "--yes" in message
+    assert not (tmp_path / "out").exists()

@@ -30,6 +30,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import sys
 import warnings
 from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Union
@@ -474,7 +475,9 @@ class SweepResult:
     """The rows of a sweep's results.csv: ``results[column]`` is a NumPy array (numbers
     as float with NaN for blank cells, true/false as bool, text as str), ``to_pandas()``
     the DataFrame; ``directory``, ``path``; ``report`` what the run did (``total``,
-    ``ran``, ``skipped``, ``failed``, ``wall_s``, ``jobs``; empty for :func:`read_results`)."""
+    ``in_shard``, ``ran``, ``skipped``, ``failed``, ``duplicates``, ``wall_s``,
+    ``estimate_s`` (the rough estimate made before), ``jobs``, ``superseded`` (where
+    ``new_results`` moved the earlier results, or None); empty for :func:`read_results`)."""
 
     def __init__(self, path: Path, header: List[str], rows: List[List[str]], report: Optional[Dict[str, Any]] = None):
         self.path = path
@@ -517,6 +520,9 @@ def sweep(
     jobs: Optional[int] = None,
     shard: Optional[str] = None,
     exe: Optional[PathLike] = None,
+    retry_failed: bool = False,
+    new_results: bool = False,
+    yes: bool = False,
     progress: bool = True,
 ) -> SweepResult:
     """Run (or resume) a sweep as ``skg-solve sweep`` does and return its results.
@@ -525,18 +531,32 @@ def sweep(
     :func:`find_skg_solve`; Debian's Ipopt is not thread-safe, so parallel solves need
     processes), at most ``jobs`` at once (default: the number of cores); each finished
     point is appended to ``out/results.csv`` (default ``out/sweeps/<sweep name>``), and
-    running the same call again resumes. ``shard="k/n"`` runs one shard. ``progress``
-    shows the command line's progress bar on stderr when it is a terminal.
+    running the same call again resumes. ``shard="k/n"`` runs one shard. The options
+    are the command line's: ``retry_failed`` (``--retry-failed``) runs the points that
+    did not converge again; ``new_results`` (``--new-results``) moves an earlier result
+    set aside (needed after the base scene, the reference file or the ``[sweep]``
+    settings changed: a plain rerun is refused with :class:`SweepError`); more than
+    10 000 points start only with ``yes=True`` (``--yes``). A second sweep into the same
+    directory is refused. ``progress`` prints the plan (points, a rough time estimate)
+    and shows the progress bar on stderr when it is a terminal.
     """
     worker = find_skg_solve(exe)
-    report = _skg.run_sweep(
+    plan = _skg.plan_sweep(
         os.fspath(sweep_file),
         exe=str(worker),
         out=None if out is None else os.fspath(out),
         jobs=jobs,
         shard=shard,
+        retry_failed=retry_failed,
+        new_results=new_results,
+        yes=yes,
         progress=progress,
     )
+    if progress:
+        print(plan.text, file=sys.stderr)
+    report = plan.run()
+    if progress and report["superseded"] is not None:
+        print(f"  moved the previous results to {report['superseded']}", file=sys.stderr)
     path = Path(report["results"])
     header, rows = _skg.read_results(str(path))
     return SweepResult(path, header, rows, report)
