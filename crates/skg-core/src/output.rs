@@ -231,6 +231,20 @@ pub fn verify_pairing(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     )))
 }
 
+/// A temporary path beside `path` for a file that another library or program writes
+/// itself (a picture, a video), to be renamed over `path` when complete. It is named
+/// like the temporaries of [`write_atomic`] (`.skg-tmp-<pid>-<file name of path>`, so it
+/// ends like `path` for writers that go by the extension), and one left by a kill is
+/// removed by the next write in that directory. Creates the directory and removes its
+/// stale temporaries first.
+pub fn temporary_beside(path: &Path) -> Result<PathBuf, OutputError> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+    remove_stale_temporaries(dir);
+    let name = path.file_name().map_or("file".into(), |n| n.to_string_lossy().into_owned());
+    Ok(dir.join(format!("{}{name}", temp_prefix())))
+}
+
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
     move |source| OutputError::Io { path: path.to_path_buf(), source }
 }
@@ -493,6 +507,21 @@ mod tests {
         let e = verify_pairing(&csv, b"t\n0.0\n2.0\n").unwrap_err().to_string();
         assert!(e.contains("is not the file that") && e.contains("2 rows"), "{e}");
         verify_pairing(&dir.path().join("reference.csv"), b"other").unwrap();
+    }
+
+    #[test]
+    fn temporaries_beside_a_file_keep_its_extension_and_are_cleaned_up() {
+        let dir = tempfile::tempdir().unwrap();
+        let stale = dir.path().join(".skg-tmp-4194304-old.gif");
+        std::fs::write(&stale, "left by a kill").unwrap();
+        let target = dir.path().join("sub").join("motion.gif");
+        let tmp = temporary_beside(&target).unwrap();
+        assert_eq!(tmp.parent(), target.parent());
+        let name = tmp.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(name.starts_with(&temp_prefix()) && name.ends_with("motion.gif"), "{name}");
+        assert!(!is_stale_temporary(&name), "this process's own");
+        temporary_beside(&dir.path().join("x.png")).unwrap();
+        assert!(!stale.exists(), "a dead process's temporary is removed");
     }
 
     #[test]

@@ -54,6 +54,9 @@ pub enum PlotError {
     /// A trajectory or reference CSV cannot be read.
     #[error(transparent)]
     Table(#[from] skg_core::check::CheckError),
+    /// A chart's temporary file or its directory could not be made.
+    #[error(transparent)]
+    Output(#[from] skg_core::output::OutputError),
     /// A chart or its directory could not be written.
     #[error("cannot write {path}: {source}")]
     Io {
@@ -93,18 +96,15 @@ fn color(i: usize) -> RGBColor {
 }
 
 /// Draw a chart with both backends: `stem.svg` and `stem.png` (written to temporary
-/// files in the same directory, then renamed).
+/// files in the same directory, [`skg_core::output::temporary_beside`], then renamed).
 macro_rules! render {
     ($stem:expr, $size:expr, $draw:ident ( $($arg:expr),* )) => {{
         register_fonts();
         let stem: &Path = $stem;
-        if let Some(dir) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|source| PlotError::Io { path: dir.to_path_buf(), source })?;
-        }
         let mut written = Vec::new();
         for ext in ["svg", "png"] {
             let path = stem.with_extension(ext);
-            let tmp = stem.with_extension(format!("tmp.{ext}"));
+            let tmp = skg_core::output::temporary_beside(&path)?;
             let drawn: Result<(), String> = if ext == "svg" {
                 let root = SVGBackend::new(&tmp, $size).into_drawing_area();
                 $draw(&root, $($arg),*).and_then(|_| root.present().map_err(|e| e.to_string()))

@@ -32,6 +32,7 @@ use plotters::prelude::*;
 use skg_core::check::Table;
 use skg_core::contact;
 use skg_core::model::Model;
+use skg_core::output::{self, REFERENCE_FILE, SUMMARY_FILE, TRAJECTORY_FILE};
 use skg_core::scenario::{Overrides, Scene, SceneFile, TIME, VELOCITY_SUFFIX};
 use skg_core::trajectory::trajectory_header;
 
@@ -91,12 +92,12 @@ impl Motion {
     /// is `reference`, else the directory's reference.csv when there is one.
     pub fn load(input: &Path, scene: Option<&Path>, reference: Option<&Path>) -> Result<Motion, PlotError> {
         let (dir, file) = if input.is_dir() {
-            (input.to_path_buf(), input.join("trajectory.csv"))
+            (input.to_path_buf(), input.join(TRAJECTORY_FILE))
         } else {
             (input.parent().map(Path::to_path_buf).unwrap_or_default(), input.to_path_buf())
         };
         let solution = Table::read(&file)?;
-        let summary_path = dir.join("summary.json");
+        let summary_path = dir.join(SUMMARY_FILE);
         let summary: Option<serde_json::Value> = if summary_path.is_file() {
             let text = std::fs::read_to_string(&summary_path).map_err(|source| PlotError::Io { path: summary_path.clone(), source })?;
             Some(serde_json::from_str(&text).map_err(|e| data_err(format!("{}: {e}", summary_path.display())))?)
@@ -148,7 +149,7 @@ impl Motion {
         let resolved = scene_file.resolve(&Overrides { set, ..Overrides::default() })?;
         let reference = match reference {
             Some(p) => Some(Table::read(p)?),
-            None => Some(dir.join("reference.csv")).filter(|p| p.is_file()).map(|p| Table::read(&p)).transpose()?,
+            None => Some(dir.join(REFERENCE_FILE)).filter(|p| p.is_file()).map(|p| Table::read(&p)).transpose()?,
         };
         let label = if input.is_dir() { input } else { dir.as_path() }
             .file_name()
@@ -716,7 +717,7 @@ pub fn path(motion: &Motion, view: &View, stem: &Path) -> Result<Vec<PathBuf>, P
 pub fn path_png(motion: &Motion, view: &View, size: (u32, u32), file: &Path) -> Result<PathBuf, PlotError> {
     register_fonts();
     let s = Scenery::new(motion, view.clone())?;
-    let tmp = tmp_beside(file)?;
+    let tmp = output::temporary_beside(file)?;
     let drawn = (|| {
         let root = BitMapBackend::new(&tmp, size).into_drawing_area();
         draw(&root, &s, Shot::Path)?;
@@ -772,14 +773,6 @@ fn frame_times(motion: &Motion, count: usize) -> Vec<f64> {
     (0..count).map(|i| t0 + (t1 - t0) * i as f64 / (count - 1) as f64).collect()
 }
 
-fn tmp_beside(path: &Path) -> Result<PathBuf, PlotError> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).map_or_else(|| PathBuf::from("."), Path::to_path_buf);
-    std::fs::create_dir_all(&dir).map_err(|source| PlotError::Io { path: dir.clone(), source })?;
-    let name = path.file_name().map_or("frames".into(), |n| n.to_string_lossy().into_owned());
-    let ext = path.extension().map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
-    Ok(dir.join(format!(".{name}.tmp-{}{ext}", std::process::id())))
-}
-
 /// Rename the finished temporary file over `path`, or remove it when drawing failed.
 fn finish(tmp: &Path, path: &Path, drawn: Result<(), String>) -> Result<PathBuf, PlotError> {
     if let Err(message) = drawn {
@@ -801,7 +794,7 @@ pub fn animate(motion: &Motion, view: &View, frames: &Frames, path: &Path, on_fr
     }
     let s = Scenery::new(motion, view.clone())?;
     let times = frame_times(motion, frames.count);
-    let tmp = tmp_beside(path)?;
+    let tmp = output::temporary_beside(path)?;
     let drawn = match Format::of(path)? {
         Format::Gif => (|| {
             let delay = (1000.0 / frames.fps).round().max(10.0) as u32;
@@ -879,7 +872,7 @@ pub fn strip(motion: &Motion, view: &View, count: usize, panel: (u32, u32), path
     }
     let s = Scenery::new(motion, View { title: String::new(), ..view.clone() })?;
     let times = frame_times(motion, count);
-    let tmp = tmp_beside(path)?;
+    let tmp = output::temporary_beside(path)?;
     let drawn = (|| {
         let root = BitMapBackend::new(&tmp, (panel.0 * count as u32, panel.1)).into_drawing_area();
         root.fill(&WHITE).map_err(e2s)?;
