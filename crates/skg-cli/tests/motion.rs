@@ -144,4 +144,11 @@ fn gallery_page_with_pictures_and_errors() {
         assert_eq!(png_size(&img.join(format!("{stem}.png"))), (720, 560));
         assert_eq!(png_size(&img.join(format!("{stem}_frames.png"))), (3 * 260, 230));
     }
+    // while another process holds the pictures' directory, a second gallery is refused
+    let lock = std::fs::File::create(dir.path().join("docs/img/gallery/.skg-lock")).unwrap();
+    lock.try_lock().unwrap();
+    let o = common::skg(&["gallery", common::scenario("free_fall").to_str().unwrap(), "-o", page.to_str().unwrap(), "-q"], Path::new("."));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(common::text(&o).contains("another skg-solve is writing into"), "{}", common::text(&o));
+    assert_eq!(std::fs::read_to_string(&page).unwrap(), text, "the page is left as it was");
 }

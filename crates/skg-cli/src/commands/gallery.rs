@@ -83,6 +83,8 @@ pub fn run(args: GalleryArgs) -> Result<ExitCode> {
     }
     let page_dir = args.output.parent().filter(|d| !d.as_os_str().is_empty()).map_or_else(|| PathBuf::from("."), Path::to_path_buf);
     let img_dir = page_dir.join("img").join("gallery");
+    // One gallery at a time writes these pictures (and the page beside them).
+    let _lock = output::OutputDir::lock(&img_dir)?;
     let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(scenes.len() as u64) };
     bar.set_style(
         ProgressStyle::with_template("{msg:30} [{bar:30}] {pos}/{len} scenes, {elapsed}").expect("valid template").progress_chars("=> "),
