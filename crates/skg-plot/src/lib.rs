@@ -125,6 +125,23 @@ macro_rules! render {
 
 pub mod motion;
 
+/// Draw a chart's legend: the series' labels in a framed, nearly opaque white box at
+/// `position`, in `size`-pixel type.
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    size: u32,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font(("sans-serif", size))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(e2s)
+}
+
 fn e2s<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
@@ -256,14 +273,7 @@ fn draw_loglog<DB: DrawingBackend>(
             chart.draw_series(l.points.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(e2s)?;
         }
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font(("sans-serif", 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(e2s)?;
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
     Ok(())
 }
 
@@ -439,14 +449,7 @@ fn draw_trajectory<DB: DrawingBackend>(
                     .legend(move |(x, y)| Circle::new((x + 9, y), 3, c.filled()));
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerLeft)
-            .label_font(("sans-serif", 11))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e2s)?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 11)?;
         Ok(())
     };
     panel(&panels[0], "coordinates", "q", series)?;

@@ -36,7 +36,7 @@ use skg_core::output::{self, REFERENCE_FILE, SUMMARY_FILE, TRAJECTORY_FILE};
 use skg_core::scenario::{Overrides, Scene, SceneFile, TIME, VELOCITY_SUFFIX};
 use skg_core::trajectory::trajectory_header;
 
-use crate::{color, e2s, register_fonts, PlotError};
+use crate::{color, draw_legend, e2s, register_fonts, PlotError};
 
 /// Curves that vary with the state are drawn at most at this many states.
 pub const MAX_SNAPSHOTS: usize = 6;
@@ -690,14 +690,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot
         }
     }
     if !compact {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font(("sans-serif", 12))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e2s)?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 12)?;
     }
     Ok(())
 }
