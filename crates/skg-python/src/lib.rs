@@ -352,18 +352,6 @@ impl NativeSweepPlan {
         &self.plan.text
     }
 
-    /// Points this run owns.
-    #[getter]
-    fn in_shard(&self) -> usize {
-        self.plan.in_shard
-    }
-
-    /// The rough estimate of the run's wall time, seconds.
-    #[getter]
-    fn estimate_s(&self) -> f64 {
-        self.plan.estimate_s
-    }
-
     /// Run (or resume) the sweep; returns the run's report as a dict.
     fn run<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = py.detach(|| sweep::run_sweep(&self.file, &self.plan.expanded, &self.opts)).map_err(|e| sweep_err(py, &e))?;

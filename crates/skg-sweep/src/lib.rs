@@ -8,6 +8,9 @@
 //!   tolerances (the peer line of the work-precision chart). Points are numbered in that
 //!   order; a point's **id** is a hash of its canonical string (axis names sorted,
 //!   `name=value` joined by `;`), so it does not depend on the order of the file.
+//! * **Before a run** ([`plan`]): the points this run owns, a rough time estimate and
+//!   the line saying so; more than [`CONFIRM_ABOVE`] points are refused unless confirmed
+//!   (the command line's `--yes`, the Python module's `yes=True`).
 //! * **Workers**: Debian's Ipopt/MUMPS is not thread-safe (docs/solver.md), so each point runs
 //!   in a child process (`skg-solve sweep-worker JOB.json`), at most `jobs` at once, the
 //!   points with the largest [`estimated_cost`] first. A
@@ -808,8 +811,6 @@ pub fn default_jobs() -> usize {
 pub struct Plan {
     /// The sweep's points, for [`run_sweep`].
     pub expanded: Expanded,
-    /// Points this run owns (its shard's, or all).
-    pub in_shard: usize,
     /// A rough estimate of the run's wall time in seconds ([`estimated_wall_s`]).
     pub estimate_s: f64,
     /// One line for the user: the points, the estimate, where the results go.
@@ -834,7 +835,7 @@ pub fn plan(file: &SweepFile, opts: &SweepOptions, confirmed: bool) -> Result<Pl
     if mine.len() > CONFIRM_ABOVE && !confirmed {
         return Err(SweepError::Unconfirmed { plan: text });
     }
-    Ok(Plan { in_shard: mine.len(), expanded, estimate_s, text })
+    Ok(Plan { expanded, estimate_s, text })
 }
 
 /// A duration in seconds as `12 s`, `3.5 min` or `2.1 h`.
