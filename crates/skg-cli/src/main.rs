@@ -47,7 +47,8 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Time solves of one scene over a ladder of node counts and print a table
-    /// (wall time split into setup, initial guess, evaluations and Ipopt).
+    /// (wall time split into setup, initial guess, evaluations and the solver; the
+    /// verification in its own column; peak memory).
     Bench(bench::BenchArgs),
     /// Run a parameter sweep: every point of the sweep file's grid in its own worker
     /// process, each finished point appended to DIR/results.csv. Rerunning resumes.

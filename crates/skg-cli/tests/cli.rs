@@ -38,7 +38,7 @@ fn solve_writes_csv_and_summary() {
     assert_eq!(summary["status"], "Solve_Succeeded");
     assert_eq!(summary["sizes"]["nodes"], 64);
     assert!(summary["iterations"].as_u64().unwrap() > 0);
-    assert!(summary["timings"]["ipopt_total_s"].as_f64().unwrap() > 0.0);
+    assert!(summary["timings"]["solver_s"].as_f64().unwrap() > 0.0);
     assert!(summary["diagnostics"]["max_residual"].as_f64().unwrap() < 1e-8);
     assert!(common::text(&o).contains("trajectory.csv"), "prints where the output went");
 }
@@ -202,6 +202,35 @@ fn ipopt_log_file_and_pass_through_options() {
     let t = common::text(&o);
     assert_eq!(o.status.code(), Some(1), "{t}");
     assert!(t.contains("no_such_option") && !t.contains("panicked"), "{t}");
+}
+
+/// `[solver] backend` and `--backend` choose Newton; the summary line and summary.json
+/// say which backend ran; an unknown backend is an error naming the valid ones.
+#[test]
+fn backend_key_and_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = variant(dir.path(), "knife_edge", &[("[discretization]", "[solver]\nbackend = \"newton\"\n\n[discretization]")]);
+    let o = common::skg(&[&s, "-o", "res"], dir.path());
+    let t = common::text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(t.contains("Newton iterations"), "{t}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("res/summary.json")).unwrap()).unwrap();
+    assert_eq!((summary["status"].as_str(), summary["settings"]["backend"].as_str()), (Some("Newton_Converged"), Some("newton")));
+    assert_eq!(summary["backend"]["handed_over_to_ipopt"], false);
+    // The flag overrides the scene's key.
+    let o = common::skg(&[&s, "-o", "res2", "--backend", "ipopt"], dir.path());
+    assert!(common::text(&o).contains("Ipopt iterations"), "{}", common::text(&o));
+    // A Newton solve that does not converge exits 3 like an Ipopt one.
+    let o = common::skg(&[&s, "-o", "res3", "--max-iter", "0"], dir.path());
+    assert_eq!(o.status.code(), Some(3), "{}", common::text(&o));
+    let o = common::skg(&[&s, "--backend", "lu"], dir.path());
+    assert_eq!(o.status.code(), Some(2));
+    assert!(common::text(&o).contains("newton"), "{}", common::text(&o));
+    let bad = variant(dir.path(), "knife_edge", &[("[discretization]", "[solver]\nbackend = \"lu\"\n\n[discretization]")]);
+    let o = common::skg(&[&bad], dir.path());
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    let t = common::text(&o);
+    assert!(t.contains("scene.toml:") && t.contains("`lu`") && t.contains("`ipopt` or `newton`"), "names the place and the choices: {t}");
 }
 
 /// `line:col` (1-based) of the first occurrence of `needle` in the file at `path`.

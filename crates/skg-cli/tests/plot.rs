@@ -94,3 +94,63 @@ fn every_chart_is_written_as_svg_and_png() {
     assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
     assert!(common::text(&o).contains("--where"), "{}", common::text(&o));
 }
+
+/// `bench --csv` of both backends feeds `plot scaling`; the table has the backend and
+/// memory columns and both backends converge at every N.
+#[test]
+fn bench_csv_and_scaling_chart() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let scene = common::scenario("tumbler");
+    let mut csvs = Vec::new();
+    for backend in ["ipopt", "newton"] {
+        let csv = dir.path().join(format!("{backend}.csv"));
+        let o = common::skg(
+            &["bench", &s(&scene), "--nodes", "256,512", "--repeat", "1", "--backend", backend, "--csv", &s(&csv)],
+            Path::new("."),
+        );
+        assert!(o.status.success(), "{}", common::text(&o));
+        let table = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(table.contains("| backend |") && table.contains("peak MiB"), "{table}");
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let rows: Vec<&str> = text.lines().skip(1).collect();
+        assert_eq!(rows.len(), 2, "{text}");
+        assert!(rows.iter().all(|r| r.contains(&format!(",{backend},")) && r.contains(",yes,")), "{text}");
+        csvs.push(s(&csv));
+    }
+    let stem = dir.path().join("img/scaling");
+    let o = common::skg(&["plot", "scaling", &csvs[0], &csvs[1], "-o", &s(&stem)], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    check_chart(&stem, "slope 1");
+    let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
+    assert!(svg.contains("ipopt (ipopt)") && svg.contains("newton (newton)"), "one line per file, labelled by backend");
+    // A CSV that is not from bench is a clear error.
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(&bad, "t,x\n0,1\n").unwrap();
+    let o = common::skg(&["plot", "scaling", &s(&bad), "-o", &s(&stem)], Path::new("."));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(common::text(&o).contains("no column `nodes`"), "{}", common::text(&o));
+}
+
+/// A sweep with a `backend` axis: each point runs its backend, and the work-precision
+/// chart has one line per backend.
+#[test]
+fn a_backend_axis_gives_one_work_precision_line_per_backend() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = common::sweep_file(
+        dir.path(),
+        &common::scenario("rolling_disk"),
+        "reference = \"integrate\"\n[[grid]]\nbackend = [\"ipopt\", \"newton\"]\nnodes = [64, 128]\n",
+    );
+    let out = dir.path().join("out");
+    let o = common::skg(&["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(results.matches("Newton_Converged").count(), 2, "{results}");
+    assert_eq!(results.matches("Solve_Succeeded").count(), 2, "{results}");
+    let stem = dir.path().join("wp");
+    let o = common::skg(&["plot", "work-precision", out.to_str().unwrap(), "-o", stem.to_str().unwrap()], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    check_chart(&stem, "SBP242 reduced newton");
+    check_chart(&stem, "SBP242 reduced ipopt");
+}

@@ -59,6 +59,28 @@ fn sbp363_converges_faster_than_sbp242() {
     assert!(e363 < e242, "SBP363 {e363} vs SBP242 {e242}");
 }
 
+/// SBP484 (eighth-order interior, fourth-order closure) against the closed form, with
+/// the Newton backend. Measured (x, y, θ, φ; N = 128/192/256): 4.3e-5 / 6.9e-6 / 1.8e-6,
+/// against SBP363's 1.6e-3 / 3.1e-4 / 9.9e-5; observed order about 5.
+#[test]
+fn sbp484_is_an_order_more_accurate_than_sbp363() {
+    let ns = [128usize, 192, 256];
+    let errors: Vec<f64> = ns
+        .iter()
+        .map(|&n| {
+            let ov = Overrides { backend: Some(skg_core::scenario::Backend::Newton), ..common::grid(n, "SBP484") };
+            common::max_error(&common::solve("rolling_disk", &ov), &[0, 1, 2, 3], 2, common::rolling_disk_exact)
+        })
+        .collect();
+    assert!(errors[2] < 2.5e-6, "SBP484 at N = 256: {:e}", errors[2]);
+    let e363 =
+        common::max_error(&common::solve("rolling_disk", &common::grid(256, "SBP363")), &[0, 1, 2, 3], 2, common::rolling_disk_exact);
+    assert!(errors[2] < e363 / 20.0, "SBP484 {:e} vs SBP363 {e363:e} at N = 256", errors[2]);
+    let h: Vec<f64> = ns.iter().map(|&n| 1.0 / (n as f64 - 1.0)).collect();
+    let fit = fit_order(&h, &errors, 1e-12).unwrap();
+    assert!(fit.order > 4.5, "observed order {}", fit.order);
+}
+
 /// The disk conserves E = ½M(ẋ²+ẏ²) + ½I_S θ̇² + ½I_D φ̇² − M g x sin α (the
 /// constraints do no work). The discrete drift (last two nodes excluded) must vanish
 /// under refinement at the operator's observed order. Measured (N = 64/128/256):

@@ -5,10 +5,11 @@
 
 mod common;
 
+use skg_core::backend::SquareSolver;
 use skg_core::check::Table;
 use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scenario::{Overrides, Scene, SceneFile};
-use skg_core::solve::{self, build_action, Guess, Plans};
+use skg_core::solve::{self, build_action, Guess};
 
 /// m, k, c, A, Ω of scenarios/driven_oscillator.toml.
 const M: f64 = 1.0;
@@ -129,13 +130,13 @@ fn successive_windows_of_one_action_follow_the_closed_form() {
     let scene = variant(&[("end = 10", "end = 5"), ("nodes = 256", "nodes = 128")], &Overrides::default());
     let exact = closed_form(0.0, 0.0, 0.0);
     let mut action = build_action(&scene).unwrap();
-    let plans = Plans::new(&scene, &action);
-    let first = solve::solve_piece(&scene, &action, &plans, &action.times(), &Guess::TimeStepping).unwrap();
+    let mut solver = SquareSolver::new(&scene, &action);
+    let first = solve::solve_piece(&scene, &action, &mut solver, &action.times(), &Guess::TimeStepping).unwrap();
     assert!(first.status.is_converged());
     let e1 = max_error(&first.trajectory.t, &first.trajectory.q, &exact);
     let (x5, v5) = exact(5.0);
     action.set_window(5.0, &[x5], &[v5]);
-    let second = solve::solve_piece(&scene, &action, &plans, &action.times(), &Guess::TimeStepping).unwrap();
+    let second = solve::solve_piece(&scene, &action, &mut solver, &action.times(), &Guess::TimeStepping).unwrap();
     assert!(second.status.is_converged());
     let t = &second.trajectory.t;
     assert_eq!((t[0], t[t.len() - 1]), (5.0, 10.0));

@@ -14,11 +14,12 @@
 //! 4. [`trajectory`]: the states at the nodes with their physical columns, the common
 //!    result type; [`ode`] (DOP853) and [`time_stepping`]: the index-reduced
 //!    Lagrange–d'Alembert equations of a model integrated in time.
-//! 5. [`solve`]: the square system ∇S = 0 handed to Ipopt ([`ipopt`]) from a
-//!    time-stepping initial guess, and its diagnostics ([`solve::Outcome`]);
-//!    [`verify`]: the solution compared with time stepping of the same scene;
-//!    [`window`]: a span solved in windows; [`ladder`]: the scene's own solve and the
-//!    fallback ladder, what [`solve::solve_scene`] runs;
+//! 5. [`newton`] (Newton's method with a sparse LU) and [`backend`]: the solvers of the
+//!    square system, Ipopt ([`ipopt`]) or Newton; [`solve`]: the square system ∇S = 0
+//!    handed to the backend from a time-stepping initial guess, and its diagnostics
+//!    ([`solve::Outcome`]); [`verify`]: the solution compared with time stepping of the
+//!    same scene; [`window`]: a span solved in windows; [`ladder`]: the scene's own
+//!    solve and the fallback ladder, what [`solve::solve_scene`] runs;
 //!    [`reference`](mod@reference): reference solutions by time stepping, regularized
 //!    or with hard walls.
 //! 6. [`output`]: writes what solve and reference produced (CSV, JSON), atomically.
@@ -30,12 +31,14 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod action;
+pub mod backend;
 pub mod check;
 pub mod contact;
 pub mod convergence;
 pub mod ladder;
 pub mod memory;
 pub mod model;
+pub mod newton;
 pub mod ode;
 pub mod output;
 pub mod provenance;

@@ -7,7 +7,9 @@
 //! about `64 MB + N · u² · 2 kB · max(1, N/16384)^0.75` bytes, `u = d + n` the unknowns
 //! per node: MUMPS's factors of the KKT matrix dominate and grow faster than N (rolling
 //! disk, u = 6: 140 MB at N = 4096, 1.04 GB at N = 16384). SBP121 needs about half,
-//! SBP363 1.5 times, the full formulation 3 times as much. A reference stores its
+//! SBP363 1.5 times, the full formulation 3 times as much. The Newton backend's sparse
+//! LU of the square Jacobian grows linearly (disk: 142 MB at N = 16384, 489 MB at
+//! 65536), so its estimate keeps the per-node figure without the growth. A reference stores its
 //! samples and the integrator's dense output: about 96 bytes per sample and column
 //! (tumbler: 79 MB for 10⁵ samples, 705 MB for 10⁶). Both err on the high side. The limit is the memory
 //! the kernel reports as available (`MemAvailable` in `/proc/meminfo`); where that
@@ -15,7 +17,7 @@
 //! crate (`sysinfo` would bring a large dependency for it).
 
 use crate::sbp::OperatorKind;
-use crate::scenario::{Formulation, Location, Scene, SceneError};
+use crate::scenario::{Backend, Formulation, Location, Scene, SceneError};
 
 /// Bytes per node and per unknown² of a reduced `SBP242` solve at N ≤ 16384.
 const SOLVE_BYTES_PER_NODE_UNIT: f64 = 2.0e3;
@@ -38,7 +40,10 @@ pub fn solve_bytes(scene: &Scene) -> f64 {
     };
     let formulation = if scene.formulation == Formulation::Full { 3.0 } else { 1.0 };
     let n = scene.nodes as f64;
-    let fill = (n / SOLVE_FILL_NODES).max(1.0).powf(SOLVE_FILL_EXPONENT);
+    let fill = match scene.solver.backend {
+        Backend::Ipopt => (n / SOLVE_FILL_NODES).max(1.0).powf(SOLVE_FILL_EXPONENT),
+        Backend::Newton => 1.0,
+    };
     SOLVE_BASE_BYTES + n * unknowns * unknowns * SOLVE_BYTES_PER_NODE_UNIT * fill * stencil * formulation
 }
 

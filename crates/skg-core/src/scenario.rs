@@ -145,6 +145,48 @@ pub enum HessianMode {
     Exact,
 }
 
+/// Which solver finds the root of the square system (docs/solver.md#choosing-the-backend).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    /// Ipopt with MUMPS on the KKT system (the default).
+    #[default]
+    Ipopt,
+    /// Newton's method with a sparse LU of the square Jacobian and a line search on the
+    /// residual norm; hands over to Ipopt when it fails.
+    Newton,
+}
+
+/// Error of parsing a [`Backend`] from a string.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown backend `{input}` (expected `ipopt` or `newton`)")]
+pub struct ParseBackendError {
+    /// The rejected input.
+    pub input: String,
+}
+
+impl std::str::FromStr for Backend {
+    type Err = ParseBackendError;
+
+    /// Case-insensitive: `ipopt` or `newton`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_lowercase().as_str() {
+            "ipopt" => Ok(Backend::Ipopt),
+            "newton" => Ok(Backend::Newton),
+            _ => Err(ParseBackendError { input: s.to_string() }),
+        }
+    }
+}
+
+impl fmt::Display for Backend {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Backend::Ipopt => "ipopt",
+            Backend::Newton => "newton",
+        })
+    }
+}
+
 /// The `[scene]` table.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -247,10 +289,12 @@ pub struct DiscretizationSpec {
     pub formulation: Option<Formulation>,
 }
 
-/// The `[solver]` table: Ipopt's settings.
+/// The `[solver]` table: the backend and Ipopt's settings.
 #[derive(Debug, Clone, Deserialize, Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
+    /// The solver of the square system (default ipopt).
+    pub backend: Option<Backend>,
     /// Ipopt's `tol` and `constr_viol_tol` (default 1e-11).
     pub tol: Option<Spanned<f64>>,
     /// Ipopt's `max_iter` (default 100).
@@ -411,6 +455,8 @@ pub struct Overrides {
     pub hessian: Option<HessianMode>,
     /// Ipopt's iteration limit.
     pub max_iter: Option<u32>,
+    /// The solver of the square system.
+    pub backend: Option<Backend>,
     /// Window length in seconds (`--window`; 0 turns windows off).
     pub window: Option<f64>,
     /// Window overlap in seconds (`--overlap`).
@@ -436,9 +482,11 @@ impl Overrides {
     }
 }
 
-/// Settings of the Ipopt solve, resolved.
+/// Settings of the solve, resolved.
 #[derive(Debug, Clone, Serialize)]
 pub struct SolverSettings {
+    /// The solver of the square system.
+    pub backend: Backend,
     /// Ipopt's `tol` and `constr_viol_tol`.
     pub tol: f64,
     /// Ipopt's `max_iter`.
@@ -931,6 +979,7 @@ impl SceneFile {
             return Err(self.invalid(p, format!("solver.print_level must be 0 (silent) … 12 (Ipopt's range), got {print_level}")));
         }
         let solver = SolverSettings {
+            backend: ov.backend.or(s.backend).unwrap_or_default(),
             tol,
             max_iter: ov.max_iter.or(s.max_iter).unwrap_or(100),
             print_level,

@@ -1,5 +1,6 @@
 //! Solving one scene: build the discrete action, make a physical initial guess, hand
-//! the square system to Ipopt, and turn the critical point into a trajectory.
+//! the square system to the backend ([`crate::backend`]: Ipopt, or Newton with a
+//! sparse LU), and turn the critical point into a trajectory.
 //!
 //! Initial guess: the Lagrange–d'Alembert equations of the same scene are integrated
 //! by [`crate::time_stepping`] (adaptive high-order Runge–Kutta, index-reduced:
@@ -16,16 +17,17 @@ use std::time::Instant;
 use indexmap::IndexMap;
 use serde::Serialize;
 
-use crate::action::{Action, Block, MatrixPlan};
+use crate::action::Action;
+use crate::backend::{BackendError, BackendReport, SolverStatus, SquareSolver};
 use crate::contact;
-use crate::model::{Model, Workspace};
+use crate::model::Model;
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
-use crate::scenario::{ConstraintKind, Formulation, HessianMode, IpoptValue, Scene, SceneError, Wall};
+use crate::scenario::{Backend, ConstraintKind, Formulation, HessianMode, Scene, SceneError, Wall};
 use crate::time_stepping::{integrate_model, min_spacing};
 use crate::trajectory::{NodeSeries, States, Trajectory};
 use crate::verify::{self, Verification, VerifyStatus};
-use skg_ipopt::{self as ipopt, EvalError, Problem};
+use skg_ipopt as ipopt;
 
 /// A solution farther than this fraction of the coordinates' range from the
 /// time-stepping solution gets a warning. Discretization errors of usable grids are
@@ -33,8 +35,8 @@ use skg_ipopt::{self as ipopt, EvalError, Problem};
 /// N=48) and 100 %+ (knife edge on SBP121, an odd-even mode).
 const FAR_FROM_TIME_STEPPING: f64 = 0.1;
 
-/// Why a solve could not be attempted or completed (a non-converged Ipopt run is not
-/// an error: it is an [`Outcome`] whose [`SolveStatus`] says so).
+/// Why a solve could not be attempted or completed (a non-converged run is not an
+/// error: it is an [`Outcome`] whose [`SolveStatus`] says so).
 #[derive(Debug, thiserror::Error)]
 pub enum SolveError {
     /// The scene's model cannot be built (an expression, the initial state).
@@ -43,9 +45,10 @@ pub enum SolveError {
     /// The SBP operator cannot be built on the scene's grid.
     #[error(transparent)]
     Sbp(#[from] SbpError),
-    /// Ipopt could not be run (options, sizes, a callback error it did not recover from).
+    /// The backend could not be run (Ipopt's options, sizes, a callback error it did not
+    /// recover from; Newton's structure).
     #[error(transparent)]
-    Ipopt(#[from] ipopt::SolveError),
+    Backend(#[from] BackendError),
     /// The scene's windows do not fit its grid.
     #[error("{}: [time] window: {message}", .scene)]
     Windows {
@@ -63,12 +66,14 @@ pub struct Timings {
     pub setup_s: f64,
     /// Time stepping for the initial guess.
     pub initial_guess_s: f64,
-    /// Wall time of the Ipopt call, split into time in our callbacks and inside Ipopt.
-    pub ipopt_total_s: f64,
+    /// Wall time of the backend (Ipopt, or Newton and Ipopt after a hand-over), split
+    /// into time in our callbacks and inside the solver.
+    pub solver_s: f64,
     /// Time in our callbacks (residual, Jacobian, Hessian).
     pub evaluation_s: f64,
-    /// Time inside Ipopt (mostly the linear solver).
-    pub ipopt_internal_s: f64,
+    /// Time inside the solver: Ipopt's own time (mostly MUMPS), Newton's LU analysis,
+    /// factorizations and solves.
+    pub solver_internal_s: f64,
     /// Trajectory, end multipliers and diagnostics from the solution.
     pub postprocess_s: f64,
     /// Verification against time stepping ([`crate::verify`]).
@@ -85,9 +90,9 @@ impl Timings {
         Timings {
             setup_s: 0.0,
             initial_guess_s: 0.0,
-            ipopt_total_s: 0.0,
+            solver_s: 0.0,
             evaluation_s: 0.0,
-            ipopt_internal_s: 0.0,
+            solver_internal_s: 0.0,
             postprocess_s: 0.0,
             verification_s: 0.0,
             other_attempts_s: 0.0,
@@ -99,9 +104,9 @@ impl Timings {
     pub fn add(&mut self, other: &Timings) {
         self.setup_s += other.setup_s;
         self.initial_guess_s += other.initial_guess_s;
-        self.ipopt_total_s += other.ipopt_total_s;
+        self.solver_s += other.solver_s;
         self.evaluation_s += other.evaluation_s;
-        self.ipopt_internal_s += other.ipopt_internal_s;
+        self.solver_internal_s += other.solver_internal_s;
         self.postprocess_s += other.postprocess_s;
         self.verification_s += other.verification_s;
         self.other_attempts_s += other.other_attempts_s;
@@ -112,7 +117,7 @@ impl Timings {
     pub fn total(&self) -> f64 {
         self.setup_s
             + self.initial_guess_s
-            + self.ipopt_total_s
+            + self.solver_s
             + self.postprocess_s
             + self.verification_s
             + self.other_attempts_s
@@ -225,11 +230,13 @@ pub struct Settings {
     pub t_end: f64,
     /// The formulation.
     pub formulation: Formulation,
+    /// The backend asked for (what ran: [`Outcome::backend`]).
+    pub backend: Backend,
     /// The Hessian given to Ipopt.
     pub hessian: HessianMode,
-    /// Ipopt's tolerance.
+    /// The tolerance on max |c| (Ipopt's `tol` and `constr_viol_tol`, Newton's stop).
     pub tol: f64,
-    /// Ipopt's iteration limit.
+    /// The iteration limit (Ipopt's, and Newton's).
     pub max_iter: u32,
     /// The scene's parameter values.
     pub parameters: IndexMap<String, f64>,
@@ -241,42 +248,44 @@ pub struct Settings {
 /// as converged (Ipopt's own tolerance applies to its possibly scaled problem).
 pub const CONVERGED_RESIDUAL: f64 = 1e-8;
 
-/// How a solve ended: Ipopt's verdict, checked against the unscaled residual.
+/// How a solve ended: the backend's verdict, checked against the unscaled residual.
 ///
 /// `Display` gives readable text; [`SolveStatus::name`] a stable name. Serialized (into
-/// `summary.json`) as four fields: `"converged"` (true or false), `"status"` (Ipopt's
-/// status name, e.g. `"Solve_Succeeded"`), `"status_text"` (the readable text) and
-/// `"solve_status"` (the stable name).
+/// `summary.json`) as four fields: `"converged"` (true or false), `"status"` (the
+/// status name of the backend that finished, e.g. Ipopt's `"Solve_Succeeded"` or
+/// `"Newton_Converged"`), `"status_text"` (the readable text) and `"solve_status"` (the
+/// stable name).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SolveStatus {
-    /// Ipopt succeeded and the unscaled residual is at most [`CONVERGED_RESIDUAL`].
+    /// The backend succeeded and the unscaled residual is at most [`CONVERGED_RESIDUAL`].
     Converged {
-        /// Ipopt's status (`Solve_Succeeded` or `Solved_To_Acceptable_Level`).
-        ipopt: ipopt::Status,
+        /// The backend's status (Ipopt's `Solve_Succeeded` or
+        /// `Solved_To_Acceptable_Level`, or `Newton_Converged`).
+        solver: SolverStatus,
     },
-    /// Ipopt reported success, but the unscaled residual exceeds [`CONVERGED_RESIDUAL`]
-    /// (or is not a number): not counted as converged.
+    /// The backend reported success, but the unscaled residual exceeds
+    /// [`CONVERGED_RESIDUAL`] (or is not a number): not counted as converged.
     ResidualTooLarge {
-        /// Ipopt's status (a success).
-        ipopt: ipopt::Status,
+        /// The backend's status (a success).
+        solver: SolverStatus,
         /// The unscaled residual max |c|.
         residual: f64,
     },
-    /// Ipopt stopped without success.
+    /// The backend stopped without success.
     NotConverged {
-        /// Ipopt's status, which says why.
-        ipopt: ipopt::Status,
+        /// The backend's status, which says why.
+        solver: SolverStatus,
     },
 }
 
 impl SolveStatus {
-    /// The status of a solve that ended with Ipopt's status `ipopt` at an unscaled
-    /// residual `residual`.
-    pub fn classify(ipopt: ipopt::Status, residual: f64) -> SolveStatus {
-        match (ipopt.is_success(), residual <= CONVERGED_RESIDUAL) {
-            (true, true) => SolveStatus::Converged { ipopt },
-            (true, false) => SolveStatus::ResidualTooLarge { ipopt, residual },
-            (false, _) => SolveStatus::NotConverged { ipopt },
+    /// The status of a solve that ended with the backend's status `solver` at an
+    /// unscaled residual `residual`.
+    pub fn classify(solver: SolverStatus, residual: f64) -> SolveStatus {
+        match (solver.is_success(), residual <= CONVERGED_RESIDUAL) {
+            (true, true) => SolveStatus::Converged { solver },
+            (true, false) => SolveStatus::ResidualTooLarge { solver, residual },
+            (false, _) => SolveStatus::NotConverged { solver },
         }
     }
 
@@ -285,10 +294,12 @@ impl SolveStatus {
         matches!(self, SolveStatus::Converged { .. })
     }
 
-    /// Ipopt's status.
-    pub fn ipopt(&self) -> ipopt::Status {
+    /// The status of the backend that finished.
+    pub fn solver(&self) -> SolverStatus {
         match *self {
-            SolveStatus::Converged { ipopt } | SolveStatus::ResidualTooLarge { ipopt, .. } | SolveStatus::NotConverged { ipopt } => ipopt,
+            SolveStatus::Converged { solver } | SolveStatus::ResidualTooLarge { solver, .. } | SolveStatus::NotConverged { solver } => {
+                solver
+            }
         }
     }
 
@@ -305,9 +316,9 @@ impl SolveStatus {
 impl fmt::Display for SolveStatus {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SolveStatus::Converged { ipopt } | SolveStatus::NotConverged { ipopt } => write!(f, "{ipopt}"),
-            SolveStatus::ResidualTooLarge { ipopt, residual } => {
-                write!(f, "Ipopt reported success ({ipopt}) but the unscaled residual {residual:.3e} exceeds {CONVERGED_RESIDUAL:e}")
+            SolveStatus::Converged { solver } | SolveStatus::NotConverged { solver } => write!(f, "{solver}"),
+            SolveStatus::ResidualTooLarge { solver, residual } => {
+                write!(f, "the solver reported success ({solver}) but the unscaled residual {residual:.3e} exceeds {CONVERGED_RESIDUAL:e}")
             }
         }
     }
@@ -318,7 +329,7 @@ impl Serialize for SolveStatus {
         use serde::ser::SerializeMap;
         let mut map = serializer.serialize_map(Some(4))?;
         map.serialize_entry("converged", &self.is_converged())?;
-        map.serialize_entry("status", &self.ipopt())?;
+        map.serialize_entry("status", &self.solver())?;
         map.serialize_entry("status_text", &self.to_string())?;
         map.serialize_entry("solve_status", self.name())?;
         map.end()
@@ -340,7 +351,9 @@ pub struct Outcome {
     pub method: Method,
     /// The Ipopt version the tool was built against.
     pub ipopt_version: String,
-    /// Ipopt's iterations.
+    /// Which backend ran: the one asked for, Newton's own outcome, a hand-over to Ipopt.
+    pub backend: BackendReport,
+    /// Iterations of the backend that finished.
     pub iterations: usize,
     /// The settings the solve ran with.
     pub settings: Settings,
@@ -398,86 +411,6 @@ pub struct Attempt {
     pub chosen: bool,
 }
 
-/// Ipopt's view of the reduced system R(P) = ∂S/∂M = 0.
-struct Reduced<'a> {
-    action: &'a Action,
-    z: Vec<f64>,
-    ws: Workspace,
-    jac: &'a MatrixPlan,
-    hess: Option<&'a MatrixPlan>,
-}
-
-impl Reduced<'_> {
-    fn set(&mut self, x: &[f64], minus: Option<&[f64]>) {
-        let n_p = self.action.layout.n_p;
-        self.z[..n_p].copy_from_slice(x);
-        match minus {
-            Some(y) => self.z[n_p..].copy_from_slice(y),
-            None => self.z[n_p..].iter_mut().for_each(|v| *v = 0.0),
-        }
-    }
-}
-
-impl Problem for Reduced<'_> {
-    fn num_variables(&self) -> usize {
-        self.action.layout.n_p
-    }
-    fn num_constraints(&self) -> usize {
-        self.action.layout.n_m
-    }
-    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-        self.set(x, None);
-        self.action.gradient(&self.z, true, c, &mut self.ws);
-        Ok(())
-    }
-    fn jacobian_structure(&self) -> &[(u32, u32)] {
-        &self.jac.structure
-    }
-    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.set(x, None);
-        self.action.matrix_values(self.jac, &self.z, values, &mut self.ws);
-        Ok(())
-    }
-    fn hessian_structure(&self) -> &[(u32, u32)] {
-        self.hess.as_ref().map_or(&[], |h| &h.structure)
-    }
-    fn hessian_values(&mut self, x: &[f64], _obj: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        if self.hess.is_some() {
-            self.set(x, Some(lambda));
-            let plan = self.hess.expect("checked");
-            self.action.matrix_values(plan, &self.z, values, &mut self.ws);
-        }
-        Ok(())
-    }
-}
-
-/// Ipopt's view of the full system ∇S(Z) = 0.
-struct Full<'a> {
-    action: &'a Action,
-    ws: Workspace,
-    jac: &'a MatrixPlan,
-}
-
-impl Problem for Full<'_> {
-    fn num_variables(&self) -> usize {
-        self.action.layout.len()
-    }
-    fn num_constraints(&self) -> usize {
-        self.action.layout.len()
-    }
-    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-        self.action.gradient(x, false, c, &mut self.ws);
-        Ok(())
-    }
-    fn jacobian_structure(&self) -> &[(u32, u32)] {
-        &self.jac.structure
-    }
-    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.action.matrix_values(self.jac, x, values, &mut self.ws);
-        Ok(())
-    }
-}
-
 /// Node times of a scene's grid.
 pub fn grid(scene: &Scene) -> (Vec<f64>, f64) {
     let n = scene.nodes;
@@ -528,35 +461,17 @@ pub enum Guess {
     },
 }
 
-/// The matrix plans of an action for a scene's formulation: computed once per action
-/// and reused by every solve on it.
-pub struct Plans {
-    jac: MatrixPlan,
-    hess: Option<MatrixPlan>,
-}
-
-impl Plans {
-    /// The sparsity plans of the Jacobian of the scene's formulation and, for the reduced
-    /// formulation with the exact Hessian, of the Hessian.
-    pub fn new(scene: &Scene, action: &Action) -> Plans {
-        let jac_block = match scene.formulation {
-            Formulation::Reduced => Block::ReducedJacobian,
-            Formulation::Full => Block::FullJacobian,
-        };
-        let exact_hessian = scene.formulation == Formulation::Reduced && scene.solver.hessian == HessianMode::Exact;
-        Plans { jac: action.plan(jac_block), hess: exact_hessian.then(|| action.plan(Block::ReducedHessian)) }
-    }
-}
-
 /// One solve of one action's discrete system: the whole span, or one window of it.
 #[derive(Debug, Clone)]
 pub struct Piece {
-    /// How Ipopt ended, checked against the unscaled residual.
+    /// How the backend ended, checked against the unscaled residual.
     pub status: SolveStatus,
-    /// Ipopt's iterations.
+    /// Iterations of the backend that finished.
     pub iterations: usize,
-    /// Ipopt's iteration table.
+    /// Its iteration table.
     pub history: Vec<ipopt::IterationStat>,
+    /// Which backend ran, and Newton's own outcome.
+    pub backend: BackendReport,
     /// The solution at the action's nodes.
     pub trajectory: Trajectory,
     /// max |c| of the system (unscaled) at the returned point.
@@ -569,33 +484,37 @@ pub struct Piece {
     pub time_stepping_q: Option<NodeSeries>,
     /// How the initial guess was made.
     pub guess: String,
-    /// Time of the guess and of Ipopt (setup and output are not a piece's).
+    /// Time of the guess and of the backend (setup and output are not a piece's).
     pub timings: Timings,
 }
 
-/// Solve the discrete system of `action` (nodes at `times`) from `guess`.
-pub fn solve_piece(scene: &Scene, action: &Action, plans: &Plans, times: &[f64], guess: &Guess) -> Result<Piece, SolveError> {
+/// Solve the discrete system of `action` (nodes at `times`) from `guess` with `solver`,
+/// which was built for this action (or one of equal structure) and keeps its sparsity
+/// plans and LU analysis for the next piece.
+pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, times: &[f64], guess: &Guess) -> Result<Piece, SolveError> {
     let t_guess = Instant::now();
     let mut warnings = Vec::new();
     let (z0, guess_desc, ts_q) = initial_guess(action, times, guess, &mut warnings);
     check_initial_guess(scene, action, times, &z0)?;
     let initial_guess_s = t_guess.elapsed().as_secs_f64();
 
-    let (solution, z) = run_ipopt(scene.formulation, action, plans, &z0, &ipopt_options(scene)).map_err(|e| rejected_option(scene, e))?;
-    if solution.status == ipopt::Status::InvalidOption {
+    let solution = solver.solve(action, &z0).map_err(|e| rejected_option(scene, e.into()))?;
+    if solution.status == SolverStatus::Ipopt(ipopt::Status::InvalidOption) {
         return Err(unusable_option(scene));
     }
+    let z = &solution.z;
 
     let t_post = Instant::now();
-    let (trajectory, max_eom_residual) = evaluate(action, times, &z);
+    let (trajectory, max_eom_residual) = evaluate(action, times, z);
     let lay = &action.layout;
     let max_minus_variable = (scene.formulation == Formulation::Full)
         .then(|| lay.qm.iter().chain(&lay.lm).map(|&i| z[i as usize].abs()).fold(0.0_f64, f64::max));
-    let max_residual = solution.max_constraint_violation;
+    let max_residual = solution.max_residual;
     Ok(Piece {
         status: SolveStatus::classify(solution.status, max_residual),
         iterations: solution.iterations,
         history: solution.history,
+        backend: solution.report,
         trajectory,
         max_residual,
         max_eom_residual,
@@ -607,9 +526,9 @@ pub fn solve_piece(scene: &Scene, action: &Action, plans: &Plans, times: &[f64],
         },
         timings: Timings {
             initial_guess_s,
-            ipopt_total_s: solution.total_seconds,
-            evaluation_s: solution.total_seconds - solution.ipopt_seconds,
-            ipopt_internal_s: solution.ipopt_seconds,
+            solver_s: solution.total_s,
+            evaluation_s: solution.evaluation_s,
+            solver_internal_s: solution.total_s - solution.evaluation_s,
             postprocess_s: t_post.elapsed().as_secs_f64(),
             ..Timings::zero()
         },
@@ -623,9 +542,14 @@ fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut V
     let (q, lambda, desc, ts_q) = match guess {
         Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None),
         Guess::TimeStepping => {
-            // Steps at most the node spacing: a larger step can jump across a thin wall
-            // that the error estimate never sees (free flight is integrated exactly).
-            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step: min_spacing(times), ..OdeOptions::default() };
+            // With walls, steps at most the node spacing: a larger step can jump across a
+            // thin wall that the error estimate never sees (free flight is integrated
+            // exactly). Without walls the step is left to the error control: at
+            // N = 16384 the capped guess cost as much as the whole Newton solve, the
+            // uncapped one a tenth, with the same Newton iterations on every shipped
+            // scene (docs/benchmarks.md#the-initial-guess).
+            let max_step = if action.model.walls.is_empty() { None } else { min_spacing(times) };
+            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, ..OdeOptions::default() };
             let (q0, v0) = (action.q0(), action.v0());
             match integrate_model(&action.model, q0, v0, times, &opts) {
                 Ok((States { q, lambda, .. }, _)) => (
@@ -675,7 +599,7 @@ fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64]
 /// An option Ipopt refused when it was set, as an input error at the option's place in
 /// the scene file; other errors pass through.
 fn rejected_option(scene: &Scene, e: SolveError) -> SolveError {
-    let SolveError::Ipopt(ipopt::SolveError::BadOption { name, value }) = &e else { return e };
+    let SolveError::Backend(BackendError::Ipopt(ipopt::SolveError::BadOption { name, value })) = &e else { return e };
     let message = format!(
         "Ipopt refused the option {name} = {value}: it has no such option, or the value has the wrong type or is outside \
          the option's range (Ipopt prints its reason on stdout)"
@@ -735,60 +659,6 @@ fn point_from_states(action: &Action, q: &[Vec<f64>], lambda: &[Vec<f64>]) -> Ve
     z
 }
 
-/// Ipopt's options for a scene: its `[solver]` settings, then the pass-through options.
-fn ipopt_options(scene: &Scene) -> ipopt::Options {
-    let solver = &scene.solver;
-    let pass_through = solver.ipopt.iter().map(|(k, v)| {
-        let v = match v {
-            IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
-            IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
-            IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
-        };
-        (k.clone(), v)
-    });
-    ipopt::Options {
-        tol: solver.tol,
-        constr_viol_tol: solver.tol,
-        max_iter: solver.max_iter,
-        print_level: solver.print_level,
-        linear_solver: solver.linear_solver.clone(),
-        output_file: solver.log_file.clone(),
-        // MUMPS's default scaling (77, automatic) made the very first factorization of
-        // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
-        // on Debian's MUMPS 5.5). The scene's own [solver.ipopt] options come after and
-        // override it.
-        extra: std::iter::once(("mumps_scaling".to_string(), ipopt::OptionValue::Int(0))).chain(pass_through).collect(),
-        ..ipopt::Options::default()
-    }
-}
-
-/// Solve the formulation's square system with Ipopt from `z0`; returns Ipopt's solution
-/// and the whole unknown vector Z (the minus block zero for the reduced formulation).
-fn run_ipopt(
-    formulation: Formulation,
-    action: &Action,
-    plans: &Plans,
-    z0: &[f64],
-    options: &ipopt::Options,
-) -> Result<(ipopt::Solution, Vec<f64>), SolveError> {
-    let lay = &action.layout;
-    Ok(match formulation {
-        Formulation::Reduced => {
-            let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac: &plans.jac, hess: plans.hess.as_ref() };
-            let sol = ipopt::solve(&mut p, &z0[..lay.n_p], options)?;
-            let mut z = vec![0.0; lay.len()];
-            z[..lay.n_p].copy_from_slice(&sol.x);
-            (sol, z)
-        }
-        Formulation::Full => {
-            let mut p = Full { action, ws: action.model.workspace(), jac: &plans.jac };
-            let sol = ipopt::solve(&mut p, z0, options)?;
-            let z = sol.x.clone();
-            (sol, z)
-        }
-    })
-}
-
 /// The settings a scene is solved with on the grid `times`.
 fn settings(scene: &Scene, times: &[f64], initial_guess: String) -> Settings {
     Settings {
@@ -797,6 +667,7 @@ fn settings(scene: &Scene, times: &[f64], initial_guess: String) -> Settings {
         t_start: times[0],
         t_end: times[times.len() - 1],
         formulation: scene.formulation,
+        backend: scene.solver.backend,
         hessian: scene.solver.hessian,
         tol: scene.solver.tol,
         max_iter: scene.solver.max_iter,
@@ -805,8 +676,9 @@ fn settings(scene: &Scene, times: &[f64], initial_guess: String) -> Settings {
     }
 }
 
-/// The sizes of the system handed to Ipopt for one piece (the whole span, or one window).
-pub fn sizes(scene: &Scene, action: &Action, plans: &Plans) -> Sizes {
+/// The sizes of the system handed to the backend for one piece (the whole span, or one
+/// window).
+pub fn sizes(scene: &Scene, action: &Action, solver: &SquareSolver) -> Sizes {
     let (lay, model) = (&action.layout, &action.model);
     let (variables, equations) = match scene.formulation {
         Formulation::Reduced => (lay.n_p, lay.n_m),
@@ -819,8 +691,8 @@ pub fn sizes(scene: &Scene, action: &Action, plans: &Plans) -> Sizes {
         walls: model.walls.len(),
         variables,
         equations,
-        jacobian_nonzeros: plans.jac.structure.len(),
-        hessian_nonzeros: plans.hess.as_ref().map_or(0, |h| h.structure.len()),
+        jacobian_nonzeros: solver.jacobian_plan().structure.len(),
+        hessian_nonzeros: solver.hessian_plan().map_or(0, |h| h.structure.len()),
         tape_instructions: model.minus_gradient.len() + model.mixed.tape.len(),
     }
 }
@@ -873,12 +745,12 @@ pub struct Run {
 pub fn solve_global(scene: &Scene, guess: &Guess) -> Result<Run, SolveError> {
     let t_setup = Instant::now();
     let action = build_action(scene)?;
-    let plans = Plans::new(scene, &action);
+    let mut solver = SquareSolver::new(scene, &action);
     let setup_s = t_setup.elapsed().as_secs_f64();
     let (times, _) = grid(scene);
-    let mut solution = solve_piece(scene, &action, &plans, &times, guess)?;
+    let mut solution = solve_piece(scene, &action, &mut solver, &times, guess)?;
     solution.timings.setup_s = setup_s;
-    Ok(Run { method: Method::Global, sizes: sizes(scene, &action, &plans), solution })
+    Ok(Run { method: Method::Global, sizes: sizes(scene, &action, &solver), solution })
 }
 
 /// The outcome of a run: its diagnostics, verification and warnings (the ladder adds
@@ -891,6 +763,14 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
     timings.verification_s = t.elapsed().as_secs_f64();
     let diagnostics = diagnose(model, &run);
     let mut warnings = suspicions(&diagnostics, run.time_stepping_q.as_deref(), run.status);
+    if let Some(newton) = run.backend.newton.as_ref().filter(|_| run.backend.handed_over_to_ipopt) {
+        warnings.push(format!(
+            "Newton's method did not converge ({}, {} iterations, residual {:.3e}); Ipopt solved the system from the same initial guess",
+            newton.status.name(),
+            newton.iterations,
+            newton.max_residual
+        ));
+    }
     if let Some(loss) = &diagnostics.kinetic_loss {
         verification.fail(loss.to_string());
         warnings.push(loss.to_string());
@@ -901,6 +781,7 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
         verification,
         method,
         ipopt_version: ipopt::ipopt_version().to_string(),
+        backend: run.backend,
         iterations: run.iterations,
         settings: settings(scene, &run.trajectory.t, run.guess),
         sizes,
@@ -940,7 +821,8 @@ fn suspicions(diagnostics: &Diagnostics, ts_q: Option<&[Vec<f64>]>, status: Solv
         }
     }
     if let SolveStatus::ResidualTooLarge { residual, .. } = status {
-        warnings.push(format!("Ipopt reported success but the unscaled residual is {residual:.3e} (> 1e-8): not counted as converged"));
+        warnings
+            .push(format!("the solver reported success but the unscaled residual is {residual:.3e} (> 1e-8): not counted as converged"));
     }
     warnings
 }
@@ -1060,24 +942,25 @@ fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> IndexMap<String, usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::newton::NewtonStatus;
     use ipopt::Status;
 
     #[test]
     fn solve_status_from_ipopt_and_residual() {
-        let ok = SolveStatus::classify(Status::SolveSucceeded, 1e-12);
-        assert_eq!(ok, SolveStatus::Converged { ipopt: Status::SolveSucceeded });
+        let ok = SolveStatus::classify(SolverStatus::Ipopt(Status::SolveSucceeded), 1e-12);
+        assert_eq!(ok, SolveStatus::Converged { solver: SolverStatus::Ipopt(Status::SolveSucceeded) });
         assert!(ok.is_converged());
         assert_eq!((ok.name(), ok.to_string().as_str()), ("converged", "solved to the requested tolerance"));
 
-        let loose = SolveStatus::classify(Status::SolvedToAcceptableLevel, 2e-5);
+        let loose = SolveStatus::classify(SolverStatus::Ipopt(Status::SolvedToAcceptableLevel), 2e-5);
         assert!(!loose.is_converged());
-        assert_eq!(loose.ipopt(), Status::SolvedToAcceptableLevel);
+        assert_eq!(loose.solver(), SolverStatus::Ipopt(Status::SolvedToAcceptableLevel));
         assert_eq!(loose.name(), "residual_too_large");
         assert!(loose.to_string().contains("2.000e-5") && loose.to_string().contains("exceeds 1e-8"), "{loose}");
-        assert!(!SolveStatus::classify(Status::SolveSucceeded, f64::NAN).is_converged());
+        assert!(!SolveStatus::classify(SolverStatus::Ipopt(Status::SolveSucceeded), f64::NAN).is_converged());
 
-        let failed = SolveStatus::classify(Status::MaximumIterationsExceeded, 1e-12);
-        assert_eq!(failed, SolveStatus::NotConverged { ipopt: Status::MaximumIterationsExceeded });
+        let failed = SolveStatus::classify(SolverStatus::Ipopt(Status::MaximumIterationsExceeded), 1e-12);
+        assert_eq!(failed, SolveStatus::NotConverged { solver: SolverStatus::Ipopt(Status::MaximumIterationsExceeded) });
         assert_eq!(failed.to_string(), "maximum number of iterations exceeded");
 
         let json = serde_json::to_value(loose).unwrap();
@@ -1085,5 +968,12 @@ mod tests {
         assert_eq!(json["status"], "Solved_To_Acceptable_Level");
         assert_eq!(json["solve_status"], "residual_too_large");
         assert_eq!(json["status_text"], loose.to_string());
+
+        // Newton's own statuses classify the same way and keep their names.
+        let newton = SolveStatus::classify(SolverStatus::Newton(NewtonStatus::Converged), 1e-12);
+        assert!(newton.is_converged());
+        assert_eq!(serde_json::to_value(newton).unwrap()["status"], "Newton_Converged");
+        let stuck = SolveStatus::classify(SolverStatus::Newton(NewtonStatus::LineSearchFailed), 1e-12);
+        assert_eq!((stuck.name(), stuck.solver().name()), ("not_converged", "Newton_Line_Search_Failed"));
     }
 }

@@ -25,9 +25,10 @@
 
 use std::time::Instant;
 
+use crate::backend::{BackendReport, SquareSolver};
 use crate::contact;
 use crate::scenario::{Scene, Windows};
-use crate::solve::{self, build_action_on, solve_piece, Guess, Method, Piece, Plans, Run, SolveError, Timings};
+use crate::solve::{self, build_action_on, solve_piece, Guess, Method, Piece, Run, SolveError, Timings};
 use crate::trajectory::Trajectory;
 
 /// Nodes and restart of the windows of a scene.
@@ -73,8 +74,10 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
     let grid = WindowGrid::new(scene, windows).map_err(|message| SolveError::Windows { scene: scene.file.origin.path.clone(), message })?;
     let t_setup = Instant::now();
     let mut action = build_action_on(scene, grid.nodes, grid.dt)?;
-    let plans = Plans::new(scene, &action);
-    let sizes = solve::sizes(scene, &action, &plans);
+    // One solver for all windows: the sparsity plans and Newton's LU analysis are made
+    // once and reused by every window.
+    let mut solver = SquareSolver::new(scene, &action);
+    let sizes = solve::sizes(scene, &action, &solver);
     let mut timings = Timings::zero();
     timings.setup_s = t_setup.elapsed().as_secs_f64();
 
@@ -83,16 +86,22 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
     let mut time_stepping_q = Some(Vec::with_capacity(total));
     let mut run_status = None;
     let (mut iterations, mut history) = (0, Vec::new());
+    // The first window's backend report (it made the LU analysis), or the first that
+    // handed over to Ipopt.
+    let mut backend: Option<BackendReport> = None;
     let (mut max_residual, mut max_eom_residual, mut max_minus_variable) = (0.0_f64, 0.0_f64, None::<f64>);
     let (mut q0, mut v0) = (scene.initial_q.clone(), scene.initial_v.clone());
     let (mut start, mut count) = (0, 0);
     loop {
         let times: Vec<f64> = (0..grid.nodes).map(|k| scene.t_start + (start + k) as f64 * grid.dt).collect();
         action.set_window(times[0], &q0, &v0);
-        let piece = solve_piece(scene, &action, &plans, &times, &Guess::TimeStepping)?;
+        let piece = solve_piece(scene, &action, &mut solver, &times, &Guess::TimeStepping)?;
         timings.add(&piece.timings);
         iterations += piece.iterations;
         history.extend(piece.history);
+        if backend.as_ref().is_none_or(|b| piece.backend.handed_over_to_ipopt && !b.handed_over_to_ipopt) {
+            backend = Some(piece.backend.clone());
+        }
         max_residual = max_residual.max(piece.max_residual);
         max_eom_residual = max_eom_residual.max(piece.max_eom_residual);
         max_minus_variable = piece.max_minus_variable.map(|m| m.max(max_minus_variable.unwrap_or(0.0)));
@@ -130,6 +139,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
         status: run_status.expect("at least one window"),
         iterations,
         history,
+        backend: backend.expect("at least one window"),
         trajectory,
         max_residual,
         max_eom_residual,

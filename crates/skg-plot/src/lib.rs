@@ -6,6 +6,8 @@
 //!   operator and formulation, the reference integrator at a ladder of tolerances as the
 //!   peer line.
 //! * [`convergence`]: error versus N, log-log, the fitted order in the legend.
+//! * [`scaling`]: solve time versus N from `skg-solve bench --csv`, log-log, with a
+//!   line of slope 1.
 //! * [`trajectory`]: the coordinates over time with the reference overlaid, and the
 //!   energy over time.
 //! * [`stability`]: a map over two grid axes, each cell converged / failed / converged
@@ -277,23 +279,26 @@ fn draw_loglog<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Group the converged SKG rows by "operator formulation": (label, [(x, y, nodes)]).
+/// Group the converged SKG rows by "operator formulation", and with `by_backend` also by
+/// backend when the sweep has that axis: (label, [(x, y, nodes)]).
 /// Points (x, y, N) of each line, by label.
 type Groups = BTreeMap<String, Vec<(f64, f64, f64)>>;
 
 /// One line of a time-series panel: label, points, colour, whether it is the reference.
 type Series = (String, Vec<(f64, f64)>, RGBColor, bool);
 
-fn skg_groups(res: &Results, rows: &[&Vec<String>], x: &str, y: &str) -> Result<Groups, PlotError> {
+fn skg_groups(res: &Results, rows: &[&Vec<String>], x: &str, y: &str, by_backend: bool) -> Result<Groups, PlotError> {
     let (im, io, ifm, inodes, ix, iy) =
         (col(res, "method")?, col(res, "operator")?, col(res, "formulation")?, col(res, "nodes")?, col(res, x)?, col(res, y)?);
+    let ib = col(res, "backend").ok().filter(|_| by_backend);
     let mut groups: Groups = BTreeMap::new();
     for r in rows {
         if r[im] != "skg" || !res.status(r)?.is_converged() {
             continue;
         }
         if let (Some(xv), Some(yv), Some(n)) = (cell_value(&r[ix]), cell_value(&r[iy]), cell_value(&r[inodes])) {
-            groups.entry(format!("{} {}", r[io], r[ifm])).or_default().push((xv, yv, n));
+            let backend = ib.map_or(String::new(), |i| format!(" {}", r[i]));
+            groups.entry(format!("{} {}{backend}", r[io], r[ifm])).or_default().push((xv, yv, n));
         }
     }
     for v in groups.values_mut() {
@@ -305,7 +310,8 @@ fn skg_groups(res: &Results, rows: &[&Vec<String>], x: &str, y: &str) -> Result<
 /// Work-precision chart: error_max versus wall time.
 pub fn work_precision(res: &Results, filters: &[(String, String)], title: &str, stem: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let rows = filtered(res, filters)?;
-    let groups = skg_groups(res, &rows, "wall_s", "error_max")?;
+    // The backends find the same solutions: their lines differ in time only.
+    let groups = skg_groups(res, &rows, "wall_s", "error_max", true)?;
     let mut lines: Vec<Line> = groups
         .into_iter()
         .enumerate()
@@ -340,10 +346,37 @@ pub fn work_precision(res: &Results, filters: &[(String, String)], title: &str, 
     render!(stem, SIZE, draw_loglog(title, "wall time [s]", "max error against the reference", &lines))
 }
 
+/// Scaling chart: solve time versus N, log-log, one line per benchmark (label and
+/// points (N, seconds)), with a dashed line of slope 1 (cost proportional to N) through
+/// the last line's largest N for comparison.
+pub fn scaling(benchmarks: &[(String, Vec<(f64, f64)>)], title: &str, stem: &Path) -> Result<Vec<PathBuf>, PlotError> {
+    let mut lines: Vec<Line> = benchmarks
+        .iter()
+        .enumerate()
+        .map(|(i, (label, pts))| Line { label: label.clone(), tags: Vec::new(), points: pts.clone(), color: color(i), dashed: false })
+        .collect();
+    let anchor = benchmarks.last().and_then(|(_, pts)| pts.iter().copied().max_by(|a, b| a.0.total_cmp(&b.0)));
+    let n = benchmarks.iter().flat_map(|(_, p)| p.iter().map(|q| q.0));
+    let (x0, x1) = n.fold((f64::INFINITY, 0.0_f64), |(a, b), x| (a.min(x), b.max(x)));
+    let Some((xa, ya)) = anchor else {
+        return Err(PlotError::Data("no benchmark rows to plot".into()));
+    };
+    lines.push(Line {
+        label: "∝ N (slope 1)".into(),
+        tags: Vec::new(),
+        points: [x0, x1].iter().map(|&x| (x, ya * x / xa)).collect(),
+        color: RGBColor(0, 0, 0),
+        dashed: true,
+    });
+    render!(stem, SIZE, draw_loglog(title, "nodes N", "wall time of the solve [s]", &lines))
+}
+
 /// Convergence chart: error_max versus N with the fitted order per line.
 pub fn convergence(res: &Results, filters: &[(String, String)], title: &str, stem: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let rows = filtered(res, filters)?;
-    let groups = skg_groups(res, &rows, "nodes", "error_max")?;
+    let mut groups = skg_groups(res, &rows, "nodes", "error_max", false)?;
+    // Points of several backends at one N have the same error (the same solution): keep one.
+    groups.values_mut().for_each(|pts| pts.dedup_by(|a, b| a.2 == b.2));
     if groups.is_empty() {
         return Err(PlotError::Data("no converged point has an error (does the sweep name a reference?)".into()));
     }

@@ -23,7 +23,7 @@ use pyo3::types::{PyDict, PyList};
 
 use skg_core::check::Table;
 use skg_core::reference::{self, Reference, ReferenceError, ReferenceOptions};
-use skg_core::scenario::{ConstraintKind, Formulation, HessianMode, Overrides, Scene, SceneError, SceneFile};
+use skg_core::scenario::{Backend, ConstraintKind, Formulation, HessianMode, Overrides, Scene, SceneError, SceneFile};
 use skg_core::solve::{self, Outcome, SolveError};
 use skg_core::trajectory::{trajectory_header, trajectory_rows, NodeSeries, Trajectory};
 use skg_core::{error_text, output, provenance};
@@ -199,7 +199,7 @@ impl NativeSolution {
 /// `skg-solve SCENE -o OUT` does ([`output::solve_into`]), else without writing files.
 #[pyfunction]
 #[pyo3(signature = (path, *, out=None, nodes=None, set=None, operator=None, formulation=None, hessian=None, max_iter=None,
-    window=None, overlap=None, verify_tol=None, no_verify=false, no_fallback=false))]
+    backend=None, window=None, overlap=None, verify_tol=None, no_verify=false, no_fallback=false))]
 #[pyo3(name = "solve")]
 #[allow(clippy::too_many_arguments)]
 fn solve_scene(
@@ -212,6 +212,7 @@ fn solve_scene(
     formulation: Option<&str>,
     hessian: Option<&str>,
     max_iter: Option<u32>,
+    backend: Option<&str>,
     window: Option<f64>,
     overlap: Option<f64>,
     verify_tol: Option<f64>,
@@ -227,8 +228,10 @@ fn solve_scene(
         Some("exact") => Some(HessianMode::Exact),
         Some(other) => return Err(PyValueError::new_err(format!("hessian: expected \"zero\" or \"exact\", got \"{other}\""))),
     };
+    let backend: Option<Backend> = backend.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("backend: {e}")))).transpose()?;
     let ov = Overrides {
         set: assignments(set)?,
+        backend,
         nodes,
         operator,
         formulation,

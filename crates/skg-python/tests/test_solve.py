@@ -49,6 +49,20 @@ def test_rolling_disk_matches_closed_form(scene):
     assert sol.summary["settings"]["operator"] == "SBP363"
 
 
+def test_newton_backend_matches_closed_form_and_ipopt(scene):
+    # The same square system solved by Newton's method with a sparse LU: the closed
+    # form's accuracy, Ipopt's root to 1e-9, and the summary says which backend ran.
+    newton = skg.solve(scene("rolling_disk"), nodes=128, operator="SBP363", backend="newton")
+    ipopt = skg.solve(scene("rolling_disk"), nodes=128, operator="SBP363")
+    assert newton.trusted
+    assert newton.summary["status"] == "Newton_Converged"
+    assert newton.summary["backend"]["requested"] == "newton" and not newton.summary["backend"]["handed_over_to_ipopt"]
+    assert np.abs(newton.q - rolling_disk_exact(newton.t))[:-2, :3].max() < 2e-3
+    assert np.abs(newton.q - ipopt.q).max() < 1e-9
+    with pytest.raises(ValueError, match="backend"):
+        skg.solve(scene("rolling_disk"), backend="lu")
+
+
 def damped_exact(t, x0=1.0, v0=0.0, m=1.0, k=4.0, c=3.0):
     """scenarios/damped_oscillator.toml: x = exp(-ct/2m)(x0 cos wt + (v0 + c x0/2m)/w sin wt)."""
     w = np.sqrt(k / m - c**2 / (4 * m**2))

@@ -38,7 +38,7 @@
 //! * one column per grid axis. A scene parameter's column holds the **number** the
 //!   resolved scene has (`sigma = "1/110"` gives `0.00909090909090909`, the shortest text
 //!   that reads back to the same double, as in every numeric column); a setting's column
-//!   (`max_iter`, `hessian`) holds the value as written. A parameter axis with at least
+//!   (`max_iter`, `hessian`, `backend`) holds the value as written. A parameter axis with at least
 //!   one value written as an expression also gets the column **`<axis>_expr`**, right
 //!   after it, with every value as written in the sweep file (`1/110`, and `0.005` for a
 //!   plain number); an axis whose values are all plain numbers gets none;
@@ -86,7 +86,9 @@ use toml::Spanned;
 use skg_core::check::{self, CheckOptions, Comparison, Table};
 use skg_core::output;
 use skg_core::sbp::OperatorKind;
-use skg_core::scenario::{parse_toml, read_toml, Formulation, HessianMode, Location, Origin, Overrides, Scene, SceneFile, TomlError};
+use skg_core::scenario::{
+    parse_toml, read_toml, Backend, Formulation, HessianMode, Location, Origin, Overrides, Scene, SceneFile, TomlError,
+};
 
 /// Errors of a sweep file, a results file or the sweep driver.
 #[derive(Debug, thiserror::Error)]
@@ -283,7 +285,7 @@ pub const MAX_POINTS: usize = 10_000_000;
 pub const CONFIRM_ABOVE: usize = 10_000;
 
 /// Axes that are not scene parameters.
-pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "hessian", "max_iter"];
+pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "hessian", "max_iter", "backend"];
 
 /// How a point is computed.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -371,6 +373,7 @@ impl Point {
                     })
                 }
                 "max_iter" => ov.max_iter = Some(v.parse().map_err(|_| format!("max_iter = {v}: expected a whole number"))?),
+                "backend" => ov.backend = Some(v.parse::<Backend>().map_err(|e| e.to_string())?),
                 _ => ov.set.push((k.clone(), v.clone())),
             }
         }
@@ -972,7 +975,7 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
                 (true, false) => PointStatus::NotVerified,
                 (false, _) => PointStatus::NotConverged,
             };
-            rec.solver_status = outcome.status.ipopt().name().to_string();
+            rec.solver_status = outcome.status.solver().name().to_string();
             if outcome.converged() {
                 rec.verification = outcome.verification.status.to_string();
                 rec.verify_error = outcome.verification.max_error;

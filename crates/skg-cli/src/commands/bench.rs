@@ -4,10 +4,10 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 
-use skg_core::solve;
+use skg_core::solve::{self, Outcome};
 
 use super::{load, SceneArgs};
 
@@ -22,9 +22,80 @@ pub struct BenchArgs {
     /// Repetitions per node count (the fastest is reported).
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
+    /// Also write the rows as CSV to this file (for `skg-solve plot scaling`).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
     #[command(flatten)]
     pub scene: SceneArgs,
 }
+
+/// One measured row: the fastest repetition at one N.
+struct Row {
+    nodes: usize,
+    wall_s: f64,
+    peak_mib: Option<f64>,
+    outcome: Outcome,
+}
+
+impl Row {
+    /// The backend that ran: `ipopt`, `newton`, or `newton→ipopt` after a hand-over.
+    fn backend(&self) -> String {
+        let b = &self.outcome.backend;
+        if b.handed_over_to_ipopt {
+            format!("{}→ipopt", b.requested)
+        } else {
+            b.requested.to_string()
+        }
+    }
+
+    /// Wall seconds of the solve: the repetition's wall time without the verification
+    /// (which every solve runs, [`skg_core::verify`], and which is timed in its own
+    /// column).
+    fn solve_s(&self) -> f64 {
+        self.wall_s - self.outcome.timings.verification_s
+    }
+
+    /// The columns: N, sizes, backend, iterations, converged, the time split, the time
+    /// per node and the peak memory.
+    fn cells(&self) -> Vec<String> {
+        let (o, t) = (&self.outcome, &self.outcome.timings);
+        vec![
+            self.nodes.to_string(),
+            o.sizes.variables.to_string(),
+            o.sizes.jacobian_nonzeros.to_string(),
+            self.backend(),
+            o.iterations.to_string(),
+            if o.converged() { "yes" } else { "no" }.to_string(),
+            format!("{:.4}", t.setup_s),
+            format!("{:.4}", t.initial_guess_s),
+            format!("{:.4}", t.evaluation_s),
+            format!("{:.4}", t.solver_internal_s),
+            format!("{:.4}", self.solve_s()),
+            format!("{:.2}", 1e6 * self.solve_s() / self.nodes as f64),
+            format!("{:.4}", t.verification_s),
+            self.peak_mib.map_or("–".into(), |m| format!("{m:.0}")),
+        ]
+    }
+}
+
+const HEADER: [&str; 14] = [
+    "N",
+    "variables",
+    "Jacobian nnz",
+    "backend",
+    "iterations",
+    "converged",
+    "setup s",
+    "guess s",
+    "eval s",
+    "solver internal s",
+    "total s",
+    "µs per node",
+    "verify s",
+    "peak MiB",
+];
+const CSV_HEADER: &str =
+    "nodes,variables,jacobian_nonzeros,backend,iterations,converged,setup_s,guess_s,evaluation_s,solver_internal_s,total_s,us_per_node,verify_s,peak_mib";
 
 pub fn run(args: BenchArgs) -> Result<ExitCode> {
     let bar = indicatif::ProgressBar::new((args.nodes.len() * args.repeat) as u64);
@@ -36,38 +107,52 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     for &n in &args.nodes {
         let ov = args.scene.overrides(Some(n))?;
         let scene = load(&args.scenario, &ov)?;
-        let mut best: Option<(f64, solve::Outcome)> = None;
+        let mut best: Option<Row> = None;
         for _ in 0..args.repeat.max(1) {
             bar.set_message(format!("N={n}"));
+            let peak = PeakMemory::reset();
             let start = Instant::now();
             let outcome = solve::solve_scene(&scene)?;
-            let wall = start.elapsed().as_secs_f64();
+            let wall_s = start.elapsed().as_secs_f64();
+            let peak_mib = peak.and_then(|p| p.read_mib());
             bar.inc(1);
-            if best.as_ref().is_none_or(|(w, _)| wall < *w) {
-                best = Some((wall, outcome));
+            if best.as_ref().is_none_or(|b| wall_s < b.wall_s) {
+                best = Some(Row { nodes: n, wall_s, peak_mib, outcome });
             }
         }
-        let (wall, o) = best.expect("at least one repetition");
-        rows.push((n, wall, o));
+        rows.push(best.expect("at least one repetition"));
     }
     bar.finish_and_clear();
-    println!("| N | variables | Jacobian nnz | iterations | converged | setup s | guess s | eval s | Ipopt internal s | total s |");
-    println!("|---:|---:|---:|---:|:---:|---:|---:|---:|---:|---:|");
-    for (n, wall, o) in &rows {
-        let t = &o.timings;
-        println!(
-            "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
-            n,
-            o.sizes.variables,
-            o.sizes.jacobian_nonzeros,
-            o.iterations,
-            if o.converged() { "yes" } else { "no" },
-            t.setup_s,
-            t.initial_guess_s,
-            t.evaluation_s,
-            t.ipopt_internal_s,
-            wall
-        );
+    println!("| {} |", HEADER.join(" | "));
+    println!("|{}", HEADER.iter().map(|h| if matches!(*h, "backend" | "converged") { ":---:|" } else { "---:|" }).collect::<String>());
+    for row in &rows {
+        println!("| {} |", row.cells().join(" | "));
+    }
+    if let Some(path) = &args.csv {
+        let mut text = format!("{CSV_HEADER}\n");
+        for row in &rows {
+            text.push_str(&row.cells().join(","));
+            text.push('\n');
+        }
+        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The process's peak resident memory since a reset (Linux: `VmHWM` of
+/// `/proc/self/status`, reset by writing 5 to `/proc/self/clear_refs`). Elsewhere, or
+/// when the reset is refused, there is no measurement.
+struct PeakMemory;
+
+impl PeakMemory {
+    fn reset() -> Option<PeakMemory> {
+        std::fs::write("/proc/self/clear_refs", "5").ok().map(|_| PeakMemory)
+    }
+
+    fn read_mib(&self) -> Option<f64> {
+        let status = std::fs::read_to_string("/proc/self/status").ok()?;
+        let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+        let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kib / 1024.0)
+    }
 }

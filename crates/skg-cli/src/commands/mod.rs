@@ -21,7 +21,7 @@ use anyhow::Result;
 use clap::Args;
 
 use skg_core::sbp::OperatorKind;
-use skg_core::scenario::{Formulation, HessianMode, Overrides, Scene, SceneFile};
+use skg_core::scenario::{Backend, Formulation, HessianMode, Overrides, Scene, SceneFile};
 
 /// Exit code of a solve that ran but did not converge.
 pub const EXIT_NOT_CONVERGED: u8 = 3;
@@ -37,7 +37,7 @@ pub struct SceneArgs {
     /// Set a scene parameter, e.g. `--set sigma=1/200` (repeatable; value: number or expression).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Override the SBP operator: SBP121, SBP242 (alias SBP424), SBP363.
+    /// Override the SBP operator: SBP121, SBP242 (alias SBP424), SBP363, SBP484.
     #[arg(long, value_name = "NAME")]
     pub operator: Option<OperatorKind>,
     /// Formulation: `reduced` (physical limit, half the unknowns; default) or `full`
@@ -48,9 +48,14 @@ pub struct SceneArgs {
     /// not depend on it) or `exact` (reduced formulation only).
     #[arg(long, value_enum, value_name = "MODE")]
     pub hessian: Option<HessianArg>,
-    /// Maximum number of Ipopt iterations.
+    /// Maximum number of iterations (Ipopt's, or Newton's).
     #[arg(long, value_name = "N")]
     pub max_iter: Option<u32>,
+    /// Solver of the square system: `ipopt` (default; Ipopt with MUMPS) or `newton`
+    /// (Newton's method with a sparse LU of the Jacobian and a line search on the
+    /// residual; hands over to Ipopt if it fails). Overrides `[solver] backend`.
+    #[arg(long, value_name = "NAME")]
+    pub backend: Option<Backend>,
     /// Solve in successive windows of SECONDS (each starts from the state the previous one
     /// reached and discards its last --overlap); cures the odd-even mode that damping
     /// amplifies and makes long spans linear in cost. 0 turns the scene's windows off.
@@ -93,6 +98,7 @@ impl SceneArgs {
                 HessianArg::Exact => HessianMode::Exact,
             }),
             max_iter: self.max_iter,
+            backend: self.backend,
             window: self.window,
             overlap: self.overlap,
             verify_tol: self.verify_tol,

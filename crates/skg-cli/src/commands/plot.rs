@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
 use skg_core::check::Table;
@@ -41,6 +41,23 @@ pub enum PlotKind {
         /// Output path without extension (writes .svg and .png).
         #[arg(short, long, value_name = "STEM")]
         output: PathBuf,
+    },
+    /// Solve time versus N (log-log) from `skg-solve bench --csv` files, one line per
+    /// file, with a line of slope 1 (cost proportional to N) through the last file's
+    /// largest N.
+    Scaling {
+        /// CSV files written by `skg-solve bench --csv`.
+        #[arg(required = true, value_name = "BENCH.csv")]
+        inputs: Vec<PathBuf>,
+        /// Legend label of each file, in order [default: the file name and its backend].
+        #[arg(long, value_name = "TEXT")]
+        label: Vec<String>,
+        /// Output path without extension (writes .svg and .png).
+        #[arg(short, long, value_name = "STEM")]
+        output: PathBuf,
+        /// Chart title.
+        #[arg(long, default_value = "solve time against N")]
+        title: String,
     },
     /// Coordinates over time (reference overlaid as a thin black line) and the energy over time.
     Trajectory {
@@ -117,6 +134,15 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
             let (m, view) = motion.load()?;
             plot::motion::path(&m, &view, &output)?
         }
+        PlotKind::Scaling { inputs, label, output: out, title } => {
+            let mut benchmarks = Vec::new();
+            for (k, p) in inputs.iter().enumerate() {
+                let (backend, points) = read_bench_csv(p)?;
+                let name = p.file_stem().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+                benchmarks.push((label.get(k).cloned().unwrap_or_else(|| format!("{name} ({backend})")), points));
+            }
+            plot::scaling(&benchmarks, &title, &out)?
+        }
         PlotKind::Trajectory { inputs, reference, label, output: out, title } => {
             let mut sols = Vec::new();
             for (k, p) in inputs.iter().enumerate() {
@@ -141,4 +167,32 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
         println!("wrote {}", w.display());
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The backend and the points (N, total seconds) of a `bench --csv` file.
+fn read_bench_csv(path: &Path) -> Result<(String, Vec<(f64, f64)>)> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| anyhow::anyhow!("{}: no column `{name}` (not a `bench --csv` file?)", path.display()))
+    };
+    let (nodes, total, backend) = (column("nodes")?, column("total_s")?, column("backend")?);
+    let mut points = Vec::new();
+    let mut backends = Vec::new();
+    for (i, line) in lines.enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        let number = |c: usize| cells.get(c).and_then(|v| v.parse::<f64>().ok());
+        let (Some(n), Some(t)) = (number(nodes), number(total)) else {
+            anyhow::bail!("{}:{}: expected numbers in the columns nodes and total_s", path.display(), i + 2);
+        };
+        points.push((n, t));
+        if let Some(b) = cells.get(backend).filter(|b| !backends.contains(*b)) {
+            backends.push(*b);
+        }
+    }
+    Ok((backends.join("/"), points))
 }

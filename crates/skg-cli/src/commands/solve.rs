@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 
+use skg_core::backend::SolverStatus;
 use skg_core::{output, solve};
 
 use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
@@ -26,6 +27,16 @@ pub struct SolveArgs {
     /// Print only errors.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// The backend that finished, for the summary line: `Ipopt`, `Newton`, or
+/// `Ipopt (after Newton failed)`.
+fn solver_name(outcome: &solve::Outcome) -> &'static str {
+    match (outcome.status.solver(), outcome.backend.handed_over_to_ipopt) {
+        (SolverStatus::Newton(_), _) => "Newton",
+        (SolverStatus::Ipopt(_), false) => "Ipopt",
+        (SolverStatus::Ipopt(_), true) => "Ipopt (after Newton failed)",
+    }
 }
 
 pub fn run(args: SolveArgs) -> Result<ExitCode> {
@@ -68,9 +79,10 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
     if !args.quiet {
         let d = &outcome.diagnostics;
         println!(
-            "{}: converged in {} Ipopt iterations ({}), {} {} N={}{}, {:.3} s",
+            "{}: converged in {} {} iterations ({}), {} {} N={}{}, {:.3} s",
             outcome.scene,
             outcome.iterations,
+            solver_name(&outcome),
             outcome.status,
             outcome.settings.operator,
             outcome.settings.formulation,

@@ -25,9 +25,11 @@ pub fn sweep_long_about() -> String {
          change a row were edited is refused (--new-results starts a new result set). A second sweep into the same \
          DIR is refused. Above {} points the sweep starts only with --yes.\n\n\
          results.csv is a plain CSV, one row per point, with the columns {}; one column per grid axis; {}; and the \
-         provenance {}. status is one of {} (converged is true exactly for `converged`); solver_status is Ipopt's \
-         status name (ODE_Succeeded for a peer point); scene_hash and reference_hash are the SHA-256 of the base \
-         scene file's and the reference file's content.\n\n\
+         provenance {}. status is one of {} (converged is true exactly for `converged`); solver_status is the \
+         finishing backend's status name (Ipopt's, Newton_..., ODE_Succeeded for a peer point); scene_hash and \
+         reference_hash are the SHA-256 of the base scene file's and the reference file's content.
+
+\
          A grid axis that is a scene parameter holds the number the point's scene has (sigma = \"1/110\" gives \
          0.00909090909090909, the shortest text that reads back to the same double). If any of its values is \
          written as an expression, the column <axis>{} follows it with every value as written (1/110); an axis of \

@@ -341,6 +341,7 @@ def solve(
     formulation: Optional[str] = None,
     hessian: Optional[str] = None,
     max_iter: Optional[int] = None,
+    backend: Optional[str] = None,
     window: Optional[float] = None,
     overlap: Optional[float] = None,
     verify_tol: Optional[float] = None,
@@ -357,9 +358,9 @@ def solve(
 
     The keyword arguments are the command line's options: ``nodes`` (``--nodes``),
     ``set`` (``--set``, a mapping such as ``{"sigma": 1/200, "V0": "2*g"}``: numbers, or
-    expressions as strings), ``operator`` (``"SBP121"``, ``"SBP242"``, ``"SBP363"``),
-    ``formulation`` (``"reduced"``, ``"full"``), ``hessian`` (``"zero"``, ``"exact"``),
-    ``max_iter``, ``window`` and ``overlap`` (seconds; ``window=0`` turns the scene's
+    expressions as strings), ``operator`` (``"SBP121"``, ``"SBP242"``, ``"SBP363"``,
+    ``"SBP484"``), ``formulation`` (``"reduced"``, ``"full"``), ``hessian`` (``"zero"``,
+    ``"exact"``), ``max_iter``, ``backend`` (``"ipopt"``, ``"newton"``), ``window`` and ``overlap`` (seconds; ``window=0`` turns the scene's
     windows off), ``verify_tol``, ``no_verify``, ``no_fallback``.
 
     Every solve is verified against time stepping and may use the fallback ladder, as on
@@ -377,6 +378,7 @@ def solve(
         formulation=formulation,
         hessian=hessian,
         max_iter=max_iter,
+        backend=backend,
         window=window,
         overlap=overlap,
         verify_tol=verify_tol,

@@ -1,0 +1,133 @@
+//! The two backends solve the same square system: Newton's method with a sparse LU
+//! must find Ipopt's root (docs/solver.md#the-newton-backend), report its own statuses
+//! in the same fields, reuse its symbolic analysis, and hand over to Ipopt when it fails.
+
+mod common;
+
+use skg_core::backend::{SolverStatus, SquareSolver};
+use skg_core::newton::NewtonStatus;
+use skg_core::scenario::{Backend, Formulation, Overrides};
+use skg_core::solve;
+
+fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+fn with_backend(backend: Backend, formulation: Formulation) -> Overrides {
+    Overrides { backend: Some(backend), formulation: Some(formulation), ..Default::default() }
+}
+
+#[test]
+fn newton_and_ipopt_agree_on_every_shipped_scene() {
+    for name in common::SHIPPED {
+        for formulation in [Formulation::Reduced, Formulation::Full] {
+            let ipopt = common::solve(name, &with_backend(Backend::Ipopt, formulation));
+            let newton = common::solve(name, &with_backend(Backend::Newton, formulation));
+            let ctx = format!("{name} ({formulation})");
+            // Newton converged by itself, with the same number of steps as Ipopt's
+            // (both take full Newton steps from the same guess).
+            assert_eq!(newton.status.solver(), SolverStatus::Newton(NewtonStatus::Converged), "{ctx}");
+            assert!(!newton.backend.handed_over_to_ipopt, "{ctx}");
+            assert_eq!(newton.iterations, ipopt.iterations, "{ctx}: iterations");
+            assert_eq!(newton.history.len(), newton.iterations + 1, "{ctx}");
+            let (a, b) = (&newton.trajectory, &ipopt.trajectory);
+            for (what, x, y) in [("q", &a.q, &b.q), ("v", &a.v, &b.v), ("λ", &a.lambda, &b.lambda)] {
+                let d = max_diff(x, y);
+                assert!(d < 1e-9, "{ctx}: max |{what}_newton − {what}_ipopt| = {d:e}");
+            }
+            assert!(newton.diagnostics.max_residual <= 1e-11, "{ctx}: residual {:e}", newton.diagnostics.max_residual);
+            // The same summary fields, honestly filled.
+            let json = serde_json::to_value(&newton).unwrap();
+            assert_eq!(json["status"], "Newton_Converged", "{ctx}");
+            assert_eq!(json["settings"]["backend"], "newton", "{ctx}");
+            assert_eq!(json["backend"]["requested"], "newton", "{ctx}");
+            assert!(json["backend"]["newton"]["jacobian_evaluations"].as_u64().unwrap() == newton.iterations as u64, "{ctx}");
+            let ipopt_json = serde_json::to_value(&ipopt).unwrap();
+            assert!(ipopt_json["backend"]["newton"].is_null() && ipopt_json["backend"]["requested"] == "ipopt", "{ctx}");
+        }
+    }
+}
+
+/// The shipped scenes solved in windows (the damped oscillator after the fallback
+/// ladder, the long rolling disk by its own `[time] window`): both backends verify, cover
+/// the span the same way and agree to 1e-9.
+#[test]
+fn newton_and_ipopt_agree_on_the_windowed_scenes() {
+    for name in ["damped_oscillator", "rolling_disk_long"] {
+        let ipopt = common::solve(name, &with_backend(Backend::Ipopt, Formulation::Reduced));
+        let newton = common::solve(name, &with_backend(Backend::Newton, Formulation::Reduced));
+        assert!(ipopt.trusted() && newton.trusted(), "{name}: {} / {}", ipopt.verification.reason, newton.verification.reason);
+        assert_eq!(newton.method, ipopt.method, "{name}");
+        assert!(matches!(newton.method, solve::Method::Windows { count, .. } if count > 1), "{name}: {}", newton.method);
+        assert!(!newton.backend.handed_over_to_ipopt, "{name}");
+        let d = max_diff(&newton.trajectory.q, &ipopt.trajectory.q);
+        assert!(d < 1e-9, "{name}: max |q_newton − q_ipopt| = {d:e}");
+        // The report is the first window's, which made the analysis the others reused.
+        assert!(!newton.backend.newton.as_ref().unwrap().analysis_reused, "{name}");
+    }
+}
+
+/// One `SquareSolver` reused for a second initial state (a time window) keeps its
+/// symbolic analysis and still finds that state's own root; a new solver of an action
+/// with equal structure adopts it too.
+#[test]
+fn the_symbolic_analysis_is_reused_across_solves_of_equal_structure() {
+    let scene = common::load("rolling_disk", &with_backend(Backend::Newton, Formulation::Reduced));
+    let action = solve::build_action(&scene).unwrap();
+    let first = solve::solve_scene(&scene).unwrap();
+    let z0 = guess_from(&first.trajectory.q, &action);
+    let mut solver = SquareSolver::new(&scene, &action);
+    let a = solver.solve(&action, &z0).unwrap();
+    let newton = a.report.newton.as_ref().unwrap();
+    assert!(!newton.analysis_reused && newton.analysis_s > 0.0);
+    assert!(a.max_residual <= 1e-11);
+
+    // Same structure, different initial velocity: a different root, same analysis.
+    let mut other = scene.clone();
+    other.initial_v[2] = 5.1; // θ̇
+    other.initial_v[0] = 5.1; // ẋ: keeps g1 = ẋ² + ẏ² − R²θ̇² = 0
+    let action2 = solve::build_action(&other).unwrap();
+    let mut solver2 = SquareSolver::new(&other, &action2).with_analysis(solver.into_analysis());
+    let b = solver2.solve(&action2, &z0).unwrap();
+    let newton = b.report.newton.as_ref().unwrap();
+    assert!(newton.analysis_reused && newton.analysis_s == 0.0, "{newton:?}");
+    assert_eq!(b.status, SolverStatus::Newton(NewtonStatus::Converged));
+    assert!(b.max_residual <= 1e-11);
+    let direct = solve::solve_scene(&other).unwrap();
+    let lay = &action2.layout;
+    let d = (0..lay.nodes * lay.d).map(|i| (b.z[lay.qp[i] as usize] - direct.trajectory.q[i / lay.d][i % lay.d]).abs()).fold(0.0, f64::max);
+    assert!(d < 1e-9, "reused analysis: {d:e} from a fresh solve");
+}
+
+/// A start far from the solution on the coarse SBP121 incline: plain Newton fails
+/// there, and the solve hands over to Ipopt, records that, and warns.
+#[test]
+fn a_failed_newton_solve_hands_over_to_ipopt() {
+    let ov = Overrides { max_iter: Some(3), ..with_backend(Backend::Newton, Formulation::Reduced) };
+    let scene = common::load("incline_frictionless", &Overrides { nodes: Some(64), operator: Some("SBP121".parse().unwrap()), ..ov });
+    let o = solve::solve_scene(&scene).unwrap();
+    assert!(o.backend.handed_over_to_ipopt, "Newton cannot converge in 3 steps here");
+    let newton = o.backend.newton.as_ref().unwrap();
+    assert!(!newton.status.is_success());
+    assert!(matches!(o.status.solver(), SolverStatus::Ipopt(_)));
+    assert!(
+        o.warnings.iter().any(|w| w.contains("Newton's method did not converge") && w.contains(newton.status.name())),
+        "{:?}",
+        o.warnings
+    );
+    let json = serde_json::to_value(&o).unwrap();
+    assert_eq!(json["backend"]["handed_over_to_ipopt"], true);
+    assert_eq!(json["backend"]["newton"]["status"], newton.status.name());
+}
+
+/// Z with the plus block's coordinates from `q` (node-major) and everything else zero.
+fn guess_from(q: &[Vec<f64>], action: &skg_core::action::Action) -> Vec<f64> {
+    let lay = &action.layout;
+    let mut z = vec![0.0; lay.len()];
+    for (k, qk) in q.iter().enumerate() {
+        for (i, v) in qk.iter().enumerate() {
+            z[lay.qp[k * lay.d + i] as usize] = *v;
+        }
+    }
+    z
+}

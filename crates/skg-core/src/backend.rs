@@ -1,0 +1,380 @@
+//! The solvers of the square system: Ipopt (the default) and Newton's method with a
+//! sparse LU ([`crate::newton`]), behind one interface, [`SquareSolver`].
+//!
+//! Both see the system through the same adapters of [`skg_ipopt::Problem`]: `Reduced`
+//! (`R(P) = ∂S/∂M = 0`) and `Full` (`∇S(Z) = 0`). A [`SquareSolver`] is built once per
+//! action and keeps what does not change between solves of the same structure: the
+//! sparsity plans of the Jacobian (and Hessian) and, for Newton, the symbolic LU
+//! analysis. [`SquareSolver::solve`] can then be called for any number of starting
+//! points or actions of the same model and grid (only the initial state `q0`, `v0` may
+//! differ), and [`SquareSolver::into_analysis`] hands the analysis on to the solver of
+//! another action of equal structure (a sweep point).
+//!
+//! **Hand-over.** When Newton does not converge, the same system is solved by Ipopt
+//! from the same starting point, so a Newton solve never ends worse than an Ipopt solve;
+//! the [`BackendReport`] records Newton's own outcome and that Ipopt finished.
+
+use std::fmt;
+
+use serde::Serialize;
+
+use crate::action::{Action, Block, MatrixPlan};
+use crate::model::Workspace;
+use crate::newton::{NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
+use crate::scenario::{Backend, Formulation, HessianMode, IpoptValue, Scene};
+use skg_ipopt::{self as ipopt, EvalError, IterationStat, Problem};
+
+/// The status of the backend that ended a solve: Ipopt's or Newton's own.
+///
+/// Serialized as its name (`"Solve_Succeeded"`, `"Newton_Converged"`, …).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SolverStatus {
+    /// Ipopt's return status.
+    Ipopt(ipopt::Status),
+    /// Newton's status.
+    Newton(NewtonStatus),
+}
+
+impl SolverStatus {
+    /// Whether the backend reports success (Ipopt: [`ipopt::Status::is_success`]).
+    pub fn is_success(&self) -> bool {
+        match self {
+            SolverStatus::Ipopt(s) => s.is_success(),
+            SolverStatus::Newton(s) => s.is_success(),
+        }
+    }
+
+    /// The status's stable name: Ipopt's identifier or Newton's `Newton_…` name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SolverStatus::Ipopt(s) => s.name(),
+            SolverStatus::Newton(s) => s.name(),
+        }
+    }
+}
+
+impl fmt::Display for SolverStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SolverStatus::Ipopt(s) => write!(f, "{s}"),
+            SolverStatus::Newton(s) => write!(f, "{s}"),
+        }
+    }
+}
+
+impl Serialize for SolverStatus {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match self {
+            SolverStatus::Ipopt(s) => s.serialize(serializer),
+            SolverStatus::Newton(s) => s.serialize(serializer),
+        }
+    }
+}
+
+/// What Newton's method did in a solve with `backend = "newton"`.
+#[derive(Debug, Clone, Serialize)]
+pub struct NewtonReport {
+    /// How Newton ended (`Newton_Converged` or why not).
+    pub status: NewtonStatus,
+    /// Newton steps.
+    pub iterations: usize,
+    /// max |F| where Newton stopped.
+    pub max_residual: f64,
+    /// Seconds of the symbolic LU analysis in this solve (0 when it was reused).
+    pub analysis_s: f64,
+    /// Whether the symbolic analysis of an earlier solve of equal structure was reused.
+    pub analysis_reused: bool,
+    /// Evaluations, factorizations and their times.
+    #[serde(flatten)]
+    pub stats: NewtonStats,
+}
+
+/// Which backend ran, and how.
+#[derive(Debug, Clone, Serialize)]
+pub struct BackendReport {
+    /// The backend the settings asked for.
+    pub requested: Backend,
+    /// Newton's own outcome (only with `backend = "newton"`).
+    pub newton: Option<NewtonReport>,
+    /// Whether Newton failed and Ipopt solved the system from the same start.
+    pub handed_over_to_ipopt: bool,
+}
+
+/// The root of the square system as a backend found it (whatever its status).
+#[derive(Debug, Clone)]
+pub struct SystemSolution {
+    /// The status of the backend that finished (Ipopt's after a hand-over).
+    pub status: SolverStatus,
+    /// The whole unknown vector Z (the minus block zero for the reduced formulation).
+    pub z: Vec<f64>,
+    /// Unscaled max |c| of the system at `z`.
+    pub max_residual: f64,
+    /// Iterations of the backend that finished.
+    pub iterations: usize,
+    /// Its iteration table.
+    pub history: Vec<IterationStat>,
+    /// Wall time of all backends, in seconds.
+    pub total_s: f64,
+    /// Of that, time in the residual, Jacobian and Hessian evaluations.
+    pub evaluation_s: f64,
+    /// Which backend ran, and Newton's own outcome.
+    pub report: BackendReport,
+}
+
+/// Why the system could not be solved at all (a non-converged run is a
+/// [`SystemSolution`] with a failure status).
+#[derive(Debug, thiserror::Error)]
+pub enum BackendError {
+    /// Ipopt could not be run (options, sizes, a callback error it did not recover from).
+    #[error(transparent)]
+    Ipopt(#[from] ipopt::SolveError),
+    /// The Newton backend could not be set up (structure, analysis).
+    #[error(transparent)]
+    Newton(#[from] NewtonError),
+}
+
+/// The backend and its options.
+struct Settings {
+    backend: Backend,
+    newton: NewtonOptions,
+    ipopt: ipopt::Options,
+}
+
+/// The solver of one action's square system, keeping its sparsity plans and (Newton)
+/// its symbolic LU analysis between solves.
+pub struct SquareSolver {
+    formulation: Formulation,
+    settings: Settings,
+    jac: MatrixPlan,
+    hess: Option<MatrixPlan>,
+    lu: Option<SystemSolver>,
+}
+
+impl SquareSolver {
+    /// The solver of `action`'s system with `scene`'s formulation and solver settings:
+    /// the sparsity plans, and no LU analysis yet (made by the first Newton solve).
+    pub fn new(scene: &Scene, action: &Action) -> SquareSolver {
+        let jac_block = match scene.formulation {
+            Formulation::Reduced => Block::ReducedJacobian,
+            Formulation::Full => Block::FullJacobian,
+        };
+        let exact_hessian = scene.formulation == Formulation::Reduced && scene.solver.hessian == HessianMode::Exact;
+        SquareSolver {
+            formulation: scene.formulation,
+            settings: Settings {
+                backend: scene.solver.backend,
+                newton: NewtonOptions { tol: scene.solver.tol, max_iter: scene.solver.max_iter },
+                ipopt: ipopt_options(scene),
+            },
+            jac: action.plan(jac_block),
+            hess: exact_hessian.then(|| action.plan(Block::ReducedHessian)),
+            lu: None,
+        }
+    }
+
+    /// Adopt the LU analysis of an earlier solver (e.g. of the previous sweep point); it
+    /// is used only if its structure equals this system's, otherwise analysed anew.
+    pub fn with_analysis(mut self, lu: Option<SystemSolver>) -> SquareSolver {
+        self.lu = lu;
+        self
+    }
+
+    /// The LU analysis, to hand on to the solver of another action of equal structure.
+    pub fn into_analysis(self) -> Option<SystemSolver> {
+        self.lu
+    }
+
+    /// The Jacobian's sparsity plan.
+    pub fn jacobian_plan(&self) -> &MatrixPlan {
+        &self.jac
+    }
+
+    /// The Hessian's sparsity plan (reduced formulation with the exact Hessian only).
+    pub fn hessian_plan(&self) -> Option<&MatrixPlan> {
+        self.hess.as_ref()
+    }
+
+    /// Solve the system of `action` (the model and grid this solver was built for) from
+    /// the whole unknown vector `z0` with the configured backend.
+    pub fn solve(&mut self, action: &Action, z0: &[f64]) -> Result<SystemSolution, BackendError> {
+        let n_p = action.layout.n_p;
+        match self.formulation {
+            Formulation::Reduced => {
+                let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac: &self.jac, hess: self.hess.as_ref() };
+                let mut solution = solve_problem(&self.settings, &mut self.lu, &mut p, &z0[..n_p])?;
+                let mut z = vec![0.0; action.layout.len()];
+                z[..n_p].copy_from_slice(&solution.z);
+                solution.z = z;
+                Ok(solution)
+            }
+            Formulation::Full => {
+                let mut p = Full { action, ws: action.model.workspace(), jac: &self.jac };
+                solve_problem(&self.settings, &mut self.lu, &mut p, z0)
+            }
+        }
+    }
+}
+
+/// Solve one adapter's system from `x0` (the adapter's unknowns): Newton first if
+/// asked for (reusing the analysis in `lu` when its structure fits, else replacing it),
+/// Ipopt when Newton was not asked for or failed.
+fn solve_problem<P: Problem>(
+    settings: &Settings,
+    lu: &mut Option<SystemSolver>,
+    problem: &mut P,
+    x0: &[f64],
+) -> Result<SystemSolution, BackendError> {
+    let mut report = BackendReport { requested: settings.backend, newton: None, handed_over_to_ipopt: false };
+    let (mut total_s, mut evaluation_s) = (0.0, 0.0);
+    if settings.backend == Backend::Newton {
+        let mut analysis_s = 0.0;
+        let reusable = lu.as_ref().is_some_and(|lu| lu.size() == x0.len() && lu.structure() == problem.jacobian_structure());
+        if !reusable {
+            let analysed = SystemSolver::new(x0.len(), problem.jacobian_structure())?;
+            analysis_s = analysed.analysis_seconds();
+            *lu = Some(analysed);
+        }
+        let lu = lu.as_mut().expect("set above");
+        let sol = lu.solve(problem, x0, &settings.newton)?;
+        total_s += analysis_s + sol.total_s;
+        evaluation_s += sol.stats.evaluation_s;
+        report.newton = Some(NewtonReport {
+            status: sol.status,
+            iterations: sol.iterations,
+            max_residual: sol.max_residual,
+            analysis_s,
+            analysis_reused: reusable,
+            stats: sol.stats,
+        });
+        if sol.status.is_success() {
+            return Ok(SystemSolution {
+                status: SolverStatus::Newton(sol.status),
+                z: sol.x,
+                max_residual: sol.max_residual,
+                iterations: sol.iterations,
+                history: sol.history,
+                total_s,
+                evaluation_s,
+                report,
+            });
+        }
+        report.handed_over_to_ipopt = true;
+    }
+    let sol = ipopt::solve(problem, x0, &settings.ipopt)?;
+    Ok(SystemSolution {
+        status: SolverStatus::Ipopt(sol.status),
+        max_residual: sol.max_constraint_violation,
+        iterations: sol.iterations,
+        total_s: total_s + sol.total_seconds,
+        evaluation_s: evaluation_s + sol.total_seconds - sol.ipopt_seconds,
+        history: sol.history,
+        z: sol.x,
+        report,
+    })
+}
+
+/// Ipopt's options for a scene: its `[solver]` settings, then the pass-through options.
+fn ipopt_options(scene: &Scene) -> ipopt::Options {
+    let solver = &scene.solver;
+    let pass_through = solver.ipopt.iter().map(|(k, v)| {
+        let v = match v {
+            IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
+            IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
+            IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
+        };
+        (k.clone(), v)
+    });
+    ipopt::Options {
+        tol: solver.tol,
+        constr_viol_tol: solver.tol,
+        max_iter: solver.max_iter,
+        print_level: solver.print_level,
+        linear_solver: solver.linear_solver.clone(),
+        output_file: solver.log_file.clone(),
+        // MUMPS's default scaling (77, automatic) made the very first factorization of
+        // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
+        // on Debian's MUMPS 5.5). The scene's own [solver.ipopt] options come after and
+        // override it.
+        extra: std::iter::once(("mumps_scaling".to_string(), ipopt::OptionValue::Int(0))).chain(pass_through).collect(),
+        ..ipopt::Options::default()
+    }
+}
+
+/// The reduced system R(P) = ∂S/∂M = 0 as a [`Problem`].
+struct Reduced<'a> {
+    action: &'a Action,
+    z: Vec<f64>,
+    ws: Workspace,
+    jac: &'a MatrixPlan,
+    hess: Option<&'a MatrixPlan>,
+}
+
+impl Reduced<'_> {
+    fn set(&mut self, x: &[f64], minus: Option<&[f64]>) {
+        let n_p = self.action.layout.n_p;
+        self.z[..n_p].copy_from_slice(x);
+        match minus {
+            Some(y) => self.z[n_p..].copy_from_slice(y),
+            None => self.z[n_p..].iter_mut().for_each(|v| *v = 0.0),
+        }
+    }
+}
+
+impl Problem for Reduced<'_> {
+    fn num_variables(&self) -> usize {
+        self.action.layout.n_p
+    }
+    fn num_constraints(&self) -> usize {
+        self.action.layout.n_m
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.set(x, None);
+        self.action.gradient(&self.z, true, c, &mut self.ws);
+        Ok(())
+    }
+    fn jacobian_structure(&self) -> &[(u32, u32)] {
+        &self.jac.structure
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.set(x, None);
+        self.action.matrix_values(self.jac, &self.z, values, &mut self.ws);
+        Ok(())
+    }
+    fn hessian_structure(&self) -> &[(u32, u32)] {
+        self.hess.map_or(&[], |h| &h.structure)
+    }
+    fn hessian_values(&mut self, x: &[f64], _obj: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        if let Some(plan) = self.hess {
+            self.set(x, Some(lambda));
+            self.action.matrix_values(plan, &self.z, values, &mut self.ws);
+        }
+        Ok(())
+    }
+}
+
+/// The full system ∇S(Z) = 0 as a [`Problem`].
+struct Full<'a> {
+    action: &'a Action,
+    ws: Workspace,
+    jac: &'a MatrixPlan,
+}
+
+impl Problem for Full<'_> {
+    fn num_variables(&self) -> usize {
+        self.action.layout.len()
+    }
+    fn num_constraints(&self) -> usize {
+        self.action.layout.len()
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.action.gradient(x, false, c, &mut self.ws);
+        Ok(())
+    }
+    fn jacobian_structure(&self) -> &[(u32, u32)] {
+        &self.jac.structure
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.action.matrix_values(self.jac, x, values, &mut self.ws);
+        Ok(())
+    }
+}

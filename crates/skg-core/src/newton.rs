@@ -1,0 +1,571 @@
+//! Newton's method for a square sparse system `F(x) = 0` with a sparse LU of its
+//! Jacobian (docs/solver.md#the-newton-backend).
+//!
+//! The system is anything that implements [`Problem`] (the same adapters Ipopt is
+//! given): its residual is [`Problem::constraints`], its Jacobian
+//! [`Problem::jacobian_values`] on the fixed [`Problem::jacobian_structure`].
+//!
+//! **Linear algebra.** A [`SystemSolver`] is built once per sparsity structure: it turns
+//! the structure into a compressed-column pattern and computes the symbolic LU analysis
+//! (a COLAMD fill-reducing column order and the elimination structure) with faer's
+//! sparse LU. Every Newton iteration then does one numeric LU (threshold partial
+//! pivoting by rows, on the stored analysis and into the stored buffers) and one pair
+//! of triangular solves. The same value serves any number of solves of systems with
+//! the same structure: successive iterations, successive time windows, sweep points.
+//! faer was chosen over SuiteSparse's KLU/UMFPACK by measurement (docs/benchmarks.md):
+//! it is fast enough on these matrices and needs no system library or FFI.
+//!
+//! **Globalization.** The step `dx = −J(x)⁻¹ F(x)` is tried with `α = 1, ½, ¼, …`
+//! until the Armijo condition on the residual norm
+//! `‖F(x + α dx)‖₂ ≤ (1 − 10⁻⁴ α) ‖F(x)‖₂` holds (Dennis and Schnabel, *Numerical
+//! Methods for Unconstrained Optimization and Nonlinear Equations*, §6.3, applied to
+//! `½‖F‖₂²`, whose directional derivative along the Newton step is `−‖F‖₂²`). A step
+//! whose residual is not finite counts as not decreasing. The iteration stops with
+//! [`NewtonStatus::Converged`] when `max |F| ≤ tol`; with
+//! [`NewtonStatus::ConvergedToRoundOff`] when `max |F|` is at most the round-off level
+//! `4 ε max_i Σ_j |J_ij| |x_j|` of the last Jacobian (a residual below the rounding
+//! error of the terms it sums cannot be told from zero; at large N this level exceeds
+//! the default tol); with
+//! [`NewtonStatus::LineSearchFailed`] when `α` falls below [`MIN_STEP`]; with
+//! [`NewtonStatus::SingularJacobian`] when the LU finds no pivot or the step is not
+//! finite; with [`NewtonStatus::InvalidNumber`] when the starting residual or a
+//! Jacobian cannot be evaluated or is not finite; and with [`NewtonStatus::MaximumIterationsExceeded`]. The caller decides
+//! what to do on failure (the solve hands over to Ipopt, [`crate::backend`]).
+
+use std::fmt;
+use std::time::Instant;
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par};
+use serde::Serialize;
+
+use skg_ipopt::{EvalError, IterationStat, Problem};
+
+/// Smallest step length of the line search: below it the iteration stops with
+/// [`NewtonStatus::LineSearchFailed`] (15 halvings).
+pub const MIN_STEP: f64 = 1.0 / 32768.0;
+
+/// The sufficient-decrease constant of the Armijo condition.
+const ARMIJO: f64 = 1e-4;
+
+/// The residual's round-off level is taken as `ROUNDOFF · ε · max_i Σ_j |J_ij| |x_j|`.
+/// Measured: at N = 16384 (disk) and 65536 (tumbler) the residual stagnated at 0.4 of
+/// `ε · max_i Σ_j |J_ij| |x_j|` (1.1e-11 and 3.2e-11, above the default tol 1e-11), with
+/// Newton steps that no longer decreased it.
+pub const ROUNDOFF: f64 = 4.0;
+
+/// How a Newton solve ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum NewtonStatus {
+    /// `max |F| ≤ tol`.
+    Converged,
+    /// `max |F|` is above `tol` but at the residual's round-off level
+    /// `ROUNDOFF · ε · max_i Σ_j |J_ij| |x_j|` ([`ROUNDOFF`]): no step can reduce it further.
+    ConvergedToRoundOff,
+    /// The iteration limit was reached first.
+    MaximumIterationsExceeded,
+    /// No step length down to [`MIN_STEP`] decreased the residual norm enough.
+    LineSearchFailed,
+    /// The LU found no pivot, or the step was not finite.
+    SingularJacobian,
+    /// A residual at the start, or a Jacobian, could not be evaluated or is not finite.
+    InvalidNumber,
+}
+
+impl NewtonStatus {
+    /// A stable name, e.g. `"Newton_Converged"` (written where Ipopt's status names go).
+    pub fn name(&self) -> &'static str {
+        match self {
+            NewtonStatus::Converged => "Newton_Converged",
+            NewtonStatus::ConvergedToRoundOff => "Newton_Converged_To_Round_Off",
+            NewtonStatus::MaximumIterationsExceeded => "Newton_Maximum_Iterations_Exceeded",
+            NewtonStatus::LineSearchFailed => "Newton_Line_Search_Failed",
+            NewtonStatus::SingularJacobian => "Newton_Singular_Jacobian",
+            NewtonStatus::InvalidNumber => "Newton_Invalid_Number",
+        }
+    }
+
+    /// Whether the residual reached the tolerance or its round-off level.
+    pub fn is_success(&self) -> bool {
+        matches!(self, NewtonStatus::Converged | NewtonStatus::ConvergedToRoundOff)
+    }
+}
+
+impl fmt::Display for NewtonStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            NewtonStatus::Converged => "Newton's method converged to the requested tolerance",
+            NewtonStatus::ConvergedToRoundOff => {
+                "Newton's method converged to the round-off level of the residual (above the requested tolerance)"
+            }
+            NewtonStatus::MaximumIterationsExceeded => "Newton's method: maximum number of iterations exceeded",
+            NewtonStatus::LineSearchFailed => "Newton's method: the line search found no step that decreases the residual",
+            NewtonStatus::SingularJacobian => "Newton's method: the Jacobian is singular (no pivot, or a non-finite step)",
+            NewtonStatus::InvalidNumber => "Newton's method: the residual at the start or a Jacobian is not finite",
+        })
+    }
+}
+
+impl Serialize for NewtonStatus {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
+
+/// Why a [`SystemSolver`] cannot be built or used.
+#[derive(Debug, thiserror::Error)]
+pub enum NewtonError {
+    /// The structure is not square or has an index out of range.
+    #[error("invalid Jacobian structure: {0}")]
+    Structure(String),
+    /// The problem's Jacobian structure differs from the one the solver was built for.
+    #[error("the problem's Jacobian structure differs from the one this solver was analysed for")]
+    OtherStructure,
+    /// The symbolic analysis failed (out of memory).
+    #[error("symbolic LU analysis failed: {0}")]
+    Analysis(String),
+}
+
+/// Options of a Newton solve.
+#[derive(Debug, Clone, Copy)]
+pub struct NewtonOptions {
+    /// Converged when `max |F| ≤ tol`.
+    pub tol: f64,
+    /// Iteration limit (Jacobian factorizations).
+    pub max_iter: u32,
+}
+
+/// Counts and wall times of a Newton solve, in seconds.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct NewtonStats {
+    /// Residual evaluations (line-search trials included).
+    pub residual_evaluations: usize,
+    /// Jacobian evaluations (= numeric factorizations).
+    pub jacobian_evaluations: usize,
+    /// Time in the residual and Jacobian callbacks.
+    pub evaluation_s: f64,
+    /// Time in numeric LU factorizations.
+    pub factorization_s: f64,
+    /// Time in the triangular solves.
+    pub triangular_solve_s: f64,
+}
+
+/// The result of a Newton solve (whatever its status).
+#[derive(Debug, Clone)]
+pub struct NewtonSolution {
+    /// How it ended.
+    pub status: NewtonStatus,
+    /// The last accepted point (the starting point if no step was accepted).
+    pub x: Vec<f64>,
+    /// `max |F(x)|` at that point.
+    pub max_residual: f64,
+    /// Newton steps taken.
+    pub iterations: usize,
+    /// One entry per iteration, iteration 0 the start, in Ipopt's layout: `inf_pr` is
+    /// `max |F|`, `d_norm` the step's max-norm, `alpha_pr` the step length, `ls_trials`
+    /// the residual evaluations of the line search; the other fields are 0.
+    pub history: Vec<IterationStat>,
+    /// Counts and times.
+    pub stats: NewtonStats,
+    /// Wall time of the solve.
+    pub total_s: f64,
+}
+
+/// The sparse LU machinery of one sparsity structure: the compressed-column pattern,
+/// the symbolic analysis, the numeric factorization's storage and the work buffers.
+/// Build it once with [`SystemSolver::new`] and call [`SystemSolver::solve`] for every
+/// system of that structure.
+pub struct SystemSolver {
+    n: usize,
+    /// The (row, column) structure this solver was built for, in the problem's order.
+    structure: Vec<(u32, u32)>,
+    col_ptr: Vec<u32>,
+    row_idx: Vec<u32>,
+    /// Position in the compressed values of each structure entry (duplicates share one).
+    slot: Vec<usize>,
+    symbolic: SymbolicLu<u32>,
+    numeric: NumericLu<u32, f64>,
+    factor_work: MemBuffer,
+    solve_work: MemBuffer,
+    /// Seconds the symbolic analysis took.
+    analysis_s: f64,
+}
+
+impl SystemSolver {
+    /// Analyse the `n × n` structure `structure` ((row, column) pairs, 0-based,
+    /// duplicates summed): the compressed-column pattern and the symbolic LU.
+    pub fn new(n: usize, structure: &[(u32, u32)]) -> Result<SystemSolver, NewtonError> {
+        let start = Instant::now();
+        if let Some(&(r, c)) = structure.iter().find(|&&(r, c)| r as usize >= n || c as usize >= n) {
+            return Err(NewtonError::Structure(format!("entry ({r}, {c}) outside the {n} × {n} matrix")));
+        }
+        let (col_ptr, row_idx, slot) = compressed_columns(n, structure);
+        let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
+        let symbolic = factorize_symbolic_lu(pattern, Default::default()).map_err(|e| NewtonError::Analysis(format!("{e:?}")))?;
+        let factor_req = symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
+        let solve_req: StackReq = symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
+        Ok(SystemSolver {
+            n,
+            structure: structure.to_vec(),
+            col_ptr,
+            row_idx,
+            slot,
+            symbolic,
+            numeric: NumericLu::new(),
+            factor_work: MemBuffer::new(factor_req),
+            solve_work: MemBuffer::new(solve_req),
+            analysis_s: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The size `n` of the systems this solver handles.
+    pub fn size(&self) -> usize {
+        self.n
+    }
+
+    /// The (row, column) structure this solver was built for.
+    pub fn structure(&self) -> &[(u32, u32)] {
+        &self.structure
+    }
+
+    /// Seconds the symbolic analysis took (once, in [`SystemSolver::new`]).
+    pub fn analysis_seconds(&self) -> f64 {
+        self.analysis_s
+    }
+
+    /// Nonzeros of the compressed pattern (duplicates merged).
+    pub fn pattern_nonzeros(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// Solve `problem`'s system `F(x) = 0` from `x0` by Newton's method with the line
+    /// search of the module documentation. Errors only when the problem does not fit
+    /// this solver (size, structure); a failed iteration is a [`NewtonSolution`] whose
+    /// status says why.
+    pub fn solve<P: Problem>(&mut self, problem: &mut P, x0: &[f64], options: &NewtonOptions) -> Result<NewtonSolution, NewtonError> {
+        let n = self.n;
+        if problem.num_variables() != n || problem.num_constraints() != n || x0.len() != n {
+            return Err(NewtonError::Structure(format!(
+                "{} variables, {} equations and a start of {} entries for a solver of size {n}",
+                problem.num_variables(),
+                problem.num_constraints(),
+                x0.len()
+            )));
+        }
+        if problem.jacobian_structure() != self.structure.as_slice() {
+            return Err(NewtonError::OtherStructure);
+        }
+        let start = Instant::now();
+        let mut stats = NewtonStats::default();
+        let mut x = x0.to_vec();
+        let mut f = vec![0.0; n];
+        let mut norm = match evaluate_residual(problem, &x, &mut f, &mut stats) {
+            Ok(()) => norm2(&f),
+            Err(_) => f64::NAN,
+        };
+        let mut history = vec![iteration_stat(0, max_abs(&f), 0.0, 0.0, 0)];
+        let mut jac = vec![0.0; self.structure.len()];
+        let mut values = vec![0.0; self.row_idx.len()];
+        let mut step = vec![0.0; n];
+        let mut trial = vec![0.0; n];
+        let mut f_trial = vec![0.0; n];
+        let mut iterations = 0;
+        // The residual's round-off level, from the last Jacobian (none before the first).
+        let mut floor = 0.0;
+        let status = loop {
+            if !norm.is_finite() {
+                break NewtonStatus::InvalidNumber;
+            }
+            let residual = max_abs(&f);
+            if residual <= options.tol {
+                break NewtonStatus::Converged;
+            }
+            if residual <= floor {
+                break NewtonStatus::ConvergedToRoundOff;
+            }
+            if iterations >= options.max_iter as usize {
+                break NewtonStatus::MaximumIterationsExceeded;
+            }
+            // The Newton step: J dx = −F.
+            let t = Instant::now();
+            let evaluated = problem.jacobian_values(&x, &mut jac);
+            stats.evaluation_s += t.elapsed().as_secs_f64();
+            stats.jacobian_evaluations += 1;
+            if evaluated.is_err() || jac.iter().any(|v| !v.is_finite()) {
+                break NewtonStatus::InvalidNumber;
+            }
+            values.fill(0.0);
+            for (&s, &v) in self.slot.iter().zip(&jac) {
+                values[s] += v;
+            }
+            floor = ROUNDOFF * f64::EPSILON * self.row_scale(&values, &x);
+            step.iter_mut().zip(&f).for_each(|(s, fi)| *s = -fi);
+            if !self.factor_and_solve(&values, &mut step, &mut stats) {
+                break NewtonStatus::SingularJacobian;
+            }
+            // Backtracking on ‖F‖₂.
+            let mut alpha = 1.0;
+            let mut trials = 0;
+            let accepted = loop {
+                for ((xt, xi), si) in trial.iter_mut().zip(&x).zip(&step) {
+                    *xt = xi + alpha * si;
+                }
+                trials += 1;
+                let ok = evaluate_residual(problem, &trial, &mut f_trial, &mut stats).is_ok();
+                let trial_norm = norm2(&f_trial);
+                if ok && trial_norm.is_finite() && trial_norm <= (1.0 - ARMIJO * alpha) * norm {
+                    break true;
+                }
+                alpha *= 0.5;
+                if alpha < MIN_STEP {
+                    break false;
+                }
+            };
+            if !accepted {
+                break NewtonStatus::LineSearchFailed;
+            }
+            std::mem::swap(&mut x, &mut trial);
+            std::mem::swap(&mut f, &mut f_trial);
+            norm = norm2(&f);
+            iterations += 1;
+            history.push(iteration_stat(iterations as i32, max_abs(&f), max_abs(&step), alpha, trials));
+        };
+        Ok(NewtonSolution { status, max_residual: max_abs(&f), x, iterations, history, stats, total_s: start.elapsed().as_secs_f64() })
+    }
+
+    /// `max_i Σ_j |J_ij| |x_j|` of the compressed matrix with `values`: the size of the
+    /// terms whose rounding errors a residual near `x` carries.
+    fn row_scale(&self, values: &[f64], x: &[f64]) -> f64 {
+        let mut rows = vec![0.0_f64; self.n];
+        for (c, xc) in x.iter().enumerate() {
+            for k in self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize {
+                rows[self.row_idx[k] as usize] += values[k].abs() * xc.abs();
+            }
+        }
+        rows.into_iter().fold(0.0, f64::max)
+    }
+
+    /// Factor the compressed matrix with `values` and overwrite `rhs` with the solution;
+    /// `false` when the matrix is singular or the solution not finite.
+    fn factor_and_solve(&mut self, values: &[f64], rhs: &mut [f64], stats: &mut NewtonStats) -> bool {
+        let t = Instant::now();
+        let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
+        let matrix = SparseColMatRef::new(pattern, values);
+        let factored = self.symbolic.factorize_numeric_lu(
+            &mut self.numeric,
+            matrix,
+            Par::Seq,
+            MemStack::new(&mut self.factor_work),
+            Default::default(),
+        );
+        stats.factorization_s += t.elapsed().as_secs_f64();
+        let Ok(lu) = factored else {
+            return false;
+        };
+        let t = Instant::now();
+        lu.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(rhs, self.n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.solve_work),
+        );
+        stats.triangular_solve_s += t.elapsed().as_secs_f64();
+        rhs.iter().all(|v| v.is_finite())
+    }
+}
+
+/// The compressed-column pattern of `structure` (rows sorted within each column,
+/// duplicates merged) and the position of each structure entry in it.
+fn compressed_columns(n: usize, structure: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>, Vec<usize>) {
+    let mut order: Vec<usize> = (0..structure.len()).collect();
+    order.sort_unstable_by_key(|&e| (structure[e].1, structure[e].0));
+    let mut col_ptr = vec![0u32; n + 1];
+    let mut row_idx = Vec::with_capacity(structure.len());
+    let mut slot = vec![0usize; structure.len()];
+    let mut last = None;
+    for &e in &order {
+        let (r, c) = structure[e];
+        if last != Some((r, c)) {
+            row_idx.push(r);
+            col_ptr[c as usize + 1] += 1;
+            last = Some((r, c));
+        }
+        slot[e] = row_idx.len() - 1;
+    }
+    for c in 0..n {
+        col_ptr[c + 1] += col_ptr[c];
+    }
+    (col_ptr, row_idx, slot)
+}
+
+/// `F(x)` into `f`, counting and timing the call; non-finite values are an error.
+fn evaluate_residual<P: Problem>(problem: &mut P, x: &[f64], f: &mut [f64], stats: &mut NewtonStats) -> Result<(), EvalError> {
+    let t = Instant::now();
+    let result = problem.constraints(x, f);
+    stats.evaluation_s += t.elapsed().as_secs_f64();
+    stats.residual_evaluations += 1;
+    result?;
+    if f.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(EvalError("non-finite residual".into()))
+    }
+}
+
+fn norm2(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0_f64, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
+}
+
+fn iteration_stat(iter: i32, inf_pr: f64, d_norm: f64, alpha: f64, ls_trials: i32) -> IterationStat {
+    IterationStat {
+        iter,
+        objective: 0.0,
+        inf_pr,
+        inf_du: 0.0,
+        mu: 0.0,
+        d_norm,
+        regularization: 0.0,
+        alpha_pr: alpha,
+        alpha_du: 0.0,
+        ls_trials,
+        restoration: false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `F(x) = (x0² + x1² − 4, x0 − x1)`: root (√2, √2); from (1, 0.5).
+    struct Circle {
+        jac: Vec<(u32, u32)>,
+    }
+
+    impl Problem for Circle {
+        fn num_variables(&self) -> usize {
+            2
+        }
+        fn num_constraints(&self) -> usize {
+            2
+        }
+        fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+            c[0] = x[0] * x[0] + x[1] * x[1] - 4.0;
+            c[1] = x[0] - x[1];
+            Ok(())
+        }
+        fn jacobian_structure(&self) -> &[(u32, u32)] {
+            &self.jac
+        }
+        fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
+            // The (0, 0) entry is split into two duplicates to check that they are summed.
+            v.copy_from_slice(&[x[0], 2.0 * x[1], 1.0, -1.0, x[0]]);
+            Ok(())
+        }
+    }
+
+    fn circle() -> Circle {
+        Circle { jac: vec![(0, 0), (0, 1), (1, 0), (1, 1), (0, 0)] }
+    }
+
+    #[test]
+    fn converges_quadratically_on_a_small_system_and_is_reusable() {
+        let mut p = circle();
+        let mut solver = SystemSolver::new(2, &p.jac.clone()).unwrap();
+        assert_eq!(solver.pattern_nonzeros(), 4);
+        let opts = NewtonOptions { tol: 1e-14, max_iter: 20 };
+        for x0 in [[1.0, 0.5], [3.0, 2.0]] {
+            let sol = solver.solve(&mut p, &x0, &opts).unwrap();
+            assert_eq!(sol.status, NewtonStatus::Converged);
+            let r = 2f64.sqrt();
+            assert!((sol.x[0] - r).abs() < 1e-14 && (sol.x[1] - r).abs() < 1e-14, "{:?}", sol.x);
+            // Quadratic convergence: each residual at most a constant times the square of the last.
+            let res: Vec<f64> = sol.history.iter().map(|h| h.inf_pr).collect();
+            for w in res.windows(2).filter(|w| w[0] < 0.1 && w[1] > 1e-15) {
+                assert!(w[1] <= 2.0 * w[0] * w[0], "not quadratic: {res:?}");
+            }
+            assert_eq!(sol.stats.jacobian_evaluations, sol.iterations);
+            assert!(sol.history.iter().skip(1).all(|h| h.alpha_pr == 1.0), "{:?}", sol.history);
+        }
+    }
+
+    /// `F(x) = atan(x)` from x0 = 3: the full Newton step overshoots to −9.5 and
+    /// diverges; the line search must damp it and converge to 0.
+    #[test]
+    fn line_search_rescues_a_diverging_newton_iteration() {
+        struct Atan(Vec<(u32, u32)>);
+        impl Problem for Atan {
+            fn num_variables(&self) -> usize {
+                1
+            }
+            fn num_constraints(&self) -> usize {
+                1
+            }
+            fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+                c[0] = x[0].atan();
+                Ok(())
+            }
+            fn jacobian_structure(&self) -> &[(u32, u32)] {
+                &self.0
+            }
+            fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
+                v[0] = 1.0 / (1.0 + x[0] * x[0]);
+                Ok(())
+            }
+        }
+        let mut p = Atan(vec![(0, 0)]);
+        let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
+        let sol = solver.solve(&mut p, &[3.0], &NewtonOptions { tol: 1e-12, max_iter: 50 }).unwrap();
+        assert_eq!(sol.status, NewtonStatus::Converged);
+        assert!(sol.x[0].abs() < 1e-12);
+        assert!(sol.history[1].alpha_pr < 1.0, "the first step must be damped: {:?}", sol.history[1]);
+        // Without damping the first step lands at 3 − (1 + 9)·atan(3) ≈ −9.49.
+        assert!(sol.history[1].ls_trials > 1);
+    }
+
+    #[test]
+    fn failures_are_statuses_and_misuse_is_an_error() {
+        // A structurally singular Jacobian (column 1 empty).
+        struct Singular(Vec<(u32, u32)>);
+        impl Problem for Singular {
+            fn num_variables(&self) -> usize {
+                2
+            }
+            fn num_constraints(&self) -> usize {
+                2
+            }
+            fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+                c[0] = x[0] - 1.0;
+                c[1] = x[0] + 1.0;
+                Ok(())
+            }
+            fn jacobian_structure(&self) -> &[(u32, u32)] {
+                &self.0
+            }
+            fn jacobian_values(&mut self, _x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
+                v.fill(1.0);
+                Ok(())
+            }
+        }
+        let mut p = Singular(vec![(0, 0), (1, 0)]);
+        let mut solver = SystemSolver::new(2, &p.0.clone()).unwrap();
+        let sol = solver.solve(&mut p, &[0.0, 0.0], &NewtonOptions { tol: 1e-12, max_iter: 10 }).unwrap();
+        assert_eq!(sol.status, NewtonStatus::SingularJacobian);
+        assert!(!sol.status.is_success());
+        assert_eq!(sol.status.name(), "Newton_Singular_Jacobian");
+
+        let mut c = circle();
+        let opts = NewtonOptions { tol: 1e-14, max_iter: 1 };
+        let mut solver = SystemSolver::new(2, &c.jac.clone()).unwrap();
+        assert_eq!(solver.solve(&mut c, &[1.0, 0.5], &opts).unwrap().status, NewtonStatus::MaximumIterationsExceeded);
+        assert_eq!(solver.solve(&mut c, &[f64::NAN, 0.5], &opts).unwrap().status, NewtonStatus::InvalidNumber);
+        let mut other = SystemSolver::new(2, &[(0, 0), (1, 1)]).unwrap();
+        assert!(matches!(other.solve(&mut c, &[1.0, 0.5], &opts), Err(NewtonError::OtherStructure)));
+        assert!(matches!(SystemSolver::new(2, &[(0, 2)]), Err(NewtonError::Structure(_))));
+    }
+}
