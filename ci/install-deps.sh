@@ -4,6 +4,8 @@
 #   libclang-dev         libclang, used by bindgen in build.rs
 #   pkg-config           finds Ipopt
 #   gcc, libc6-dev       the linker Rust uses
+#   python3-venv, python3-dev, python3-pip
+#                        the Python package's tests (ci/python-env.sh makes .venv)
 # and, when no cargo is found, installs a Rust toolchain with rustup (minimal profile)
 # into ~/.cargo (callers then `source ~/.cargo/env`). When `cargo fmt` or `cargo clippy`
 # is missing (rustup's minimal profile has neither) and rustup is present, adds the
@@ -14,7 +16,7 @@
 # only when not root.
 set -euo pipefail
 
-packages=(coinor-libipopt-dev libclang-dev pkg-config gcc libc6-dev)
+packages=(coinor-libipopt-dev libclang-dev pkg-config gcc libc6-dev python3-venv python3-dev python3-pip)
 need_rust=false
 if ! command -v cargo >/dev/null 2>&1 && [[ ! -x "$HOME/.cargo/bin/cargo" ]]; then
     need_rust=true

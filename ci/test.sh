@@ -7,6 +7,7 @@
 #   cargo build --workspace --examples                     the examples compile
 #   cargo run -p skg-core --example oscillator             a scene solved from code
 #   cargo test --workspace --no-fail-fast                  the test suite
+#   maturin develop, then pytest crates/skg-python/tests   the Python package (skg), in .venv
 # Extra arguments go to `cargo test`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,3 +28,22 @@ step cargo clippy --workspace --all-targets -- -D warnings
 step cargo build --workspace --examples
 step cargo run --quiet -p skg-core --example oscillator
 step cargo test --workspace --no-fail-fast "$@"
+
+# The Python package: .venv with maturin, numpy, pytest and pandas (ci/python-env.sh),
+# the extension built by maturin in the dev profile, and its tests, which compare with
+# the skg-solve just built. maturin builds crates/skg-python alone; with the same PyO3
+# configuration file as cargo (.cargo/config.toml) and the features that
+# crates/skg-python/Cargo.toml aligns, it reuses skg-core and everything below it from
+# `cargo build --workspace --examples` above and compiles only what that build does not
+# need (PyO3, numpy, skg-sweep, the extension). If a dependency change breaks the
+# alignment, skg-core is compiled again: then it says so.
+step bash ci/python-env.sh
+maturin_log=target/maturin-develop.log
+echo "== maturin develop -m crates/skg-python/Cargo.toml (output in $maturin_log)" >&2
+env VIRTUAL_ENV="$PWD/.venv" PYO3_CONFIG_FILE="$PWD/crates/skg-python/pyo3-config.txt" \
+    .venv/bin/maturin develop -m crates/skg-python/Cargo.toml >"$maturin_log" 2>&1 || { cat "$maturin_log" >&2; exit 1; }
+if grep -q '^ *Compiling skg-core ' "$maturin_log"; then
+    echo "warning: maturin compiled skg-core again instead of reusing the workspace's build (see crates/skg-python/Cargo.toml):" \
+        "$(sed -n 's/^ *Compiling \([^ ]*\) .*/\1/p' "$maturin_log" | tr '\n' ' ')" >&2
+fi
+step env SKG_SOLVE="$PWD/target/debug/skg-solve" .venv/bin/python -m pytest -q crates/skg-python/tests

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use commands::{bench, check, plot, reference, solve, sweep, tune};
+use commands::{animate, bench, check, gallery, plot, reference, solve, sweep, tune};
 
 #[derive(Parser)]
 #[command(
@@ -59,6 +59,12 @@ enum Command {
     /// Find the smallest wall width σ whose energy artifact stays below a tolerance
     /// at the scene's N (bisection over solves).
     Tune(tune::TuneArgs),
+    /// An animation of a solution's motion in the plane of two coordinates (GIF, MP4
+    /// with ffmpeg, or a PNG strip of frames), with the walls and a time stamp.
+    Animate(animate::AnimateArgs),
+    /// Solve every shipped scene and write a Markdown page with its path, a strip of
+    /// frames, the verification's error and the time (how docs/gallery.md is made).
+    Gallery(gallery::GalleryArgs),
     /// Charts (SVG and PNG) from a sweep's results.csv or from solutions.
     #[command(subcommand)]
     Plot(plot::PlotKind),
@@ -81,6 +87,8 @@ fn main() -> ExitCode {
         Some(Command::Merge(a)) => sweep::run_merge(a),
         Some(Command::Tune(a)) => tune::run(a),
         Some(Command::Plot(k)) => plot::run(k),
+        Some(Command::Animate(a)) => animate::run(a),
+        Some(Command::Gallery(a)) => gallery::run(a),
         Some(Command::SweepWorker { job, result }) => sweep::run_worker(&job, &result),
         Some(Command::Reference(a)) => reference::run(a),
         Some(Command::Check(a)) => check::run(a),
@@ -95,17 +103,7 @@ fn main() -> ExitCode {
     }
 }
 
-/// The error and its causes, joined by `: ` like `{:#}`, each text once: many library
-/// errors already include their source's message in their own.
+/// The error and its causes ([`skg_core::error_text`]).
 fn describe(e: &anyhow::Error) -> String {
-    let mut text = String::new();
-    for cause in e.chain().map(ToString::to_string) {
-        if !text.contains(&cause) {
-            if !text.is_empty() {
-                text.push_str(": ");
-            }
-            text.push_str(&cause);
-        }
-    }
-    text
+    skg_core::error_text(e.as_ref())
 }

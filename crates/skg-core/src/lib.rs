@@ -54,3 +54,22 @@ pub mod window;
 
 pub use skg_expr as expr;
 pub use skg_ipopt as ipopt;
+
+/// The text of an error and its causes, joined by `: ` like anyhow's `{:#}`, each text
+/// once (many errors already include their source's message in their own): what the
+/// command line prints after `error: ` and the message of the Python module's exceptions.
+pub fn error_text(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = String::new();
+    let mut cause = Some(e);
+    while let Some(c) = cause {
+        let t = c.to_string();
+        if !text.contains(&t) {
+            if !text.is_empty() {
+                text.push_str(": ");
+            }
+            text.push_str(&t);
+        }
+        cause = c.source();
+    }
+    text
+}

@@ -35,7 +35,7 @@ use sha2::{Digest, Sha256};
 use crate::provenance;
 use crate::reference::{self, Reference};
 use crate::scenario::Scene;
-use crate::solve::Outcome;
+use crate::solve::{self, Outcome, SolveError};
 use crate::trajectory::{trajectory_header, trajectory_rows};
 
 /// Why an output file could not be written.
@@ -231,6 +231,20 @@ pub fn verify_pairing(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     )))
 }
 
+/// A temporary path beside `path` for a file that another library or program writes
+/// itself (a picture, a video), to be renamed over `path` when complete. It is named
+/// like the temporaries of [`write_atomic`] (`.skg-tmp-<pid>-<file name of path>`, so it
+/// ends like `path` for writers that go by the extension), and one left by a kill is
+/// removed by the next write in that directory. Creates the directory and removes its
+/// stale temporaries first.
+pub fn temporary_beside(path: &Path) -> Result<PathBuf, OutputError> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+    remove_stale_temporaries(dir);
+    let name = path.file_name().map_or("file".into(), |n| n.to_string_lossy().into_owned());
+    Ok(dir.join(format!("{}{name}", temp_prefix())))
+}
+
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
     move |source| OutputError::Io { path: path.to_path_buf(), source }
 }
@@ -325,6 +339,9 @@ struct Summary<'a> {
     schema_version: u32,
     /// SHA-256 of the scene file's text (`sha256:<hex>`).
     scene_hash: String,
+    /// The scene file as the user named it (relative to the directory the solve ran in),
+    /// which `plot path` and `animate` read for the walls.
+    scene_file: String,
     /// The data files of this run, by name.
     files: IndexMap<&'static str, DataFile>,
     #[serde(flatten)]
@@ -349,6 +366,8 @@ pub struct Written {
     pub reference: Option<PathBuf>,
     /// `summary.json`, written last.
     pub summary: PathBuf,
+    /// The data files as `summary.json` lists them.
+    pub files: IndexMap<&'static str, DataFile>,
 }
 
 impl Written {
@@ -356,6 +375,23 @@ impl Written {
     pub fn paths(&self) -> impl Iterator<Item = &PathBuf> {
         std::iter::once(&self.trajectory).chain(&self.reference).chain(std::iter::once(&self.summary))
     }
+}
+
+fn summary<'a>(outcome: &'a Outcome, scene: &Scene, files: IndexMap<&'static str, DataFile>) -> Summary<'a> {
+    Summary {
+        skg_solve_version: provenance::VERSION,
+        schema_version: provenance::SCHEMA_VERSION,
+        scene_hash: scene.file.origin.content_hash(),
+        scene_file: scene.file.origin.path.clone(),
+        files,
+        outcome,
+    }
+}
+
+/// The text of `summary.json` of a solve of `scene`: what [`write_outcome`] writes, with
+/// the `files` it wrote (an empty map for a solve not written).
+pub fn summary_json(outcome: &Outcome, scene: &Scene, written: Option<&Written>) -> Result<String, serde_json::Error> {
+    serde_json::to_string_pretty(&summary(outcome, scene, written.map(|w| w.files.clone()).unwrap_or_default()))
 }
 
 /// Write `trajectory.csv`, `reference.csv` (the verification's reference, when there is
@@ -387,15 +423,44 @@ pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result
         }
     };
     outcome.timings.output_s = t.elapsed().as_secs_f64();
-    let summary = Summary {
-        skg_solve_version: provenance::VERSION,
-        schema_version: provenance::SCHEMA_VERSION,
-        scene_hash: scene.file.origin.content_hash(),
-        files,
-        outcome,
+    write_json(&json_path, &summary(outcome, scene, files.clone()))?;
+    Ok(Written { trajectory: csv_path, reference, summary: json_path, files })
+}
+
+/// Why [`solve_into`] failed: the solve could not run, or its files not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum SolveIntoError {
+    /// The solve could not be attempted or completed.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    /// The output directory is locked by another process, or a file could not be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+}
+
+/// Solve `scene` and write its files into `dir` as `skg-solve SCENE -o DIR` does: the
+/// directory is locked ([`OutputDir`]) for the whole solve; Ipopt writes the scene's
+/// `log_file` (relative to `dir`) into a staged file that is moved over the old log when
+/// the solve returns, so a killed run leaves the old log complete; the files are written
+/// by [`write_outcome`]. A solve that cannot run leaves no directory it created.
+pub fn solve_into(dir: &Path, scene: &mut Scene) -> Result<(Outcome, Written), SolveIntoError> {
+    let out = OutputDir::lock(dir)?;
+    let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
+    let named = std::mem::replace(&mut scene.solver.log_file, log.as_ref().map(|(_, staged)| staged.clone()));
+    let outcome = solve::solve_scene(scene);
+    scene.solver.log_file = named;
+    if let Some((target, staged)) = &log {
+        out.commit(staged, target)?;
+    }
+    let mut outcome = match outcome {
+        Ok(outcome) => outcome,
+        Err(e) => {
+            out.abandon();
+            return Err(e.into());
+        }
     };
-    write_json(&json_path, &summary)?;
-    Ok(Written { trajectory: csv_path, reference, summary: json_path })
+    let written = write_outcome(dir, &mut outcome, scene)?;
+    Ok((outcome, written))
 }
 
 /// Write a reference as a trajectory CSV with its provenance ([`reference::provenance`])
@@ -442,6 +507,21 @@ mod tests {
         let e = verify_pairing(&csv, b"t\n0.0\n2.0\n").unwrap_err().to_string();
         assert!(e.contains("is not the file that") && e.contains("2 rows"), "{e}");
         verify_pairing(&dir.path().join("reference.csv"), b"other").unwrap();
+    }
+
+    #[test]
+    fn temporaries_beside_a_file_keep_its_extension_and_are_cleaned_up() {
+        let dir = tempfile::tempdir().unwrap();
+        let stale = dir.path().join(".skg-tmp-4194304-old.gif");
+        std::fs::write(&stale, "left by a kill").unwrap();
+        let target = dir.path().join("sub").join("motion.gif");
+        let tmp = temporary_beside(&target).unwrap();
+        assert_eq!(tmp.parent(), target.parent());
+        let name = tmp.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(name.starts_with(&temp_prefix()) && name.ends_with("motion.gif"), "{name}");
+        assert!(!is_stale_temporary(&name), "this process's own");
+        temporary_beside(&dir.path().join("x.png")).unwrap();
+        assert!(!stale.exists(), "a dead process's temporary is removed");
     }
 
     #[test]

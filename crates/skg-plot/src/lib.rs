@@ -12,6 +12,9 @@
 //!   energy over time.
 //! * [`stability`]: a map over two grid axes, each cell converged / failed / converged
 //!   with energy artifacts / not run.
+//! * [`motion`]: the motion itself: a solution's path in the plane of two coordinates
+//!   with the walls drawn as their curves `h = 0` ([`motion::path`]), an animation
+//!   ([`motion::animate`], GIF or MP4) and a strip of frames ([`motion::strip`]).
 //!
 //! Points are judged by their [`PointStatus`] (the `status` column of results.csv).
 //! Axis values are read as numbers; where a sweep wrote them as expressions (the
@@ -47,6 +50,15 @@ pub enum PlotError {
         /// plotters' message.
         message: String,
     },
+    /// The scene of a picture of the motion is invalid.
+    #[error(transparent)]
+    Scene(#[from] skg_core::scenario::SceneError),
+    /// A trajectory or reference CSV cannot be read.
+    #[error(transparent)]
+    Table(#[from] skg_core::check::CheckError),
+    /// A chart's temporary file or its directory could not be made.
+    #[error(transparent)]
+    Output(#[from] skg_core::output::OutputError),
     /// A chart or its directory could not be written.
     #[error("cannot write {path}: {source}")]
     Io {
@@ -86,18 +98,15 @@ fn color(i: usize) -> RGBColor {
 }
 
 /// Draw a chart with both backends: `stem.svg` and `stem.png` (written to temporary
-/// files in the same directory, then renamed).
+/// files in the same directory, [`skg_core::output::temporary_beside`], then renamed).
 macro_rules! render {
     ($stem:expr, $size:expr, $draw:ident ( $($arg:expr),* )) => {{
         register_fonts();
         let stem: &Path = $stem;
-        if let Some(dir) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|source| PlotError::Io { path: dir.to_path_buf(), source })?;
-        }
         let mut written = Vec::new();
         for ext in ["svg", "png"] {
             let path = stem.with_extension(ext);
-            let tmp = stem.with_extension(format!("tmp.{ext}"));
+            let tmp = skg_core::output::temporary_beside(&path)?;
             let drawn: Result<(), String> = if ext == "svg" {
                 let root = SVGBackend::new(&tmp, $size).into_drawing_area();
                 $draw(&root, $($arg),*).and_then(|_| root.present().map_err(|e| e.to_string()))
@@ -114,6 +123,25 @@ macro_rules! render {
         }
         Ok(written)
     }};
+}
+
+pub mod motion;
+
+/// Draw a chart's legend: the series' labels in a framed, nearly opaque white box at
+/// `position`, in `size`-pixel type.
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    size: u32,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font(("sans-serif", size))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(e2s)
 }
 
 fn e2s<E: std::fmt::Display>(e: E) -> String {
@@ -247,14 +275,7 @@ fn draw_loglog<DB: DrawingBackend>(
             chart.draw_series(l.points.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(e2s)?;
         }
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font(("sans-serif", 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(e2s)?;
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
     Ok(())
 }
 
@@ -461,14 +482,7 @@ fn draw_trajectory<DB: DrawingBackend>(
                     .legend(move |(x, y)| Circle::new((x + 9, y), 3, c.filled()));
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerLeft)
-            .label_font(("sans-serif", 11))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e2s)?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 11)?;
         Ok(())
     };
     panel(&panels[0], "coordinates", "q", series)?;

@@ -8,6 +8,9 @@
 //!   tolerances (the peer line of the work-precision chart). Points are numbered in that
 //!   order; a point's **id** is a hash of its canonical string (axis names sorted,
 //!   `name=value` joined by `;`), so it does not depend on the order of the file.
+//! * **Before a run** ([`plan`]): the points this run owns, a rough time estimate and
+//!   the line saying so; more than [`CONFIRM_ABOVE`] points are refused unless confirmed
+//!   (the command line's `--yes`, the Python module's `yes=True`).
 //! * **Workers**: Debian's Ipopt/MUMPS is not thread-safe (docs/solver.md), so each point runs
 //!   in a child process (`skg-solve sweep-worker JOB.json`), at most `jobs` at once, the
 //!   points with the largest [`estimated_cost`] first. A
@@ -125,6 +128,12 @@ pub enum SweepError {
     /// Writing `sweep.json`, a job file or `results.csv` failed.
     #[error(transparent)]
     Output(#[from] output::OutputError),
+    /// More than [`CONFIRM_ABOVE`] points would run and the run was not confirmed.
+    #[error("{plan}: more than {CONFIRM_ABOVE} points start only with --yes (or split the sweep with --shard)")]
+    Unconfirmed {
+        /// What the run would do ([`Plan::text`]).
+        plan: String,
+    },
     /// The shards given to [`merge`] do not hold every point of the sweep.
     #[error(
         "the shards hold {present} of the sweep's {total} points{}; missing: {}. Run the missing shards, or merge what there is with --partial",
@@ -788,6 +797,59 @@ const SECONDS_PER_POINT: f64 = 0.03;
 pub fn estimated_wall_s(expanded: &Expanded, points: &[&Point], jobs: usize) -> f64 {
     let serial: f64 = points.iter().map(|p| SECONDS_PER_POINT + SECONDS_PER_COST * expanded.costs[p.index]).sum();
     serial / jobs.max(1) as f64
+}
+
+/// A sweep's output directory when none is given: `out/sweeps/<name>`.
+pub fn default_out_dir(file: &SweepFile) -> PathBuf {
+    PathBuf::from("out/sweeps").join(file.name())
+}
+
+/// Worker processes when no number is given: one per core.
+pub fn default_jobs() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// What a run of a sweep will do, known before it starts ([`plan`]).
+#[derive(Debug)]
+pub struct Plan {
+    /// The sweep's points, for [`run_sweep`].
+    pub expanded: Expanded,
+    /// A rough estimate of the run's wall time in seconds ([`estimated_wall_s`]).
+    pub estimate_s: f64,
+    /// One line for the user: the points, the estimate, where the results go.
+    pub text: String,
+}
+
+/// Expand a sweep and say what a run with `opts` will do. More than [`CONFIRM_ABOVE`]
+/// points are refused ([`SweepError::Unconfirmed`]) unless `confirmed`.
+pub fn plan(file: &SweepFile, opts: &SweepOptions, confirmed: bool) -> Result<Plan, SweepError> {
+    let expanded = file.expand()?;
+    let mine: Vec<&Point> = expanded.points.iter().filter(|p| opts.shard.is_none_or(|s| s.contains(p.index))).collect();
+    let estimate_s = estimated_wall_s(&expanded, &mine, opts.jobs);
+    let text = format!(
+        "{}: {} points{}, roughly {} with {} worker(s) (points already in {} are skipped)",
+        file.name(),
+        mine.len(),
+        opts.shard.map_or(String::new(), |s| format!(" in shard {}/{} of {}", s.k, s.n, expanded.points.len())),
+        duration_text(estimate_s),
+        opts.jobs.max(1),
+        opts.out_dir.join("results.csv").display()
+    );
+    if mine.len() > CONFIRM_ABOVE && !confirmed {
+        return Err(SweepError::Unconfirmed { plan: text });
+    }
+    Ok(Plan { expanded, estimate_s, text })
+}
+
+/// A duration in seconds as `12 s`, `3.5 min` or `2.1 h`.
+fn duration_text(s: f64) -> String {
+    if s < 120.0 {
+        format!("{s:.0} s")
+    } else if s < 7200.0 {
+        format!("{:.1} min", s / 60.0)
+    } else {
+        format!("{:.1} h", s / 3600.0)
+    }
 }
 
 // ---------------------------------------------------------------------------------------

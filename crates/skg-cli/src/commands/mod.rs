@@ -5,8 +5,10 @@
 //! while reading or writing files, 2 a command-line usage error (clap), 3 a solve that
 //! did not converge, 4 a tolerance exceeded (`check`).
 
+pub mod animate;
 pub mod bench;
 pub mod check;
+pub mod gallery;
 pub mod plot;
 pub mod reference;
 pub mod solve;

@@ -32,6 +32,16 @@ pub enum PlotKind {
         #[arg(long, default_value = "energy_artifact")]
         value: String,
     },
+    /// The path in the plane of two coordinates (or a coordinate and t) with the walls
+    /// drawn as their curves h = 0 and the reference overlaid.
+    #[command(after_long_help = super::animate::WALLS_HELP)]
+    Path {
+        #[command(flatten)]
+        motion: super::animate::MotionArgs,
+        /// Output path without extension (writes .svg and .png).
+        #[arg(short, long, value_name = "STEM")]
+        output: PathBuf,
+    },
     /// Solve time versus N (log-log) from `skg-solve bench --csv` files, one line per
     /// file, with a line of slope 1 (cost proportional to N) through the last file's
     /// largest N.
@@ -119,6 +129,10 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
         PlotKind::Stability { common: c, x, y, value } => {
             let r = sweep::Results::read(&c.results)?;
             plot::stability(&r, &x, &y, &value, &parse_filters(&c.filters)?, &title_for(&c, "stability"), &c.output)?
+        }
+        PlotKind::Path { motion, output } => {
+            let (m, view) = motion.load()?;
+            plot::motion::path(&m, &view, &output)?
         }
         PlotKind::Scaling { inputs, label, output: out, title } => {
             let mut benchmarks = Vec::new();

@@ -47,23 +47,7 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
-    let out = output::OutputDir::lock(&dir)?;
-    // Ipopt writes its log into a staged file, moved over the old log when the solve
-    // returns: a killed run leaves the old log complete.
-    let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
-    scene.solver.log_file = log.as_ref().map(|(_, staged)| staged.clone());
-    let outcome = solve::solve_scene(&scene);
-    if let Some((target, staged)) = &log {
-        out.commit(staged, target)?;
-    }
-    let mut outcome = match outcome {
-        Ok(outcome) => outcome,
-        Err(e) => {
-            out.abandon();
-            return Err(e.into());
-        }
-    };
-    let written = output::write_outcome(&dir, &mut outcome, &scene)?;
+    let (outcome, written) = output::solve_into(&dir, &mut scene)?;
     for w in &outcome.warnings {
         eprintln!("warning: {w}");
     }

@@ -94,35 +94,20 @@ pub struct MergeArgs {
 
 pub fn run(args: SweepArgs) -> Result<ExitCode> {
     let file = sweep::SweepFile::load(&args.sweep)?;
-    let expanded = file.expand()?;
-    let out = args.output.unwrap_or_else(|| PathBuf::from("out/sweeps").join(file.name()));
-    let jobs = args.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
-    let mine: Vec<&sweep::Point> = expanded.points.iter().filter(|p| args.shard.is_none_or(|s| s.contains(p.index))).collect();
-    let estimate = sweep::estimated_wall_s(&expanded, &mine, jobs);
-    let plan = format!(
-        "{}: {} points{}, roughly {} with {jobs} worker(s) (points already in {} are skipped)",
-        file.name(),
-        mine.len(),
-        args.shard.map_or(String::new(), |s| format!(" in shard {}/{} of {}", s.k, s.n, expanded.points.len())),
-        duration_text(estimate),
-        out.join("results.csv").display()
-    );
-    if mine.len() > sweep::CONFIRM_ABOVE && !args.yes {
-        anyhow::bail!("{plan}: more than {} points start only with --yes (or split the sweep with --shard)", sweep::CONFIRM_ABOVE);
-    }
-    if !args.quiet {
-        eprintln!("{plan}");
-    }
     let opts = sweep::SweepOptions {
-        out_dir: out,
-        jobs,
+        out_dir: args.output.unwrap_or_else(|| sweep::default_out_dir(&file)),
+        jobs: args.jobs.unwrap_or_else(sweep::default_jobs).max(1),
         shard: args.shard,
         worker_exe: std::env::current_exe().context("locating the skg-solve executable for the workers")?,
         progress: !args.quiet,
         retry_failed: args.retry_failed,
         new_results: args.new_results,
     };
-    let r = sweep::run_sweep(&file, &expanded, &opts)?;
+    let plan = sweep::plan(&file, &opts, args.yes)?;
+    if !args.quiet {
+        eprintln!("{}", plan.text);
+    }
+    let r = sweep::run_sweep(&file, &plan.expanded, &opts)?;
     if !args.quiet {
         if let Some(old) = &r.superseded {
             println!("  moved the previous results to {}", old.display());
@@ -135,24 +120,13 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
             r.skipped,
             r.ran,
             r.failed,
-            jobs,
+            opts.jobs,
             r.wall_s,
             if r.duplicates > 0 { format!("; {} duplicate points dropped", r.duplicates) } else { String::new() }
         );
         println!("  wrote {}", r.results.display());
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// A duration in seconds as `12 s`, `3.5 min` or `2.1 h`.
-fn duration_text(s: f64) -> String {
-    if s < 120.0 {
-        format!("{s:.0} s")
-    } else if s < 7200.0 {
-        format!("{:.1} min", s / 60.0)
-    } else {
-        format!("{:.1} h", s / 3600.0)
-    }
 }
 
 pub fn run_worker(job: &Path, result: &Path) -> Result<ExitCode> {

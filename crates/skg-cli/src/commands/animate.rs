@@ -1,0 +1,132 @@
+//! Pictures of the motion: `skg-solve plot path` (the path in the plane of two
+//! coordinates with the walls) and `skg-solve animate` (GIF, MP4 or a strip of frames).
+//! The drawing is `skg_plot::motion`; here are the options and the progress bar.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use skg_plot::motion::{self, Aspect, Format, Frames, Motion, View};
+
+/// What `plot path` and `animate` draw: a solution, its scene and the two axes.
+#[derive(Args)]
+pub struct MotionArgs {
+    /// A solve's output directory (trajectory.csv, summary.json, reference.csv), or its
+    /// trajectory CSV.
+    #[arg(value_name = "SOLUTION")]
+    pub solution: PathBuf,
+    /// The scene file, for the walls [default: the scene_file recorded in summary.json,
+    /// resolved with the parameters the solve used].
+    #[arg(long, value_name = "SCENARIO.toml")]
+    pub scene: Option<PathBuf>,
+    /// Reference CSV overlaid as a thin black line [default: the solution's reference.csv,
+    /// the verification's time stepping].
+    #[arg(long, value_name = "FILE.csv")]
+    pub reference: Option<PathBuf>,
+    /// Column on the horizontal axis: a coordinate, `t`, or any column of the trajectory
+    /// [default: the first coordinate, or `t` for a scene with one coordinate].
+    #[arg(long, value_name = "COLUMN")]
+    pub x: Option<String>,
+    /// Column on the vertical axis [default: the second coordinate, or the only one].
+    #[arg(long, value_name = "COLUMN")]
+    pub y: Option<String>,
+    /// Axis scaling: `equal` (circles are round), `fill`, or `auto` (equal for two
+    /// coordinates whose ranges are within a factor 10).
+    #[arg(long, default_value = "auto", value_name = "auto|equal|fill")]
+    pub aspect: Aspect,
+    /// Title [default: the scene's name and the axes].
+    #[arg(long)]
+    pub title: Option<String>,
+}
+
+impl MotionArgs {
+    /// The solution with its scene, and the view; prints notes (a changed scene file) on stderr.
+    pub fn load(&self) -> Result<(Motion, View)> {
+        let m = Motion::load(&self.solution, self.scene.as_deref(), self.reference.as_deref())?;
+        for n in &m.notes {
+            eprintln!("note: {n}");
+        }
+        let (dx, dy) = m.default_axes();
+        let (x, y) = (self.x.clone().unwrap_or(dx), self.y.clone().unwrap_or(dy));
+        let title = self.title.clone().unwrap_or_else(|| format!("{}: {y} against {x}", m.scene.name));
+        Ok((m, View { x, y, aspect: self.aspect, title }))
+    }
+}
+
+/// How walls are drawn, for `--help`.
+pub const WALLS_HELP: &str = "Walls and position constraints h(q, t) = 0 are drawn when both axes are coordinates or t, \
+as the zero curve of h evaluated on a grid over the plot area. Coordinates that are not plotted, and the time, take \
+the trajectory's values: with t on an axis, the trajectory's state at that time (a moving wall appears as its motion); \
+in the plane of two coordinates, a curve that is the same at the first, middle and last node (it depends only on the \
+plotted coordinates) is drawn once, any other at the state of each contact with it (the node of deepest contact, at \
+most 6, labelled with their times) or at the start when never touched. Nodes in contact with a wall (h > -6 sigma) \
+are marked red.";
+
+#[derive(Args)]
+#[command(after_long_help = WALLS_HELP)]
+pub struct AnimateArgs {
+    #[command(flatten)]
+    pub motion: MotionArgs,
+    /// Output: FILE.gif (an animated GIF), FILE.mp4 (H.264, needs ffmpeg on PATH) or
+    /// FILE.png (a strip of --strip frames side by side).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// Number of frames, evenly spaced in time from the first node to the last.
+    #[arg(long, default_value_t = 100, value_name = "N")]
+    pub frames: usize,
+    /// Frames per second (a GIF's frame delay is rounded to 10 ms).
+    #[arg(long, default_value_t = 25.0, value_name = "FPS")]
+    pub fps: f64,
+    /// Frame size in pixels, WIDTHxHEIGHT (a strip: each panel's).
+    #[arg(long, default_value = "640x520", value_parser = parse_size, value_name = "WxH")]
+    pub size: (u32, u32),
+    /// Frames in a .png strip.
+    #[arg(long, default_value_t = 5, value_name = "K")]
+    pub strip: usize,
+    /// No progress bar, no summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("bad size `{s}`: expected WIDTHxHEIGHT, e.g. 640x480, each 64…4096");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h): (u32, u32) = (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?);
+    if !(64..=4096).contains(&w) || !(64..=4096).contains(&h) {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+pub fn run(args: AnimateArgs) -> Result<ExitCode> {
+    let format = Format::of(&args.output)?;
+    if args.frames == 0 || args.strip == 0 {
+        bail!("--frames and --strip must be at least 1");
+    }
+    if !(args.fps > 0.0 && args.fps.is_finite()) {
+        bail!("--fps must be a positive number, got {}", args.fps);
+    }
+    let (m, view) = args.motion.load()?;
+    let written = if format == Format::Png {
+        motion::strip(&m, &view, args.strip, args.size, &args.output)?
+    } else {
+        let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(args.frames as u64) };
+        bar.set_style(
+            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {elapsed} (ETA {eta})")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        bar.set_message(format!("animating {}", m.label));
+        let frames = Frames { count: args.frames, fps: args.fps, size: args.size };
+        let written = motion::animate(&m, &view, &frames, &args.output, &mut || bar.inc(1));
+        bar.finish_and_clear();
+        written?
+    };
+    if !args.quiet {
+        println!("wrote {}", written.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
