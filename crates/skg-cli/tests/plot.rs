@@ -95,8 +95,9 @@ fn every_chart_is_written_as_svg_and_png() {
     assert!(common::text(&o).contains("--where"), "{}", common::text(&o));
 }
 
-/// `bench --csv` of both backends feeds `plot scaling`; the table has the backend and
-/// memory columns and both backends converge at every N.
+/// `bench --csv` of both backends feeds `plot scaling` (the CSV's directory is made,
+/// as for every output); the table has the backend, verification and memory columns and
+/// both backends converge at every N.
 #[test]
 fn bench_csv_and_scaling_chart() {
     let dir = tempfile::tempdir().unwrap();
@@ -104,14 +105,14 @@ fn bench_csv_and_scaling_chart() {
     let scene = common::scenario("tumbler");
     let mut csvs = Vec::new();
     for backend in ["ipopt", "newton"] {
-        let csv = dir.path().join(format!("{backend}.csv"));
+        let csv = dir.path().join(format!("bench/{backend}.csv"));
         let o = common::skg(
             &["bench", &s(&scene), "--nodes", "256,512", "--repeat", "1", "--backend", backend, "--csv", &s(&csv)],
             Path::new("."),
         );
         assert!(o.status.success(), "{}", common::text(&o));
         let table = String::from_utf8_lossy(&o.stdout).into_owned();
-        assert!(table.contains("| backend |") && table.contains("peak MiB"), "{table}");
+        assert!(table.contains("| backend |") && table.contains("| verify s |") && table.contains("peak MiB"), "{table}");
         let text = std::fs::read_to_string(&csv).unwrap();
         let rows: Vec<&str> = text.lines().skip(1).collect();
         assert_eq!(rows.len(), 2, "{text}");

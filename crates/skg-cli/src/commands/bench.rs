@@ -7,6 +7,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 
+use skg_core::output;
 use skg_core::solve::{self, Outcome};
 
 use super::{load, SceneArgs};
@@ -98,6 +99,11 @@ const CSV_HEADER: &str =
     "nodes,variables,jacobian_nonzeros,backend,iterations,converged,setup_s,guess_s,evaluation_s,solver_internal_s,total_s,us_per_node,verify_s,peak_mib";
 
 pub fn run(args: BenchArgs) -> Result<ExitCode> {
+    // The CSV's directory is made before the solves, so that a path that cannot be
+    // written fails at once, not after minutes of solving.
+    if let Some(dir) = args.csv.as_deref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let bar = indicatif::ProgressBar::new((args.nodes.len() * args.repeat) as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} solves, {elapsed} elapsed, ETA {eta} {msg}")
@@ -134,7 +140,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
             text.push_str(&row.cells().join(","));
             text.push('\n');
         }
-        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+        output::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
     }
     Ok(ExitCode::SUCCESS)
 }
