@@ -453,7 +453,7 @@ pub struct Overrides {
     pub formulation: Option<Formulation>,
     /// Hessian given to Ipopt.
     pub hessian: Option<HessianMode>,
-    /// Ipopt's iteration limit.
+    /// The iteration limit (Ipopt's, and Newton's).
     pub max_iter: Option<u32>,
     /// The solver of the square system.
     pub backend: Option<Backend>,

@@ -125,7 +125,7 @@ impl Timings {
     }
 }
 
-/// The sizes of the problem handed to Ipopt.
+/// The sizes of the problem handed to the backend.
 #[derive(Debug, Clone, Serialize)]
 pub struct Sizes {
     /// Grid nodes N.
@@ -151,7 +151,7 @@ pub struct Sizes {
 /// Checks of the solution: residuals, energy, walls, distance from time stepping.
 #[derive(Debug, Clone, Serialize)]
 pub struct Diagnostics {
-    /// max |c| of the system handed to Ipopt (unscaled), at the returned point.
+    /// max |c| of the system handed to the backend (unscaled), at the returned point.
     pub max_residual: f64,
     /// max |equation of motion| at interior nodes, unweighted (force units).
     pub max_eom_residual: f64,
@@ -370,7 +370,8 @@ pub struct Outcome {
     pub attempts: Vec<Attempt>,
     /// What to do when the result cannot be trusted (not converged, or not verified).
     pub remedy: Option<String>,
-    /// Ipopt's iteration table.
+    /// The iteration table of the backend that finished (Ipopt's, or Newton's in the
+    /// same layout).
     pub history: Vec<ipopt::IterationStat>,
     /// The solution at the nodes (written as trajectory.csv, not into the summary).
     #[serde(skip)]
@@ -403,7 +404,7 @@ pub struct Attempt {
     pub verification: Option<VerifyStatus>,
     /// Its max |q − q_reference|, when verified.
     pub max_error: Option<f64>,
-    /// Ipopt iterations.
+    /// Iterations of the backend that finished.
     pub iterations: usize,
     /// Wall time, seconds.
     pub wall_s: f64,
@@ -796,7 +797,7 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
 }
 
 /// Warnings about a solution: far from time stepping, a contact episode more or less
-/// than time stepping (a spurious critical point or a grid too coarse), or Ipopt's
+/// than time stepping (a spurious critical point or a grid too coarse), or the backend's
 /// success contradicted by the unscaled residual.
 fn suspicions(diagnostics: &Diagnostics, ts_q: Option<&[Vec<f64>]>, status: SolveStatus) -> Vec<String> {
     let mut warnings = Vec::new();

@@ -43,9 +43,9 @@
 //!   after it, with every value as written in the sweep file (`1/110`, and `0.005` for a
 //!   plain number); an axis whose values are all plain numbers gets none;
 //! * `converged` (`true`/`false`), `status` (the stable name of the [`PointStatus`]:
-//!   `converged`, `not_converged`, `error`, `crashed`, `timeout`), `solver_status`
-//!   (Ipopt's status name, `ODE_Succeeded` for a peer point, empty when the solver did
-//!   not finish), then `iterations`, `wall_s`, `error_max`, `error_rms`, `error_column`,
+//!   `converged`, `not_verified`, `not_converged`, `error`, `crashed`, `timeout`),
+//!   `solver_status` (the finishing backend's status name, Ipopt's or `Newton_…`,
+//!   `ODE_Succeeded` for a peer point, empty when the solver did not finish), then `iterations`, `wall_s`, `error_max`, `error_rms`, `error_column`,
 //!   `energy_drift`, `energy_artifact` (empty unless the energy is conserved:
 //!   [`skg_core::tune::conserves_energy`]), `artifacts`, `max_residual`, `message`;
 //! * the provenance ([`Provenance`]): `skg_solve_version`, `schema_version` and
@@ -290,7 +290,7 @@ pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "hessian
 /// How a point is computed.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub enum Method {
-    /// The SKG action solved by Ipopt.
+    /// The SKG action solved by the scene's backend (Ipopt by default).
     Skg,
     /// The time-stepping reference integrator (DOP853, [`skg_core::reference::regularized`])
     /// at a relative tolerance (absolute tolerance the same).
@@ -879,11 +879,12 @@ pub struct Job {
 pub struct Record {
     /// How the point ended.
     pub status: PointStatus,
-    /// The solver's own status name: Ipopt's (`Solve_Succeeded`,
-    /// `Maximum_Iterations_Exceeded`, …) or `ODE_Succeeded` for the time-stepping peer;
+    /// The solver's own status name: the finishing backend's (Ipopt's `Solve_Succeeded`,
+    /// `Maximum_Iterations_Exceeded`, …, or `Newton_…`) or `ODE_Succeeded` for the
+    /// time-stepping peer;
     /// empty when the solver did not finish.
     pub solver_status: String,
-    /// Ipopt iterations.
+    /// Iterations of the backend that finished.
     pub iterations: Option<usize>,
     /// Wall time of the computation inside the worker (scene setup, guess, solve).
     pub wall_s: Option<f64>,
