@@ -65,7 +65,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "SECONDS")]
     pub overlap: Option<f64>,
     /// Verification tolerance: max |q − q_reference| allowed, in coordinate units
-    /// [default: the scene's [verify] tol, else 1e-3 × the largest coordinate range].
+    /// [default: the scene's [verify] tol, else 1e-4 × the largest coordinate range].
     #[arg(long, value_name = "TOL")]
     pub verify_tol: Option<f64>,
     /// Skip the comparison with time stepping (the result is still checked for
