@@ -67,6 +67,30 @@ fn newton_and_ipopt_agree_on_the_windowed_scenes() {
     }
 }
 
+/// A tolerance below round-off: both backends stop once the residual stagnates at its
+/// round-off level (Ipopt from its intermediate callback, instead of iterating on to its
+/// acceptable-level test), count as converged and verified, and agree to 1e-9.
+#[test]
+fn an_unreachable_tolerance_stops_both_backends_at_the_round_off_level() {
+    for name in ["tumbler", "rolling_disk"] {
+        let solve_with = |backend| {
+            let mut scene = common::load(name, &with_backend(backend, Formulation::Reduced));
+            scene.solver.tol = 1e-20;
+            solve::solve_scene(&scene).unwrap()
+        };
+        let (ipopt, newton) = (solve_with(Backend::Ipopt), solve_with(Backend::Newton));
+        assert_eq!(ipopt.status.solver(), SolverStatus::IpoptConvergedToRoundOff, "{name}");
+        assert_eq!(serde_json::to_value(&ipopt).unwrap()["status"], "Ipopt_Converged_To_Round_Off", "{name}");
+        assert_eq!(newton.status.solver(), SolverStatus::Newton(NewtonStatus::ConvergedToRoundOff), "{name}");
+        assert!(ipopt.trusted() && newton.trusted(), "{name}: {} / {}", ipopt.verification.reason, newton.verification.reason);
+        // Quadratic convergence from the time-stepping start reaches round-off in a few
+        // steps; Ipopt used to take 10 or more here.
+        assert!(ipopt.iterations <= newton.iterations + 1 && ipopt.iterations <= 5, "{name}: {} Ipopt iterations", ipopt.iterations);
+        let d = max_diff(&newton.trajectory.q, &ipopt.trajectory.q);
+        assert!(d < 1e-9, "{name}: max |q_newton − q_ipopt| = {d:e}");
+    }
+}
+
 /// One `SquareSolver` reused for a second initial state (a time window) keeps its
 /// symbolic analysis and still finds that state's own root; a new solver of an action
 /// with equal structure adopts it too.

@@ -10,6 +10,18 @@
 //! differ), and [`SquareSolver::into_analysis`] hands the analysis on to the solver of
 //! another action of equal structure (a sweep point).
 //!
+//! **Stopping Ipopt.** Ipopt is stopped from its intermediate callback
+//! (`StopWhenSolved`) as soon as `max |c|` meets the tolerance (status
+//! `Solve_Succeeded`: the multipliers of a square system are not used, so the residual
+//! is the whole convergence test, as it is for Newton) or the
+//! residual's round-off level ([`newton::residual_roundoff_level`]; status
+//! `Ipopt_Converged_To_Round_Off`). This saves two costs Ipopt would otherwise pay:
+//! after converging on a square problem it factors the KKT matrix once more to
+//! "recompute multipliers for the feasibility problem" (it prints that this fails; the
+//! multipliers are unused here), and at large `N`, where round-off keeps `max |c|` just
+//! above the tolerance, it iterates on until its acceptable-level test (disk,
+//! N = 16384: 11 iterations instead of 1).
+//!
 //! **Hand-over.** When Newton does not converge, the same system is solved by Ipopt
 //! from the same starting point, so a Newton solve never ends worse than an Ipopt solve;
 //! the [`BackendReport`] records Newton's own outcome and that Ipopt finished.
@@ -20,7 +32,7 @@ use serde::Serialize;
 
 use crate::action::{Action, Block, MatrixPlan};
 use crate::model::Workspace;
-use crate::newton::{NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
+use crate::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
 use crate::scenario::{Backend, Formulation, HessianMode, IpoptValue, Scene};
 use skg_ipopt::{self as ipopt, EvalError, IterationStat, Problem};
 
@@ -31,6 +43,9 @@ use skg_ipopt::{self as ipopt, EvalError, IterationStat, Problem};
 pub enum SolverStatus {
     /// Ipopt's return status.
     Ipopt(ipopt::Status),
+    /// Ipopt stopped by [`StopWhenSolved`] with `max |c|` above the tolerance but at the
+    /// residual's round-off level (`Ipopt_Converged_To_Round_Off`): a success.
+    IpoptConvergedToRoundOff,
     /// Newton's status.
     Newton(NewtonStatus),
 }
@@ -40,6 +55,7 @@ impl SolverStatus {
     pub fn is_success(&self) -> bool {
         match self {
             SolverStatus::Ipopt(s) => s.is_success(),
+            SolverStatus::IpoptConvergedToRoundOff => true,
             SolverStatus::Newton(s) => s.is_success(),
         }
     }
@@ -48,6 +64,7 @@ impl SolverStatus {
     pub fn name(&self) -> &'static str {
         match self {
             SolverStatus::Ipopt(s) => s.name(),
+            SolverStatus::IpoptConvergedToRoundOff => "Ipopt_Converged_To_Round_Off",
             SolverStatus::Newton(s) => s.name(),
         }
     }
@@ -57,6 +74,9 @@ impl fmt::Display for SolverStatus {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SolverStatus::Ipopt(s) => write!(f, "{s}"),
+            SolverStatus::IpoptConvergedToRoundOff => {
+                f.write_str("Ipopt converged to the round-off level of the residual (above the requested tolerance)")
+            }
             SolverStatus::Newton(s) => write!(f, "{s}"),
         }
     }
@@ -66,6 +86,7 @@ impl Serialize for SolverStatus {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
         match self {
             SolverStatus::Ipopt(s) => s.serialize(serializer),
+            SolverStatus::IpoptConvergedToRoundOff => serializer.serialize_str(self.name()),
             SolverStatus::Newton(s) => s.serialize(serializer),
         }
     }
@@ -260,9 +281,10 @@ fn solve_problem<P: Problem>(
         }
         report.handed_over_to_ipopt = true;
     }
-    let sol = ipopt::solve(problem, x0, &settings.ipopt)?;
+    let mut stopping = StopWhenSolved::new(problem, settings.ipopt.tol);
+    let sol = ipopt::solve(&mut stopping, x0, &settings.ipopt)?;
     Ok(SystemSolution {
-        status: SolverStatus::Ipopt(sol.status),
+        status: stopping.status(sol.status),
         max_residual: sol.max_constraint_violation,
         iterations: sol.iterations,
         total_s: total_s + sol.total_seconds,
@@ -271,6 +293,93 @@ fn solve_problem<P: Problem>(
         z: sol.x,
         report,
     })
+}
+
+/// Why [`StopWhenSolved`] stopped Ipopt.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Stop {
+    /// `max |c| ≤ tol`.
+    Tolerance,
+    /// `max |c|` at the round-off level of the last Jacobian.
+    RoundOff,
+}
+
+/// A problem seen by Ipopt with skg-solve's stopping test in the intermediate callback
+/// (module docs, "Stopping Ipopt"): outside the restoration phase, stop once
+/// `max |c| ≤ tol`, or, after at least one step, once it is at the round-off level of
+/// the last Jacobian Ipopt asked for (as Newton does: the round-off test says that
+/// steps no longer reduce the residual, which a starting point alone cannot show).
+/// Everything else is passed through to the wrapped adapter.
+struct StopWhenSolved<'p, P: Problem> {
+    inner: &'p mut P,
+    tol: f64,
+    /// Round-off level of the residual from the last Jacobian (0 before the first).
+    roundoff: f64,
+    stopped: Option<Stop>,
+}
+
+impl<'p, P: Problem> StopWhenSolved<'p, P> {
+    fn new(inner: &'p mut P, tol: f64) -> Self {
+        StopWhenSolved { inner, tol, roundoff: 0.0, stopped: None }
+    }
+
+    /// The solve's status: Ipopt's, unless this wrapper stopped it.
+    fn status(&self, ipopt_status: ipopt::Status) -> SolverStatus {
+        match (ipopt_status, self.stopped) {
+            (ipopt::Status::UserRequestedStop, Some(Stop::Tolerance)) => SolverStatus::Ipopt(ipopt::Status::SolveSucceeded),
+            (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff)) => SolverStatus::IpoptConvergedToRoundOff,
+            (status, _) => SolverStatus::Ipopt(status),
+        }
+    }
+}
+
+impl<P: Problem> Problem for StopWhenSolved<'_, P> {
+    fn num_variables(&self) -> usize {
+        self.inner.num_variables()
+    }
+    fn num_constraints(&self) -> usize {
+        self.inner.num_constraints()
+    }
+    fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        self.inner.variable_bounds(lower, upper)
+    }
+    fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        self.inner.constraint_bounds(lower, upper)
+    }
+    fn objective(&mut self, x: &[f64]) -> Result<f64, EvalError> {
+        self.inner.objective(x)
+    }
+    fn objective_gradient(&mut self, x: &[f64], grad: &mut [f64]) -> Result<(), EvalError> {
+        self.inner.objective_gradient(x, grad)
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.inner.constraints(x, c)
+    }
+    fn jacobian_structure(&self) -> &[(u32, u32)] {
+        self.inner.jacobian_structure()
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.inner.jacobian_values(x, values)?;
+        let entries = self.inner.jacobian_structure().iter().zip(values.iter()).map(|(&(r, c), &v)| (r as usize, c as usize, v));
+        self.roundoff = newton::residual_roundoff_level(entries, x, self.inner.num_constraints());
+        Ok(())
+    }
+    fn hessian_structure(&self) -> &[(u32, u32)] {
+        self.inner.hessian_structure()
+    }
+    fn hessian_values(&mut self, x: &[f64], obj_factor: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.inner.hessian_values(x, obj_factor, lambda, values)
+    }
+    fn intermediate(&mut self, stat: &IterationStat) -> bool {
+        if !stat.restoration {
+            if stat.inf_pr <= self.tol {
+                self.stopped = Some(Stop::Tolerance);
+            } else if stat.iter >= 1 && stat.inf_pr <= self.roundoff {
+                self.stopped = Some(Stop::RoundOff);
+            }
+        }
+        self.stopped.is_none() && self.inner.intermediate(stat)
+    }
 }
 
 /// Ipopt's options for a scene: its `[solver]` settings, then the pass-through options.

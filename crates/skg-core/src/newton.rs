@@ -56,6 +56,18 @@ const ARMIJO: f64 = 1e-4;
 /// Newton steps that no longer decreased it.
 pub const ROUNDOFF: f64 = 4.0;
 
+/// The round-off level of a residual `F(x)` whose Jacobian has the entries (row,
+/// column, value): `ROUNDOFF · ε · max_i Σ_j |J_ij| |x_j|` over `rows` rows. No step
+/// computed in floating point can bring `max |F|` much below it. Used as a stopping
+/// test by Newton and by the Ipopt path alike (`backend::solve_problem`).
+pub fn residual_roundoff_level(entries: impl Iterator<Item = (usize, usize, f64)>, x: &[f64], rows: usize) -> f64 {
+    let mut sums = vec![0.0_f64; rows];
+    for (r, c, v) in entries {
+        sums[r] += v.abs() * x[c].abs();
+    }
+    ROUNDOFF * f64::EPSILON * sums.into_iter().fold(0.0, f64::max)
+}
+
 /// How a Newton solve ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum NewtonStatus {
@@ -300,7 +312,7 @@ impl SystemSolver {
             for (&s, &v) in self.slot.iter().zip(&jac) {
                 values[s] += v;
             }
-            floor = ROUNDOFF * f64::EPSILON * self.row_scale(&values, &x);
+            floor = residual_roundoff_level(self.entries(&values), &x, self.n);
             step.iter_mut().zip(&f).for_each(|(s, fi)| *s = -fi);
             if !self.factor_and_solve(&values, &mut step, &mut stats) {
                 break NewtonStatus::SingularJacobian;
@@ -335,16 +347,11 @@ impl SystemSolver {
         Ok(NewtonSolution { status, max_residual: max_abs(&f), x, iterations, history, stats, total_s: start.elapsed().as_secs_f64() })
     }
 
-    /// `max_i Σ_j |J_ij| |x_j|` of the compressed matrix with `values`: the size of the
-    /// terms whose rounding errors a residual near `x` carries.
-    fn row_scale(&self, values: &[f64], x: &[f64]) -> f64 {
-        let mut rows = vec![0.0_f64; self.n];
-        for (c, xc) in x.iter().enumerate() {
-            for k in self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize {
-                rows[self.row_idx[k] as usize] += values[k].abs() * xc.abs();
-            }
-        }
-        rows.into_iter().fold(0.0, f64::max)
+    /// The entries (row, column, value) of the compressed matrix with `values`.
+    fn entries<'a>(&'a self, values: &'a [f64]) -> impl Iterator<Item = (usize, usize, f64)> + 'a {
+        (0..self.n).flat_map(move |c| {
+            (self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize).map(move |k| (self.row_idx[k] as usize, c, values[k]))
+        })
     }
 
     /// Factor the compressed matrix with `values` and overwrite `rhs` with the solution;
@@ -440,6 +447,17 @@ fn iteration_stat(iter: i32, inf_pr: f64, d_norm: f64, alpha: f64, ls_trials: i3
 
 #[cfg(test)]
 mod tests {
+
+    /// `ROUNDOFF · ε · max_i Σ_j |J_ij| |x_j|`, duplicates counted separately (they are
+    /// summed values whose rounding errors add up).
+    #[test]
+    fn roundoff_level_is_the_largest_weighted_row_sum() {
+        // Rows: |2·1| + |−3·(−2)| = 8 and |0.5·1| + |1·(−2)| + |−1·(−2)| = 4.5.
+        let entries = [(0, 0, 2.0), (0, 1, -3.0), (1, 0, 0.5), (1, 1, 1.0), (1, 1, -1.0)];
+        let level = residual_roundoff_level(entries.into_iter(), &[1.0, -2.0], 2);
+        assert_eq!(level, ROUNDOFF * f64::EPSILON * 8.0);
+    }
+
     use super::*;
 
     /// `F(x) = (x0² + x1² − 4, x0 − x1)`: root (√2, √2); from (1, 0.5).

@@ -34,8 +34,8 @@ pub struct SolveArgs {
 fn solver_name(outcome: &solve::Outcome) -> &'static str {
     match (outcome.status.solver(), outcome.backend.handed_over_to_ipopt) {
         (SolverStatus::Newton(_), _) => "Newton",
-        (SolverStatus::Ipopt(_), false) => "Ipopt",
-        (SolverStatus::Ipopt(_), true) => "Ipopt (after Newton failed)",
+        (_, false) => "Ipopt",
+        (_, true) => "Ipopt (after Newton failed)",
     }
 }
 
