@@ -402,9 +402,17 @@ fn ipopt_options(scene: &Scene) -> ipopt::Options {
         output_file: solver.log_file.clone(),
         // MUMPS's default scaling (77, automatic) made the very first factorization of
         // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
-        // on Debian's MUMPS 5.5). The scene's own [solver.ipopt] options come after and
-        // override it.
-        extra: std::iter::once(("mumps_scaling".to_string(), ipopt::OptionValue::Int(0))).chain(pass_through).collect(),
+        // on Debian's MUMPS 5.5). MUMPS's automatic pivot order picks SCOTCH, whose
+        // ordering is randomized: the same solve gave different trajectories (in the
+        // last digits) and, on hard wall scenes, different iteration counts and exit
+        // codes from run to run. AMF (2) is deterministic and was faster on every scene
+        // measured (docs/solver.md, "Posing the system"). The scene's own
+        // [solver.ipopt] options come after and override both.
+        extra: [("mumps_scaling", 0), ("mumps_pivot_order", 2)]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), ipopt::OptionValue::Int(v)))
+            .chain(pass_through)
+            .collect(),
         ..ipopt::Options::default()
     }
 }
