@@ -217,3 +217,23 @@ fn windows_agree_with_the_global_solve_where_both_run() {
         assert!(apart <= tol, "{name}: windows and the global solve differ by {apart:e}");
     }
 }
+
+/// When the whole ladder failed, the remedy suggests only what applies and was not
+/// tried: no walls to widen in a scene without walls, no windows after the ladder's
+/// windows failed. (One iteration per attempt makes every attempt fail.)
+#[test]
+fn the_remedy_after_a_failed_ladder_names_only_untried_steps_that_apply() {
+    let one_step = Overrides { max_iter: Some(1), ..Overrides::default() };
+    let ladder_of = |name| solve::solve_scene(&common::load(name, &one_step)).unwrap();
+    let o = ladder_of("pendulum");
+    assert!(!o.converged() && o.attempts.len() > 2, "{:?}", o.attempts);
+    let remedy = o.remedy.as_deref().unwrap();
+    assert!(remedy.contains("--nodes") && remedy.contains("did not help"), "{remedy}");
+    for absent in ["walls", "wall-width", "--window"] {
+        assert!(!remedy.contains(absent), "pendulum has no walls and windows were tried: {remedy}");
+    }
+    let o = ladder_of("tumbler");
+    let remedy = o.remedy.as_deref().unwrap();
+    assert!(remedy.contains("widen the walls") && remedy.contains("wall-width continuation"), "{remedy}");
+    assert!(!remedy.contains("--window"), "windows were tried: {remedy}");
+}

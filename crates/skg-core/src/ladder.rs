@@ -183,10 +183,11 @@ impl Ladder<'_> {
         let chosen = self.chosen();
         let attempts: Vec<Attempt> = self.tried.iter().enumerate().map(|(i, t)| record(t, i == chosen)).collect();
         let fallback_used = self.tried.len() > 1;
+        let windows_tried = self.tried.iter().any(|t| matches!(t.outcome.method, Method::Windows { .. }));
         let others_s: f64 = attempts.iter().filter(|a| !a.chosen).map(|a| a.wall_s).sum();
         let mut outcome = self.tried.swap_remove(chosen).outcome;
         outcome.timings.other_attempts_s = others_s;
-        outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &outcome, fallback_used));
+        outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &outcome, fallback_used, windows_tried));
         outcome.attempts = attempts;
         outcome
     }
@@ -226,22 +227,31 @@ fn record(t: &Tried, chosen: bool) -> Attempt {
     }
 }
 
-/// What to do about an outcome that cannot be trusted.
-fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool) -> String {
+/// What to do about an outcome that cannot be trusted: only steps that apply to the
+/// scene (walls) and were not already tried (windows).
+fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) -> String {
     let span = scene.t_end - scene.t_start;
     let suggested_window = format!("{:.4}", span / 8.0);
+    let walls = !scene.walls.is_empty();
     let ladder = if fallback_used {
-        "the fallback ladder (coarse-to-fine guess, wall-width continuation, windows) did not help either; "
+        let width = if walls { ", wall-width continuation" } else { "" };
+        format!("the fallback ladder (coarse-to-fine guess{width}, windows) did not help either; ")
     } else if !scene.solver.fallback {
-        "the fallback ladder is off (--no-fallback / [solver] fallback = false): without it, "
+        "the fallback ladder is off (--no-fallback / [solver] fallback = false): without it, ".to_string()
     } else {
-        ""
+        String::new()
     };
     if !o.converged() {
-        return format!(
-            "{ladder}refine the grid (--nodes {}), widen the walls (a larger σ), or solve in windows (--window {suggested_window})",
-            2 * scene.nodes
-        );
+        let mut steps = vec![format!("refine the grid (--nodes {})", 2 * scene.nodes)];
+        if walls {
+            steps.push("widen the walls (a larger σ)".to_string());
+        }
+        if !windows_tried {
+            steps.push(format!("solve in windows (--window {suggested_window})"));
+        }
+        let last = steps.pop().expect("one step at least");
+        let steps = if steps.is_empty() { last } else { format!("{}, or {last}", steps.join(", ")) };
+        return format!("{ladder}{steps}");
     }
     let v = &o.verification;
     match v.status {
@@ -252,7 +262,7 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool) -> String {
         _ => {
             let oddeven = v.max_error.is_some_and(|e| v.odd_even_max >= 0.25 * e);
             let windows = matches!(o.method, Method::Windows { .. });
-            let cure = if oddeven && !windows {
+            let cure = if oddeven && !windows && !windows_tried {
                 format!("solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even mode's growth")
             } else {
                 format!("refine the grid (--nodes {}) or use a higher-order operator (--operator SBP363)", 2 * scene.nodes)
