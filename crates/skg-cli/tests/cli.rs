@@ -113,6 +113,15 @@ fn help_states_the_default_verification_tolerance_the_code_uses() {
 /// converge (3) and an exceeded tolerance (4), so a script can tell them apart.
 #[test]
 fn usage_errors_exit_2() {
+    // Out-of-range option values too, negative numbers included (taken as the value,
+    // not as an unknown option).
+    let bad_values =
+        [&["x.toml", "--verify-tol", "-1"][..], &["x.toml", "--verify-tol=0"], &["x.toml", "--window", "-3"], &["x.toml", "--overlap=nan"]];
+    for args in bad_values {
+        let o = common::skg(args, Path::new("."));
+        let t = common::text(&o);
+        assert!(o.status.code() == Some(2) && t.contains("invalid value") && !t.contains("unexpected argument"), "{args:?}: {t}");
+    }
     for args in [&["--nodes"][..], &["check", "only-one.csv"], &["--no-such-option", "x.toml"], &["plot"]] {
         let o = common::skg(args, Path::new("."));
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", common::text(&o));
@@ -189,6 +198,13 @@ fn bad_override_and_operator_names() {
     let s = common::scenario("free_fall");
     expect_error(dir.path(), s.to_str().unwrap(), &["--set", "nope=1"], &["no parameter `nope`"]);
     expect_error(dir.path(), s.to_str().unwrap(), &["--set", "g"], &["expected name=value"]);
+    // An unknown name is not a cycle, even when a parameter's name is part of it ("gabc").
+    let o = common::skg(&[s.to_str().unwrap(), "--set", "g=gabc"], dir.path());
+    let t = common::text(&o);
+    assert!(o.status.code() == Some(1) && t.contains("unknown symbol `gabc`") && !t.contains("cycle"), "{t}");
+    // A real cycle is called one.
+    let cyc = variant(dir.path(), "free_fall", &[("[parameters]", "[parameters]\na = \"b + 1\"\nb = \"2*a\"")]);
+    expect_error(dir.path(), &cyc, &[], &["cycle", "a, b"]);
     let o = common::skg(&[s.to_str().unwrap(), "--operator", "SBP999"], dir.path());
     assert_eq!(o.status.code(), Some(2), "clap usage error");
     assert!(common::text(&o).contains("SBP242"), "lists the valid operators: {}", common::text(&o));

@@ -116,9 +116,16 @@ fn bench_csv_and_scaling_chart() {
         let text = std::fs::read_to_string(&csv).unwrap();
         let rows: Vec<&str> = text.lines().skip(1).collect();
         assert_eq!(rows.len(), 2, "{text}");
-        assert!(rows.iter().all(|r| r.contains(&format!(",{backend},")) && r.contains(",yes,")), "{text}");
+        assert!(rows.iter().all(|r| r.contains(&format!(",{backend},")) && r.contains(",verified,global,")), "{text}");
         csvs.push(s(&csv));
     }
+    // A solve that does not verify is not a benchmark: the row says so, a warning names
+    // it and bench exits 4 as the solve would (the damped oscillator without windows).
+    let damped = common::test_scene("damped_oscillator");
+    let o = common::skg(&["bench", &s(&damped), "--nodes", "512", "--repeat", "1", "--no-fallback"], Path::new("."));
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(4), "{t}");
+    assert!(t.contains("| not verified | global |") && t.contains("warning: N = 512 not verified"), "{t}");
     let stem = dir.path().join("img/scaling");
     let o = common::skg(&["plot", "scaling", &csvs[0], &csvs[1], "-o", &s(&stem)], Path::new("."));
     assert!(o.status.success(), "{}", common::text(&o));

@@ -62,6 +62,15 @@ pub enum SceneError {
         /// What is wrong.
         message: String,
     },
+    /// A setting given outside the scene file (a command-line option such as
+    /// `--verify-tol`, or the same argument of the Python API) is out of range.
+    #[error("{setting}: {message}")]
+    Setting {
+        /// The setting and its value as given, e.g. `--verify-tol -1`.
+        setting: String,
+        /// What is wrong.
+        message: String,
+    },
     /// A `--set` (or sweep) assignment is malformed or names no parameter.
     #[error("--set {assignment}: {message}")]
     Override {
@@ -1024,20 +1033,28 @@ impl SceneFile {
             Some(o) => Some(o),
             None => from_file(&self.time.overlap, "time.overlap")?,
         };
-        let here = |key: &Option<Spanned<NumOrExpr>>, message: String| match key {
-            Some(v) => self.invalid(v, message),
-            None => SceneError::Override { assignment: "--window/--overlap".into(), message },
+        // The value's origin: the scene file's line, or the command line.
+        let here = |key: &Option<Spanned<NumOrExpr>>, from_cli: Option<f64>, option: &str, message: String| match (key, from_cli) {
+            (Some(v), None) => self.invalid(v, message),
+            (_, given) => SceneError::Setting { setting: format!("{option} {}", given.map_or("?".into(), |g| g.to_string())), message },
         };
         let Some(length) = length.filter(|&w| w != 0.0 || ov.window.is_none()) else {
             return Ok(None);
         };
         if !(length > 0.0 && length.is_finite()) {
-            return Err(here(&self.time.window, format!("time.window must be a positive number of seconds, got {length}")));
+            return Err(here(
+                &self.time.window,
+                ov.window,
+                "--window",
+                format!("time.window must be a positive number of seconds, got {length}"),
+            ));
         }
         let overlap = overlap.unwrap_or(length / 4.0);
         if !(0.0..length).contains(&overlap) {
             return Err(here(
                 &self.time.overlap,
+                ov.overlap,
+                "--overlap",
                 format!("time.overlap must be ≥ 0 and shorter than the window ({length} s), got {overlap}"),
             ));
         }
@@ -1056,7 +1073,7 @@ impl SceneFile {
                 let message = format!("the verification tolerance must be a positive number, got {t}");
                 return Err(match (&self.verify.tol, ov.verify_tol) {
                     (Some(v), None) => self.invalid(v, message),
-                    _ => SceneError::Override { assignment: format!("--verify-tol {t}"), message },
+                    _ => SceneError::Setting { setting: format!("--verify-tol {t}"), message },
                 });
             }
         }
@@ -1137,7 +1154,8 @@ impl SceneFile {
                     Ok(_) => unreachable!("expression failed a moment ago"),
                 };
                 let names: Vec<&str> = defs.keys().map(String::as_str).collect();
-                if err.message.contains("unknown") && still.iter().any(|n| s.contains(n.as_str())) {
+                // A cycle when the unknown symbol is itself an unresolved parameter.
+                if err.message.contains("unknown") && still.iter().any(|n| err.message.contains(&format!("`{n}`"))) {
                     err.message = format!(
                         "{} (parameters that depend on each other in a cycle: {})",
                         err.message,

@@ -8,9 +8,10 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use skg_core::output;
-use skg_core::solve::{self, Outcome};
+use skg_core::solve::{self, Method, Outcome};
+use skg_core::verify::VerifyStatus;
 
-use super::{load, SceneArgs};
+use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -56,8 +57,29 @@ impl Row {
         self.wall_s - self.outcome.timings.verification_s
     }
 
-    /// The columns: N, sizes, backend, iterations, converged, the time split, the time
-    /// per node and the peak memory.
+    /// How the solve ended: `verified`, `not verified` (converged, verification failed
+    /// or impossible), `not converged`, or `converged` (verification skipped).
+    fn result(&self) -> &'static str {
+        let o = &self.outcome;
+        match (o.converged(), o.verification.status) {
+            (false, _) => "not converged",
+            (true, VerifyStatus::Passed) => "verified",
+            (true, VerifyStatus::Skipped) => "converged",
+            (true, _) => "not verified",
+        }
+    }
+
+    /// How the span was covered: `global`, or `K windows` (the sizes and iterations are
+    /// then those of one window).
+    fn solved_as(&self) -> String {
+        match self.outcome.method {
+            Method::Global => "global".into(),
+            Method::Windows { count, .. } => format!("{count} windows"),
+        }
+    }
+
+    /// The columns: N, sizes, backend, iterations, result, how the span was solved, the
+    /// time split, the time per node and the peak memory.
     fn cells(&self) -> Vec<String> {
         let (o, t) = (&self.outcome, &self.outcome.timings);
         vec![
@@ -66,7 +88,8 @@ impl Row {
             o.sizes.jacobian_nonzeros.to_string(),
             self.backend(),
             o.iterations.to_string(),
-            if o.converged() { "yes" } else { "no" }.to_string(),
+            self.result().to_string(),
+            self.solved_as(),
             format!("{:.4}", t.setup_s),
             format!("{:.4}", t.initial_guess_s),
             format!("{:.4}", t.evaluation_s),
@@ -79,13 +102,14 @@ impl Row {
     }
 }
 
-const HEADER: [&str; 14] = [
+const HEADER: [&str; 15] = [
     "N",
     "variables",
     "Jacobian nnz",
     "backend",
     "iterations",
-    "converged",
+    "result",
+    "solved as",
     "setup s",
     "guess s",
     "eval s",
@@ -96,7 +120,7 @@ const HEADER: [&str; 14] = [
     "peak MiB",
 ];
 const CSV_HEADER: &str =
-    "nodes,variables,jacobian_nonzeros,backend,iterations,converged,setup_s,guess_s,evaluation_s,solver_internal_s,total_s,us_per_node,verify_s,peak_mib";
+    "nodes,variables,jacobian_nonzeros,backend,iterations,result,solved_as,setup_s,guess_s,evaluation_s,solver_internal_s,total_s,us_per_node,verify_s,peak_mib";
 
 pub fn run(args: BenchArgs) -> Result<ExitCode> {
     // The CSV's directory is made before the solves, so that a path that cannot be
@@ -130,7 +154,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     }
     bar.finish_and_clear();
     println!("| {} |", HEADER.join(" | "));
-    println!("|{}", HEADER.iter().map(|h| if matches!(*h, "backend" | "converged") { ":---:|" } else { "---:|" }).collect::<String>());
+    println!("|{}", HEADER.iter().map(|h| if matches!(*h, "backend" | "result" | "solved as") { ":---:|" } else { "---:|" }).collect::<String>());
     for row in &rows {
         println!("| {} |", row.cells().join(" | "));
     }
@@ -142,7 +166,15 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         }
         output::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
     }
-    Ok(ExitCode::SUCCESS)
+    // Timings of solves that cannot be trusted are not benchmarks of the scene: say so,
+    // and exit as a solve would (3 if any did not converge, else 4 if any did not verify).
+    let untrusted: Vec<String> = rows.iter().filter(|r| !r.outcome.trusted()).map(|r| format!("N = {} {}", r.nodes, r.result())).collect();
+    if untrusted.is_empty() {
+        return Ok(ExitCode::SUCCESS);
+    }
+    eprintln!("warning: {}; their times are not those of a trustworthy solve (run the scene with `skg-solve` for the reason)", untrusted.join(", "));
+    let code = if rows.iter().any(|r| !r.outcome.converged()) { EXIT_NOT_CONVERGED } else { EXIT_NOT_VERIFIED };
+    Ok(ExitCode::from(code))
 }
 
 /// The process's peak resident memory since a reset (Linux: `VmHWM` of

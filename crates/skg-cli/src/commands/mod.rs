@@ -59,14 +59,14 @@ pub struct SceneArgs {
     /// Solve in successive windows of SECONDS (each starts from the state the previous one
     /// reached and discards its last --overlap); cures the odd-even mode that damping
     /// amplifies and makes long spans linear in cost. 0 turns the scene's windows off.
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative)]
     pub window: Option<f64>,
     /// Seconds discarded at the end of each window [default: a quarter of the window].
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative)]
     pub overlap: Option<f64>,
     /// Verification tolerance: max |q − q_reference| allowed, in coordinate units
     /// [default: the scene's [verify] tol, else 1e-4 × the largest coordinate range].
-    #[arg(long, value_name = "TOL")]
+    #[arg(long, value_name = "TOL", allow_negative_numbers = true, value_parser = positive)]
     pub verify_tol: Option<f64>,
     /// Skip the comparison with time stepping (the result is still checked for
     /// non-finite numbers); a converged solve then exits 0.
@@ -111,4 +111,16 @@ impl SceneArgs {
 /// Load a scene file and resolve it with the overrides.
 pub fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
     Ok(SceneFile::load(path)?.resolve(ov)?)
+}
+
+/// A command-line number that must be finite and positive (a usage error otherwise).
+fn positive(text: &str) -> Result<f64, String> {
+    let x: f64 = text.parse().map_err(|e| format!("`{text}` is not a number: {e}"))?;
+    (x > 0.0 && x.is_finite()).then_some(x).ok_or_else(|| format!("must be a positive number, got {text}"))
+}
+
+/// A command-line number that must be finite and not negative (a usage error otherwise).
+fn non_negative(text: &str) -> Result<f64, String> {
+    let x: f64 = text.parse().map_err(|e| format!("`{text}` is not a number: {e}"))?;
+    (x >= 0.0 && x.is_finite()).then_some(x).ok_or_else(|| format!("must be a number ≥ 0, got {text}"))
 }
