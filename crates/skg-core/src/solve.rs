@@ -496,7 +496,7 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     let t_guess = Instant::now();
     let mut warnings = Vec::new();
     let (z0, guess_desc, ts_q) = initial_guess(action, times, guess, &mut warnings);
-    check_initial_guess(scene, action, times, &z0)?;
+    check_initial_guess(scene, action, times, &z0, &guess_desc, &warnings)?;
     let initial_guess_s = t_guess.elapsed().as_secs_f64();
 
     let solution = solver.solve(action, &z0).map_err(|e| rejected_option(scene, e.into()))?;
@@ -573,7 +573,8 @@ fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut V
 /// Refuse an initial guess with a value that is not finite, naming the node, the state
 /// and the scene's expression that is undefined there (Ipopt would only say "starting
 /// point x0[i] = NaN").
-fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64]) -> Result<(), SolveError> {
+/// `guess` says how the guess was made and `notes` why (a failed time stepping).
+fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64], guess: &str, notes: &[String]) -> Result<(), SolveError> {
     let Some(bad) = z0.iter().position(|x| !x.is_finite()) else { return Ok(()) };
     let names: Vec<String> = scene.constraints.iter().map(|c| c.name.clone()).collect();
     let (k, what) = action.layout.describe(bad, &scene.coordinates, &names);
@@ -582,8 +583,8 @@ fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64]
     let source = action.model.non_finite_expression(scene, times[k], &q[k], &v[k]);
     let state = |xs: &[f64]| xs.iter().map(|x| format!("{x:.6e}")).collect::<Vec<_>>().join(", ");
     let message = format!(
-        "the initial guess (time stepping from the initial state) is not finite: {what} at node {k} (t = {}) is {}; \
-         at that node q = ({}), q̇ = ({}){}",
+        "the initial guess ({guess}) is not finite: {what} at node {k} (t = {}) is {}; \
+         at that node q = ({}), q̇ = ({}){}{}",
         times[k],
         z0[bad],
         state(&q[k]),
@@ -591,7 +592,8 @@ fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64]
         match &source {
             Some((expr, _)) => format!(", where {expr} is not finite (e.g. sqrt or log of a negative number, a division by zero)"),
             None => String::new(),
-        }
+        },
+        notes.iter().map(|n| format!("; {n}")).collect::<String>()
     );
     let location = source.map_or_else(|| scene.file.origin.whole(), |(_, at)| at);
     Err(SceneError::Invalid { location, message }.into())

@@ -154,7 +154,10 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     }
     bar.finish_and_clear();
     println!("| {} |", HEADER.join(" | "));
-    println!("|{}", HEADER.iter().map(|h| if matches!(*h, "backend" | "result" | "solved as") { ":---:|" } else { "---:|" }).collect::<String>());
+    println!(
+        "|{}",
+        HEADER.iter().map(|h| if matches!(*h, "backend" | "result" | "solved as") { ":---:|" } else { "---:|" }).collect::<String>()
+    );
     for row in &rows {
         println!("| {} |", row.cells().join(" | "));
     }
@@ -172,7 +175,10 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     if untrusted.is_empty() {
         return Ok(ExitCode::SUCCESS);
     }
-    eprintln!("warning: {}; their times are not those of a trustworthy solve (run the scene with `skg-solve` for the reason)", untrusted.join(", "));
+    eprintln!(
+        "warning: {}; their times are not those of a trustworthy solve (run the scene with `skg-solve` for the reason)",
+        untrusted.join(", ")
+    );
     let code = if rows.iter().any(|r| !r.outcome.converged()) { EXIT_NOT_CONVERGED } else { EXIT_NOT_VERIFIED };
     Ok(ExitCode::from(code))
 }
