@@ -20,9 +20,9 @@
 //!    is recorded [`PointStatus::TimedOut`]. Either way the worker is gone and a fresh
 //!    one takes the next point: a crash or a timeout costs only the point in flight.
 //!
-//! A worker's stdout and stderr go to one file, `WORK/worker-<k>.log`; the driver
-//! notes the file's length when it hands out a point, so the log since then is that
-//! point's. A worker dies with the driver (`PR_SET_PDEATHSIG`, Linux); closing its
+//! A worker's stderr goes to `WORK/worker-<k>.log` (its stdout, where Ipopt would
+//! print, is discarded as before); the driver notes the file's length when it hands
+//! out a point, so the log since then is that point's. A worker dies with the driver (`PR_SET_PDEATHSIG`, Linux); closing its
 //! stdin ends it. The files are removed as the points and workers finish.
 //!
 //! Points go out largest [`estimated_cost`](crate::estimated_cost) first; among the
@@ -276,13 +276,12 @@ pub(crate) fn next_point(queue: &mut VecDeque<Point>, expanded: &Expanded, previ
     queue.remove(same.unwrap_or(0))
 }
 
-/// Start `exe sweep-worker WORK` with its stdin a pipe and its stdout and stderr `log`.
+/// Start `exe sweep-worker WORK` with its stdin a pipe and its stderr `log`.
 fn spawn_worker(exe: &Path, work: &Path, log: &Path) -> Result<Child, SweepError> {
     let spawn_err = |source| SweepError::Spawn { exe: exe.to_path_buf(), source };
-    let out = File::create(log).map_err(spawn_err)?;
-    let err = out.try_clone().map_err(spawn_err)?;
+    let err = File::create(log).map_err(spawn_err)?;
     let mut cmd = Command::new(exe);
-    cmd.arg("sweep-worker").arg(work).stdin(Stdio::piped()).stdout(out).stderr(err);
+    cmd.arg("sweep-worker").arg(work).stdin(Stdio::piped()).stdout(Stdio::null()).stderr(err);
     #[cfg(target_os = "linux")]
     {
         use std::os::unix::process::CommandExt;
