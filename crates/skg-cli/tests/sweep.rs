@@ -161,6 +161,16 @@ fn shards_partition_the_grid_and_merge_joins_them() {
     assert!(common::text(&o).contains("not shards of one sweep"), "{}", common::text(&o));
 }
 
+/// Start `skg-solve sweep SWEEP -o OUT -j 1 -q` in the background.
+fn start_sweep(sweep: &Path, out: &Path) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_skg-solve"))
+        .args(["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "1", "-q"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
 #[test]
 fn killed_sweep_resumes_without_lost_or_duplicated_rows() {
     let dir = tempfile::tempdir().unwrap();
@@ -173,12 +183,7 @@ fn killed_sweep_resumes_without_lost_or_duplicated_rows() {
     assert_eq!(total, 30);
     let out = dir.path().join("out");
     let results = out.join("results.csv");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_skg-solve"))
-        .args(["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "1", "-q"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+    let mut child = start_sweep(&p, &out);
     let start = Instant::now();
     let rows = |path: &Path| std::fs::read_to_string(path).map_or(0, |t| t.lines().count().saturating_sub(1));
     while rows(&results) < 4 {
@@ -226,15 +231,15 @@ fn failed_points_are_recorded_and_the_sweep_goes_on() {
     assert_eq!(states[0], ("false", "not_converged", "Maximum_Iterations_Exceeded"));
     assert_eq!(states[1], ("true", "converged", "Solve_Succeeded"));
     assert_eq!(r.status(&r.rows[0]).unwrap().is_converged(), r.rows[0][c] == "true");
-    // A point over the time limit is killed and recorded as such.
-    let p = sweep_file(dir.path(), "tumbler", "timeout = 0.01\n[[grid]]\nnodes = [1024]\n");
-    let out = dir.path().join("timeout");
-    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap()], Path::new("."));
+}
+
+/// Run `skg-solve sweep SWEEP -o OUT` with `extra` arguments, which must succeed; its
+/// results.
+fn run_sweep(sweep: &Path, out: &Path, extra: &[&str]) -> Results {
+    let args = [&["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap()], extra].concat();
+    let o = common::skg(&args, Path::new("."));
     assert!(o.status.success(), "{}", common::text(&o));
-    let r = Results::read(&out).unwrap();
-    assert_eq!(r.rows.len(), 1);
-    assert_eq!(r.rows[0][r.column_index("status").unwrap()], "timeout");
-    assert_eq!(r.rows[0][r.column_index("converged").unwrap()], "false");
+    Results::read(out).unwrap()
 }
 
 /// `sha256:<hex>` of a file's bytes, computed here with the `sha2` crate.
@@ -473,9 +478,7 @@ fn one_worker_reuses_the_lu_analysis_of_equal_structures_and_changes_no_value() 
         "keep_trajectories = true\n[[grid]]\nnodes = 48\nc = [0.5, 2]\n[[grid]]\nnodes = 96\nc = [0.25, 0.5, 1, 2]\n",
     );
     let out = dir.path().join("out");
-    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "1"], Path::new("."));
-    assert!(o.status.success(), "{}", common::text(&o));
-    let r = Results::read(&out).unwrap();
+    let r = run_sweep(&p, &out, &["-j", "1"]);
     // Rows in the order the worker ran them: the larger N first.
     let runs: Vec<(&str, &str, &str)> =
         r.rows.iter().map(|row| (cell(&r, row, "nodes"), cell(&r, row, "lu_analysis"), cell(&r, row, "status"))).collect();
@@ -525,12 +528,7 @@ fn a_killed_worker_costs_only_its_point() {
     let dir = tempfile::tempdir().unwrap();
     let p = sweep_file(dir.path(), "tumbler", "[[grid]]\nnodes = [128, 160, 192]\n[[points]]\nnodes = 8192\n");
     let out = dir.path().join("out");
-    let mut sweep = Command::new(env!("CARGO_BIN_EXE_skg-solve"))
-        .args(["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "1", "-q"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+    let mut sweep = start_sweep(&p, &out);
     // The largest point goes first: kill its worker while it computes.
     let start = Instant::now();
     let worker = loop {
@@ -562,13 +560,15 @@ fn a_killed_worker_costs_only_its_point() {
 fn a_timeout_kills_only_the_late_point() {
     let dir = tempfile::tempdir().unwrap();
     let p = sweep_file(dir.path(), "tumbler", "timeout = 3\n[[grid]]\nnodes = [128, 160, 192]\n[[points]]\nnodes = 65536\n");
-    let out = dir.path().join("out");
-    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "1"], Path::new("."));
-    assert!(o.status.success(), "{}", common::text(&o));
-    let r = Results::read(&out).unwrap();
-    let mut rows: Vec<(usize, &str)> = r.rows.iter().map(|row| (cell(&r, row, "nodes").parse().unwrap(), solved(&r, row))).collect();
+    let r = run_sweep(&p, &dir.path().join("out"), &["-j", "1"]);
+    let mut rows: Vec<(usize, &str, &str)> =
+        r.rows.iter().map(|row| (cell(&r, row, "nodes").parse().unwrap(), solved(&r, row), cell(&r, row, "converged"))).collect();
     rows.sort();
-    assert_eq!(rows, [(128, "solved"), (160, "solved"), (192, "solved"), (65536, "timeout")]);
+    assert_eq!(
+        rows.iter().map(|&(n, s, _)| (n, s)).collect::<Vec<_>>(),
+        [(128, "solved"), (160, "solved"), (192, "solved"), (65536, "timeout")]
+    );
+    assert_eq!(rows[3].2, "false");
 }
 
 /// A results.csv of an earlier layout (here: without `lu_analysis`) is not resumed; the
@@ -578,10 +578,8 @@ fn resuming_a_results_file_without_a_newer_column_names_it() {
     let dir = tempfile::tempdir().unwrap();
     let p = sweep_file(dir.path(), "free_fall", "[[grid]]\nnodes = [32]\n");
     let out = dir.path().join("out");
-    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap()], Path::new("."));
-    assert!(o.status.success(), "{}", common::text(&o));
+    let r = run_sweep(&p, &out, &[]);
     let results = out.join("results.csv");
-    let r = Results::read(&results).unwrap();
     let drop_at = r.column_index("lu_analysis").unwrap();
     let without = |fields: &[String]| {
         let kept: Vec<String> = fields.iter().enumerate().filter(|(k, _)| *k != drop_at).map(|(_, f)| f.clone()).collect();
