@@ -216,6 +216,7 @@ impl Pool {
             for p in [&flight.job, &flight.result] {
                 let _ = std::fs::remove_file(p);
             }
+            // A worker that crashed, was killed or wrote no record of ours is ended.
             if rec.status == PointStatus::Crashed || rec.status == PointStatus::TimedOut {
                 let mut gone = self.workers.swap_remove(k);
                 end_worker(&mut gone);
@@ -249,9 +250,13 @@ fn end_worker(w: &mut Worker) {
     let _ = std::fs::remove_file(&w.log);
 }
 
-/// A result file's record, if the file is there (it is complete whenever it exists).
+/// A result file's record, if the file is there (it is complete whenever it exists); a
+/// file that is not a record (a worker of another skg-solve) makes a crashed record.
 fn read_record(path: &Path) -> Option<Record> {
-    std::fs::read_to_string(path).ok().and_then(|t| serde_json::from_str(&t).ok())
+    let text = std::fs::read_to_string(path).ok()?;
+    Some(serde_json::from_str(&text).unwrap_or_else(|e| {
+        Record::new(PointStatus::Crashed, format!("the worker's result {} is not a record of this skg-solve: {e}", path.display()))
+    }))
 }
 
 /// The record of a point whose worker exited without a result: the exit status and the
