@@ -68,9 +68,10 @@ enum Command {
     /// Charts (SVG and PNG) from a sweep's results.csv or from solutions.
     #[command(subcommand)]
     Plot(plot::PlotKind),
-    /// Worker process of a sweep (internal).
+    /// Worker process of a sweep (internal): runs the points whose ids arrive on stdin
+    /// (protocol: the `skg_sweep::workers` module).
     #[command(hide = true)]
-    SweepWorker { job: PathBuf, result: PathBuf },
+    SweepWorker { work: PathBuf },
     /// Integrate the Lagrange–d'Alembert equations of a scene with a tight-tolerance
     /// adaptive integrator (DOP853) and write a reference CSV with the solver's columns.
     Reference(reference::ReferenceArgs),
@@ -89,7 +90,7 @@ fn main() -> ExitCode {
         Some(Command::Plot(k)) => plot::run(k),
         Some(Command::Animate(a)) => animate::run(a),
         Some(Command::Gallery(a)) => gallery::run(a),
-        Some(Command::SweepWorker { job, result }) => sweep::run_worker(&job, &result),
+        Some(Command::SweepWorker { work }) => sweep::run_worker(&work),
         Some(Command::Reference(a)) => reference::run(a),
         Some(Command::Check(a)) => check::run(a),
         None => solve::run(cli.solve),

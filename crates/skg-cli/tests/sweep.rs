@@ -161,6 +161,16 @@ fn shards_partition_the_grid_and_merge_joins_them() {
     assert!(common::text(&o).contains("not shards of one sweep"), "{}", common::text(&o));
 }
 
+/// Start `skg-solve sweep SWEEP -o OUT -j 1 -q` in the background.
+fn start_sweep(sweep: &Path, out: &Path) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_skg-solve"))
+        .args(["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "1", "-q"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
 #[test]
 fn killed_sweep_resumes_without_lost_or_duplicated_rows() {
     let dir = tempfile::tempdir().unwrap();
@@ -173,12 +183,7 @@ fn killed_sweep_resumes_without_lost_or_duplicated_rows() {
     assert_eq!(total, 30);
     let out = dir.path().join("out");
     let results = out.join("results.csv");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_skg-solve"))
-        .args(["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "1", "-q"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+    let mut child = start_sweep(&p, &out);
     let start = Instant::now();
     let rows = |path: &Path| std::fs::read_to_string(path).map_or(0, |t| t.lines().count().saturating_sub(1));
     while rows(&results) < 4 {
@@ -226,15 +231,15 @@ fn failed_points_are_recorded_and_the_sweep_goes_on() {
     assert_eq!(states[0], ("false", "not_converged", "Maximum_Iterations_Exceeded"));
     assert_eq!(states[1], ("true", "converged", "Solve_Succeeded"));
     assert_eq!(r.status(&r.rows[0]).unwrap().is_converged(), r.rows[0][c] == "true");
-    // A point over the time limit is killed and recorded as such.
-    let p = sweep_file(dir.path(), "tumbler", "timeout = 0.01\n[[grid]]\nnodes = [1024]\n");
-    let out = dir.path().join("timeout");
-    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap()], Path::new("."));
+}
+
+/// Run `skg-solve sweep SWEEP -o OUT` with `extra` arguments, which must succeed; its
+/// results.
+fn run_sweep(sweep: &Path, out: &Path, extra: &[&str]) -> Results {
+    let args = [&["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap()], extra].concat();
+    let o = common::skg(&args, Path::new("."));
     assert!(o.status.success(), "{}", common::text(&o));
-    let r = Results::read(&out).unwrap();
-    assert_eq!(r.rows.len(), 1);
-    assert_eq!(r.rows[0][r.column_index("status").unwrap()], "timeout");
-    assert_eq!(r.rows[0][r.column_index("converged").unwrap()], "false");
+    Results::read(out).unwrap()
 }
 
 /// `sha256:<hex>` of a file's bytes, computed here with the `sha2` crate.
@@ -419,4 +424,172 @@ fn unverified_points_are_recorded_and_fallback_cures_them() {
         // The plain solve's odd-even mode (4.6e-2) or the windows' 6e-5.
         assert!(if fallback == "false" { e > 1e-2 } else { e < 1e-4 }, "{e:e}");
     }
+}
+
+/// A scene of my own: a damped oscillator with a cubic spring, `c` the damping.
+const DUFFING: &str = r#"
+[scene]
+name = "damped duffing"
+lagrangian = "1/2*x_dot^2 - 1/2*x^2 - 1/4*x^4"
+
+[parameters]
+c = 1
+
+[[coordinates]]
+name = "x"
+initial = 1
+velocity = 0
+
+[forces]
+x = "-c*x_dot"
+
+[time]
+start = 0
+end = 4
+nodes = 64
+
+[discretization]
+operator = "SBP242"
+
+[solver]
+backend = "newton"
+
+[verify]
+tol = 1e-2
+"#;
+
+/// The cells of `name` in a row.
+fn cell<'a>(r: &Results, row: &'a [String], name: &str) -> &'a str {
+    &row[r.column_index(name).unwrap_or_else(|| panic!("no column {name}"))]
+}
+
+/// With `--jobs 1` one worker runs every point: the points of equal structure (one N, a
+/// damping axis) follow each other and reuse the first one's LU analysis, a point of
+/// another N analyses anew; every trajectory is the one a separate one-point solve
+/// (a fresh process, a fresh analysis) finds, to 1e-12.
+#[test]
+fn one_worker_reuses_the_lu_analysis_of_equal_structures_and_changes_no_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("duffing.toml");
+    std::fs::write(&scene, DUFFING).unwrap();
+    let p = common::sweep_file(
+        dir.path(),
+        &scene,
+        "keep_trajectories = true\n[[grid]]\nnodes = 48\nc = [0.5, 2]\n[[grid]]\nnodes = 96\nc = [0.25, 0.5, 1, 2]\n",
+    );
+    let out = dir.path().join("out");
+    let r = run_sweep(&p, &out, &["-j", "1"]);
+    // Rows in the order the worker ran them: the larger N first.
+    let runs: Vec<(&str, &str, &str)> =
+        r.rows.iter().map(|row| (cell(&r, row, "nodes"), cell(&r, row, "lu_analysis"), cell(&r, row, "status"))).collect();
+    let expected = [("96", "computed"), ("96", "reused"), ("96", "reused"), ("96", "reused"), ("48", "computed"), ("48", "reused")];
+    assert_eq!(runs.iter().map(|&(n, a, _)| (n, a)).collect::<Vec<_>>(), expected, "{runs:?}");
+    assert!(runs.iter().all(|&(_, _, s)| s == "converged"), "{runs:?}");
+    for row in &r.rows {
+        let (nodes, c, id) = (cell(&r, row, "nodes"), cell(&r, row, "c"), cell(&r, row, "id"));
+        let single = dir.path().join(format!("single-{id}"));
+        let args =
+            [scene.to_str().unwrap(), "--nodes", nodes, "--set", &format!("c={c}"), "--no-fallback", "-q", "-o", single.to_str().unwrap()];
+        let o = common::skg(&args, Path::new("."));
+        assert!(o.status.success(), "{}", common::text(&o));
+        let swept = skg_core::check::Table::read(&out.join("points").join(id).join("trajectory.csv")).unwrap();
+        let alone = skg_core::check::Table::read(&single.join("trajectory.csv")).unwrap();
+        assert_eq!((swept.columns.len(), swept.rows.len()), (alone.columns.len(), alone.rows.len()));
+        let d = swept.rows.iter().flatten().zip(alone.rows.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(d <= 1e-12, "N = {nodes}, c = {c}: the swept trajectory differs from a one-point solve by {d:e}");
+        let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(single.join("summary.json")).unwrap()).unwrap();
+        let residual = summary["diagnostics"]["max_residual"].as_f64().unwrap();
+        let swept_residual: f64 = cell(&r, row, "max_residual").parse().unwrap();
+        assert!((residual - swept_residual).abs() <= 1e-12, "{residual:e} against {swept_residual:e}");
+        assert_eq!(summary["backend"]["newton"]["analysis_reused"], false, "a one-point solve analyses");
+    }
+}
+
+/// `solved` for a row whose solve converged (verified or not: the small tumbler grids
+/// need the fallback ladder to verify), else its status.
+fn solved<'a>(r: &Results, row: &'a [String]) -> &'a str {
+    if cell(r, row, "converged") == "true" && !cell(r, row, "solver_status").is_empty() {
+        "solved"
+    } else {
+        cell(r, row, "status")
+    }
+}
+
+/// Pids of the child processes of `pid` (Linux's /proc).
+fn children(pid: u32) -> Vec<u32> {
+    let text = std::fs::read_to_string(format!("/proc/{pid}/task/{pid}/children")).unwrap_or_default();
+    text.split_whitespace().map(|p| p.parse().unwrap()).collect()
+}
+
+/// A worker killed (as by the kernel's out-of-memory killer) while it runs a point costs
+/// only that point, recorded as crashed; a fresh worker runs the rest.
+#[test]
+fn a_killed_worker_costs_only_its_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = sweep_file(dir.path(), "tumbler", "[[grid]]\nnodes = [128, 160, 192]\n[[points]]\nnodes = 8192\n");
+    let out = dir.path().join("out");
+    let mut sweep = start_sweep(&p, &out);
+    // The largest point goes first: kill its worker while it computes.
+    let start = Instant::now();
+    let worker = loop {
+        if let Some(&w) = children(sweep.id()).first() {
+            break w;
+        }
+        assert!(start.elapsed() < Duration::from_secs(30), "no worker started");
+        std::thread::sleep(Duration::from_millis(2));
+    };
+    std::thread::sleep(Duration::from_millis(100));
+    assert!(!out.join("results.csv").exists() || Results::read(&out).unwrap().rows.is_empty(), "the first point finished too soon");
+    assert!(Command::new("kill").args(["-KILL", &worker.to_string()]).status().unwrap().success());
+    assert!(sweep.wait().unwrap().success());
+    let r = Results::read(&out).unwrap();
+    let mut rows: Vec<(usize, &str, &str)> =
+        r.rows.iter().map(|row| (cell(&r, row, "nodes").parse().unwrap(), solved(&r, row), cell(&r, row, "message"))).collect();
+    rows.sort();
+    assert_eq!(
+        rows.iter().map(|&(n, s, _)| (n, s)).collect::<Vec<_>>(),
+        [(128, "solved"), (160, "solved"), (192, "solved"), (8192, "crashed")]
+    );
+    assert!(rows[3].2.contains("SIGKILL"), "{}", rows[3].2);
+    assert!(!out.join(".work").exists(), "worker files are cleaned up");
+}
+
+/// The sweep's timeout kills the worker of the late point only; a fresh worker runs the
+/// others.
+#[test]
+fn a_timeout_kills_only_the_late_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = sweep_file(dir.path(), "tumbler", "timeout = 3\n[[grid]]\nnodes = [128, 160, 192]\n[[points]]\nnodes = 65536\n");
+    let r = run_sweep(&p, &dir.path().join("out"), &["-j", "1"]);
+    let mut rows: Vec<(usize, &str, &str)> =
+        r.rows.iter().map(|row| (cell(&r, row, "nodes").parse().unwrap(), solved(&r, row), cell(&r, row, "converged"))).collect();
+    rows.sort();
+    assert_eq!(
+        rows.iter().map(|&(n, s, _)| (n, s)).collect::<Vec<_>>(),
+        [(128, "solved"), (160, "solved"), (192, "solved"), (65536, "timeout")]
+    );
+    assert_eq!(rows[3].2, "false");
+}
+
+/// A results.csv of an earlier layout (here: without `lu_analysis`) is not resumed; the
+/// error names what differs.
+#[test]
+fn resuming_a_results_file_without_a_newer_column_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = sweep_file(dir.path(), "free_fall", "[[grid]]\nnodes = [32]\n");
+    let out = dir.path().join("out");
+    let r = run_sweep(&p, &out, &[]);
+    let results = out.join("results.csv");
+    let drop_at = r.column_index("lu_analysis").unwrap();
+    let without = |fields: &[String]| {
+        let kept: Vec<String> = fields.iter().enumerate().filter(|(k, _)| *k != drop_at).map(|(_, f)| f.clone()).collect();
+        skg_sweep::csv_line(&kept)
+    };
+    let mut old = without(&r.header);
+    r.rows.iter().for_each(|row| old.extend(without(row)));
+    std::fs::write(&results, old).unwrap();
+    let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap()], Path::new("."));
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("results.csv") && t.contains("it lacks lu_analysis") && t.contains("--new-results"), "{t}");
 }

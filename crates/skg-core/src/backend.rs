@@ -7,8 +7,22 @@
 //! sparsity plans of the Jacobian (and Hessian) and, for Newton, the symbolic LU
 //! analysis. [`SquareSolver::solve`] can then be called for any number of starting
 //! points or actions of the same model and grid (only the initial state `q0`, `v0` may
-//! differ), and [`SquareSolver::into_analysis`] hands the analysis on to the solver of
-//! another action of equal structure (a sweep point).
+//! differ): the time windows of one run share one solver.
+//!
+//! **The kept analysis.** When a Newton solver is dropped, its symbolic LU analysis (a
+//! [`SystemSolver`]) is kept, one per thread, and the next [`SquareSolver`] of the same
+//! thread with `backend = "newton"` takes it over. It is used only if the new system's
+//! Jacobian structure is the same (size and every (row, column) entry in the same order,
+//! [`SystemSolver::fits`]); otherwise it is dropped and the structure analysed anew. So
+//! every path that solves several systems of equal structure one after the other reuses
+//! it without being told: the attempts of the fallback ladder, the points a sweep worker
+//! runs one after the other, and repeated `skg.solve` calls from one Python thread. The
+//! slot is per thread, not one process-wide mutex, so solves on parallel threads (e.g.
+//! `cargo test`) neither wait for each other nor take each other's analysis, and a
+//! report's `analysis_reused` depends only on what ran before on the same thread. The
+//! kept value holds the memory of its last factorization until the next Newton solve on
+//! the thread replaces it, or [`discard_kept_analysis`] frees it. Ipopt keeps doing its
+//! own MUMPS analysis in every solve (its C interface offers no way to keep one).
 //!
 //! **Stopping Ipopt.** Ipopt is stopped from its intermediate callback
 //! (`StopWhenSolved`) as soon as `max |c|` meets the tolerance (status
@@ -26,6 +40,7 @@
 //! from the same starting point, so a Newton solve never ends worse than an Ipopt solve;
 //! the [`BackendReport`] records Newton's own outcome and that Ipopt finished.
 
+use std::cell::RefCell;
 use std::fmt;
 
 use serde::Serialize;
@@ -110,6 +125,18 @@ pub struct NewtonReport {
     pub stats: NewtonStats,
 }
 
+impl NewtonReport {
+    /// `computed` or `reused`: whether this solve made its symbolic LU analysis or took
+    /// over one of an earlier solve of equal structure (results.csv's `lu_analysis`).
+    pub fn lu_analysis(&self) -> &'static str {
+        if self.analysis_reused {
+            "reused"
+        } else {
+            "computed"
+        }
+    }
+}
+
 /// Which backend ran, and how.
 #[derive(Debug, Clone, Serialize)]
 pub struct BackendReport {
@@ -173,7 +200,8 @@ pub struct SquareSolver {
 
 impl SquareSolver {
     /// The solver of `action`'s system with `scene`'s formulation and solver settings:
-    /// the sparsity plans, and no LU analysis yet (made by the first Newton solve).
+    /// the sparsity plans and, with `backend = "newton"`, the thread's kept LU analysis
+    /// (see the module documentation; used by the first solve if its structure fits).
     pub fn new(scene: &Scene, action: &Action) -> SquareSolver {
         let jac_block = match scene.formulation {
             Formulation::Reduced => Block::ReducedJacobian,
@@ -189,20 +217,8 @@ impl SquareSolver {
             },
             jac: action.plan(jac_block),
             hess: exact_hessian.then(|| action.plan(Block::ReducedHessian)),
-            lu: None,
+            lu: if scene.solver.backend == Backend::Newton { KEPT_ANALYSIS.take() } else { None },
         }
-    }
-
-    /// Adopt the LU analysis of an earlier solver (e.g. of the previous sweep point); it
-    /// is used only if its structure equals this system's, otherwise analysed anew.
-    pub fn with_analysis(mut self, lu: Option<SystemSolver>) -> SquareSolver {
-        self.lu = lu;
-        self
-    }
-
-    /// The LU analysis, to hand on to the solver of another action of equal structure.
-    pub fn into_analysis(self) -> Option<SystemSolver> {
-        self.lu
     }
 
     /// The Jacobian's sparsity plan.
@@ -236,6 +252,26 @@ impl SquareSolver {
     }
 }
 
+impl Drop for SquareSolver {
+    /// Keep the LU analysis for the next solver of this thread.
+    fn drop(&mut self) {
+        if let Some(lu) = self.lu.take() {
+            KEPT_ANALYSIS.set(Some(lu));
+        }
+    }
+}
+
+thread_local! {
+    /// The LU analysis of the last Newton solver dropped on this thread (module docs).
+    static KEPT_ANALYSIS: RefCell<Option<SystemSolver>> = const { RefCell::new(None) };
+}
+
+/// Free the LU analysis kept for the next Newton solve of this thread (its memory; the
+/// next solve analyses its structure anew).
+pub fn discard_kept_analysis() {
+    KEPT_ANALYSIS.take();
+}
+
 /// Solve one adapter's system from `x0` (the adapter's unknowns): Newton first if
 /// asked for (reusing the analysis in `lu` when its structure fits, else replacing it),
 /// Ipopt when Newton was not asked for or failed.
@@ -249,8 +285,10 @@ fn solve_problem<P: Problem>(
     let (mut total_s, mut evaluation_s) = (0.0, 0.0);
     if settings.backend == Backend::Newton {
         let mut analysis_s = 0.0;
-        let reusable = lu.as_ref().is_some_and(|lu| lu.size() == x0.len() && lu.structure() == problem.jacobian_structure());
+        let reusable = lu.as_ref().is_some_and(|lu| lu.fits(x0.len(), problem.jacobian_structure()));
         if !reusable {
+            // Free an analysis of another structure before making the new one.
+            *lu = None;
             let analysed = SystemSolver::new(x0.len(), problem.jacobian_structure())?;
             analysis_s = analysed.analysis_seconds();
             *lu = Some(analysed);

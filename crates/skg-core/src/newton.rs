@@ -242,6 +242,13 @@ impl SystemSolver {
         &self.structure
     }
 
+    /// Whether this solver serves the `n × n` system with the Jacobian structure
+    /// `structure`: the same size and the same (row, column) entries in the same order
+    /// (the order matters: the solver maps each entry to its compressed position).
+    pub fn fits(&self, n: usize, structure: &[(u32, u32)]) -> bool {
+        self.n == n && self.structure == structure
+    }
+
     /// Seconds the symbolic analysis took (once, in [`SystemSolver::new`]).
     pub fn analysis_seconds(&self) -> f64 {
         self.analysis_s
@@ -266,7 +273,7 @@ impl SystemSolver {
                 x0.len()
             )));
         }
-        if problem.jacobian_structure() != self.structure.as_slice() {
+        if !self.fits(n, problem.jacobian_structure()) {
             return Err(NewtonError::OtherStructure);
         }
         let start = Instant::now();
@@ -585,5 +592,21 @@ mod tests {
         let mut other = SystemSolver::new(2, &[(0, 0), (1, 1)]).unwrap();
         assert!(matches!(other.solve(&mut c, &[1.0, 0.5], &opts), Err(NewtonError::OtherStructure)));
         assert!(matches!(SystemSolver::new(2, &[(0, 2)]), Err(NewtonError::Structure(_))));
+    }
+
+    /// An analysis is shared only by systems of the same pattern: equal sizes and equal
+    /// nonzero counts are not enough.
+    #[test]
+    fn an_analysis_fits_only_the_same_pattern() {
+        let lower = [(0, 0), (1, 0), (1, 1), (2, 1), (2, 2)];
+        let upper = [(0, 0), (0, 1), (1, 1), (1, 2), (2, 2)];
+        let solver = SystemSolver::new(3, &lower).unwrap();
+        assert!(solver.fits(3, &lower));
+        assert!(!solver.fits(3, &upper), "same size and nonzero count, other pattern");
+        assert!(!solver.fits(4, &lower), "same entries, other size");
+        let mut reordered = lower;
+        reordered.swap(0, 4);
+        assert!(!solver.fits(3, &reordered), "the entries' order maps them to their slots");
+        assert!(!solver.fits(3, &lower[..4]));
     }
 }

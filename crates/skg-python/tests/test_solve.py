@@ -63,6 +63,23 @@ def test_newton_backend_matches_closed_form_and_ipopt(scene):
         skg.solve(scene("rolling_disk"), backend="lu")
 
 
+def test_repeated_newton_solves_of_one_structure_reuse_the_lu_analysis(scene):
+    # Another incline angle on the same grid: the same sparsity structure, so the second
+    # solve of this thread takes the first one's symbolic analysis over; another grid
+    # analyses anew. The reused analysis finds the root a fresh one finds.
+    args = dict(nodes=96, operator="SBP242", backend="newton")
+    first = skg.solve(scene("rolling_disk"), set={"alpha": 0.4}, **args)
+    second = skg.solve(scene("rolling_disk"), set={"alpha": 0.5}, **args)
+    other = skg.solve(scene("rolling_disk"), set={"alpha": 0.5}, **dict(args, nodes=80))
+    assert second.summary["backend"]["newton"]["analysis_reused"]
+    assert second.summary["backend"]["newton"]["analysis_s"] == 0.0
+    assert not other.summary["backend"]["newton"]["analysis_reused"]
+    assert np.abs(second.q - first.q).max() > 1e-3
+    fresh = skg.solve(scene("rolling_disk"), set={"alpha": 0.5}, **args)  # after N = 80: analysed anew
+    assert not fresh.summary["backend"]["newton"]["analysis_reused"]
+    assert np.abs(second.q - fresh.q).max() <= 1e-12
+
+
 def damped_exact(t, x0=1.0, v0=0.0, m=1.0, k=4.0, c=3.0):
     """scenarios/damped_oscillator.toml: x = exp(-ct/2m)(x0 cos wt + (v0 + c x0/2m)/w sin wt)."""
     w = np.sqrt(k / m - c**2 / (4 * m**2))

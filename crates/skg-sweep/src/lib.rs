@@ -11,10 +11,14 @@
 //! * **Before a run** ([`plan`]): the points this run owns, a rough time estimate and
 //!   the line saying so; more than [`CONFIRM_ABOVE`] points are refused unless confirmed
 //!   (the command line's `--yes`, the Python module's `yes=True`).
-//! * **Workers**: Debian's Ipopt/MUMPS is not thread-safe (docs/solver.md), so each point runs
-//!   in a child process (`skg-solve sweep-worker JOB.json`), at most `jobs` at once, the
-//!   points with the largest [`estimated_cost`] first. A
-//!   child dies with the driver (`PR_SET_PDEATHSIG`), and Ctrl-C reaches the whole
+//! * **Workers** ([`workers`]): Debian's Ipopt/MUMPS is not thread-safe
+//!   (docs/solver.md), so points run in child processes (`skg-solve sweep-worker
+//!   WORK`), at most `jobs` at once, the points with the largest [`estimated_cost`]
+//!   first. A worker runs one point after another, handed to it through its stdin, so
+//!   points of equal structure ([`Expanded::structures`]) in a row share the process
+//!   and, with the Newton backend, the symbolic LU analysis (`lu_analysis` column). A
+//!   crash or a timeout costs only the point in flight; a fresh worker takes the next.
+//!   A worker dies with the driver (`PR_SET_PDEATHSIG`), and Ctrl-C reaches the whole
 //!   process group.
 //! * **Results**: the driver alone appends to `results.csv`, one whole line per
 //!   finished point, flushed and fsync'd, and holds the output directory's lock
@@ -45,7 +49,11 @@
 //! * `converged` (`true`/`false`), `status` (the stable name of the [`PointStatus`]:
 //!   `converged`, `not_verified`, `not_converged`, `error`, `crashed`, `timeout`),
 //!   `solver_status` (the finishing backend's status name, Ipopt's or `Newton_…`,
-//!   `ODE_Succeeded` for a peer point, empty when the solver did not finish), then `iterations`, `wall_s`, `error_max`, `error_rms`, `error_column`,
+//!   `ODE_Succeeded` for a peer point, empty when the solver did not finish), then
+//!   `verification`, `verify_error`, `solved_as`, `iterations`, `wall_s`, `lu_analysis`
+//!   (`computed` or `reused`: the Newton backend's symbolic LU analysis, made for this
+//!   point or taken over from the worker's previous point of equal structure; empty
+//!   when Newton did not run), `error_max`, `error_rms`, `error_column`,
 //!   `energy_drift`, `energy_artifact` (empty unless the energy is conserved:
 //!   [`skg_core::tune::conserves_energy`]), `artifacts`, `max_residual`, `message`;
 //! * the provenance ([`Provenance`]): `skg_solve_version`, `schema_version` and
@@ -65,18 +73,19 @@
 
 mod results;
 mod status;
+pub mod workers;
 
 pub use results::{
     csv_line, header_names, results_columns, results_row, Column, Provenance, Results, EXPR_SUFFIX, LEADING_COLUMNS, PROVENANCE_COLUMNS,
     RESULT_COLUMNS,
 };
 pub use status::{PointStatus, UnknownStatus};
+pub use workers::serve_points;
 
 use std::collections::{BTreeMap, BTreeSet, HashSet, VecDeque};
 use std::fmt;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use indexmap::IndexMap;
@@ -417,6 +426,9 @@ pub struct Expanded {
     pub points: Vec<Point>,
     /// Rough relative cost of each point (see [`estimated_cost`]), by index.
     pub costs: Vec<f64>,
+    /// Each point's structure key ([`structure_key`]), by index: points with equal keys
+    /// are run one after the other by one worker where the order allows.
+    pub structures: Vec<String>,
     /// Grid axes in order of first appearance.
     pub axes: Vec<String>,
     /// The scene-parameter axes with some value written as an expression (they get an
@@ -711,6 +723,7 @@ impl SweepFile {
         }
         let mut points = Vec::new();
         let mut costs = Vec::new();
+        let mut structures = Vec::new();
         let mut seen = HashSet::new();
         let mut duplicates = 0;
         for (values, method, loc) in raw {
@@ -731,6 +744,7 @@ impl SweepFile {
             if seen.insert(p.id()) {
                 p.evaluated = evaluated_parameters(&p, &scene);
                 costs.push(estimated_cost(&scene, &p.method));
+                structures.push(structure_key(&scene, &p.method));
                 points.push(p);
             } else {
                 duplicates += 1;
@@ -742,8 +756,16 @@ impl SweepFile {
             .map_err(|e| SweepError::Invalid { location: self.origin.whole(), message: e.to_string() })?;
         self.check_compare_columns(&first)?;
         let expression_axes = expression_axes(&axes, &points);
-        let expanded =
-            Expanded { points, costs, axes, expression_axes, duplicates, scene_hash: base.origin.content_hash(), reference_hash };
+        let expanded = Expanded {
+            points,
+            costs,
+            structures,
+            axes,
+            expression_axes,
+            duplicates,
+            scene_hash: base.origin.content_hash(),
+            reference_hash,
+        };
         self.check_column_names(&expanded.columns())?;
         Ok(expanded)
     }
@@ -780,6 +802,17 @@ pub fn estimated_cost(scene: &Scene, method: &Method) -> f64 {
             let full = if scene.formulation == Formulation::Full { 2.0 } else { 1.0 };
             n * width * full
         }
+    }
+}
+
+/// What decides the sparsity structure of a point's system (the same base scene
+/// throughout): the method, node count, operator, formulation and backend. Points with
+/// equal keys usually have equal Jacobian structures (a parameter value that makes a
+/// term vanish can still change it: the solver compares the structures themselves).
+pub fn structure_key(scene: &Scene, method: &Method) -> String {
+    match method {
+        Method::Ode { .. } => "ode".into(),
+        Method::Skg => format!("skg N={} {} {} {}", scene.nodes, scene.operator.name(), scene.formulation, scene.solver.backend),
     }
 }
 
@@ -888,6 +921,11 @@ pub struct Record {
     pub iterations: Option<usize>,
     /// Wall time of the computation inside the worker (scene setup, guess, solve).
     pub wall_s: Option<f64>,
+    /// The Newton backend's symbolic LU analysis: `computed` for this point, `reused`
+    /// from the worker's previous solve of equal structure, empty when Newton did not
+    /// run ([`skg_core::backend::NewtonReport::lu_analysis`]).
+    #[serde(default)]
+    pub lu_analysis: String,
     /// Node count of the resolved scene.
     pub nodes: Option<usize>,
     /// SBP operator of the resolved scene (SKG points).
@@ -930,6 +968,7 @@ impl Record {
             solver_status: String::new(),
             iterations: None,
             wall_s: None,
+            lu_analysis: String::new(),
             nodes: None,
             operator: None,
             formulation: None,
@@ -986,6 +1025,7 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
                 skg_core::solve::Method::Windows { length, .. } => format!("windows {length:.4} s"),
             };
             rec.iterations = Some(outcome.iterations);
+            rec.lu_analysis = outcome.backend.newton.as_ref().map_or("", |n| n.lu_analysis()).to_string();
             let d = &outcome.diagnostics;
             rec.energy_drift = Some(d.energy_drift);
             rec.max_residual = Some(d.max_residual);
@@ -1065,7 +1105,7 @@ pub struct SweepOptions {
     pub jobs: usize,
     /// Run only this shard's points.
     pub shard: Option<Shard>,
-    /// The executable that runs `sweep-worker JOB.json` (the skg-solve binary).
+    /// The executable that runs `sweep-worker WORK` (the skg-solve binary, [`workers`]).
     pub worker_exe: PathBuf,
     /// Show a progress bar (hidden anyway when stderr is not a terminal).
     pub progress: bool,
@@ -1098,15 +1138,6 @@ pub struct SweepReport {
     pub wall_s: f64,
     /// Where the previous results went (`--new-results`).
     pub superseded: Option<PathBuf>,
-}
-
-struct Running {
-    child: Child,
-    started: Instant,
-    point: Point,
-    job_path: PathBuf,
-    result_path: PathBuf,
-    err_path: PathBuf,
 }
 
 /// The settings of `[sweep]` that change the values of a row (recorded in `sweep.json`;
@@ -1236,9 +1267,11 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
         all_ids: expanded.points.iter().map(Point::id).collect(),
     };
     output::write_json(&dir.join("sweep.json"), &info)?;
-    // Largest first (stable: equal costs keep the file's order); rows carry their index.
+    // Largest first, equal structures together (stable: the file's order otherwise);
+    // rows carry their index.
     let mut todo: Vec<Point> = mine.iter().filter(|p| !done.contains(&p.id())).map(|&p| p.clone()).collect();
-    todo.sort_by(|a, b| expanded.costs[b.index].total_cmp(&expanded.costs[a.index]));
+    let (costs, structures) = (&expanded.costs, &expanded.structures);
+    todo.sort_by(|a, b| costs[b.index].total_cmp(&costs[a.index]).then_with(|| structures[a.index].cmp(&structures[b.index])));
     let mut queue: VecDeque<Point> = todo.into();
     let mut report = SweepReport {
         total: expanded.points.len(),
@@ -1250,46 +1283,32 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
         ..SweepReport::default()
     };
     let bar = progress_bar(opts.progress, mine.len(), report.skipped);
-    let jobs = opts.jobs.max(1);
-    let mut running: Vec<Running> = Vec::new();
     let artifact_tol = file.artifact_tol();
-    let timeout = file.sweep.timeout.as_ref().map(|t| *t.get_ref());
     let reference = file.reference();
     let scene_path = std::path::absolute(file.scene_path()).unwrap_or(file.scene_path());
-    while !queue.is_empty() || !running.is_empty() {
-        while running.len() < jobs {
-            let Some(point) = queue.pop_front() else { break };
-            let id = point.id();
-            let job = Job {
-                scene: scene_path.clone(),
-                point,
-                reference: reference.clone(),
-                compare: file.sweep.compare.as_ref().map(|c| c.get_ref().clone()),
-                skip_last: file.skip_last(),
-                keep_dir: file.sweep.keep_trajectories.then(|| dir.join("points").join(&id)),
-                fallback: file.sweep.fallback,
-            };
-            running.push(start_worker(&opts.worker_exe, &work, job)?);
+    let job_of = |point: Point| Job {
+        scene: scene_path.clone(),
+        keep_dir: file.sweep.keep_trajectories.then(|| dir.join("points").join(point.id())),
+        point,
+        reference: reference.clone(),
+        compare: file.sweep.compare.as_ref().map(|c| c.get_ref().clone()),
+        skip_last: file.skip_last(),
+        fallback: file.sweep.fallback,
+    };
+    let mut pool = workers::Pool::new(&opts.worker_exe, &work, opts.jobs, file.sweep.timeout.as_ref().map(|t| *t.get_ref()));
+    loop {
+        while pool.hand_out(&mut queue, expanded, job_of)? {}
+        if queue.is_empty() {
+            pool.close_idle();
+            if pool.busy() == 0 {
+                break;
+            }
         }
         std::thread::sleep(Duration::from_millis(5));
-        let mut k = 0;
-        while k < running.len() {
-            let exit = running[k].child.try_wait().map_err(|e| SweepError::Spawn { exe: opts.worker_exe.clone(), source: e })?;
-            let rec = match (exit, timeout) {
-                (Some(exit), _) => finished_record(&running[k], exit),
-                (None, Some(t)) if running[k].started.elapsed().as_secs_f64() > t => timed_out_record(&mut running[k], t),
-                (None, _) => {
-                    k += 1;
-                    continue;
-                }
-            };
-            let r = running.swap_remove(k);
-            let line = csv_line(&results_row(&columns, &r.point, &rec, artifact_tol, &provenance));
+        for (point, rec) in pool.finished()? {
+            let line = csv_line(&results_row(&columns, &point, &rec, artifact_tol, &provenance));
             results.write_all(&line).map_err(io_err(&results_path))?;
             results.sync_data().map_err(io_err(&results_path))?;
-            for p in [&r.job_path, &r.result_path, &r.err_path] {
-                let _ = std::fs::remove_file(p);
-            }
             report.ran += 1;
             if !rec.status.is_converged() {
                 report.failed += 1;
@@ -1315,60 +1334,6 @@ fn progress_bar(visible: bool, len: usize, done: usize) -> indicatif::ProgressBa
     bar.reset_eta();
     bar.set_message("0 failed");
     bar
-}
-
-/// Write the job file into `work` and start a worker on it.
-fn start_worker(exe: &Path, work: &Path, job: Job) -> Result<Running, SweepError> {
-    let id = job.point.id();
-    let job_path = work.join(format!("{id}.job.json"));
-    let result_path = work.join(format!("{id}.result.json"));
-    let err_path = work.join(format!("{id}.stderr"));
-    let _ = std::fs::remove_file(&result_path);
-    output::write_json(&job_path, &job)?;
-    let child = spawn_worker(exe, &job_path, &result_path, &err_path)?;
-    Ok(Running { child, started: Instant::now(), point: job.point, job_path, result_path, err_path })
-}
-
-/// The record of a worker that exited: its result file, or a crash with the last lines
-/// of its stderr.
-fn finished_record(r: &Running, exit: std::process::ExitStatus) -> Record {
-    match std::fs::read_to_string(&r.result_path).ok().and_then(|t| serde_json::from_str::<Record>(&t).ok()) {
-        Some(rec) => rec,
-        None => {
-            let stderr = std::fs::read_to_string(&r.err_path).unwrap_or_default();
-            let tail: Vec<&str> = stderr.lines().rev().take(3).collect::<Vec<_>>().into_iter().rev().collect();
-            Record::new(PointStatus::Crashed, format!("worker exited with {exit} without a result: {}", tail.join(" | ")))
-        }
-    }
-}
-
-/// Kill a worker that ran past the sweep's timeout of `limit_s` seconds; its record.
-fn timed_out_record(r: &mut Running, limit_s: f64) -> Record {
-    let _ = r.child.kill();
-    let _ = r.child.wait();
-    let message = format!("killed after the sweep's timeout of {limit_s} s");
-    Record { wall_s: Some(r.started.elapsed().as_secs_f64()), ..Record::new(PointStatus::TimedOut, message) }
-}
-
-fn spawn_worker(exe: &Path, job: &Path, result: &Path, err: &Path) -> Result<Child, SweepError> {
-    let spawn_err = |source| SweepError::Spawn { exe: exe.to_path_buf(), source };
-    let stderr = std::fs::File::create(err).map_err(spawn_err)?;
-    let mut cmd = Command::new(exe);
-    cmd.arg("sweep-worker").arg(job).arg(result).stdin(Stdio::null()).stdout(Stdio::null()).stderr(stderr);
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::unix::process::CommandExt;
-        // SAFETY: prctl is async-signal-safe; the closure allocates nothing.
-        unsafe {
-            cmd.pre_exec(|| {
-                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                Ok(())
-            });
-        }
-    }
-    cmd.spawn().map_err(spawn_err)
 }
 
 // ---------------------------------------------------------------------------------------

@@ -67,6 +67,7 @@ pub const RESULT_COLUMNS: &[&str] = &[
     "solved_as",
     "iterations",
     "wall_s",
+    "lu_analysis",
     "error_max",
     "error_rms",
     "error_column",
@@ -177,6 +178,7 @@ fn fixed_cell(name: &str, point: &Point, rec: &Record, artifact_tol: f64, proven
         "solved_as" => rec.solved_as.clone(),
         "iterations" => rec.iterations.map_or(String::new(), |i| i.to_string()),
         "wall_s" => optional_number(rec.wall_s),
+        "lu_analysis" => rec.lu_analysis.clone(),
         "error_max" => optional_number(rec.error_max),
         "error_rms" => optional_number(rec.error_rms),
         "error_column" => rec.error_column.clone().unwrap_or_default(),
@@ -369,10 +371,10 @@ pub(crate) fn open_results(
         return Err(SweepError::Results {
             path: path.to_path_buf(),
             message: format!(
-                "was written by a different sweep (columns {}; this sweep writes {}): use another output directory, \
-                 or start a new result set with --new-results",
-                existing.header.join(","),
-                header.join(",")
+                "has other columns than this sweep writes ({}): it was written by a different sweep or by another \
+                 skg-solve version. Use another output directory, or start a new result set with --new-results (the old \
+                 results are kept in a subdirectory)",
+                column_difference(&existing.header, header)
             ),
         });
     }
@@ -399,6 +401,19 @@ pub(crate) fn open_results(
         }
     }
     Ok((f, existing.ids()))
+}
+
+/// How the columns `found` differ from `expected`: the missing ones, the extra ones,
+/// or that they are in another order.
+fn column_difference(found: &[String], expected: &[String]) -> String {
+    let absent = |a: &[String], b: &[String]| a.iter().filter(|c| !b.contains(c)).cloned().collect::<Vec<_>>().join(", ");
+    let (missing, extra) = (absent(expected, found), absent(found, expected));
+    match (missing.is_empty(), extra.is_empty()) {
+        (true, true) => "the same columns in another order".into(),
+        (false, true) => format!("it lacks {missing}"),
+        (true, false) => format!("it has {extra} besides"),
+        (false, false) => format!("it lacks {missing} and has {extra} besides"),
+    }
 }
 
 #[cfg(test)]

@@ -12,15 +12,16 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use skg_core::output;
 use skg_sweep as sweep;
 
 /// `skg-solve sweep --help`: what the command writes (column lists from `skg_sweep`).
 pub fn sweep_long_about() -> String {
     let statuses: Vec<&str> = sweep::PointStatus::ALL.iter().map(|s| s.name()).collect();
     format!(
-        "Run a parameter sweep: every point of the sweep file's grid in its own worker process, each finished point \
-         appended to DIR/results.csv. Rerunning resumes (points already in results.csv are skipped; --retry-failed runs \
+        "Run a parameter sweep: the points of the sweep file's grid in up to --jobs worker processes, each finished \
+         point appended to DIR/results.csv. A worker runs one point after another, points of equal structure (node \
+         count, operator, formulation, backend) in a row, so that the Newton backend reuses the symbolic LU analysis \
+         (column lu_analysis); a worker that crashes or exceeds the sweep's timeout costs only its point. Rerunning resumes (points already in results.csv are skipped; --retry-failed runs \
          the failed ones again). A rerun after the base scene, the reference file or the [sweep] settings that \
          change a row were edited is refused (--new-results starts a new result set). A second sweep into the same \
          DIR is refused. Above {} points the sweep starts only with --yes.\n\n\
@@ -129,11 +130,8 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-pub fn run_worker(job: &Path, result: &Path) -> Result<ExitCode> {
-    let text = std::fs::read_to_string(job).with_context(|| format!("reading {}", job.display()))?;
-    let job: sweep::Job = serde_json::from_str(&text).with_context(|| format!("parsing {}", job.display()))?;
-    let rec = sweep::run_job(&job);
-    output::write_json(result, &rec)?;
+pub fn run_worker(work: &Path) -> Result<ExitCode> {
+    sweep::serve_points(work, std::io::stdin().lock())?;
     Ok(ExitCode::SUCCESS)
 }
 
