@@ -181,8 +181,9 @@ fn exit_status_says_converged_and_verified() {
     let tumbler = common::scenario("tumbler");
     let o = run(&[tumbler.to_str().unwrap(), "-o", "short", "--max-iter", "1", "--no-fallback"]);
     assert_eq!(o.status.code(), Some(3), "{}", common::text(&o));
+    // An option value out of range is a usage error.
     let o = run(&[damped, "-o", "x", "--verify-tol", "0"]);
-    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
     assert!(Path::new(dir.path()).join("short/summary.json").is_file());
 }
 
