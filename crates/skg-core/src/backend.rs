@@ -347,7 +347,10 @@ enum Stop {
 /// `max |c| ≤ tol`, or, after at least one step, once it is at the round-off level of
 /// the last Jacobian Ipopt asked for (as Newton does: the round-off test says that
 /// steps no longer reduce the residual, which a starting point alone cannot show).
-/// Everything else is passed through to the wrapped adapter.
+/// `max |c|` is Ipopt's `inf_pr`: unscaled, since skg-solve turns Ipopt's NLP scaling off
+/// (a scene that turns it on under `[solver.ipopt]` is stopped on the scaled value, as
+/// Ipopt's own test would be; convergence is judged on the recomputed unscaled residual
+/// either way). Everything else is passed through to the wrapped adapter.
 struct StopWhenSolved<'p, P: Problem> {
     inner: &'p mut P,
     tol: f64,
