@@ -50,8 +50,8 @@ enum Command {
     /// (wall time split into setup, initial guess, evaluations and the solver; the
     /// verification in its own column; peak memory).
     Bench(bench::BenchArgs),
-    /// Run a parameter sweep: every point of the sweep file's grid in its own worker
-    /// process, each finished point appended to DIR/results.csv. Rerunning resumes.
+    /// Run a parameter sweep: the points of the sweep file's grid in worker processes,
+    /// each finished point appended to DIR/results.csv. Rerunning resumes.
     #[command(long_about = sweep::sweep_long_about())]
     Sweep(sweep::SweepArgs),
     /// Join the results of a sweep's shards into one results.csv.

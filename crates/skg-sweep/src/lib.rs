@@ -1,6 +1,6 @@
-//! Parameter sweeps: a sweep file (TOML) names a base scene and a grid of values; every
-//! point of the grid is solved in its own worker process and appended to `results.csv`
-//! as soon as it finishes.
+//! Parameter sweeps: a sweep file (TOML) names a base scene and a grid of values; the
+//! points of the grid are solved in worker processes, each worker running one point after
+//! another ([`workers`]), and each is appended to `results.csv` as soon as it finishes.
 //!
 //! * **Grid expansion** ([`SweepFile::expand`]): each `[[grid]]` table is a Cartesian
 //!   product of its axes (the first axis varies slowest); `[[points]]` tables are explicit

@@ -529,9 +529,9 @@ def sweep(
 ) -> SweepResult:
     """Run (or resume) a sweep as ``skg-solve sweep`` does and return its results.
 
-    Every point runs in its own worker process of the ``skg-solve`` executable (found by
+    The points run in worker processes of the ``skg-solve`` executable (found by
     :func:`find_skg_solve`; Debian's Ipopt is not thread-safe, so parallel solves need
-    processes), at most ``jobs`` at once (default: the number of cores); each finished
+    processes), each worker one point after another, at most ``jobs`` at once (default: the number of cores); each finished
     point is appended to ``out/results.csv`` (default ``out/sweeps/<sweep name>``), and
     running the same call again resumes. ``shard="k/n"`` runs one shard. The options
     are the command line's: ``retry_failed`` (``--retry-failed``) runs the points that
