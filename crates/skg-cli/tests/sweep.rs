@@ -515,6 +515,14 @@ fn solved<'a>(r: &Results, row: &'a [String]) -> &'a str {
     }
 }
 
+/// Every row as (N, [`solved`], the cell of `column`), sorted by N.
+fn by_nodes<'a>(r: &'a Results, column: &str) -> Vec<(usize, &'a str, &'a str)> {
+    let mut rows: Vec<_> =
+        r.rows.iter().map(|row| (cell(r, row, "nodes").parse().unwrap(), solved(r, row), cell(r, row, column))).collect();
+    rows.sort();
+    rows
+}
+
 /// Pids of the child processes of `pid` (Linux's /proc).
 fn children(pid: u32) -> Vec<u32> {
     let text = std::fs::read_to_string(format!("/proc/{pid}/task/{pid}/children")).unwrap_or_default();
@@ -543,9 +551,7 @@ fn a_killed_worker_costs_only_its_point() {
     assert!(Command::new("kill").args(["-KILL", &worker.to_string()]).status().unwrap().success());
     assert!(sweep.wait().unwrap().success());
     let r = Results::read(&out).unwrap();
-    let mut rows: Vec<(usize, &str, &str)> =
-        r.rows.iter().map(|row| (cell(&r, row, "nodes").parse().unwrap(), solved(&r, row), cell(&r, row, "message"))).collect();
-    rows.sort();
+    let rows = by_nodes(&r, "message");
     assert_eq!(
         rows.iter().map(|&(n, s, _)| (n, s)).collect::<Vec<_>>(),
         [(128, "solved"), (160, "solved"), (192, "solved"), (8192, "crashed")]
@@ -564,9 +570,7 @@ fn a_timeout_kills_only_the_late_point() {
     // stops at the round-off level), so a 1 s limit separates them.
     let p = sweep_file(dir.path(), "tumbler", "timeout = 1\n[[grid]]\nnodes = [128, 160, 192]\n[[points]]\nnodes = 65536\n");
     let r = run_sweep(&p, &dir.path().join("out"), &["-j", "1"]);
-    let mut rows: Vec<(usize, &str, &str)> =
-        r.rows.iter().map(|row| (cell(&r, row, "nodes").parse().unwrap(), solved(&r, row), cell(&r, row, "converged"))).collect();
-    rows.sort();
+    let rows = by_nodes(&r, "converged");
     assert_eq!(
         rows.iter().map(|&(n, s, _)| (n, s)).collect::<Vec<_>>(),
         [(128, "solved"), (160, "solved"), (192, "solved"), (65536, "timeout")]
