@@ -444,9 +444,9 @@ fn ipopt_options(scene: &Scene) -> ipopt::Options {
         // MUMPS's default scaling (77, automatic) made the very first factorization of
         // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
         // on Debian's MUMPS 5.5). MUMPS's automatic pivot order picks SCOTCH, whose
-        // ordering is randomized: the same solve gave different trajectories (in the
-        // last digits) and, on hard wall scenes, different iteration counts and exit
-        // codes from run to run. AMF (2) is deterministic and was faster on every scene
+        // ordering of the same matrix varied from run to run (different fill): the same
+        // solve gave different trajectories (in the last digits) and, on hard wall
+        // scenes, different iteration counts and exit codes from run to run. AMF (2) is deterministic and was faster on every scene
         // measured (docs/solver.md, "Posing the system"). The scene's own
         // [solver.ipopt] options come after and override both.
         extra: [("mumps_scaling", 0), ("mumps_pivot_order", 2)]

@@ -115,12 +115,17 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
 
 /// A command-line number that must be finite and positive (a usage error otherwise).
 fn positive(text: &str) -> Result<f64, String> {
-    let x: f64 = text.parse().map_err(|e| format!("`{text}` is not a number: {e}"))?;
+    let x = number(text)?;
     (x > 0.0 && x.is_finite()).then_some(x).ok_or_else(|| format!("must be a positive number, got {text}"))
 }
 
 /// A command-line number that must be finite and not negative (a usage error otherwise).
 fn non_negative(text: &str) -> Result<f64, String> {
-    let x: f64 = text.parse().map_err(|e| format!("`{text}` is not a number: {e}"))?;
+    let x = number(text)?;
     (x >= 0.0 && x.is_finite()).then_some(x).ok_or_else(|| format!("must be a number ≥ 0, got {text}"))
+}
+
+/// A command-line number, or clap's message for a value that is not one.
+fn number(text: &str) -> Result<f64, String> {
+    text.parse().map_err(|e| format!("`{text}` is not a number: {e}"))
 }
