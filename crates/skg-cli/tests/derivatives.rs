@@ -1,11 +1,12 @@
 //! Exact derivatives against central finite differences, on random points of every
-//! shipped scene, and the squareness / nonsingularity of the discrete systems.
+//! shipped scene, and the squareness / nonsingularity of the discrete systems, with both
+//! ways of imposing the initial velocity.
 
 mod common;
 
 use nalgebra::DMatrix;
 use skg_core::action::{Action, Block};
-use skg_core::scenario::Overrides;
+use skg_core::scenario::{InitialVelocity, Overrides};
 use skg_core::solve::build_action;
 
 /// Deterministic pseudo-random numbers in [-1, 1) (xorshift), so failures reproduce.
@@ -66,9 +67,11 @@ fn equilibrate(mut m: DMatrix<f64>) -> DMatrix<f64> {
     m
 }
 
-fn small_action(name: &str) -> Action {
+const INITIAL_VELOCITIES: [InitialVelocity; 2] = [InitialVelocity::Strong, InitialVelocity::Natural];
+
+fn small_action(name: &str, initial_velocity: InitialVelocity) -> Action {
     // Nodes: the smallest grid on which every operator of the test has interior rows.
-    let ov = Overrides { nodes: Some(12), ..Default::default() };
+    let ov = Overrides { nodes: Some(12), initial_velocity: Some(initial_velocity), ..Default::default() };
     build_action(&common::load(name, &ov)).unwrap()
 }
 
@@ -79,8 +82,9 @@ fn check_close(what: &str, exact: f64, fd: f64, scale: f64) {
 
 #[test]
 fn gradient_matches_finite_differences_of_the_action() {
-    for name in common::SHIPPED {
-        let action = small_action(name);
+    for (name, iv) in common::SHIPPED.iter().flat_map(|n| INITIAL_VELOCITIES.map(|iv| (n, iv))) {
+        let action = small_action(name, iv);
+        let name = format!("{name} ({iv})");
         let mut rng = Rng(0x9e3779b97f4a7c15);
         let mut ws = action.model.workspace();
         let z = random_point(&action, &mut rng);
@@ -105,8 +109,9 @@ fn gradient_matches_finite_differences_of_the_action() {
 
 #[test]
 fn jacobians_and_hessian_match_finite_differences_of_the_gradient() {
-    for name in common::SHIPPED {
-        let action = small_action(name);
+    for (name, iv) in common::SHIPPED.iter().flat_map(|n| INITIAL_VELOCITIES.map(|iv| (n, iv))) {
+        let action = small_action(name, iv);
+        let name = format!("{name} ({iv})");
         let lay = &action.layout;
         let (n_p, len) = (lay.n_p, lay.len());
         let mut rng = Rng(0x2545f4914f6cdd1d);
@@ -144,14 +149,20 @@ fn jacobians_and_hessian_match_finite_differences_of_the_gradient() {
 
 #[test]
 fn discrete_systems_are_square_and_nonsingular_at_small_n() {
-    for name in common::SHIPPED {
-        for op in ["SBP121", "SBP242", "SBP363"] {
-            let nodes = if op == "SBP363" { 12 } else { 8 };
-            let scene = common::load(name, &common::grid(nodes, op));
+    for (name, iv) in common::SHIPPED.iter().flat_map(|n| INITIAL_VELOCITIES.map(|iv| (n, iv))) {
+        for (op, nodes) in [("SBP121", 8), ("SBP242", 8), ("SBP363", 12), ("SBP484", 16)] {
+            let ov = Overrides { initial_velocity: Some(iv), ..common::grid(nodes, op) };
+            let scene = common::load(name, &ov);
             let action = build_action(&scene).unwrap();
             let lay = &action.layout;
+            let op = format!("{op} ({iv})");
             assert_eq!(lay.n_p, lay.n_m, "{name} {op}: not square");
-            assert_eq!(lay.n_p, nodes * lay.d + nodes * lay.n + 2 * lay.d);
+            // The strong condition adds the multipliers ν_q1, ν_λ1 and ν_v and pins λ+[1].
+            let boundary = match iv {
+                InitialVelocity::Strong => 2 * lay.d,
+                InitialVelocity::Natural => lay.d,
+            };
+            assert_eq!(lay.n_p, nodes * lay.d + nodes * lay.n + boundary, "{name} {op}: unknowns");
             // At the time-stepping solution (a point near the critical point).
             let (times, _) = skg_core::solve::grid(&scene);
             let (states, _) =

@@ -600,3 +600,32 @@ fn resuming_a_results_file_without_a_newer_column_names_it() {
     assert_eq!(o.status.code(), Some(1), "{t}");
     assert!(t.contains("results.csv") && t.contains("it lacks lu_analysis") && t.contains("--new-results"), "{t}");
 }
+
+/// An `initial_velocity` axis: its own column in results.csv, each point solved with its
+/// condition (the natural one more accurate on SBP484, as against the closed form in
+/// tests/initial_velocity.rs), and the work-precision chart draws one line per condition.
+#[test]
+fn an_initial_velocity_axis_gets_its_column_and_its_chart_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = "reference = \"integrate\"\nfallback = false\n[[grid]]\noperator = \"SBP484\"\nnodes = [128, 256]\n\
+                initial_velocity = [\"strong\", \"natural\"]\n";
+    let p = common::sweep_file(dir.path(), &common::scenario("rolling_disk"), body);
+    let out = dir.path().join("out");
+    let r = run_sweep(&p, &out, &["-q"]);
+    assert_eq!(r.rows.len(), 4);
+    let mut errors = std::collections::BTreeMap::new();
+    for row in &r.rows {
+        assert_eq!(cell(&r, row, "status"), "converged", "{row:?}");
+        let key = (cell(&r, row, "nodes").to_string(), cell(&r, row, "initial_velocity").to_string());
+        errors.insert(key, cell(&r, row, "error_max").parse::<f64>().unwrap());
+    }
+    for n in ["128", "256"] {
+        let (s, nat) = (errors[&(n.to_string(), "strong".to_string())], errors[&(n.to_string(), "natural".to_string())]);
+        assert!(nat < s / 3.0, "N = {n}: natural {nat:e}, strong {s:e}");
+    }
+    let stem = dir.path().join("wp");
+    let o = common::skg(&["plot", "work-precision", out.to_str().unwrap(), "-o", stem.to_str().unwrap()], Path::new("."));
+    assert!(o.status.success(), "{}", common::text(&o));
+    let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
+    assert!(svg.contains("SBP484 reduced strong") && svg.contains("SBP484 reduced natural"), "legend of {}", stem.display());
+}

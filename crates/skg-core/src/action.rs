@@ -8,12 +8,18 @@
 //! of the initial conditions `ν_x` (`q+[1] = q_i`) and `ν_v` (`(Dq+)[1] = q̇_i`).
 //! Both blocks have `N d + N n + 2d` entries: the system is square.
 //!
+//! With the natural initial velocity ([`InitialVelocity::Natural`]) the first node is
+//! not absorbed: `ν_q1`, `ν_λ1` and `ν_v` do not exist, `λ+[1]` is an unknown, and the
+//! initial momentum `p_i` enters as the linear term `p_i·q-[1]`. Both blocks then have
+//! `N d + N n + d` entries.
+//!
 //! The action is `S(Z) = Σ_k H_kk s(T_k Z, t_k) + ½ Zᵀ K Z + lᵀ Z` with `Z = [P, M]`,
 //! the node density `s` of [`crate::model`] evaluated at the node's time
 //! `t_k = t₀ + k Δt` (k from 0), `T_k` the linear map from `Z` to the local variables of
 //! node `k` (the SBP derivative `D` supplies `v = Dq+` and `dw = Dq-`), and `K`, `l` the
 //! boundary terms: `K` couples each boundary multiplier to its condition, and `l` holds
-//! the initial state, `l = −(q₀, q̇₀)` on `(ν_x, ν_v)`. `S` is linear in `M`, so
+//! the initial state, `l = −(q₀, q̇₀)` on `(ν_x, ν_v)` (natural: `−q₀` on `ν_x` and `p_i`
+//! on `q-[1]`). `S` is linear in `M`, so
 //!
 //! * the reduced system is `R(P) = ∂S/∂M = 0` with Jacobian `∂²S/∂M∂P`, and the
 //!   Hessian of Ipopt's Lagrangian with multipliers `y` is `∂²S/∂P²` at `M = y`;
@@ -31,6 +37,7 @@ use rustc_hash::FxHashMap;
 
 use crate::model::{LocalKind, Model, PairTape, Workspace};
 use crate::sbp::SbpOperator;
+use crate::scenario::InitialVelocity;
 
 const NONE: u32 = u32::MAX;
 
@@ -43,15 +50,19 @@ pub struct GlobalLayout {
     pub n: usize,
     /// Grid nodes N.
     pub nodes: usize,
+    /// How the initial velocity is imposed.
+    pub initial_velocity: InitialVelocity,
     /// Z index of `q+[k][i]` at `k*d + i`.
     pub qp: Vec<u32>,
     /// Z index of `λ+[k][a]` at `k*n + a` (NONE at the pinned end nodes).
     pub lp: Vec<u32>,
-    /// Z index of the multiplier of `q-[1] = 0`, per coordinate.
+    /// Z index of the multiplier of `q-[1] = 0`, per coordinate (none with the natural
+    /// initial velocity).
     pub nu_q1: Vec<u32>,
     /// Z index of the multiplier of `q-[N] = 0`, per coordinate.
     pub nu_qn: Vec<u32>,
-    /// Z index of the multiplier of `λ-[1] = 0`, per constraint.
+    /// Z index of the multiplier of `λ-[1] = 0`, per constraint (none with the natural
+    /// initial velocity).
     pub nu_l1: Vec<u32>,
     /// Z index of the multiplier of `λ-[N] = 0`, per constraint.
     pub nu_ln: Vec<u32>,
@@ -61,7 +72,8 @@ pub struct GlobalLayout {
     pub lm: Vec<u32>,
     /// Z index of the multiplier of the initial condition `q+[1] = q_i`, per coordinate.
     pub nu_x: Vec<u32>,
-    /// Z index of the multiplier of the initial condition `(Dq+)[1] = q̇_i`, per coordinate.
+    /// Z index of the multiplier of the initial condition `(Dq+)[1] = q̇_i`, per
+    /// coordinate (none with the natural initial velocity).
     pub nu_v: Vec<u32>,
     /// Size of P (= size of M).
     pub n_p: usize,
@@ -70,9 +82,11 @@ pub struct GlobalLayout {
 }
 
 impl GlobalLayout {
-    /// The layout for `d` coordinates and `n` constraints on `nodes` nodes: P first
-    /// (node by node, then the boundary multipliers on minus variables), then M.
-    pub fn new(d: usize, n: usize, nodes: usize) -> Self {
+    /// The layout for `d` coordinates and `n` constraints on `nodes` nodes with the
+    /// initial velocity imposed as `initial_velocity` says: P first (node by node, then
+    /// the boundary multipliers on minus variables), then M.
+    pub fn new(d: usize, n: usize, nodes: usize, initial_velocity: InitialVelocity) -> Self {
+        let natural = initial_velocity == InitialVelocity::Natural;
         let next = std::cell::Cell::new(0u32);
         let take = || {
             let i = next.get();
@@ -85,15 +99,17 @@ impl GlobalLayout {
             for i in 0..d {
                 qp[k * d + i] = take();
             }
-            if k > 0 && k + 1 < nodes {
+            if (k > 0 || natural) && k + 1 < nodes {
                 for a in 0..n {
                     lp[k * n + a] = take();
                 }
             }
         }
-        let nu_q1: Vec<u32> = (0..d).map(|_| take()).collect();
+        // The first node's multipliers exist only where its rows are absorbed.
+        let first = |count: usize| if natural { Vec::new() } else { (0..count).map(|_| take()).collect() };
+        let nu_q1: Vec<u32> = first(d);
         let nu_qn: Vec<u32> = (0..d).map(|_| take()).collect();
-        let nu_l1: Vec<u32> = (0..n).map(|_| take()).collect();
+        let nu_l1: Vec<u32> = first(n);
         let nu_ln: Vec<u32> = (0..n).map(|_| take()).collect();
         let n_p = next.get() as usize;
         let mut qm = vec![NONE; nodes * d];
@@ -107,9 +123,9 @@ impl GlobalLayout {
             }
         }
         let nu_x: Vec<u32> = (0..d).map(|_| take()).collect();
-        let nu_v: Vec<u32> = (0..d).map(|_| take()).collect();
+        let nu_v: Vec<u32> = first(d);
         let n_m = next.get() as usize - n_p;
-        GlobalLayout { d, n, nodes, qp, lp, nu_q1, nu_qn, nu_l1, nu_ln, qm, lm, nu_x, nu_v, n_p, n_m }
+        GlobalLayout { d, n, nodes, initial_velocity, qp, lp, nu_q1, nu_qn, nu_l1, nu_ln, qm, lm, nu_x, nu_v, n_p, n_m }
     }
 
     /// Total size of Z.
@@ -197,6 +213,9 @@ pub struct Action {
     q0: Vec<f64>,
     /// Initial velocities q̇_i.
     v0: Vec<f64>,
+    /// The initial momentum p_i = ∂L/∂q̇(q_i, q̇_i, t_i) (used by the natural initial
+    /// velocity only).
+    p0: Vec<f64>,
     /// Node map T: for node k and local variable a, entries `map[offsets[k*m+a]..offsets[k*m+a+1]]`.
     offsets: Vec<u32>,
     map: Vec<(u32, f64)>,
@@ -209,11 +228,12 @@ pub struct Action {
 
 impl Action {
     /// The discrete action of `model` on the grid of `op` whose first node is at time
-    /// `t0`, with initial state (q0, v0) there: the node map T and the boundary terms.
-    pub fn new(model: Model, op: SbpOperator, t0: f64, q0: Vec<f64>, v0: Vec<f64>) -> Action {
+    /// `t0`, with initial state (q0, v0) there imposed as `initial_velocity` says: the
+    /// node map T and the boundary terms.
+    pub fn new(model: Model, op: SbpOperator, initial_velocity: InitialVelocity, t0: f64, q0: Vec<f64>, v0: Vec<f64>) -> Action {
         let (d, n) = (model.layout.d, model.layout.n);
         let nodes = op.len();
-        let layout = GlobalLayout::new(d, n, nodes);
+        let layout = GlobalLayout::new(d, n, nodes, initial_velocity);
         let m = model.layout.len();
         let mut offsets = Vec::with_capacity(nodes * m + 1);
         let mut map = Vec::new();
@@ -241,20 +261,44 @@ impl Action {
         let last = nodes - 1;
         let mut bilinear = Vec::new();
         for i in 0..d {
-            bilinear.push((layout.nu_q1[i], layout.qm[i], 1.0));
             bilinear.push((layout.nu_qn[i], layout.qm[last * d + i], 1.0));
             bilinear.push((layout.nu_x[i], layout.qp[i], 1.0));
-            for (j, cf) in op.row(0) {
-                bilinear.push((layout.nu_v[i], layout.qp[j * d + i], cf));
-            }
         }
         for a in 0..n {
-            bilinear.push((layout.nu_l1[a], layout.lm[a], 1.0));
             bilinear.push((layout.nu_ln[a], layout.lm[last * n + a], 1.0));
+        }
+        // The strong initial velocity: q-[1] = 0, λ-[1] = 0 and (Dq+)[1] = q̇_i (the
+        // natural one has none of these multipliers).
+        for (i, &nu) in layout.nu_q1.iter().enumerate() {
+            bilinear.push((nu, layout.qm[i], 1.0));
+        }
+        for (a, &nu) in layout.nu_l1.iter().enumerate() {
+            bilinear.push((nu, layout.lm[a], 1.0));
+        }
+        for (i, &nu) in layout.nu_v.iter().enumerate() {
+            bilinear.extend(op.row(0).into_iter().map(|(j, cf)| (nu, layout.qp[j * d + i], cf)));
         }
         let minus_locals = (0..m).filter(|&a| !model.layout.kind(a).0.is_plus()).collect();
         assert_eq!((q0.len(), v0.len()), (d, d), "initial state of the wrong size");
-        Action { model, op, layout, t0, q0, v0, offsets, map, bilinear, minus_locals, all_locals: (0..m).collect() }
+        let all_locals = (0..m).collect();
+        let mut action = Action { model, op, layout, t0, q0, v0, p0: vec![0.0; d], offsets, map, bilinear, minus_locals, all_locals };
+        action.update_initial_momentum();
+        action
+    }
+
+    /// Recompute `p0` from the initial state and the start time (natural initial
+    /// velocity only; the strong one does not use it).
+    fn update_initial_momentum(&mut self) {
+        if self.layout.initial_velocity == InitialVelocity::Natural {
+            let mut ws = self.model.workspace();
+            self.p0 = self.model.physical(self.t0, &self.q0, &self.v0, &mut ws).p;
+        }
+    }
+
+    /// The initial momentum `p_i = ∂L/∂q̇(q_i, q̇_i, t_i)`, imposed by the natural
+    /// initial velocity (zeros with the strong one).
+    pub fn initial_momentum(&self) -> &[f64] {
+        &self.p0
     }
 
     /// Time of the first node.
@@ -290,11 +334,13 @@ impl Action {
         assert_eq!((q0.len(), v0.len()), (self.layout.d, self.layout.d), "initial state of the wrong size");
         self.q0.copy_from_slice(q0);
         self.v0.copy_from_slice(v0);
+        self.update_initial_momentum();
     }
 
     /// Move the grid to start at `t0` (same node count and spacing).
     pub fn set_start_time(&mut self, t0: f64) {
         self.t0 = t0;
+        self.update_initial_momentum();
     }
 
     /// Re-target the action to the window that starts at `t0` with state (q0, v0): the
@@ -304,11 +350,16 @@ impl Action {
         self.set_initial_state(q0, v0);
     }
 
-    /// The linear boundary terms `l z_a`: `−q0` on `ν_x`, `−v0` on `ν_v`.
+    /// The linear boundary terms `l z_a`: `−q0` on `ν_x`, then `−v0` on `ν_v` (strong
+    /// initial velocity) or `p0` on `q-[1]` (natural).
     fn linear(&self) -> impl Iterator<Item = (u32, f64)> + '_ {
         let lay = &self.layout;
         let x = lay.nu_x.iter().zip(&self.q0).map(|(&z, q)| (z, -q));
-        x.chain(lay.nu_v.iter().zip(&self.v0).map(|(&z, v)| (z, -v)))
+        let velocity: Box<dyn Iterator<Item = (u32, f64)>> = match lay.initial_velocity {
+            InitialVelocity::Strong => Box::new(lay.nu_v.iter().zip(&self.v0).map(|(&z, v)| (z, -v))),
+            InitialVelocity::Natural => Box::new(lay.qm[..lay.d].iter().zip(&self.p0).map(|(&z, &p)| (z, p))),
+        };
+        x.chain(velocity)
     }
 
     fn entries(&self, k: usize, a: usize) -> &[(u32, f64)] {

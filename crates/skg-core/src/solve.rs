@@ -23,7 +23,7 @@ use crate::contact;
 use crate::model::Model;
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
-use crate::scenario::{Backend, ConstraintKind, Formulation, HessianMode, Scene, SceneError, Wall};
+use crate::scenario::{Backend, ConstraintKind, Formulation, HessianMode, InitialVelocity, Scene, SceneError, Wall};
 use crate::time_stepping::{integrate_model, min_spacing, step_budget};
 use crate::trajectory::{NodeSeries, States, Trajectory};
 use crate::verify::{self, Verification, VerifyStatus};
@@ -230,6 +230,8 @@ pub struct Settings {
     pub t_end: f64,
     /// The formulation.
     pub formulation: Formulation,
+    /// How the initial velocity was imposed.
+    pub initial_velocity: InitialVelocity,
     /// The backend asked for (what ran: [`Outcome::backend`]).
     pub backend: Backend,
     /// The Hessian given to Ipopt.
@@ -430,7 +432,7 @@ pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
 pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, SolveError> {
     let model = Model::build(scene)?;
     let op = SbpOperator::new(scene.operator, nodes, dt)?;
-    Ok(Action::new(model, op, scene.t_start, scene.initial_q.clone(), scene.initial_v.clone()))
+    Ok(Action::new(model, op, scene.initial_velocity, scene.t_start, scene.initial_q.clone(), scene.initial_v.clone()))
 }
 
 /// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
@@ -652,12 +654,17 @@ fn point_from_states(action: &Action, q: &[Vec<f64>], lambda: &[Vec<f64>]) -> Ve
     let last = lay.nodes - 1;
     let row = |zi: u32| zi as usize - lay.n_p;
     for i in 0..d {
-        z[lay.nu_q1[i] as usize] = -r[row(lay.qm[i])];
         z[lay.nu_qn[i] as usize] = -r[row(lay.qm[last * d + i])];
     }
     for a in 0..n {
-        z[lay.nu_l1[a] as usize] = -r[row(lay.lm[a])];
         z[lay.nu_ln[a] as usize] = -r[row(lay.lm[last * n + a])];
+    }
+    // The first node's multipliers (strong initial velocity only).
+    for (i, &nu) in lay.nu_q1.iter().enumerate() {
+        z[nu as usize] = -r[row(lay.qm[i])];
+    }
+    for (a, &nu) in lay.nu_l1.iter().enumerate() {
+        z[nu as usize] = -r[row(lay.lm[a])];
     }
     z
 }
@@ -670,6 +677,7 @@ fn settings(scene: &Scene, times: &[f64], initial_guess: String) -> Settings {
         t_start: times[0],
         t_end: times[times.len() - 1],
         formulation: scene.formulation,
+        initial_velocity: scene.initial_velocity,
         backend: scene.solver.backend,
         hessian: scene.solver.hessian,
         tol: scene.solver.tol,
@@ -845,14 +853,18 @@ fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
     let mut lambda = vec![vec![0.0; n]; nodes];
     let mut max_eom = 0.0_f64;
     for k in 0..nodes {
-        if k == 0 || k + 1 == nodes {
-            if n > 0 {
-                lambda[k] = end_multipliers(&phys[k], &dp[k]);
+        // λ+ is pinned where the node's row was absorbed: the last node, and the first
+        // one with the strong initial velocity.
+        let pinned = n > 0 && lay.lp[k * n] == u32::MAX;
+        if pinned {
+            lambda[k] = end_multipliers(&phys[k], &dp[k]);
+        } else {
+            for a in 0..n {
+                lambda[k][a] = z[lay.lp[k * n + a] as usize];
             }
-            continue;
         }
-        for a in 0..n {
-            lambda[k][a] = z[lay.lp[k * n + a] as usize];
+        if k == 0 || k + 1 == nodes {
+            continue;
         }
         for i in 0..d {
             let gl: f64 = (0..n).map(|a| lambda[k][a] * phys[k].gv[(a, i)]).sum();

@@ -279,8 +279,9 @@ fn draw_loglog<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Group the converged SKG rows by "operator formulation", and with `by_backend` also by
-/// backend when the sweep has that axis: (label, [(x, y, nodes)]).
+/// Group the converged SKG rows by "operator formulation", by the initial velocity
+/// condition when the sweep has that axis, and with `by_backend` also by backend when the
+/// sweep has that axis: (label, [(x, y, nodes)]).
 /// Points (x, y, N) of each line, by label.
 type Groups = BTreeMap<String, Vec<(f64, f64, f64)>>;
 
@@ -291,14 +292,16 @@ fn skg_groups(res: &Results, rows: &[&Vec<String>], x: &str, y: &str, by_backend
     let (im, io, ifm, inodes, ix, iy) =
         (col(res, "method")?, col(res, "operator")?, col(res, "formulation")?, col(res, "nodes")?, col(res, x)?, col(res, y)?);
     let ib = col(res, "backend").ok().filter(|_| by_backend);
+    let iv = col(res, "initial_velocity").ok();
     let mut groups: Groups = BTreeMap::new();
     for r in rows {
         if r[im] != "skg" || !res.status(r)?.is_converged() {
             continue;
         }
         if let (Some(xv), Some(yv), Some(n)) = (cell_value(&r[ix]), cell_value(&r[iy]), cell_value(&r[inodes])) {
-            let backend = ib.map_or(String::new(), |i| format!(" {}", r[i]));
-            groups.entry(format!("{} {}{backend}", r[io], r[ifm])).or_default().push((xv, yv, n));
+            let optional = |i: Option<usize>| i.map_or(String::new(), |i| format!(" {}", r[i]));
+            let label = format!("{} {}{}{}", r[io], r[ifm], optional(iv), optional(ib));
+            groups.entry(label).or_default().push((xv, yv, n));
         }
     }
     for v in groups.values_mut() {

@@ -23,7 +23,7 @@ use pyo3::types::{PyDict, PyList};
 
 use skg_core::check::Table;
 use skg_core::reference::{self, Reference, ReferenceError, ReferenceOptions};
-use skg_core::scenario::{Backend, ConstraintKind, Formulation, HessianMode, Overrides, Scene, SceneError, SceneFile};
+use skg_core::scenario::{Backend, ConstraintKind, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneError, SceneFile};
 use skg_core::solve::{self, Outcome, SolveError};
 use skg_core::trajectory::{trajectory_header, trajectory_rows, NodeSeries, Trajectory};
 use skg_core::{error_text, output, provenance};
@@ -198,8 +198,8 @@ impl NativeSolution {
 /// Solve a scene file as `skg-solve SCENE` does; with `out`, into that directory as
 /// `skg-solve SCENE -o OUT` does ([`output::solve_into`]), else without writing files.
 #[pyfunction]
-#[pyo3(signature = (path, *, out=None, nodes=None, set=None, operator=None, formulation=None, hessian=None, max_iter=None,
-    backend=None, window=None, overlap=None, verify_tol=None, no_verify=false, no_fallback=false))]
+#[pyo3(signature = (path, *, out=None, nodes=None, set=None, operator=None, formulation=None, initial_velocity=None,
+    hessian=None, max_iter=None, backend=None, window=None, overlap=None, verify_tol=None, no_verify=false, no_fallback=false))]
 #[pyo3(name = "solve")]
 #[allow(clippy::too_many_arguments)]
 fn solve_scene(
@@ -210,6 +210,7 @@ fn solve_scene(
     set: Option<&Bound<'_, PyDict>>,
     operator: Option<&str>,
     formulation: Option<&str>,
+    initial_velocity: Option<&str>,
     hessian: Option<&str>,
     max_iter: Option<u32>,
     backend: Option<&str>,
@@ -222,6 +223,8 @@ fn solve_scene(
     let operator = operator.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("operator: {e}")))).transpose()?;
     let formulation: Option<Formulation> =
         formulation.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("formulation: {e}")))).transpose()?;
+    let initial_velocity: Option<InitialVelocity> =
+        initial_velocity.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("initial_velocity: {e}")))).transpose()?;
     let hessian = match hessian {
         None => None,
         Some("zero") => Some(HessianMode::Zero),
@@ -235,6 +238,7 @@ fn solve_scene(
         nodes,
         operator,
         formulation,
+        initial_velocity,
         hessian,
         max_iter,
         window,

@@ -63,6 +63,19 @@ def test_newton_backend_matches_closed_form_and_ipopt(scene):
         skg.solve(scene("rolling_disk"), backend="lu")
 
 
+def test_natural_initial_velocity_reaches_1e_6_on_the_disk(scene):
+    # docs/mathematics.md §5: the initial momentum as a boundary term of the action. On
+    # SBP484 at N = 256 it brings the disk within 1e-6 of its closed form (the strong
+    # condition: 1.8e-6), and the first node's constraints hold too.
+    sol = skg.solve(scene("rolling_disk"), nodes=256, operator="SBP484", initial_velocity="natural")
+    assert sol.trusted
+    assert sol.summary["settings"]["initial_velocity"] == "natural"
+    assert np.abs(sol.q - rolling_disk_exact(sol.t))[:-2, :3].max() < 1e-6
+    assert np.abs(sol.g[:-1]).max() < 1e-9
+    with pytest.raises(ValueError, match="initial_velocity"):
+        skg.solve(scene("rolling_disk"), initial_velocity="weak")
+
+
 def test_repeated_newton_solves_of_one_structure_reuse_the_lu_analysis(scene):
     # Another incline angle on the same grid: the same sparsity structure, so the second
     # solve of this thread takes the first one's symbolic analysis over; another grid

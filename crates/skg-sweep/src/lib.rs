@@ -96,7 +96,7 @@ use skg_core::check::{self, CheckOptions, Comparison, Table};
 use skg_core::output;
 use skg_core::sbp::OperatorKind;
 use skg_core::scenario::{
-    parse_toml, read_toml, Backend, Formulation, HessianMode, Location, Origin, Overrides, Scene, SceneFile, TomlError,
+    parse_toml, read_toml, Backend, Formulation, HessianMode, InitialVelocity, Location, Origin, Overrides, Scene, SceneFile, TomlError,
 };
 
 /// Errors of a sweep file, a results file or the sweep driver.
@@ -294,7 +294,7 @@ pub const MAX_POINTS: usize = 10_000_000;
 pub const CONFIRM_ABOVE: usize = 10_000;
 
 /// Axes that are not scene parameters.
-pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "hessian", "max_iter", "backend"];
+pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "initial_velocity", "hessian", "max_iter", "backend"];
 
 /// How a point is computed.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -374,6 +374,7 @@ impl Point {
                 "nodes" => ov.nodes = Some(v.parse().map_err(|_| format!("nodes = {v}: expected a whole number"))?),
                 "operator" => ov.operator = Some(v.parse::<OperatorKind>().map_err(|e| format!("operator = {v}: {e}"))?),
                 "formulation" => ov.formulation = Some(v.parse::<Formulation>().map_err(|e| e.to_string())?),
+                "initial_velocity" => ov.initial_velocity = Some(v.parse::<InitialVelocity>().map_err(|e| e.to_string())?),
                 "hessian" => {
                     ov.hessian = Some(match v.to_ascii_lowercase().as_str() {
                         "zero" => HessianMode::Zero,
@@ -806,13 +807,21 @@ pub fn estimated_cost(scene: &Scene, method: &Method) -> f64 {
 }
 
 /// What decides the sparsity structure of a point's system (the same base scene
-/// throughout): the method, node count, operator, formulation and backend. Points with
+/// throughout): the method, node count, operator, formulation, initial velocity condition
+/// and backend. Points with
 /// equal keys usually have equal Jacobian structures (a parameter value that makes a
 /// term vanish can still change it: the solver compares the structures themselves).
 pub fn structure_key(scene: &Scene, method: &Method) -> String {
     match method {
         Method::Ode { .. } => "ode".into(),
-        Method::Skg => format!("skg N={} {} {} {}", scene.nodes, scene.operator.name(), scene.formulation, scene.solver.backend),
+        Method::Skg => format!(
+            "skg N={} {} {} {} {}",
+            scene.nodes,
+            scene.operator.name(),
+            scene.formulation,
+            scene.initial_velocity,
+            scene.solver.backend
+        ),
     }
 }
 

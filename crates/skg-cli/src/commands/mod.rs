@@ -21,7 +21,7 @@ use anyhow::Result;
 use clap::Args;
 
 use skg_core::sbp::OperatorKind;
-use skg_core::scenario::{Backend, Formulation, HessianMode, Overrides, Scene, SceneFile};
+use skg_core::scenario::{Backend, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneFile};
 
 /// Exit code of a solve that ran but did not converge.
 pub const EXIT_NOT_CONVERGED: u8 = 3;
@@ -44,6 +44,12 @@ pub struct SceneArgs {
     /// (the paper's doubled unknowns).
     #[arg(long, value_name = "KIND")]
     pub formulation: Option<Formulation>,
+    /// How the initial velocity is imposed: `strong` (default; the first node's velocity
+    /// `Dq` equals it) or `natural` (the initial momentum enters the action as a boundary
+    /// term and the first node's equations are kept; more accurate on the higher-order
+    /// operators, see docs/mathematics.md §5).
+    #[arg(long, value_name = "KIND")]
+    pub initial_velocity: Option<InitialVelocity>,
     /// Hessian given to Ipopt: `zero` (default; the Newton step of a square system does
     /// not depend on it) or `exact` (reduced formulation only).
     #[arg(long, value_enum, value_name = "MODE")]
@@ -93,6 +99,7 @@ impl SceneArgs {
             nodes,
             operator: self.operator,
             formulation: self.formulation,
+            initial_velocity: self.initial_velocity,
             hessian: self.hessian.map(|h| match h {
                 HessianArg::Zero => HessianMode::Zero,
                 HessianArg::Exact => HessianMode::Exact,

@@ -339,6 +339,7 @@ def solve(
     set: Optional[Mapping[str, Number]] = None,
     operator: Optional[str] = None,
     formulation: Optional[str] = None,
+    initial_velocity: Optional[str] = None,
     hessian: Optional[str] = None,
     max_iter: Optional[int] = None,
     backend: Optional[str] = None,
@@ -359,9 +360,11 @@ def solve(
     The keyword arguments are the command line's options: ``nodes`` (``--nodes``),
     ``set`` (``--set``, a mapping such as ``{"sigma": 1/200, "V0": "2*g"}``: numbers, or
     expressions as strings), ``operator`` (``"SBP121"``, ``"SBP242"``, ``"SBP363"``,
-    ``"SBP484"``), ``formulation`` (``"reduced"``, ``"full"``), ``hessian`` (``"zero"``,
-    ``"exact"``), ``max_iter``, ``backend`` (``"ipopt"``, ``"newton"``), ``window`` and ``overlap`` (seconds; ``window=0`` turns the scene's
-    windows off), ``verify_tol``, ``no_verify``, ``no_fallback``.
+    ``"SBP484"``), ``formulation`` (``"reduced"``, ``"full"``), ``initial_velocity``
+    (``"strong"``, ``"natural"``), ``hessian`` (``"zero"``, ``"exact"``), ``max_iter``,
+    ``backend`` (``"ipopt"``, ``"newton"``), ``window`` and ``overlap`` (seconds;
+    ``window=0`` turns the scene's windows off), ``verify_tol``, ``no_verify``,
+    ``no_fallback``.
 
     Every solve is verified against time stepping and may use the fallback ladder, as on
     the command line. A solve that does not converge or verify is returned, not raised:
@@ -376,6 +379,7 @@ def solve(
         set=_set_dict(set),
         operator=operator,
         formulation=formulation,
+        initial_velocity=initial_velocity,
         hessian=hessian,
         max_iter=max_iter,
         backend=backend,
