@@ -66,6 +66,12 @@ pub enum SolverStatus {
 }
 
 impl SolverStatus {
+    /// Whether the backend stopped at the residual's round-off level above the tolerance
+    /// (`Ipopt_Converged_To_Round_Off`, `Newton_Converged_To_Round_Off`).
+    pub fn is_round_off(&self) -> bool {
+        matches!(self, SolverStatus::IpoptConvergedToRoundOff | SolverStatus::Newton(NewtonStatus::ConvergedToRoundOff))
+    }
+
     /// Whether the backend reports success (Ipopt: [`ipopt::Status::is_success`]).
     pub fn is_success(&self) -> bool {
         match self {
@@ -250,6 +256,36 @@ impl SquareSolver {
             }
         }
     }
+}
+
+impl SquareSolver {
+    /// Whether every equation of `action`'s system at `z` (the whole unknown vector) is
+    /// within `floor` or within its own round-off level `ROUNDOFF · ε · Σ_j |J_ij| |x_j|`
+    /// ([`newton::row_roundoff_levels`]). The round-off stop of both backends compares
+    /// `max |c|` with the *largest* row's level; this checks each equation against its own,
+    /// so that an equation with small terms cannot hide behind one with large terms.
+    pub fn equations_at_round_off(&self, action: &Action, z: &[f64], floor: f64) -> bool {
+        match self.formulation {
+            Formulation::Reduced => {
+                let mut p = Reduced { action, z: z.to_vec(), ws: action.model.workspace(), jac: &self.jac, hess: None };
+                rows_at_round_off(&mut p, &z[..action.layout.n_p], floor)
+            }
+            Formulation::Full => rows_at_round_off(&mut Full { action, ws: action.model.workspace(), jac: &self.jac }, z, floor),
+        }
+    }
+}
+
+/// Whether every residual row of `problem` at `x` is within `floor` or its own round-off
+/// level (see [`SquareSolver::equations_at_round_off`]).
+fn rows_at_round_off<P: Problem>(problem: &mut P, x: &[f64], floor: f64) -> bool {
+    let mut c = vec![0.0; problem.num_constraints()];
+    let mut values = vec![0.0; problem.jacobian_structure().len()];
+    if problem.constraints(x, &mut c).is_err() || problem.jacobian_values(x, &mut values).is_err() {
+        return false;
+    }
+    let entries = problem.jacobian_structure().iter().zip(&values).map(|(&(r, col), &v)| (r as usize, col as usize, v));
+    let levels = newton::row_roundoff_levels(entries, x, c.len());
+    c.iter().zip(&levels).all(|(ci, level)| ci.abs() <= floor.max(*level))
 }
 
 impl Drop for SquareSolver {

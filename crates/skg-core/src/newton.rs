@@ -61,11 +61,20 @@ pub const ROUNDOFF: f64 = 4.0;
 /// computed in floating point can bring `max |F|` much below it. Used as a stopping
 /// test by Newton and by the Ipopt path alike (`backend::solve_problem`).
 pub fn residual_roundoff_level(entries: impl Iterator<Item = (usize, usize, f64)>, x: &[f64], rows: usize) -> f64 {
+    row_roundoff_levels(entries, x, rows).into_iter().fold(0.0, f64::max)
+}
+
+/// The round-off level of each row `i` of a residual `F(x)`, `ROUNDOFF · ε · Σ_j |J_ij| |x_j|`
+/// ([`residual_roundoff_level`] is their largest): what one equation's rounding error
+/// can reach, so that a solve stopped at the largest level can be checked equation by
+/// equation (`backend::SquareSolver::equations_at_round_off`).
+pub fn row_roundoff_levels(entries: impl Iterator<Item = (usize, usize, f64)>, x: &[f64], rows: usize) -> Vec<f64> {
     let mut sums = vec![0.0_f64; rows];
     for (r, c, v) in entries {
         sums[r] += v.abs() * x[c].abs();
     }
-    ROUNDOFF * f64::EPSILON * sums.into_iter().fold(0.0, f64::max)
+    sums.iter_mut().for_each(|s| *s *= ROUNDOFF * f64::EPSILON);
+    sums
 }
 
 /// How a Newton solve ended.

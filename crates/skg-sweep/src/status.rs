@@ -11,14 +11,17 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PointStatus {
-    /// The solve converged (Ipopt reported success and the unscaled residual of the
-    /// square system is at most 1e-8), or the time-stepping peer reached the final time.
+    /// The solve converged (the backend reported success and the unscaled residual of
+    /// the square system is at most 1e-8, or every equation is at its own round-off level
+    /// after a round-off stop: `skg_core::solve::SolveStatus::classify`), or the
+    /// time-stepping peer reached the final time.
     Converged,
     /// The solve converged, but its verification against time stepping of the same
     /// scene failed or could not run (`skg-solve` would exit 4).
     NotVerified,
-    /// Ipopt stopped without converging, or reported success with an unscaled residual
-    /// above 1e-8.
+    /// The backend stopped without converging, or reported success with an unscaled
+    /// residual above 1e-8 (and, after a round-off stop, above some equation's own
+    /// round-off level).
     NotConverged,
     /// The point could not be computed: its values do not make a valid scene, the solver
     /// or the reference integrator returned an error, or its files could not be written.
