@@ -66,8 +66,8 @@ def test_newton_backend_matches_closed_form_and_ipopt(scene):
 def test_natural_initial_velocity_reaches_1e_6_on_the_disk(scene):
     # docs/mathematics.md §5: the initial momentum as a boundary term of the action. On
     # SBP484 at N = 256 it brings the disk within 1e-6 of its closed form (the strong
-    # condition: 1.8e-6), and the first node's constraints hold too (the strong condition
-    # does not impose them there).
+    # condition: 1.8e-6). Its first node's velocity is solved for, not given, and the
+    # constraints are imposed there.
     sol = skg.solve(scene("rolling_disk"), nodes=256, operator="SBP484", initial_velocity="natural")
     assert sol.trusted
     assert sol.summary["settings"]["initial_velocity"] == "natural"
