@@ -257,3 +257,26 @@ fn a_ball_on_a_turntable_circles_at_two_sevenths_of_the_rotation() {
         assert!((end[0] - 1.0).abs() < 1e-5 && end[1].abs() < 1e-5, "{backend}: back at the start after one circle: {end:?}");
     }
 }
+
+/// A wall 3200 times thinner than the distance travelled between nodes
+/// (tests/scenes/thin_wall.toml). Time stepping must bounce off it however large its
+/// steps may be, so the verification's reference is the true motion `min(t, 2 − t)`.
+/// The grid cannot resolve the wall, so the solve must not exit 0. (Before the
+/// integrator's wall bound, the reference stepped over the wall as the solve did, and
+/// the run was "verified" with max error 0 while the particle ended 2 m from the truth.)
+#[test]
+fn a_wall_thinner_than_a_step_is_not_stepped_over_by_the_verification() {
+    let (scene, o) = solve("thin_wall", &Overrides::default());
+    assert!(o.converged() && !o.trusted(), "{}", o.verification.reason);
+    let truth = |t: f64| vec![t.min(2.0 - t)];
+    let r = reference::regularized(&scene, &o.trajectory.t, &ReferenceOptions { rtol: 1e-10, atol: 1e-12 }).unwrap();
+    for (t, q) in r.trajectory.t.iter().zip(&r.trajectory.q) {
+        assert!((q[0] - truth(*t)[0]).abs() < 1e-3, "reference x({t}) = {} (truth {})", q[0], truth(*t)[0]);
+    }
+    // The verification measured the solve against that reference: its error is the true one.
+    assert_estimate_matches(&o, true_error(&o, truth), "thin wall");
+    let out = tempfile::tempdir().unwrap();
+    let path = common::test_scene("thin_wall");
+    let run = common::skg(&[path.to_str().unwrap(), "-o", out.path().to_str().unwrap()], Path::new("."));
+    assert_eq!(run.status.code(), Some(4), "{}", common::text(&run));
+}

@@ -160,7 +160,22 @@ pub fn integrate<F>(f: F, y0: &[f64], times: &[f64], opts: &OdeOptions) -> Resul
 where
     F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
 {
-    run(f, y0, times, opts, None::<fn(f64, &[f64]) -> f64>).map(|(sol, _)| sol)
+    integrate_checked(f, y0, times, opts, |_, _, _, _| true)
+}
+
+/// Like [`integrate`], with a test every step must pass besides the error estimate:
+/// `accept(t, y, t_new, y_new)` returning false rejects the step from `(t, y)` to
+/// `(t_new, y_new)`, which is retried at half the size (down to the round-off limit:
+/// [`OdeError::StepTooSmall`]). The error estimate alone cannot see a feature that no
+/// stage of a step samples, such as a Gaussian wall far thinner than the step, which the
+/// solution would then cross unhindered; `accept` can (the time stepping of a model with
+/// walls, [`crate::time_stepping::integrate_model`]).
+pub fn integrate_checked<F, C>(f: F, y0: &[f64], times: &[f64], opts: &OdeOptions, accept: C) -> Result<OdeSolution, OdeError>
+where
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+    C: FnMut(f64, &[f64], f64, &[f64]) -> bool,
+{
+    run(f, y0, times, opts, None::<fn(f64, &[f64]) -> f64>, accept).map(|(sol, _)| sol)
 }
 
 /// A terminal event located by [`integrate_to_event`].
@@ -199,16 +214,24 @@ where
     F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
     E: FnMut(f64, &[f64]) -> f64,
 {
-    run(f, y0, times, opts, Some(event))
+    run(f, y0, times, opts, Some(event), |_, _, _, _| true)
 }
 
 /// Interior points (fractions of a step) where the event function is sampled.
 const EVENT_SAMPLES: [f64; 4] = [0.25, 0.5, 0.75, 1.0];
 
-fn run<F, E>(f: F, y0: &[f64], times: &[f64], opts: &OdeOptions, mut event: Option<E>) -> Result<(OdeSolution, Option<EventHit>), OdeError>
+fn run<F, E, C>(
+    f: F,
+    y0: &[f64],
+    times: &[f64],
+    opts: &OdeOptions,
+    mut event: Option<E>,
+    mut accept: C,
+) -> Result<(OdeSolution, Option<EventHit>), OdeError>
 where
     F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
     E: FnMut(f64, &[f64]) -> f64,
+    C: FnMut(f64, &[f64], f64, &[f64]) -> bool,
 {
     validate(y0, times, opts)?;
     let t0 = times[0];
@@ -263,6 +286,12 @@ where
         }
         let err = s.error_norm(h);
         let fac11 = err.powf(0.125);
+        if err <= 1.0 && !accept(t, &s.y, if last { t_end } else { t + h }, &s.ynew) {
+            s.stats.rejected += 1;
+            h *= 0.5;
+            reject = true;
+            continue;
+        }
         if err <= 1.0 {
             let t_new = if last { t_end } else { t + h };
             // First stage of the next step, and the dense output if a sample lies inside.
@@ -991,6 +1020,26 @@ mod tests {
         // The limit cycle has amplitude ≈ 2.
         let amp = fine.states.iter().map(|y| y[0].abs()).fold(0.0, f64::max);
         assert!((amp - 2.0).abs() < 0.05, "amplitude {amp}");
+    }
+
+    #[test]
+    fn a_rejecting_check_bounds_the_steps_and_keeps_the_accuracy() {
+        // y' = -y: without the check a handful of steps cover [0, 10]; a check that
+        // accepts no step longer than 0.01 forces at least 1000, and the result is as
+        // accurate.
+        let f = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), RhsError> {
+            dy[0] = -y[0];
+            Ok(())
+        };
+        let o = OdeOptions::default();
+        let free = integrate(f, &[1.0], &[0.0, 10.0], &o).unwrap();
+        let checked = integrate_checked(f, &[1.0], &[0.0, 10.0], &o, |t, _, t_new, _| t_new - t <= 0.01).unwrap();
+        assert!(free.stats.accepted < 200, "{:?}", free.stats);
+        assert!(checked.stats.accepted >= 1000 && checked.stats.rejected > 0, "{:?}", checked.stats);
+        assert!((checked.states[1][0] - (-10.0_f64).exp()).abs() < 1e-12);
+        // A check that accepts nothing ends at the round-off limit of the step.
+        let never = integrate_checked(f, &[1.0], &[0.0, 1.0], &o, |_, _, _, _| false);
+        assert!(matches!(never, Err(OdeError::StepTooSmall { .. })), "{never:?}");
     }
 
     #[test]

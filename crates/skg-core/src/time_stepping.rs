@@ -9,8 +9,15 @@
 //! absolute: the model is evaluated at the integrator's time, so an explicitly
 //! time-dependent scene can be integrated from any start time. The constraints `g = 0`
 //! (and a position constraint's `h = 0`) then hold only up to the integrator's drift.
+//!
+//! Regularized walls bound every step ([`wall_step_accepted`]): a step may change a
+//! wall's gap by at most half of its distance from the wall plus the wall's width. The
+//! error estimate of a step sees only what its stages sample, so without this bound a
+//! wall much thinner than the step (σ = 1e-5 at 1 m/s on a grid of 64 nodes) was crossed
+//! unhindered by the verification and the guess alike, and a solve that never bounced
+//! was verified against a reference that did not bounce either.
 
-use crate::model::{DynamicsError, Model, Workspace};
+use crate::model::{DynamicsError, Model, WallModel, Workspace};
 use crate::ode::{self, OdeError, OdeOptions, OdeStats, RhsError};
 use crate::trajectory::States;
 
@@ -41,9 +48,38 @@ pub fn min_spacing(times: &[f64]) -> Option<f64> {
 /// (increasing).
 pub fn integrate_model(model: &Model, q0: &[f64], v0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<(States, OdeStats), OdeError> {
     let y0: Vec<f64> = q0.iter().chain(v0).copied().collect();
-    let sol = ode::integrate(rhs(model, &mut model.workspace()), &y0, times, opts)?;
+    let d = model.layout.d;
+    let regularized_walls = model.wall_model == WallModel::Gaussian && !model.walls.is_empty();
+    // The gaps at the end of the last accepted step are those at the start of the next.
+    let mut last_end: Option<(f64, Vec<f64>)> = None;
+    let accept = |t: f64, y: &[f64], t_new: f64, y_new: &[f64]| {
+        if !regularized_walls {
+            return true;
+        }
+        let before = match last_end.take() {
+            Some((t_end, gaps)) if t_end == t => gaps,
+            _ => model.wall_gaps(t, &y[..d]),
+        };
+        let after = model.wall_gaps(t_new, &y_new[..d]);
+        let ok = wall_step_accepted(model, &before, &after);
+        last_end = Some(if ok { (t_new, after) } else { (t, before) });
+        ok
+    };
+    let sol = ode::integrate_checked(rhs(model, &mut model.workspace()), &y0, times, opts, accept)?;
     let states = split_states(model, &sol.states, times, &mut model.workspace())?;
     Ok((states, sol.stats))
+}
+
+/// Fraction of `|h| + σ` by which one step may change a wall's gap `h`.
+pub const WALL_STEP: f64 = 0.5;
+
+/// Whether a step that takes the walls' gaps from `before` to `after` changes every
+/// regularized wall's gap by at most `WALL_STEP · (|h| + σ)` (`h` at the step's start).
+/// Far from a wall the bound is generous (half the distance); approaching it, the steps
+/// shrink geometrically to a fraction of σ, so that the Gaussian force is sampled however
+/// thin the wall is, at a few dozen extra steps per approach.
+pub fn wall_step_accepted(model: &Model, before: &[f64], after: &[f64]) -> bool {
+    model.walls.iter().zip(before.iter().zip(after)).all(|(w, (&h, &h_new))| (h_new - h).abs() <= WALL_STEP * (h.abs() + w.width))
 }
 
 /// The right-hand side `(t, q, v) ↦ (v, q̈)` of the index-reduced equations.
