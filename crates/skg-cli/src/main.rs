@@ -25,7 +25,7 @@ DIR/reference.csv (the same scene integrated by time stepping at the same nodes)
 belongs with: check and plot refuse a trajectory that its summary does not describe). A second skg-solve \
 writing into the same DIR is refused.\n\n\
 Every solve is verified: the trajectory must be within the scene's [verify] tol (or --verify-tol; default \
-1e-4 x the largest coordinate range) of time stepping of the same scene, every number finite and the \
+1e-4 x each coordinate's range, at least 1e-7 x the largest one) of time stepping of the same scene, every number finite and the \
 kinetic matrix positive definite at every node. When the solve does not converge or verify, the fallback \
 ladder tries a coarse-to-fine guess, wall-width continuation, a solve past the end time and windows of \
 halving length (--no-fallback to skip it).\n\n\

@@ -97,15 +97,12 @@ fn help_states_the_default_verification_tolerance_the_code_uses() {
     let t = common::text(&common::skg(&["--help"], Path::new(".")));
     let stated = format!("{:e}", skg_core::verify::DEFAULT_RELATIVE_TOL);
     let flat = t.split_whitespace().collect::<Vec<_>>().join(" ");
-    let starts: Vec<usize> = flat.match_indices("the largest coordinate range").map(|(i, _)| i).collect();
+    let starts: Vec<usize> = flat.match_indices("each coordinate's range").map(|(i, _)| i).collect();
     assert!(starts.len() >= 2, "expected the default in the overview and under --verify-tol:\n{t}");
     for i in starts {
         let before = &flat[..i];
         let stated_just_before = before.rfind(&stated).is_some_and(|p| i - p <= stated.len() + 4);
-        assert!(
-            stated_just_before,
-            "--help states another default than {stated} before \"the largest coordinate range\" at byte {i}:\n{t}"
-        );
+        assert!(stated_just_before, "--help states another default than {stated} before \"each coordinate's range\" at byte {i}:\n{t}");
     }
 }
 

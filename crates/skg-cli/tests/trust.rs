@@ -280,3 +280,25 @@ fn a_wall_thinner_than_a_step_is_not_stepped_over_by_the_verification() {
     let run = common::skg(&[path.to_str().unwrap(), "-o", out.path().to_str().unwrap()], Path::new("."));
     assert_eq!(run.status.code(), Some(4), "{}", common::text(&run));
 }
+
+/// A small coordinate beside a large one (tests/scenes/rotor_and_spring.toml): with the
+/// default tolerance each coordinate is judged on its own range. On 160 nodes the spring
+/// is off by 4 cm against an amplitude of 1 cm while the rotor is exact; the largest
+/// range (1000 rad) would have allowed 0.1 everywhere and the run exited 0. Now it is
+/// refused, and on 2048 nodes it passes with the spring within its tolerance of the
+/// closed form.
+#[test]
+fn each_coordinate_is_verified_on_its_own_scale() {
+    let truth = |t: f64| vec![100.0 * t, 0.01 * (20.0 * t).cos()];
+    let (_, coarse) = solve("rotor_and_spring", &Overrides::default());
+    assert!(coarse.converged() && !coarse.trusted(), "{}", coarse.verification.reason);
+    assert!(coarse.verification.reason.contains("x at t"), "{}", coarse.verification.reason);
+    let x_error = |o: &Outcome| common::max_error(o, &[1], 2, truth);
+    assert!(x_error(&coarse) > 0.01, "the coarse spring is wrong by {:e}", x_error(&coarse));
+    let v = &coarse.verification;
+    // x moves less than a thousandth of phi's range: its tolerance is 1e-4 × 1e-3 × 1000.
+    assert!((v.tolerances["x"] - 1e-4).abs() < 1e-9 && (v.tolerances["phi"] - 0.1).abs() < 1e-6, "{:?}", v.tolerances);
+    let (_, fine) = solve("rotor_and_spring", &Overrides { nodes: Some(2048), ..Default::default() });
+    assert!(fine.trusted(), "{}", fine.verification.reason);
+    assert!(x_error(&fine) <= fine.verification.tolerances["x"], "x error {:e}", x_error(&fine));
+}

@@ -14,8 +14,12 @@
 //!   [`SKIP_LAST`] nodes excluded (they are the SBP end closure, whose equations are
 //!   boundary rows; the documentation says so everywhere an error is reported).
 //! * The tolerance is absolute, in coordinate units: the scene's `[verify] tol` or
-//!   `--verify-tol`, else [`DEFAULT_RELATIVE_TOL`] × the largest range of a coordinate
-//!   over the reference trajectory (its scale).
+//!   `--verify-tol` for every coordinate, else one per coordinate,
+//!   [`DEFAULT_RELATIVE_TOL`] × that coordinate's range over the reference trajectory,
+//!   but at least [`DEFAULT_RELATIVE_TOL`] × [`STATIC_RANGE`] × the largest range (so
+//!   that a coordinate that hardly moves is not held to round-off). Each coordinate is
+//!   judged on its own scale: a small coordinate beside a large one (a nutation angle
+//!   beside a spin angle of 500 rad) is not judged on the large one's.
 //! * The odd-even amplitude of each coordinate is the amplitude of its (−1)^k component,
 //!   measured by the fourth difference `|q[k−2] − 4q[k−1] + 6q[k] − 4q[k+1] + q[k+2]| / 16`
 //!   (exactly 1 for `(−1)^k`, `Δt⁴ q''''/16` for a smooth q), maximized over the nodes
@@ -38,8 +42,11 @@ use crate::trajectory::{NodeSeries, Trajectory};
 pub const REFERENCE_RTOL: f64 = 1e-10;
 /// Absolute tolerance of the time-stepping reference.
 pub const REFERENCE_ATOL: f64 = 1e-12;
-/// Default verification tolerance, relative to the largest coordinate range.
+/// Default verification tolerance, relative to each coordinate's range.
 pub const DEFAULT_RELATIVE_TOL: f64 = 1e-4;
+/// A coordinate whose range is below this fraction of the largest range is judged as if
+/// its range were this fraction (see the module documentation).
+pub const STATIC_RANGE: f64 = 1e-3;
 /// End nodes left out of the error (the SBP end closure).
 pub const SKIP_LAST: usize = 2;
 
@@ -84,10 +91,15 @@ pub struct Verification {
     pub max_error: Option<f64>,
     /// The same per coordinate.
     pub errors: IndexMap<String, f64>,
-    /// The coordinate and time of the largest error.
+    /// The coordinate that decides the verdict, furthest beyond its tolerance (or least
+    /// within it), and the time of its largest error. With one tolerance for every
+    /// coordinate it is the coordinate of the largest error.
     pub worst: Option<(String, f64)>,
-    /// The absolute tolerance applied (coordinate units).
+    /// The absolute tolerance applied (coordinate units): the given one, or the largest
+    /// of the default per-coordinate tolerances.
     pub tolerance: Option<f64>,
+    /// The tolerance applied to each coordinate.
+    pub tolerances: IndexMap<String, f64>,
     /// Where the tolerance came from.
     pub tolerance_source: String,
     /// Amplitude of the (−1)^k component of each coordinate.
@@ -130,6 +142,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
         errors: IndexMap::new(),
         worst: None,
         tolerance: scene.verify.tol,
+        tolerances: IndexMap::new(),
         tolerance_source: String::new(),
         odd_even,
         odd_even_max,
@@ -173,19 +186,29 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
         }
     };
     let reference_trajectory = Trajectory::with_physical_columns(model, &tr.t, states);
-    let (tolerance, tolerance_source) = tolerance(scene, &reference_trajectory.q);
+    let (tolerances, tolerance_source) = tolerances(scene, &reference_trajectory.q);
+    let tolerance = tolerances.iter().copied().fold(0.0, f64::max);
     let compared = tr.t.len().saturating_sub(SKIP_LAST).max(1);
     let errors = coordinate_errors(&scene.coordinates, &tr.q[..compared], &reference_trajectory.q[..compared]);
-    let (worst_name, worst_node, max_error) = errors
+    let max_error = errors.values().map(|&(_, e)| e).fold(0.0_f64, f64::max);
+    // The verdict's coordinate: the one furthest beyond (or least within) its tolerance.
+    let (worst_name, worst_node, worst_error, worst_tol) = errors
         .iter()
-        .map(|(name, &(k, e))| (name.clone(), k, e))
-        .fold((String::new(), 0, 0.0_f64), |best, cur| if cur.2 > best.2 || best.0.is_empty() { cur } else { best });
+        .zip(&tolerances)
+        .map(|((name, &(k, e)), &tol)| (name.clone(), k, e, tol))
+        .fold(None, |best: Option<(String, usize, f64, f64)>, cur| match best {
+            Some(b) if b.2 / b.3 >= cur.2 / cur.3 => Some(b),
+            _ => Some(cur),
+        })
+        .unwrap_or((String::new(), 0, 0.0, tolerance));
     let worst_t = tr.t[worst_node];
-    let passed = max_error <= tolerance;
+    let passed = errors.values().zip(&tolerances).all(|(&(_, e), &tol)| e <= tol);
+    let own = if scene.verify.tol.is_none() && scene.coordinates.len() > 1 { format!(" of {worst_name}") } else { String::new() };
     let reason = if passed {
-        format!("max |q − q_ref| = {max_error:.3e} ({worst_name} at t = {worst_t:.6}) is within the tolerance {tolerance:.3e}")
+        format!("max |q − q_ref| = {worst_error:.3e} ({worst_name} at t = {worst_t:.6}) is within the tolerance{own} {worst_tol:.3e}")
     } else {
-        let mut r = format!("max |q − q_ref| = {max_error:.3e} ({worst_name} at t = {worst_t:.6}) exceeds the tolerance {tolerance:.3e}");
+        let mut r =
+            format!("max |q − q_ref| = {worst_error:.3e} ({worst_name} at t = {worst_t:.6}) exceeds the tolerance{own} {worst_tol:.3e}");
         if odd_even_max >= 0.25 * max_error {
             r.push_str(&format!(
                 "; the odd-even (−1)^k component of the solution is {odd_even_max:.3e}: the parasitic mode of centred SBP stencils, \
@@ -200,6 +223,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
         errors: errors.into_iter().map(|(name, (_, e))| (name, e)).collect(),
         worst: Some((worst_name, worst_t)),
         tolerance: Some(tolerance),
+        tolerances: scene.coordinates.iter().cloned().zip(tolerances).collect(),
         tolerance_source,
         reference,
         reason,
@@ -208,27 +232,38 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
     }
 }
 
-/// The tolerance and where it came from: the scene's or the command line's, else the
-/// default relative to the reference's largest coordinate range (1 if every coordinate
+/// The tolerance of each coordinate and where they came from: the scene's or the command
+/// line's for every coordinate, else the default relative to each coordinate's range over
+/// the reference, at least [`STATIC_RANGE`] of the largest range (1 if every coordinate
 /// stays constant).
-fn tolerance(scene: &Scene, reference_q: &[Vec<f64>]) -> (f64, String) {
+fn tolerances(scene: &Scene, reference_q: &[Vec<f64>]) -> (Vec<f64>, String) {
+    let d = scene.coordinates.len();
     if let Some(t) = scene.verify.tol {
-        return (t, "given ([verify] tol or --verify-tol)".into());
+        return (vec![t; d], "given ([verify] tol or --verify-tol)".into());
     }
-    let scale = coordinate_scale(reference_q);
+    let ranges = coordinate_ranges(reference_q);
+    let scale = ranges.iter().copied().fold(0.0, f64::max);
     let scale = if scale > 0.0 { scale } else { 1.0 };
-    (DEFAULT_RELATIVE_TOL * scale, format!("default: {DEFAULT_RELATIVE_TOL:e} × the largest coordinate range {scale:.6e}"))
+    let tolerances = ranges.iter().map(|r| DEFAULT_RELATIVE_TOL * r.max(STATIC_RANGE * scale)).collect();
+    let source =
+        format!("default: {DEFAULT_RELATIVE_TOL:e} × each coordinate's range, at least {STATIC_RANGE:e} × the largest range {scale:.6e}");
+    (tolerances, source)
 }
 
-/// The largest range (max − min) of a coordinate over the nodes.
-pub fn coordinate_scale(q: &[Vec<f64>]) -> f64 {
+/// The range (max − min) of each coordinate over the nodes.
+pub fn coordinate_ranges(q: &[Vec<f64>]) -> Vec<f64> {
     let d = q.first().map_or(0, Vec::len);
     (0..d)
         .map(|i| {
             let (lo, hi) = q.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), qk| (lo.min(qk[i]), hi.max(qk[i])));
             hi - lo
         })
-        .fold(0.0, f64::max)
+        .collect()
+}
+
+/// The largest range (max − min) of a coordinate over the nodes.
+pub fn coordinate_scale(q: &[Vec<f64>]) -> f64 {
+    coordinate_ranges(q).into_iter().fold(0.0, f64::max)
 }
 
 /// Per coordinate: the node and value of max |a − b|.

@@ -71,7 +71,8 @@ pub struct SceneArgs {
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative)]
     pub overlap: Option<f64>,
     /// Verification tolerance: max |q − q_reference| allowed, in coordinate units
-    /// [default: the scene's [verify] tol, else 1e-4 × the largest coordinate range].
+    /// [default: the scene's [verify] tol, else 1e-4 × each coordinate's range, at least
+    /// 1e-7 × the largest one].
     #[arg(long, value_name = "TOL", allow_negative_numbers = true, value_parser = positive)]
     pub verify_tol: Option<f64>,
     /// Skip the comparison with time stepping (the result is still checked for
