@@ -302,3 +302,35 @@ fn each_coordinate_is_verified_on_its_own_scale() {
     assert!(fine.trusted(), "{}", fine.verification.reason);
     assert!(x_error(&fine) <= fine.verification.tolerances["x"], "x error {:e}", x_error(&fine));
 }
+
+/// A converged solve whose verification cannot run (tests/scenes/stiff_overdamped.toml:
+/// explicit time stepping exceeds its step budget) ends the ladder at once: every rung
+/// would be verified against the same time stepping at the same nodes. The remedy names
+/// --no-verify. The solve itself is close to the closed form: within 2 % of the motion's
+/// range of 0.01 (the fast initial layer of 1e-3 s lies inside the first of its 1.6 s
+/// steps; measured 1.1e-4).
+#[test]
+fn a_solve_whose_reference_cannot_run_ends_the_ladder_at_once() {
+    let (c, k, m) = (1e4_f64, 1.0_f64, 1.0_f64);
+    let disc = (c * c - 4.0 * m * k).sqrt();
+    let (r1, r2) = ((-c + disc) / (2.0 * m), (-c - disc) / (2.0 * m));
+    let exact = |t: f64| vec![(r2 * (r1 * t).exp() - r1 * (r2 * t).exp()) / (r2 - r1)];
+    let (_, o) = solve("stiff_overdamped", &Overrides::default());
+    assert!(o.converged() && o.verification.status == VerifyStatus::Unverified, "{}", o.verification.reason);
+    assert!(o.verification.reason.contains("stiff"), "{}", o.verification.reason);
+    assert_eq!(o.attempts.len(), 1, "the ladder went on: {:?}", o.attempts.iter().map(|a| &a.method).collect::<Vec<_>>());
+    assert!(o.remedy.as_deref().is_some_and(|r| r.contains("--no-verify")), "{:?}", o.remedy);
+    let err = true_error(&o, exact);
+    assert!(err < 2e-4, "the solve against the closed form: {err:e}");
+}
+
+/// `tune` chooses σ by the energy artifact, which needs an energy conserved between
+/// contacts: a scene with wall friction is refused, naming the friction.
+#[test]
+fn tune_refuses_a_scene_with_wall_friction() {
+    use skg_core::scenario::SceneFile;
+    use skg_core::tune::{self, TuneOptions};
+    let file = SceneFile::load(&common::scenario("incline_friction")).unwrap();
+    let e = tune::tune_width(&file, &Overrides::default(), &TuneOptions::default(), |_| {}).unwrap_err().to_string();
+    assert!(e.contains("has wall friction") && e.contains("energy artifact"), "{e}");
+}

@@ -24,6 +24,8 @@
 //!    contraction amplifies, and convergence failures of long or contact-rich spans
 //!    ([`crate::window`]).
 //!
+//! The ladder stops at the first run that converges and verifies, or that converges
+//! and whose verification cannot run (its reference would fail on every rung alike).
 //! The first run that converges and verifies is reported; if none does, the converged run
 //! with the smallest verification error, else the scene's own run. Every run is listed
 //! in `summary.json` (`attempts`), the reported one marked `chosen`. `[solver] fallback =
@@ -32,6 +34,7 @@
 use std::time::Instant;
 
 use crate::model::Model;
+use crate::sbp::OperatorKind;
 use crate::scenario::{Scene, Windows};
 use crate::solve::{self, Attempt, Guess, Method, Outcome, Run, SolveError};
 use crate::trajectory::{NodeSeries, Trajectory};
@@ -87,14 +90,14 @@ impl Ladder<'_> {
         let start = Instant::now();
         let run = run()?;
         let outcome = solve::outcome(self.scene, self.model, run);
-        let go_on = !outcome.trusted();
+        let go_on = !ends_the_ladder(&outcome);
         self.tried.push(Tried { description: description.to_string(), outcome, wall_s: start.elapsed().as_secs_f64() });
         Ok(go_on)
     }
 
-    /// Whether the last attempt converged and verified.
+    /// Whether the last attempt ends the ladder ([`ends_the_ladder`]).
     fn succeeded(&self) -> bool {
-        self.tried.last().is_some_and(|t| t.outcome.trusted())
+        self.tried.last().is_some_and(|t| ends_the_ladder(&t.outcome))
     }
 
     /// Step 2a; `Ok(true)` when it succeeded.
@@ -206,6 +209,14 @@ impl Ladder<'_> {
     }
 }
 
+/// Whether an attempt ends the ladder: it converged and verified, or it converged and
+/// its reference could not be computed. Every rung is verified against the same time
+/// stepping at the same nodes, so the next rungs would fail to compute it the same way
+/// (a stiff scene spent 7 s on seven rungs that way).
+fn ends_the_ladder(o: &Outcome) -> bool {
+    o.trusted() || (o.converged() && o.verification.status == VerifyStatus::Unverified)
+}
+
 /// The summary's record of one attempt.
 fn record(t: &Tried, chosen: bool) -> Attempt {
     let o = &t.outcome;
@@ -265,11 +276,20 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
             let cure = if oddeven && !windows && !windows_tried {
                 format!("solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even mode's growth")
             } else {
-                format!("refine the grid (--nodes {}) or use a higher-order operator (--operator SBP363)", 2 * scene.nodes)
+                let refine = format!("refine the grid (--nodes {})", 2 * scene.nodes);
+                match higher_order(scene.operator) {
+                    Some(op) => format!("{refine} or use a higher-order operator (--operator {})", op.name()),
+                    None => refine,
+                }
             };
             format!("{ladder}{cure}; or, if this accuracy is enough for you, state it with `[verify] tol` or --verify-tol")
         }
     }
+}
+
+/// The operator of the next higher order, if there is one.
+fn higher_order(op: OperatorKind) -> Option<OperatorKind> {
+    OperatorKind::ALL.iter().position(|&k| k == op).and_then(|i| OperatorKind::ALL.get(i + 1)).copied()
 }
 
 /// Cubic Hermite interpolation of the coordinates of `tr` (values and velocities) at `times`.
@@ -309,6 +329,14 @@ fn segment(t: &[f64], x: f64) -> usize {
 mod tests {
     use super::*;
     use crate::trajectory::States;
+
+    #[test]
+    fn the_higher_order_operator_is_the_next_one_up_and_none_above_sbp484() {
+        assert_eq!(higher_order(OperatorKind::Sbp121), Some(OperatorKind::Sbp242));
+        assert_eq!(higher_order(OperatorKind::Sbp242), Some(OperatorKind::Sbp363));
+        assert_eq!(higher_order(OperatorKind::Sbp363), Some(OperatorKind::Sbp484));
+        assert_eq!(higher_order(OperatorKind::Sbp484), None);
+    }
 
     #[test]
     fn hermite_is_exact_for_cubics() {

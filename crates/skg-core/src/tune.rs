@@ -56,6 +56,18 @@ pub fn conserves_energy(scene: &Scene, model: &crate::model::Model) -> bool {
     scene.file.forces.is_empty() && scene.walls.iter().all(|w| w.friction == 0.0) && !model.depends_on_time
 }
 
+/// What keeps a scene's energy from being conserved, in words (for a scene that
+/// [`conserves_energy`] refuses).
+fn non_conservative_part(scene: &Scene) -> &'static str {
+    if !scene.file.forces.is_empty() {
+        "declares forces ([forces])"
+    } else if scene.walls.iter().any(|w| w.friction != 0.0) {
+        "has wall friction"
+    } else {
+        "depends on the time t explicitly"
+    }
+}
+
 /// The energy artifact of a trajectory of `scene` (see the module documentation).
 pub fn energy_artifact(scene: &Scene, tr: &Trajectory, skip_last: usize) -> Artifact {
     let n = tr.energy.len();
@@ -174,10 +186,11 @@ pub enum TuneError {
         /// The scene's parameters.
         known: Vec<String>,
     },
-    /// The scene depends on the time explicitly: its energy is not conserved between
-    /// contacts, so the energy artifact measures nothing.
-    #[error("the scene depends on the time t explicitly, so its energy is not conserved between contacts and the energy artifact cannot choose the wall width")]
-    TimeDependent,
+    /// The scene's energy is not conserved between contacts (it depends on the time
+    /// explicitly, declares forces, or has wall friction), so the energy artifact
+    /// measures nothing.
+    #[error("the scene {0}, so its energy is not conserved between contacts and the energy artifact cannot choose the wall width")]
+    NotConservative(&'static str),
     /// The starting value of the parameter is not positive.
     #[error("`{param}` must be positive to be tuned, got {value}")]
     NotPositive {
@@ -239,8 +252,8 @@ pub fn tune_width(
         }
     }
     let base = file.clone().resolve(ov)?;
-    if crate::model::Model::build(&base)?.depends_on_time {
-        return Err(TuneError::TimeDependent);
+    if !conserves_energy(&base, &crate::model::Model::build(&base)?) {
+        return Err(TuneError::NotConservative(non_conservative_part(&base)));
     }
     let current = *base
         .parameters

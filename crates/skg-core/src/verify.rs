@@ -176,7 +176,8 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
                 reason: match e {
                     OdeError::MaxSteps { .. } => format!(
                         "time stepping of the same scene failed, so the solve could not be checked: {e} (more than {} steps per \
-                         node: the motion is far finer than the grid; refine N or shorten the span)",
+                         node: the motion is far finer than the grid, or the scene is stiff, e.g. strongly damped, so that \
+                         explicit time stepping needs steps far shorter than the motion; refine N or shorten the span)",
                         STEPS_PER_NODE
                     ),
                     e => format!("time stepping of the same scene failed, so the solve could not be checked: {e}"),
@@ -212,7 +213,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
         if odd_even_max >= 0.25 * max_error {
             r.push_str(&format!(
                 "; the odd-even (−1)^k component of the solution is {odd_even_max:.3e}: the parasitic mode of centred SBP stencils, \
-                 which damping or contraction amplifies toward the end of the span"
+                 which damping, contraction or a long contact amplifies"
             ));
         }
         r

@@ -7,6 +7,7 @@ use anyhow::Result;
 use clap::Args;
 
 use skg_core::backend::SolverStatus;
+use skg_core::verify::VerifyStatus;
 use skg_core::{output, solve};
 
 use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
@@ -66,10 +67,13 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         return Ok(ExitCode::from(EXIT_NOT_CONVERGED));
     }
     if !outcome.trusted() {
+        let verdict = match v.status {
+            VerifyStatus::Unverified => "could not run",
+            _ => "failed",
+        };
         eprintln!(
-            "error: {}: the solve converged but its verification {}: {}; summary in {}",
+            "error: {}: the solve converged but its verification {verdict}: {}; summary in {}",
             outcome.scene,
-            v.status,
             v.reason,
             written.summary.display()
         );
