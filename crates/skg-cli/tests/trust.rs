@@ -352,3 +352,17 @@ fn the_final_state_is_verified() {
     assert!(largest > tol && worst >= n - 2, "largest error {largest:e} at node {worst} of {n} (tolerance {tol:e})");
     assert!((0..n - 2).all(|k| error_at(k) <= tol), "the interior nodes are within the tolerance");
 }
+
+/// A span whose own solve and improved guesses do not converge is not solved again over
+/// a longer span (the frictionless incline on SBP121 at N = 64, whose plain solve hits the
+/// iteration limit): the ladder goes on to windows.
+#[test]
+fn a_span_that_does_not_converge_is_not_lengthened() {
+    let ov = Overrides { operator: Some("SBP121".parse().unwrap()), ..Default::default() };
+    let o = solve::solve_scene(&common::load("incline_frictionless", &ov)).unwrap();
+    let methods: Vec<&str> = o.attempts.iter().map(|a| a.method.as_str()).collect();
+    assert!(!o.attempts[0].converged, "{methods:?}");
+    assert!(o.attempts.iter().take_while(|a| !a.method.starts_with("windows")).all(|a| !a.converged), "{methods:?}");
+    assert!(!methods.iter().any(|m| m.contains("past the end")), "{methods:?}");
+    assert!(methods.iter().any(|m| m.starts_with("windows")), "{methods:?}");
+}
