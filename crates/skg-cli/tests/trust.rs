@@ -366,3 +366,26 @@ fn a_span_that_does_not_converge_is_not_lengthened() {
     assert!(!methods.iter().any(|m| m.contains("past the end")), "{methods:?}");
     assert!(methods.iter().any(|m| m.starts_with("windows")), "{methods:?}");
 }
+
+/// A block stopped by friction on a floor (tests/scenes/friction_stop.toml). At rest the
+/// regularized friction is a stiff damper: with the default ε = 1e-3 m/s the solve on 256
+/// nodes fails, and the remedy names friction_velocity. With ε = 1e-2 the same kind of
+/// grid verifies, and the block stops where Coulomb friction stops it, v0²/(2 μ g), to the
+/// regularization's error (about ε²/(μ g) = 3e-5 m).
+#[test]
+fn a_block_stopped_by_friction_names_friction_velocity_and_is_cured_by_it() {
+    let (_, stiff) = solve("friction_stop", &Overrides::default());
+    assert!(!stiff.trusted(), "{}", stiff.verification.reason);
+    assert!(stiff.remedy.as_deref().is_some_and(|r| r.contains("friction_velocity")), "{:?}", stiff.remedy);
+    let text = std::fs::read_to_string(common::test_scene("friction_stop")).unwrap();
+    let softer = text.replacen("friction = \"mu\"", "friction = \"mu\"\nfriction_velocity = 1e-2", 1);
+    assert_ne!(softer, text);
+    let file = skg_core::scenario::SceneFile::parse(&softer, "friction_stop_eps.toml").unwrap();
+    let scene = file.resolve(&Overrides { nodes: Some(512), ..Default::default() }).unwrap();
+    let o = solve::solve_scene(&scene).unwrap();
+    assert!(o.trusted(), "{}", o.verification.reason);
+    let (v0, mu, g) = (2.0_f64, 0.3_f64, common::G);
+    let stop = v0 * v0 / (2.0 * mu * g);
+    let x_end = o.trajectory.q.last().unwrap()[0];
+    assert!((x_end - stop).abs() < 1e-4, "x at the end {x_end}, Coulomb friction stops at {stop}");
+}
