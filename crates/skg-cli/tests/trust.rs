@@ -389,3 +389,21 @@ fn a_block_stopped_by_friction_names_friction_velocity_and_is_cured_by_it() {
     let x_end = o.trajectory.q.last().unwrap()[0];
     assert!((x_end - stop).abs() < 1e-4, "x at the end {x_end}, Coulomb friction stops at {stop}");
 }
+
+/// A bounce the grid does not resolve (tests/scenes/two_walls.toml: the ball turns
+/// about 1.3 σ short of each wall and at N = 1024 crosses a contact's length in about
+/// 0.6 grid steps). The solve is refused, and the remedy names the grid that resolves
+/// the contacts, which then verifies against time stepping.
+#[test]
+fn an_unresolved_bounce_is_refused_and_the_remedy_names_the_grid_that_resolves_it() {
+    let (_, coarse) = solve("two_walls", &plain());
+    assert!(!coarse.trusted(), "{}", coarse.verification.reason);
+    let r = coarse.verification.wall_resolution["right"];
+    // Speed 3 on Δt = 4/1023; the turn at |h| ≈ 1.3–1.5 σ gives ℓ ≈ σ/1.4.
+    assert!((r.gap_rate - 3.0).abs() < 1e-6 && (0.45..0.75).contains(&r.steps), "{r:?}");
+    let remedy = coarse.remedy.as_deref().unwrap();
+    assert!(remedy.contains("--nodes 4096") && remedy.contains("does not resolve its contacts"), "{remedy}");
+    let (_, fine) = solve("two_walls", &Overrides { nodes: Some(4096), ..plain() });
+    assert!(fine.trusted(), "{}", fine.verification.reason);
+    assert!(fine.verification.wall_resolution.values().all(|r| r.steps >= 2.0), "{:?}", fine.verification.wall_resolution);
+}

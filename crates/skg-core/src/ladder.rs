@@ -35,6 +35,7 @@
 
 use std::time::Instant;
 
+use crate::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scenario::{Scene, Windows};
@@ -264,8 +265,8 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
     let friction = scene.walls.iter().any(|w| w.friction > 0.0);
     let friction_hint = "raise the walls' friction_velocity ε (at rest the regularized friction damps at the rate μN/(mε))";
     if !o.converged() {
-        let mut steps = vec![format!("refine the grid (--nodes {})", 2 * scene.nodes)];
-        if walls {
+        let mut steps = vec![refine(scene, o)];
+        if walls && under_resolved_wall(o).is_none() {
             steps.push("widen the walls (a larger σ)".to_string());
         }
         if friction {
@@ -290,10 +291,9 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
             let cure = if oddeven && !windows && !windows_tried {
                 format!("solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even mode's growth")
             } else {
-                let refine = format!("refine the grid (--nodes {})", 2 * scene.nodes);
-                let refine = match higher_order(scene.operator) {
-                    Some(op) => format!("{refine} or use a higher-order operator (--operator {})", op.name()),
-                    None => refine,
+                let refine = match higher_order(scene.operator).filter(|_| under_resolved_wall(o).is_none()) {
+                    Some(op) => format!("{} or use a higher-order operator (--operator {})", refine(scene, o), op.name()),
+                    None => refine(scene, o),
                 };
                 if friction {
                     format!("{refine}, or {friction_hint}")
@@ -304,6 +304,30 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
             format!("{ladder}{cure}; or, if this accuracy is enough for you, state it with `[verify] tol` or --verify-tol")
         }
     }
+}
+
+/// The refinement to suggest: twice the nodes, or, when the reference shows a wall's
+/// contacts under-resolved (fewer than [`MIN_STEPS`] grid steps per contact length,
+/// [`crate::contact::fewest_steps`]), the power-of-two multiple of the nodes that reaches
+/// [`RESOLVED_STEPS`] (or a wider wall).
+fn refine(scene: &Scene, o: &Outcome) -> String {
+    let Some((name, r)) = under_resolved_wall(o) else {
+        return format!("refine the grid (--nodes {})", 2 * scene.nodes);
+    };
+    let factor = (RESOLVED_STEPS / r.steps).log2().ceil().exp2().max(2.0);
+    let nodes = (scene.nodes as f64 * factor).min(1e15) as usize;
+    let steps = if r.steps >= 0.1 { format!("{:.2}", r.steps) } else { format!("{:.1e}", r.steps) };
+    format!(
+        "refine the grid (--nodes {nodes}) or widen wall `{name}`: the grid does not resolve its contacts, the gap changing by a \
+         contact's length ({:.2e}) in {steps} grid steps (|ḣ| = {:.3} at t = {:.4}) where about {RESOLVED_STEPS} are needed",
+        r.length, r.gap_rate, r.t,
+    )
+}
+
+/// The wall whose contacts the outcome's reference resolves worst, if it has fewer than
+/// [`MIN_STEPS`] steps per contact length.
+fn under_resolved_wall(o: &Outcome) -> Option<(&String, &WallResolution)> {
+    o.verification.wall_resolution.iter().min_by(|a, b| a.1.steps.total_cmp(&b.1.steps)).filter(|(_, r)| r.steps < MIN_STEPS)
 }
 
 /// The operator of the next higher order, if there is one.

@@ -35,6 +35,7 @@ use std::fmt;
 use indexmap::IndexMap;
 use serde::Serialize;
 
+use crate::contact::{self, WallResolution};
 use crate::model::Model;
 use crate::ode::{OdeError, OdeOptions};
 use crate::scenario::Scene;
@@ -118,6 +119,10 @@ pub struct Verification {
     pub reference: String,
     /// The verdict in words.
     pub reason: String,
+    /// How finely the nodes resolve each wall's contacts in the reference, for the walls
+    /// it comes near ([`contact::resolution`]): the ladder's remedy names a finer grid
+    /// when a failed solve's walls are under-resolved.
+    pub wall_resolution: IndexMap<String, WallResolution>,
     /// The reference at the nodes (written as `reference.csv`).
     #[serde(skip)]
     pub reference_trajectory: Option<Trajectory>,
@@ -155,6 +160,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
         skip_last: SKIP_LAST,
         reference: String::new(),
         reason: String::new(),
+        wall_resolution: IndexMap::new(),
         reference_trajectory: None,
     };
     if let Some(bad) = first_non_finite(scene, tr) {
@@ -234,6 +240,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
         tolerance_source,
         reference,
         reason,
+        wall_resolution: contact::resolution(model, &reference_trajectory),
         reference_trajectory: Some(reference_trajectory),
         ..base
     }
