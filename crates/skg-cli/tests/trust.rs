@@ -407,3 +407,19 @@ fn an_unresolved_bounce_is_refused_and_the_remedy_names_the_grid_that_resolves_i
     assert!(fine.trusted(), "{}", fine.verification.reason);
     assert!(fine.verification.wall_resolution.values().all(|r| r.steps >= 2.0), "{:?}", fine.verification.wall_resolution);
 }
+
+/// The progress display is told of every attempt before it runs, numbered as the
+/// summary lists them (a failed coarse solve is announced but not listed, so numbers may
+/// repeat), and of nothing else.
+#[test]
+fn every_attempt_of_the_ladder_is_announced_before_it_runs() {
+    let scene = common::load("pendulum", &Overrides { max_iter: Some(1), ..Overrides::default() });
+    let mut announced: Vec<String> = Vec::new();
+    let o = solve::solve_scene_with_progress(&scene, &mut |m| announced.push(m.to_string())).unwrap();
+    assert!(o.attempts.len() > 2, "{:?}", o.attempts);
+    assert_eq!(announced[0], "1. one global solve");
+    for (i, a) in o.attempts.iter().enumerate() {
+        let said = announced.iter().any(|m| m.strip_prefix(&format!("{}. ", i + 1)).is_some_and(|d| a.method.starts_with(d)));
+        assert!(said, "attempt {} ({}) was not announced: {announced:?}", i + 1, a.method);
+    }
+}

@@ -53,8 +53,14 @@ pub const END_MARGIN: f64 = 0.25;
 
 /// Solve `scene`: its own solve, then the ladder while it fails (see the module docs).
 pub fn solve(scene: &Scene) -> Result<Outcome, SolveError> {
+    solve_with_progress(scene, &mut |_| {})
+}
+
+/// [`solve`], telling `progress` what each rung is about to do ("2. coarse to fine (…)"),
+/// for a progress display: a ladder that fails can take a minute.
+pub fn solve_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
     let model = Model::build(scene)?;
-    let mut ladder = Ladder { scene, model: &model, tried: Vec::new() };
+    let mut ladder = Ladder { scene, model: &model, tried: Vec::new(), progress };
     let go_on = match scene.windows {
         Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, w))?,
         None => ladder.attempt("one global solve", || solve::solve_global(scene, &Guess::TimeStepping))?,
@@ -87,12 +93,19 @@ struct Ladder<'a> {
     scene: &'a Scene,
     model: &'a Model,
     tried: Vec<Tried>,
+    progress: &'a mut dyn FnMut(&str),
 }
 
 impl Ladder<'_> {
+    /// Tell the progress display what the next attempt does.
+    fn announce(&mut self, description: &str) {
+        (self.progress)(&format!("{}. {description}", self.tried.len() + 1));
+    }
+
     /// Run and assess one attempt; `Ok(true)` means the ladder should go on (the run
     /// did not converge or did not verify).
     fn attempt(&mut self, description: &str, run: impl FnOnce() -> Result<Run, SolveError>) -> Result<bool, SolveError> {
+        self.announce(description);
         let start = Instant::now();
         let run = run()?;
         let outcome = solve::outcome(self.scene, self.model, run);
@@ -114,6 +127,7 @@ impl Ladder<'_> {
             return Ok(false);
         }
         let coarse_scene = Scene { nodes: coarse_nodes, ..scene.clone() };
+        self.announce(&format!("coarse to fine (solving on {coarse_nodes} nodes first)"));
         let coarse = solve::solve_global(&coarse_scene, &Guess::TimeStepping)?;
         let coarse = coarse.solution;
         if !coarse.status.is_converged() {
@@ -138,6 +152,7 @@ impl Ladder<'_> {
         let mut guess = Guess::TimeStepping;
         let mut widest_converged = None;
         for factor in WIDTH_FACTORS {
+            self.announce(&format!("wall-width continuation (every wall width × {factor})"));
             let mut wide = scene.clone();
             wide.walls.iter_mut().for_each(|w| w.width *= factor);
             let run = solve::solve_global(&wide, &guess)?;

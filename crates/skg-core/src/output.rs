@@ -444,10 +444,20 @@ pub enum SolveIntoError {
 /// the solve returns, so a killed run leaves the old log complete; the files are written
 /// by [`write_outcome`]. A solve that cannot run leaves no directory it created.
 pub fn solve_into(dir: &Path, scene: &mut Scene) -> Result<(Outcome, Written), SolveIntoError> {
+    solve_into_with_progress(dir, scene, &mut |_| {})
+}
+
+/// [`solve_into`], telling `progress` what each attempt of the fallback ladder is about
+/// to do.
+pub fn solve_into_with_progress(
+    dir: &Path,
+    scene: &mut Scene,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(Outcome, Written), SolveIntoError> {
     let out = OutputDir::lock(dir)?;
     let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
     let named = std::mem::replace(&mut scene.solver.log_file, log.as_ref().map(|(_, staged)| staged.clone()));
-    let outcome = solve::solve_scene(scene);
+    let outcome = solve::solve_scene_with_progress(scene, progress);
     scene.solver.log_file = named;
     if let Some((target, staged)) = &log {
         out.commit(staged, target)?;

@@ -459,8 +459,14 @@ pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, S
 /// Refused before anything is allocated if its memory estimate exceeds the available
 /// memory ([`crate::memory`]).
 pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    solve_scene_with_progress(scene, &mut |_| {})
+}
+
+/// [`solve_scene`], telling `progress` what each attempt of the fallback ladder is
+/// about to do ([`crate::ladder::solve_with_progress`]).
+pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
     crate::memory::check(scene, "the solve", scene.nodes, crate::memory::solve_bytes(scene))?;
-    crate::ladder::solve(scene)
+    crate::ladder::solve_with_progress(scene, progress)
 }
 
 /// How the initial guess of one solve is made.

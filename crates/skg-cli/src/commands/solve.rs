@@ -2,9 +2,11 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
 
 use anyhow::Result;
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
 
 use skg_core::backend::SolverStatus;
 use skg_core::verify::VerifyStatus;
@@ -48,7 +50,10 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
-    let (outcome, written) = output::solve_into(&dir, &mut scene)?;
+    let spinner = progress_spinner(args.quiet, &scene.name);
+    let solved = output::solve_into_with_progress(&dir, &mut scene, &mut |attempt| spinner.set_message(attempt.to_string()));
+    spinner.finish_and_clear();
+    let (outcome, written) = solved?;
     for w in &outcome.warnings {
         eprintln!("warning: {w}");
     }
@@ -108,6 +113,22 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// A spinner on stderr naming the attempt under way, with the time so far (drawn only
+/// when stderr is a terminal and not `--quiet`): a fallback ladder that fails can take
+/// a minute.
+fn progress_spinner(quiet: bool, scene: &str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let spinner = ProgressBar::new_spinner();
+    let scene = scene.replace('{', "{{").replace('}', "}}");
+    let style =
+        ProgressStyle::with_template(&format!("{{spinner}} {scene}: {{msg}} ({{elapsed}})")).unwrap_or(ProgressStyle::default_spinner());
+    spinner.set_style(style);
+    spinner.enable_steady_tick(Duration::from_millis(200));
+    spinner
 }
 
 /// When the fallback ladder ran, one line per attempt (on stderr, as notes).
