@@ -41,6 +41,20 @@ fn solve_writes_csv_and_summary() {
     assert!(summary["timings"]["solver_s"].as_f64().unwrap() > 0.0);
     assert!(summary["diagnostics"]["max_residual"].as_f64().unwrap() < 1e-8);
     assert!(common::text(&o).contains("trajectory.csv"), "prints where the output went");
+    assert!(!common::text(&o).contains("not conserved"), "the disk conserves its energy: {}", common::text(&o));
+}
+
+/// The energy line says why the energy is not conserved when the scene has declared
+/// forces (damping) or friction.
+#[test]
+fn the_energy_line_says_when_declared_forces_do_not_conserve_it() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["damped_oscillator", "incline_friction"] {
+        let scene = common::scenario(name);
+        let o = common::skg(&[scene.to_str().unwrap(), "-o", name], dir.path());
+        assert!(o.status.success(), "{}", common::text(&o));
+        assert!(common::text(&o).contains("not conserved: the scene has declared forces or friction"), "{name}: {}", common::text(&o));
+    }
 }
 
 /// summary.json says which program and which scene produced it, and keys per-wall

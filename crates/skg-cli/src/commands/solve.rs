@@ -103,7 +103,13 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
             println!("  solved as {}", outcome.method);
         }
         println!("  verified: {} ({})", v.status, v.reason);
-        let energy_note = if d.depends_on_time { "; not conserved: the scene depends on t" } else { "" };
+        let energy_note = if d.depends_on_time {
+            "; not conserved: the scene depends on t"
+        } else if !scene.file.forces.is_empty() || scene.walls.iter().any(|w| w.friction > 0.0) {
+            "; not conserved: the scene has declared forces or friction"
+        } else {
+            ""
+        };
         println!("  residual {:.1e}, energy drift {:.3e} (last two nodes excluded{energy_note})", d.max_residual, d.energy_drift);
         for (name, drift) in &d.max_position_drift {
             println!("  position constraint {name}: drift max |h| {drift:.1e}");
