@@ -423,3 +423,17 @@ fn every_attempt_of_the_ladder_is_announced_before_it_runs() {
         assert!(said, "attempt {} ({}) was not announced: {announced:?}", i + 1, a.method);
     }
 }
+
+/// A strongly damped, contracting scene the tool does not ship
+/// (tests/scenes/overdamped_2d.toml): with the whole fallback ladder, N = 1024 is still
+/// refused (the odd-even mode and the fast start), and N = 4096 verifies against time
+/// stepping, in windows.
+#[test]
+fn a_strongly_contracting_scene_is_refused_on_a_coarse_grid_and_verified_on_a_fine_one() {
+    let (_, coarse) = solve("overdamped_2d", &Overrides::default());
+    assert!(coarse.converged() && !coarse.trusted(), "{}", coarse.verification.reason);
+    assert!(coarse.verification.max_error.unwrap() > 5.0 * coarse.verification.tolerances["y"], "{}", coarse.verification.reason);
+    let (_, fine) = solve("overdamped_2d", &Overrides { nodes: Some(4096), ..Overrides::default() });
+    assert!(fine.trusted(), "{}", fine.verification.reason);
+    assert!(matches!(fine.method, Method::Windows { .. }), "{}", fine.method);
+}
