@@ -665,6 +665,15 @@ pub struct Scene {
     pub verify: VerifySettings,
 }
 
+impl Scene {
+    /// Whether the scene declares forces (`[forces]`) or wall friction: either keeps its
+    /// energy from being conserved (so does an explicit time dependence, a property of
+    /// its model).
+    pub fn has_non_conservative_forces(&self) -> bool {
+        !self.file.forces.is_empty() || self.walls.iter().any(|w| w.friction != 0.0)
+    }
+}
+
 /// The largest node count a scene may have (far above what fits in memory for a
 /// solve; the solve and the reference check their memory estimate separately).
 pub const MAX_NODES: usize = 100_000_000;

@@ -53,7 +53,7 @@ pub struct Artifact {
 /// that its energy artifact means something: no declared forces, no wall friction and no
 /// explicit time dependence (of the `model` built from it).
 pub fn conserves_energy(scene: &Scene, model: &crate::model::Model) -> bool {
-    scene.file.forces.is_empty() && scene.walls.iter().all(|w| w.friction == 0.0) && !model.depends_on_time
+    !scene.has_non_conservative_forces() && !model.depends_on_time
 }
 
 /// What keeps a scene's energy from being conserved, in words (for a scene that

@@ -105,7 +105,7 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         println!("  verified: {} ({})", v.status, v.reason);
         let energy_note = if d.depends_on_time {
             "; not conserved: the scene depends on t"
-        } else if !scene.file.forces.is_empty() || scene.walls.iter().any(|w| w.friction > 0.0) {
+        } else if scene.has_non_conservative_forces() {
             "; not conserved: the scene has declared forces or friction"
         } else {
             ""
