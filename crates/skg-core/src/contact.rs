@@ -90,21 +90,14 @@ pub fn fewest_steps(t: &[f64], gaps: &[f64], rates: &[f64], sigma: f64) -> Optio
         return None;
     }
     let spacing = |k: usize| if k + 1 < n { t[k + 1] - t[k] } else { t[k] - t[k - 1] };
-    let near = |k: usize| rates[k].is_finite() && in_contact(gaps[k] + rates[k].abs() * spacing(k), sigma);
+    // The gap one step on: a node is near contact when that is in contact (NaN, never in
+    // contact, where the rate is not finite).
+    let reach = (0..n).map(|k| if rates[k].is_finite() { gaps[k] + rates[k].abs() * spacing(k) } else { f64::NAN });
     let mut best: Option<(usize, f64, f64)> = None;
-    let mut k = 0;
-    while k < n {
-        let start = k;
-        while k < n && near(k) {
-            k += 1;
-        }
-        if k == start {
-            k += 1;
-            continue;
-        }
-        let turn = gaps[start..k].iter().copied().fold(f64::NEG_INFINITY, f64::max).max(-CONTACT_WIDTHS * sigma);
+    for run in episodes(reach, sigma) {
+        let turn = gaps[run.clone()].iter().copied().fold(f64::NEG_INFINITY, f64::max).max(-CONTACT_WIDTHS * sigma);
         let length = if turn < -sigma { sigma * sigma / -turn } else { sigma };
-        for j in (start..k).filter(|&j| rates[j] != 0.0) {
+        for j in run.filter(|&j| rates[j] != 0.0) {
             let steps = length / (rates[j].abs() * spacing(j));
             if best.is_none_or(|b| steps < b.1) {
                 best = Some((j, steps, length));

@@ -306,9 +306,10 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
             let cure = if oddeven && !windows && !windows_tried {
                 format!("solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even mode's growth")
             } else {
+                let refine = refine(scene, o);
                 let refine = match higher_order(scene.operator).filter(|_| under_resolved_wall(o).is_none()) {
-                    Some(op) => format!("{} or use a higher-order operator (--operator {})", refine(scene, o), op.name()),
-                    None => refine(scene, o),
+                    Some(op) => format!("{refine} or use a higher-order operator (--operator {})", op.name()),
+                    None => refine,
                 };
                 if friction {
                     format!("{refine}, or {friction_hint}")
