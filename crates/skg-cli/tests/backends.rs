@@ -6,7 +6,7 @@ mod common;
 
 use skg_core::backend::{self, SolverStatus, SquareSolver};
 use skg_core::newton::NewtonStatus;
-use skg_core::scenario::{Backend, Formulation, Overrides};
+use skg_core::scene::{Backend, Formulation, Overrides};
 use skg_core::solve;
 
 fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {

@@ -67,9 +67,9 @@ fn summary_carries_provenance_and_per_wall_entries_by_name() {
     let o = common::skg(&[scene.to_str().unwrap(), "-o", "res", "-q"], dir.path());
     assert!(o.status.success(), "{}", common::text(&o));
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("res/summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["skg_solve_version"], skg_core::provenance::VERSION);
+    assert_eq!(summary["skg_solve_version"], skg_core::scene::provenance::VERSION);
     assert_eq!(summary["skg_solve_version"], env!("CARGO_PKG_VERSION"));
-    assert_eq!(summary["schema_version"], skg_core::provenance::SCHEMA_VERSION);
+    assert_eq!(summary["schema_version"], skg_core::scene::provenance::SCHEMA_VERSION);
     let digest = Sha256::digest(std::fs::read(&scene).unwrap());
     let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
     assert_eq!(summary["scene_hash"], format!("sha256:{hex}"));

@@ -6,7 +6,7 @@ mod common;
 
 use nalgebra::DMatrix;
 use skg_core::action::{Action, Block};
-use skg_core::scenario::{InitialVelocity, Overrides};
+use skg_core::scene::{InitialVelocity, Overrides};
 use skg_core::solve::build_action;
 
 /// Deterministic pseudo-random numbers in [-1, 1) (xorshift), so failures reproduce.

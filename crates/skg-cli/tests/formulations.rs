@@ -3,7 +3,7 @@
 
 mod common;
 
-use skg_core::scenario::{Formulation, HessianMode, Overrides};
+use skg_core::scene::{Formulation, HessianMode, Overrides};
 
 fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
     a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)

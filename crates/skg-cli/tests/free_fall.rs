@@ -4,7 +4,7 @@ mod common;
 
 use common::G;
 
-use skg_core::scenario::{Formulation, Overrides};
+use skg_core::scene::{Formulation, Overrides};
 
 const X0: f64 = 10.0;
 const V0: f64 = 3.0;

@@ -24,7 +24,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use common::Rng;
-use skg_core::scenario::{Overrides, SceneFile};
+use skg_core::scene::{Overrides, SceneFile};
 
 /// Mutants per suite run.
 const SUITE_MUTANTS: usize = 300;

@@ -7,7 +7,7 @@ mod common;
 use common::G;
 use skg_core::check::Table;
 use skg_core::ode::{self, OdeOptions};
-use skg_core::scenario::Overrides;
+use skg_core::scene::Overrides;
 use skg_core::solve::Outcome;
 
 /// l, θ0 and m of scenarios/pendulum.toml.
@@ -130,7 +130,7 @@ nodes = 256
 "#;
     let path = dir.path().join("hoop.toml");
     std::fs::write(&path, text).unwrap();
-    let scene = skg_core::scenario::SceneFile::load(&path).unwrap().resolve(&Overrides::default()).unwrap();
+    let scene = skg_core::scene::SceneFile::load(&path).unwrap().resolve(&Overrides::default()).unwrap();
     let o = skg_core::solve::solve_scene(&scene).unwrap();
     assert!(o.converged(), "{}", o.status);
     let (r0, u, w0) = (1.0, 0.5, 2.0);

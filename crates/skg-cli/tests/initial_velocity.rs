@@ -6,7 +6,7 @@
 mod common;
 
 use skg_core::convergence::fit_order;
-use skg_core::scenario::{Backend, Formulation, InitialVelocity, Overrides};
+use skg_core::scene::{Backend, Formulation, InitialVelocity, Overrides};
 
 fn natural(ov: Overrides) -> Overrides {
     Overrides { initial_velocity: Some(InitialVelocity::Natural), ..ov }

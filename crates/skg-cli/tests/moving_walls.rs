@@ -7,7 +7,7 @@ mod common;
 
 use common::G;
 use skg_core::check::{self, CheckOptions, Table};
-use skg_core::scenario::{Overrides, SceneFile};
+use skg_core::scene::{Overrides, SceneFile};
 use skg_core::solve::{self, Outcome};
 use skg_core::tune::{self, TuneOptions};
 

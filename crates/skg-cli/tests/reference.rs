@@ -8,7 +8,7 @@ use common::G;
 
 use skg_core::check::Table;
 use skg_core::reference::{self, ReferenceOptions};
-use skg_core::scenario::Overrides;
+use skg_core::scene::Overrides;
 use skg_core::solve;
 
 fn checked_in(file: &str) -> Table {
@@ -251,7 +251,7 @@ fn hard_walls_refuse_what_they_do_not_model() {
     assert!(e.contains("wall `plate` moves") && e.contains("regularized reference"), "{e}");
     let mut text = std::fs::read_to_string(common::scenario("pendulum")).unwrap();
     text.push_str("\n[[walls]]\nname = \"floor\"\nh = \"-y - 2\"\nstrength = 10\nwidth = 0.01\n");
-    let with_wall = skg_core::scenario::SceneFile::parse(&text, "pendulum+floor.toml").unwrap().resolve(&Overrides::default()).unwrap();
+    let with_wall = skg_core::scene::SceneFile::parse(&text, "pendulum+floor.toml").unwrap().resolve(&Overrides::default()).unwrap();
     let e = reference::hard_wall(&with_wall, &solve::grid(&with_wall).0, &ReferenceOptions::default()).unwrap_err().to_string();
     assert!(e.contains("walls and constraints"), "{e}");
     let tumbler = common::load("tumbler", &Overrides::default());
@@ -367,7 +367,7 @@ fn hard_wall_slide_inside_drum_lifts_off_where_the_normal_force_vanishes() {
     }
     let path = dir.path().join("slide.toml");
     std::fs::write(&path, text).unwrap();
-    let scene = skg_core::scenario::SceneFile::load(&path).unwrap().resolve(&Overrides::default()).unwrap();
+    let scene = skg_core::scene::SceneFile::load(&path).unwrap().resolve(&Overrides::default()).unwrap();
     let (times, _) = solve::grid(&scene);
     let r = reference::hard_wall(&scene, &times, &ReferenceOptions::default()).unwrap();
     assert!(!r.contacts.is_empty());
@@ -417,7 +417,7 @@ fn hard_wall_reference_follows_a_time_dependent_force() {
          [[coordinates]]\nname = \"y\"\ninitial = {y0:?}\nvelocity = 0\n[forces]\ny = \"A*cos(W*t)\"\n\
          [[walls]]\nname = \"floor\"\nh = \"-y\"\nstrength = 100\nwidth = 0.01\n[time]\nstart = 0\nend = 1\nnodes = 101\n"
     );
-    let scene = skg_core::scenario::SceneFile::parse(&text, "driven-ball.toml").unwrap().resolve(&Overrides::default()).unwrap();
+    let scene = skg_core::scene::SceneFile::parse(&text, "driven-ball.toml").unwrap().resolve(&Overrides::default()).unwrap();
     let (times, _) = solve::grid(&scene);
     let r = reference::hard_wall(&scene, &times, &ReferenceOptions::default()).unwrap();
     // The flight from (t_i, y_i = 0 after the first impact, or y0 at the start) with speed v_i.

@@ -11,7 +11,7 @@ mod common;
 use skg_core::check::{self, CheckOptions, Table};
 use skg_core::convergence::{fit_order, pairwise_orders};
 use skg_core::reference::{self, ReferenceOptions};
-use skg_core::scenario::{Overrides, Scene};
+use skg_core::scene::{Overrides, Scene};
 use skg_core::solve::{self, Outcome};
 use skg_core::verify::VerifyStatus;
 

@@ -95,7 +95,7 @@ fn resuming_after_the_inputs_changed_is_refused_or_starts_a_new_result_set() {
     let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "-q"], Path::new("."));
     assert_eq!(code, Some(0), "{t}");
     let r = Results::read(&out).unwrap();
-    let hash = |p: &Path| skg_core::provenance::content_hash(&std::fs::read(p).unwrap());
+    let hash = |p: &Path| skg_core::scene::provenance::content_hash(&std::fs::read(p).unwrap());
     let old_hash = hash(&reference);
     assert!(r.rows.iter().all(|row| row[r.column_index("reference_hash").unwrap()] == old_hash));
     // The closed form is the reference: free fall on SBP242 is exact.
@@ -432,7 +432,7 @@ fn readers_refuse_a_trajectory_that_is_not_its_summarys() {
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap()).unwrap();
     let listed = &summary["files"]["trajectory.csv"];
     assert_eq!(listed["rows"], 32);
-    assert_eq!(listed["sha256"], skg_core::provenance::content_hash(&std::fs::read(&csv).unwrap()));
+    assert_eq!(listed["sha256"], skg_core::scene::provenance::content_hash(&std::fs::read(&csv).unwrap()));
     // Another run's trajectory beside this summary (a write that went half-way).
     let other = std::fs::read_to_string(&csv).unwrap().replacen("\n0.0,", "\n0.0,1", 1);
     std::fs::write(&csv, other).unwrap();

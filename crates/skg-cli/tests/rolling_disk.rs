@@ -4,7 +4,7 @@
 mod common;
 
 use skg_core::convergence::fit_order;
-use skg_core::scenario::Overrides;
+use skg_core::scene::Overrides;
 
 /// Max error of x, y, θ, last two nodes excluded (as the reference numbers are measured).
 fn disk_error(n: usize, op: &str) -> f64 {
@@ -68,7 +68,7 @@ fn sbp484_is_an_order_more_accurate_than_sbp363() {
     let errors: Vec<f64> = ns
         .iter()
         .map(|&n| {
-            let ov = Overrides { backend: Some(skg_core::scenario::Backend::Newton), ..common::grid(n, "SBP484") };
+            let ov = Overrides { backend: Some(skg_core::scene::Backend::Newton), ..common::grid(n, "SBP484") };
             common::max_error(&common::solve("rolling_disk", &ov), &[0, 1, 2, 3], 2, common::rolling_disk_exact)
         })
         .collect();
@@ -108,7 +108,7 @@ fn energy_drift_vanishes_at_the_operators_order() {
 fn sbp484_over_twenty_revolutions_converges_at_the_round_off_level() {
     use skg_core::backend::SolverStatus;
     use skg_core::newton::NewtonStatus;
-    use skg_core::scenario::Backend;
+    use skg_core::scene::Backend;
     for (backend, status) in [
         (Backend::Ipopt, SolverStatus::IpoptConvergedToRoundOff),
         (Backend::Newton, SolverStatus::Newton(NewtonStatus::ConvergedToRoundOff)),

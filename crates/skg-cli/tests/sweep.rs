@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use skg_core::scenario::{Overrides, SceneFile};
+use skg_core::scene::{Overrides, SceneFile};
 use skg_core::tune::{self, TuneOptions};
 use skg_sweep::{Method, PointStatus, Results, Shard, SweepFile};
 
@@ -292,12 +292,12 @@ fn results_hold_axis_numbers_expressions_and_provenance() {
     let hash = sha256_of(&scene);
     assert!(column(&r, "scene_hash").iter().all(|h| *h == hash), "{:?} vs {hash}", column(&r, "scene_hash"));
     assert!(column(&r, "skg_solve_version").iter().all(|v| *v == env!("CARGO_PKG_VERSION")));
-    let schema = skg_core::provenance::SCHEMA_VERSION.to_string();
+    let schema = skg_core::scene::provenance::SCHEMA_VERSION.to_string();
     assert!(column(&r, "schema_version").iter().all(|v| *v == schema));
     let info: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
     assert_eq!(info["scene_hash"], hash.as_str());
     assert_eq!(info["skg_solve_version"], env!("CARGO_PKG_VERSION"));
-    assert_eq!(info["schema_version"].as_u64(), Some(skg_core::provenance::SCHEMA_VERSION as u64));
+    assert_eq!(info["schema_version"].as_u64(), Some(skg_core::scene::provenance::SCHEMA_VERSION as u64));
 
     // Charts filter by value: the expression, the number, or an expression of scene
     // parameters (matched as written) each select one sigma, so each (N, V0) cell has one point.

@@ -8,7 +8,7 @@ mod common;
 use skg_core::backend::SquareSolver;
 use skg_core::check::Table;
 use skg_core::reference::{self, ReferenceOptions};
-use skg_core::scenario::{Overrides, Scene, SceneFile};
+use skg_core::scene::{Overrides, Scene, SceneFile};
 use skg_core::solve::{self, build_action, Guess};
 
 /// m, k, c, A, Ω of scenarios/driven_oscillator.toml.

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use skg_core::check::{self, CheckOptions, Table};
 use skg_core::reference::{self, ReferenceOptions};
-use skg_core::scenario::{Backend, Overrides, Scene};
+use skg_core::scene::{Backend, Overrides, Scene};
 use skg_core::solve::{self, Method, Outcome};
 use skg_core::trajectory::{trajectory_header, trajectory_rows};
 use skg_core::verify::VerifyStatus;
@@ -202,7 +202,7 @@ fn windows_agree_with_the_global_solve_where_both_run() {
             if let Some(w) = window {
                 text = text.replacen("[time]", &format!("[time]\nwindow = \"{w}\""), 1);
             }
-            skg_core::scenario::SceneFile::parse(&text, name).unwrap().resolve(&global).unwrap()
+            skg_core::scene::SceneFile::parse(&text, name).unwrap().resolve(&global).unwrap()
         };
         let (g_scene, w_scene) = (scene_with(None), scene_with(Some(window)));
         let g = solve::solve_scene(&g_scene).unwrap();
@@ -327,7 +327,7 @@ fn a_solve_whose_reference_cannot_run_ends_the_ladder_at_once() {
 /// contacts: a scene with wall friction is refused, naming the friction.
 #[test]
 fn tune_refuses_a_scene_with_wall_friction() {
-    use skg_core::scenario::SceneFile;
+    use skg_core::scene::SceneFile;
     use skg_core::tune::{self, TuneOptions};
     let file = SceneFile::load(&common::scenario("incline_friction")).unwrap();
     let e = tune::tune_width(&file, &Overrides::default(), &TuneOptions::default(), |_| {}).unwrap_err().to_string();
@@ -380,7 +380,7 @@ fn a_block_stopped_by_friction_names_friction_velocity_and_is_cured_by_it() {
     let text = std::fs::read_to_string(common::test_scene("friction_stop")).unwrap();
     let softer = text.replacen("friction = \"mu\"", "friction = \"mu\"\nfriction_velocity = 1e-2", 1);
     assert_ne!(softer, text);
-    let file = skg_core::scenario::SceneFile::parse(&softer, "friction_stop_eps.toml").unwrap();
+    let file = skg_core::scene::SceneFile::parse(&softer, "friction_stop_eps.toml").unwrap();
     let scene = file.resolve(&Overrides { nodes: Some(512), ..Default::default() }).unwrap();
     let o = solve::solve_scene(&scene).unwrap();
     assert!(o.trusted(), "{}", o.verification.reason);

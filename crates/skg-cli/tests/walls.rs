@@ -7,7 +7,7 @@ use std::ops::Range;
 
 use common::G;
 use skg_core::contact;
-use skg_core::scenario::Overrides;
+use skg_core::scene::Overrides;
 use skg_core::solve::Outcome;
 
 /// Contact episodes of the scene's single wall (h > −6σ, [`skg_core::contact`]): beyond

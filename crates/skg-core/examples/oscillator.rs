@@ -10,7 +10,7 @@
 
 use std::process::ExitCode;
 
-use skg_core::scenario::{Overrides, SceneFile};
+use skg_core::scene::{Overrides, SceneFile};
 use skg_core::solve;
 
 /// m = 1, k = 4 (ω = 2), x₀ = 1, one period (t from 0 to π) on 128 nodes of SBP242.

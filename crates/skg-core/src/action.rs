@@ -37,7 +37,7 @@ use rustc_hash::FxHashMap;
 
 use crate::model::{LocalKind, Model, PairTape, Workspace};
 use crate::sbp::SbpOperator;
-use crate::scenario::InitialVelocity;
+use crate::scene::InitialVelocity;
 
 const NONE: u32 = u32::MAX;
 

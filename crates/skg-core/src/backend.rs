@@ -48,7 +48,7 @@ use serde::Serialize;
 use crate::action::{Action, Block, MatrixPlan};
 use crate::model::Workspace;
 use crate::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
-use crate::scenario::{Backend, Formulation, HessianMode, IpoptValue, Scene};
+use crate::scene::{Backend, Formulation, HessianMode, IpoptValue, Scene};
 use skg_ipopt::{self as ipopt, EvalError, IterationStat, Problem};
 
 /// The status of the backend that ended a solve: Ipopt's or Newton's own.

@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::scenario::Scene;
+use crate::scene::Scene;
 use crate::trajectory::Trajectory;
 
 /// Errors of reading or comparing tables.

@@ -38,7 +38,7 @@ use std::time::Instant;
 use crate::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
 use crate::model::Model;
 use crate::sbp::OperatorKind;
-use crate::scenario::{Scene, Windows};
+use crate::scene::{Scene, Windows};
 use crate::solve::{self, Attempt, Guess, Method, Outcome, Run, SolveError};
 use crate::trajectory::{NodeSeries, Trajectory};
 use crate::verify::VerifyStatus;

@@ -3,9 +3,9 @@
 //!
 //! Data flows one way through the modules; each uses only modules listed before it:
 //!
-//! 1. [`provenance`] (version, schema version, content hash), [`sbp`] (the
-//!    summation-by-parts operators) and [`scenario`]: the TOML scene, validated and
-//!    resolved to numbers ([`scenario::Scene`]); [`memory`]: what a solve or a
+//! 1. [`sbp`] (the
+//!    summation-by-parts operators) and [`scene`]: the TOML scene, validated and
+//!    resolved to numbers ([`scene::Scene`]); [`memory`]: what a solve or a
 //!    reference of a scene would need, checked before anything is allocated.
 //! 2. [`model`]: the scene's expressions, their exact derivatives compiled into tapes
 //!    ([`expr`]), and the walls' geometry; [`contact`]: when a node is in contact with
@@ -41,10 +41,9 @@ pub mod model;
 pub mod newton;
 pub mod ode;
 pub mod output;
-pub mod provenance;
 pub mod reference;
 pub mod sbp;
-pub mod scenario;
+pub mod scene;
 pub mod solve;
 pub mod time_stepping;
 pub mod trajectory;

@@ -17,7 +17,7 @@
 //! crate (`sysinfo` would bring a large dependency for it).
 
 use crate::sbp::OperatorKind;
-use crate::scenario::{Backend, Formulation, Location, Scene, SceneError};
+use crate::scene::{Backend, Formulation, Location, Scene, SceneError};
 
 /// Bytes per node and per unknown² of a reduced `SBP242` solve at N ≤ 16384.
 const SOLVE_BYTES_PER_NODE_UNIT: f64 = 2.0e3;
@@ -97,7 +97,7 @@ fn bytes_text(bytes: f64) -> String {
 mod tests {
     use super::*;
 
-    use crate::scenario::{Overrides, SceneFile};
+    use crate::scene::{Overrides, SceneFile};
 
     fn scene(text: &str, nodes: usize, operator: &str, formulation: Formulation) -> Scene {
         let ov = Overrides {

@@ -37,7 +37,7 @@
 //! friction direction) for the hard-wall reference, which builds the same model without
 //! wall forces ([`Model::with_hard_walls`]).
 
-use crate::scenario::{Constraint, ConstraintKind, ExpressionNames, Scene, SceneError, Wall, WallSpec};
+use crate::scene::{Constraint, ConstraintKind, ExpressionNames, Scene, SceneError, Wall, WallSpec};
 use nalgebra::{DMatrix, DVector};
 use skg_expr::{ExprId, Graph, Tape};
 use toml::Spanned;
@@ -1021,7 +1021,7 @@ impl Model {
 
     /// Which of the scene's expressions is not finite at the state (q, v) at time t: a
     /// description and its place in the scene file. `None` if all are finite.
-    pub fn non_finite_expression(&self, scene: &Scene, t: f64, q: &[f64], v: &[f64]) -> Option<(String, crate::scenario::Location)> {
+    pub fn non_finite_expression(&self, scene: &Scene, t: f64, q: &[f64], v: &[f64]) -> Option<(String, crate::scene::Location)> {
         let mut ws = self.workspace();
         let ph = self.physical(t, q, v, &mut ws);
         let file = &scene.file;

@@ -32,9 +32,9 @@ use indexmap::IndexMap;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::provenance;
 use crate::reference::{self, Reference};
-use crate::scenario::Scene;
+use crate::scene::provenance;
+use crate::scene::Scene;
 use crate::solve::{self, Outcome, SolveError};
 use crate::trajectory::{trajectory_header, trajectory_rows};
 
@@ -329,7 +329,7 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), OutputErro
     })
 }
 
-/// What `summary.json` holds: where it came from ([`crate::provenance`]), the data files
+/// What `summary.json` holds: where it came from ([`crate::scene::provenance`]), the data files
 /// of its run ([the pairing rule](self)), then the fields of the [`Outcome`].
 #[derive(Serialize)]
 struct Summary<'a> {

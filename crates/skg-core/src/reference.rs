@@ -49,7 +49,7 @@ use std::fmt;
 
 use crate::model::{Model, Workspace, ON_WALL_TOLERANCE};
 use crate::ode::{self, EventHit, OdeOptions, OdeSolution, OdeStats, RhsError};
-use crate::scenario::{ConstraintKind, Scene, SceneError};
+use crate::scene::{ConstraintKind, Scene, SceneError};
 use crate::time_stepping::{integrate_model, min_spacing, rhs, split_states};
 use crate::trajectory::Trajectory;
 
@@ -614,7 +614,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
 pub fn provenance(scene: &Scene, scene_path: &str, r: &Reference) -> String {
     let mut s = format!(
         "skg-solve {} reference ({}) of {} (scene \"{}\"): {}, rtol {:e}, atol {:e}, step at most the sample spacing; index-reduced Lagrange-d'Alembert equations ([W G^T; G 0] solve for accelerations and multipliers); {} samples from t = {} to {}; {} accepted steps, {} rejected, {} right-hand-side evaluations; max |g| {:.3e}, max |E - E0| {:.3e}",
-        crate::provenance::VERSION,
+        crate::scene::provenance::VERSION,
         r.kind,
         scene_path,
         scene.name,

@@ -23,7 +23,7 @@ use crate::contact;
 use crate::model::Model;
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
-use crate::scenario::{Backend, ConstraintKind, Formulation, HessianMode, InitialVelocity, Scene, SceneError, Wall};
+use crate::scene::{Backend, ConstraintKind, Formulation, HessianMode, InitialVelocity, Scene, SceneError, Wall};
 use crate::time_stepping::{integrate_model, min_spacing, step_budget};
 use crate::trajectory::{NodeSeries, States, Trajectory};
 use crate::verify::{self, Verification, VerifyStatus};

@@ -9,7 +9,7 @@
 use serde::Serialize;
 
 use crate::model::{Model, Physical};
-use crate::scenario::{ConstraintKind, Scene};
+use crate::scene::{ConstraintKind, Scene};
 
 /// Values per node: `series[k][i]` is component i at node k.
 pub type NodeSeries = Vec<Vec<f64>>;

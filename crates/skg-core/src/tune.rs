@@ -31,7 +31,7 @@
 use std::path::PathBuf;
 
 use crate::contact;
-use crate::scenario::{NumOrExpr, Overrides, Scene, SceneFile};
+use crate::scene::{NumOrExpr, Overrides, Scene, SceneFile};
 use crate::solve::{self, SolveStatus};
 use crate::trajectory::Trajectory;
 
@@ -157,7 +157,7 @@ pub struct TuneResult {
 pub enum TuneError {
     /// The scene, or the scene with a trial value, is invalid.
     #[error(transparent)]
-    Scene(#[from] crate::scenario::SceneError),
+    Scene(#[from] crate::scene::SceneError),
     /// A solve could not be attempted.
     #[error(transparent)]
     Solve(#[from] crate::solve::SolveError),

@@ -38,7 +38,7 @@ use serde::Serialize;
 use crate::contact::{self, WallResolution};
 use crate::model::Model;
 use crate::ode::{OdeError, OdeOptions};
-use crate::scenario::Scene;
+use crate::scene::Scene;
 use crate::time_stepping::{integrate_model, min_spacing, step_budget, STEPS_PER_NODE};
 use crate::trajectory::{NodeSeries, Trajectory};
 
@@ -352,7 +352,7 @@ mod tests {
     #[test]
     fn an_exact_trajectory_passes_and_a_non_finite_value_always_fails() {
         use crate::model::Model;
-        use crate::scenario::{Overrides, SceneFile};
+        use crate::scene::{Overrides, SceneFile};
         use crate::trajectory::States;
         let text = "[scene]\nname = \"s\"\nlagrangian = \"x_dot^2/2\"\n[[coordinates]]\nname = \"x\"\ninitial = 0\nvelocity = 1\n\
                     [time]\nstart = 0\nend = 1\nnodes = 8\n";

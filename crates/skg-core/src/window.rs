@@ -27,7 +27,7 @@ use std::time::Instant;
 
 use crate::backend::{BackendReport, SquareSolver};
 use crate::contact;
-use crate::scenario::{Scene, Windows};
+use crate::scene::{Scene, Windows};
 use crate::solve::{self, build_action_on, solve_piece, Guess, Method, Piece, Run, SolveError, Timings};
 use crate::trajectory::Trajectory;
 
@@ -168,7 +168,7 @@ fn restart_node(scene: &Scene, tr: &Trajectory, keep: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::{Overrides, SceneFile};
+    use crate::scene::{Overrides, SceneFile};
 
     fn scene(nodes: usize, end: f64) -> Scene {
         let text = format!(

@@ -52,7 +52,7 @@ pub enum PlotError {
     },
     /// The scene of a picture of the motion is invalid.
     #[error(transparent)]
-    Scene(#[from] skg_core::scenario::SceneError),
+    Scene(#[from] skg_core::scene::SceneError),
     /// A trajectory or reference CSV cannot be read.
     #[error(transparent)]
     Table(#[from] skg_core::check::CheckError),
@@ -154,7 +154,7 @@ pub fn cell_value(s: &str) -> Option<f64> {
     if s.is_empty() {
         return None;
     }
-    s.parse::<f64>().ok().or_else(|| skg_core::scenario::eval_constant(s, &indexmap::IndexMap::new()).ok()).filter(|x| x.is_finite())
+    s.parse::<f64>().ok().or_else(|| skg_core::scene::eval_constant(s, &indexmap::IndexMap::new()).ok()).filter(|x| x.is_finite())
 }
 
 /// Whether two numbers are equal to a relative tolerance of 1e-12.
@@ -405,7 +405,7 @@ pub fn convergence(res: &Results, filters: &[(String, String)], title: &str, ste
 
 /// Coordinates of a table: columns `c` that have a `c_dot` column.
 fn coordinates(t: &Table) -> Vec<String> {
-    t.columns.iter().filter(|c| *c != "t" && t.index(&format!("{c}{}", skg_core::scenario::VELOCITY_SUFFIX)).is_some()).cloned().collect()
+    t.columns.iter().filter(|c| *c != "t" && t.index(&format!("{c}{}", skg_core::scene::VELOCITY_SUFFIX)).is_some()).cloned().collect()
 }
 
 fn draw_trajectory<DB: DrawingBackend>(

@@ -33,7 +33,7 @@ use skg_core::check::Table;
 use skg_core::contact;
 use skg_core::model::Model;
 use skg_core::output::{self, REFERENCE_FILE, SUMMARY_FILE, TRAJECTORY_FILE};
-use skg_core::scenario::{Overrides, Scene, SceneFile, TIME, VELOCITY_SUFFIX};
+use skg_core::scene::{Overrides, Scene, SceneFile, TIME, VELOCITY_SUFFIX};
 use skg_core::trajectory::trajectory_header;
 
 use crate::{color, draw_legend, e2s, register_fonts, PlotError};
@@ -354,7 +354,7 @@ impl<'a> Scenery<'a> {
             .walls
             .iter()
             .map(|w| Boundary { name: w.name.clone(), wall: true, fixed: true, snapshots: Vec::new() })
-            .chain(scene.constraints.iter().filter(|c| c.kind == skg_core::scenario::ConstraintKind::Position).map(|c| Boundary {
+            .chain(scene.constraints.iter().filter(|c| c.kind == skg_core::scene::ConstraintKind::Position).map(|c| Boundary {
                 name: c.name.clone(),
                 wall: false,
                 fixed: true,
@@ -432,7 +432,7 @@ impl<'a> Scenery<'a> {
     }
 
     fn boundaries_len_hint(&self) -> usize {
-        self.motion.scene.constraints.iter().filter(|c| c.kind == skg_core::scenario::ConstraintKind::Position).count()
+        self.motion.scene.constraints.iter().filter(|c| c.kind == skg_core::scene::ConstraintKind::Position).count()
     }
 
     /// The plot ranges for a plotting area of `px` pixels.

@@ -95,7 +95,7 @@ use toml::Spanned;
 use skg_core::check::{self, CheckOptions, Comparison, Table};
 use skg_core::output;
 use skg_core::sbp::OperatorKind;
-use skg_core::scenario::{
+use skg_core::scene::{
     parse_toml, read_toml, Backend, Formulation, HessianMode, InitialVelocity, Location, Origin, Overrides, Scene, SceneFile, TomlError,
 };
 
@@ -623,7 +623,7 @@ impl SweepFile {
         }
         let mut reference_hash = None;
         if let Some(ReferenceSpec::File(p)) = self.reference() {
-            reference_hash = std::fs::read(&p).ok().map(|bytes| skg_core::provenance::content_hash(&bytes));
+            reference_hash = std::fs::read(&p).ok().map(|bytes| skg_core::scene::provenance::content_hash(&bytes));
             if !p.is_file() {
                 let r = self.sweep.reference.as_ref().expect("reference given");
                 return Err(self.invalid(

@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use skg_core::output;
-use skg_core::provenance;
-use skg_core::scenario::Location;
+use skg_core::scene::provenance;
+use skg_core::scene::Location;
 
 use crate::{io_err, Method, Point, PointStatus, Record, SweepError};
 

@@ -12,8 +12,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use skg_core::check::Table;
-use skg_core::scenario::Overrides;
-use skg_core::{output, provenance, solve};
+use skg_core::scene::provenance;
+use skg_core::scene::Overrides;
+use skg_core::{output, solve};
 use skg_plot::motion::{self, Aspect, Motion, View};
 
 use super::load;

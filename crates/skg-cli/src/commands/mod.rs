@@ -21,7 +21,7 @@ use anyhow::Result;
 use clap::Args;
 
 use skg_core::sbp::OperatorKind;
-use skg_core::scenario::{Backend, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneFile};
+use skg_core::scene::{Backend, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneFile};
 
 /// Exit code of a solve that ran but did not converge.
 pub const EXIT_NOT_CONVERGED: u8 = 3;

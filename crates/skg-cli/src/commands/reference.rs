@@ -9,7 +9,7 @@ use clap::Args;
 use skg_core::check::Table;
 use skg_core::output;
 use skg_core::reference::{self, ReferenceOptions};
-use skg_core::scenario::Overrides;
+use skg_core::scene::Overrides;
 use skg_core::solve;
 
 use super::load;

@@ -7,7 +7,7 @@ use anyhow::Result;
 use clap::Args;
 
 use skg_core::output;
-use skg_core::scenario::SceneFile;
+use skg_core::scene::SceneFile;
 
 use super::SceneArgs;
 

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use skg_core::scenario::{Overrides, Scene, SceneFile};
+use skg_core::scene::{Overrides, Scene, SceneFile};
 use skg_core::solve::{self, Outcome};
 
 /// The repository's root (this crate lives in `crates/skg-cli`).

@@ -1,0 +1,77 @@
+//! [`SceneError`]: every error of a scene file, its overrides and its resolution, each
+//! naming the file and, where it can, the line and column.
+
+use std::path::PathBuf;
+
+use skg_expr::ParseError;
+
+use super::location::{Location, TomlError};
+
+/// Errors in a scene file or its overrides. Each names the file and, where it can,
+/// the line and column.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The scene file cannot be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Io {
+        /// The file as given.
+        path: PathBuf,
+        /// Why it cannot be read.
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML, or has unknown keys or values of the wrong type.
+    #[error("{location}: {message}")]
+    Toml {
+        /// Where.
+        location: Location,
+        /// The `toml` crate's message.
+        message: String,
+    },
+    /// An expression (Lagrangian, constraint, force, wall, parameter) does not parse or
+    /// names something unknown.
+    #[error("{location}: in `{key}`: {error}\n{caret}")]
+    Expression {
+        /// Where the error is, inside the expression's string.
+        location: Location,
+        /// The key holding the expression, e.g. `constraints.g1.expression`.
+        key: String,
+        /// The parser's error.
+        error: Box<ParseError>,
+        /// The expression with a caret under the error's position.
+        caret: String,
+    },
+    /// A value is out of range, a name clashes, the initial state is inadmissible, ….
+    #[error("{location}: {message}")]
+    Invalid {
+        /// Where.
+        location: Location,
+        /// What is wrong.
+        message: String,
+    },
+    /// A setting given outside the scene file (a command-line option such as
+    /// `--verify-tol`, or the same argument of the Python API) is out of range.
+    #[error("{setting}: {message}")]
+    Setting {
+        /// The setting and its value as given, e.g. `--verify-tol -1`.
+        setting: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A `--set` (or sweep) assignment is malformed or names no parameter.
+    #[error("--set {assignment}: {message}")]
+    Override {
+        /// The assignment as given.
+        assignment: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl From<TomlError> for SceneError {
+    fn from(e: TomlError) -> Self {
+        match e {
+            TomlError::Io { path, error } => SceneError::Io { path, source: error },
+            TomlError::Parse { location, message } => SceneError::Toml { location, message },
+        }
+    }
+}

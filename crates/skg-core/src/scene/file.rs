@@ -1,0 +1,267 @@
+//! The scene file as written: [`SceneFile`], the TOML document, made of one part per
+//! table (`[scene]`, `[[coordinates]]`, `[[constraints]]`, `[[walls]]`, `[time]`,
+//! `[discretization]`, `[solver]`, `[verify]`), each named after what it holds. Values
+//! keep their byte spans, so that later errors point into the file.
+
+use std::fmt;
+use std::path::Path;
+
+use indexmap::IndexMap;
+use serde::{Deserialize, Serialize};
+use skg_expr::ParseError;
+use toml::Spanned;
+
+use super::error::SceneError;
+use super::location::{parse_toml, read_toml, Location, Origin};
+use super::settings::{Backend, Formulation, HessianMode, InitialVelocity};
+
+/// A number or an expression of the scene's parameters, e.g. `0.5` or `"pi/6"`.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum NumOrExpr {
+    /// A number.
+    Num(f64),
+    /// An expression of the parameters and `pi`.
+    Expr(String),
+}
+
+impl fmt::Display for NumOrExpr {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            NumOrExpr::Num(x) => write!(f, "{x}"),
+            NumOrExpr::Expr(s) => write!(f, "{s}"),
+        }
+    }
+}
+
+/// The `[scene]` table.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneMeta {
+    /// The scene's name (in summaries and provenance).
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// L(q, q̇, t) in terms of coordinates `x`, velocities `x_dot`, the time `t` and
+    /// parameters.
+    pub lagrangian: Spanned<String>,
+}
+
+/// One `[[coordinates]]` entry.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoordinateSpec {
+    /// The coordinate's name; `<name>_dot` is its velocity in expressions.
+    pub name: Spanned<String>,
+    /// Initial value q_i(t_start).
+    pub initial: Spanned<NumOrExpr>,
+    /// Initial velocity q̇_i(t_start).
+    pub velocity: Spanned<NumOrExpr>,
+}
+
+/// One `[[constraints]]` entry: a velocity or a position constraint ([`ConstraintKind`](super::ConstraintKind)).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConstraintSpec {
+    /// The constraint's name (columns `lambda_<name>`, `residual_<name>` and, for a
+    /// position constraint, `drift_<name>`).
+    pub name: Spanned<String>,
+    /// g(q, q̇, t) = 0, linear or nonlinear in the velocities, or h(q, t) = 0 without
+    /// velocities.
+    pub expression: Spanned<String>,
+}
+
+/// One `[[walls]]` entry: a regularized wall with optional friction.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSpec {
+    /// The wall's name (column `gap_<name>`, keys of per-wall diagnostics).
+    pub name: Spanned<String>,
+    /// h(q, t): the allowed side is h ≤ 0.
+    pub h: Spanned<String>,
+    /// A in F_N = -A δ_σ(h) ∇h.
+    pub strength: Spanned<NumOrExpr>,
+    /// σ, the width of the Gaussian δ_σ.
+    pub width: Spanned<NumOrExpr>,
+    /// Kinetic friction coefficient μ (0 = no friction term at all).
+    #[serde(default)]
+    pub friction: Option<Spanned<NumOrExpr>>,
+    /// Friction direction, one expression per coordinate of the parameters,
+    /// coordinates, velocities and `t` (normalized by the tool); when absent the friction
+    /// opposes the tangential velocity.
+    #[serde(default)]
+    pub friction_direction: Option<Vec<Spanned<String>>>,
+    /// ε in |v∥| ≈ sqrt(|v∥|² + ε²), which keeps friction differentiable at rest.
+    #[serde(default)]
+    pub friction_velocity: Option<Spanned<NumOrExpr>>,
+}
+
+/// The `[time]` table: the time grid.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// Start time t_i (where the initial state is given).
+    pub start: Spanned<NumOrExpr>,
+    /// End time t_f.
+    pub end: Spanned<NumOrExpr>,
+    /// Number of grid nodes N.
+    pub nodes: Spanned<i64>,
+    /// Solve in successive windows of this length (seconds) instead of one global solve.
+    #[serde(default)]
+    pub window: Option<Spanned<NumOrExpr>>,
+    /// Length (seconds) discarded at the end of each window (default: a quarter window).
+    #[serde(default)]
+    pub overlap: Option<Spanned<NumOrExpr>>,
+}
+
+/// The `[verify]` table: how a solve is checked against time stepping of the same scene.
+#[derive(Debug, Clone, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct VerifySpec {
+    /// Absolute tolerance on max |q − q_reference| (coordinate units).
+    #[serde(default)]
+    pub tol: Option<Spanned<NumOrExpr>>,
+}
+
+/// The `[discretization]` table.
+#[derive(Debug, Clone, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct DiscretizationSpec {
+    /// The SBP operator's name (default SBP242).
+    #[serde(default)]
+    pub operator: Option<Spanned<String>>,
+    /// The formulation (default reduced).
+    #[serde(default)]
+    pub formulation: Option<Formulation>,
+    /// How the initial velocity is imposed (default strong).
+    #[serde(default)]
+    pub initial_velocity: Option<InitialVelocity>,
+}
+
+/// The `[solver]` table: the backend and Ipopt's settings.
+#[derive(Debug, Clone, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// The solver of the square system (default ipopt).
+    pub backend: Option<Backend>,
+    /// Ipopt's `tol` and `constr_viol_tol` (default 1e-11).
+    pub tol: Option<Spanned<f64>>,
+    /// Ipopt's `max_iter` (default 100).
+    pub max_iter: Option<u32>,
+    /// Ipopt's console `print_level` (default 0: silent).
+    pub print_level: Option<Spanned<i32>>,
+    /// Ipopt's `linear_solver` (default: Ipopt's).
+    pub linear_solver: Option<Spanned<String>>,
+    /// The Hessian given to Ipopt (default zero).
+    pub hessian: Option<Spanned<HessianMode>>,
+    /// Ipopt log file, relative to the output directory.
+    pub log_file: Option<String>,
+    /// Further Ipopt options passed through verbatim, e.g. `mumps_pivot_order = 0`.
+    #[serde(default)]
+    pub ipopt: IndexMap<String, Spanned<IpoptValue>>,
+    /// When the solve fails or is not verified, try the fallback ladder (default true).
+    pub fallback: Option<bool>,
+}
+
+/// The value of a pass-through Ipopt option: integer, number or string, as Ipopt's
+/// option has that type.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum IpoptValue {
+    /// An integer option.
+    Int(i32),
+    /// A numeric option.
+    Num(f64),
+    /// A string option.
+    Str(String),
+}
+
+/// The TOML document as written.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// `[scene]`: name, description, Lagrangian.
+    pub scene: SceneMeta,
+    /// `[parameters]`: named numbers or expressions of other parameters.
+    #[serde(default)]
+    pub parameters: IndexMap<String, Spanned<NumOrExpr>>,
+    /// `[[coordinates]]`, in order.
+    pub coordinates: Vec<CoordinateSpec>,
+    /// `[[constraints]]`, in order.
+    #[serde(default)]
+    pub constraints: Vec<ConstraintSpec>,
+    /// Generalized forces, one expression per coordinate name.
+    #[serde(default)]
+    pub forces: IndexMap<String, Spanned<String>>,
+    /// `[[walls]]`, in order.
+    #[serde(default)]
+    pub walls: Vec<WallSpec>,
+    /// `[time]`.
+    pub time: TimeSpec,
+    /// `[discretization]`.
+    #[serde(default)]
+    pub discretization: DiscretizationSpec,
+    /// `[solver]`.
+    #[serde(default)]
+    pub solver: SolverSpec,
+    /// `[verify]`.
+    #[serde(default)]
+    pub verify: VerifySpec,
+    /// Path and source text, for error positions.
+    #[serde(skip)]
+    pub origin: Origin,
+}
+
+impl SceneFile {
+    /// Read and deserialize a scene file.
+    pub fn load(path: &Path) -> Result<SceneFile, SceneError> {
+        let (mut file, origin): (SceneFile, Origin) = read_toml(path)?;
+        file.origin = origin;
+        Ok(file)
+    }
+
+    /// Deserialize a scene from its text; `path` only labels error messages.
+    pub fn parse(text: &str, path: &str) -> Result<SceneFile, SceneError> {
+        let (mut file, origin): (SceneFile, Origin) = parse_toml(text, path)?;
+        file.origin = origin;
+        Ok(file)
+    }
+
+    /// An error at a value of the file.
+    pub(super) fn invalid<T>(&self, v: &Spanned<T>, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid { location: self.origin.locate_in(v, None), message: message.into() }
+    }
+
+    /// Error for an expression at a spanned string value.
+    pub fn expression_error(&self, v: &Spanned<String>, key: &str, error: ParseError) -> SceneError {
+        let caret = error.caret_line();
+        SceneError::Expression {
+            location: self.origin.locate_in(v, Some(error.position)),
+            key: key.to_string(),
+            error: Box::new(error),
+            caret,
+        }
+    }
+
+    /// Where the scene sets the Ipopt option `name` (`[solver]` or `[solver.ipopt]`);
+    /// the whole file if it does not (an option skg-solve sets itself).
+    pub fn solver_option_location(&self, name: &str) -> Location {
+        let s = &self.solver;
+        let spanned = match name {
+            "tol" | "constr_viol_tol" => s.tol.as_ref().map(|v| v.span()),
+            "print_level" => s.print_level.as_ref().map(|v| v.span()),
+            "linear_solver" => s.linear_solver.as_ref().map(|v| v.span()),
+            _ => None,
+        };
+        match spanned.or_else(|| s.ipopt.get(name).map(|v| v.span())) {
+            Some(span) => self.origin.locate(span.start),
+            None => self.origin.whole(),
+        }
+    }
+
+    /// An error of the file as a whole (no single key is at fault).
+    pub(super) fn toml_error(&self, message: String) -> SceneError {
+        SceneError::Invalid { location: self.origin.whole(), message }
+    }
+}

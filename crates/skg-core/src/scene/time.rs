@@ -1,0 +1,166 @@
+//! The time grid of a scene: its span, its operator and node count (checked against the
+//! operator's minimum and against floating point), and its windows.
+
+use indexmap::IndexMap;
+use toml::Spanned;
+
+use super::error::SceneError;
+use super::file::{NumOrExpr, SceneFile};
+use super::overrides::Overrides;
+use super::resolved::Windows;
+use crate::sbp::OperatorKind;
+
+/// The largest node count a scene may have (far above what fits in memory for a
+/// solve; the solve and the reference check their memory estimate separately).
+pub const MAX_NODES: usize = 100_000_000;
+
+/// The smallest time step a grid may have (1/Δt and its powers must stay finite).
+const MIN_TIME_STEP: f64 = 1e-100;
+
+/// Why `nodes` equally spaced times from a start to an end time are not a usable grid:
+/// they would not be distinct and increasing in floating point.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TimeResolutionError {
+    /// The step is zero in floating point.
+    #[error(
+        "the time span end − start = {span:e} divided into {steps} steps gives a zero time step: lengthen the span or use fewer nodes"
+    )]
+    ZeroStep {
+        /// end − start.
+        span: f64,
+        /// The number of steps, nodes − 1.
+        steps: usize,
+    },
+    /// The step is so small that the SBP derivative, ∝ 1/Δt, would overflow.
+    #[error("the time step Δt = {dt:e} is below {min:e}: the SBP derivative (∝ 1/Δt) would overflow; rescale time", min = MIN_TIME_STEP)]
+    StepTooSmall {
+        /// The time step.
+        dt: f64,
+    },
+    /// The step is below the spacing of floating-point numbers near the span's ends, or
+    /// not finite.
+    #[error(
+        "the time step Δt = ({t_end:e} − {t_start:e})/{steps} = {dt:e} is not resolved by floating-point numbers near {magnitude:e} \
+         (their spacing there is {ulp:e}), so the {nodes} node times would not be distinct: measure time from 0 (shift start \
+         and end), or use a longer span or fewer nodes"
+    )]
+    Unresolved {
+        /// The start time.
+        t_start: f64,
+        /// The end time.
+        t_end: f64,
+        /// The number of steps, nodes − 1.
+        steps: usize,
+        /// The time step.
+        dt: f64,
+        /// The larger magnitude of the two ends.
+        magnitude: f64,
+        /// The spacing of floating-point numbers there.
+        ulp: f64,
+        /// The number of nodes.
+        nodes: usize,
+    },
+}
+
+/// Check that `nodes` equally spaced times from `t_start` to `t_end` are distinct and
+/// increasing in floating point: the step must exceed a few units in the last place of
+/// the larger end.
+pub(super) fn check_time_resolution(t_start: f64, t_end: f64, nodes: usize) -> Result<(), TimeResolutionError> {
+    let dt = (t_end - t_start) / (nodes as f64 - 1.0);
+    let magnitude = t_start.abs().max(t_end.abs());
+    let ulp = magnitude * f64::EPSILON;
+    if dt > 4.0 * ulp && dt > MIN_TIME_STEP && dt.is_finite() {
+        return Ok(());
+    }
+    if dt == 0.0 {
+        return Err(TimeResolutionError::ZeroStep { span: t_end - t_start, steps: nodes - 1 });
+    }
+    if dt <= MIN_TIME_STEP && dt > 4.0 * ulp {
+        return Err(TimeResolutionError::StepTooSmall { dt });
+    }
+    Err(TimeResolutionError::Unresolved { t_start, t_end, steps: nodes - 1, dt, magnitude, ulp, nodes })
+}
+
+/// The time span, the operator and the node count of a scene.
+pub(super) struct Grid {
+    pub(super) t_start: f64,
+    pub(super) t_end: f64,
+    pub(super) operator: OperatorKind,
+    pub(super) nodes: usize,
+}
+
+impl SceneFile {
+    /// `[time] start`, `end` and `nodes` and `[discretization] operator`, with the
+    /// command line's overrides: a positive span, at least the operator's minimum of
+    /// nodes, at most [`MAX_NODES`], and node times distinct in floating point.
+    pub(super) fn resolve_grid(&self, ov: &Overrides, params: &IndexMap<String, f64>) -> Result<Grid, SceneError> {
+        let t_start = self.eval_value(&self.time.start, "time.start", params)?;
+        let t_end = self.eval_value(&self.time.end, "time.end", params)?;
+        if t_end <= t_start {
+            return Err(self.invalid(&self.time.end, format!("the time span must be positive: end ({t_end}) ≤ start ({t_start})")));
+        }
+        let operator = match (&ov.operator, &self.discretization.operator) {
+            (Some(k), _) => *k,
+            (None, Some(s)) => s.get_ref().parse::<OperatorKind>().map_err(|e| self.invalid(s, e.to_string()))?,
+            (None, None) => OperatorKind::Sbp242,
+        };
+        let nodes_raw = match ov.nodes {
+            Some(n) => n as i128,
+            None => *self.time.nodes.get_ref() as i128,
+        };
+        let nodes_origin = if ov.nodes.is_some() { " (set by --nodes or a sweep point)" } else { "" };
+        if nodes_raw < operator.min_nodes() as i128 {
+            return Err(self.invalid(
+                &self.time.nodes,
+                format!("{} needs at least {} nodes, got {nodes_raw}{nodes_origin}", operator.name(), operator.min_nodes()),
+            ));
+        }
+        if nodes_raw > MAX_NODES as i128 {
+            return Err(self.invalid(&self.time.nodes, format!("at most {MAX_NODES} nodes are supported, got {nodes_raw}{nodes_origin}")));
+        }
+        let nodes = nodes_raw as usize;
+        check_time_resolution(t_start, t_end, nodes).map_err(|m| self.invalid(&self.time.end, format!("{m}{nodes_origin}")))?;
+        Ok(Grid { t_start, t_end, operator, nodes })
+    }
+
+    /// `[time] window` and `overlap`, with the command line's overrides (a window of 0
+    /// from the command line turns windows off). A window as long as the span or longer
+    /// is one global solve.
+    pub(super) fn resolve_windows(&self, ov: &Overrides, params: &IndexMap<String, f64>, span: f64) -> Result<Option<Windows>, SceneError> {
+        let from_file = |v: &Option<Spanned<NumOrExpr>>, key: &str| v.as_ref().map(|v| self.eval_value(v, key, params)).transpose();
+        let length = match ov.window {
+            Some(w) => Some(w),
+            None => from_file(&self.time.window, "time.window")?,
+        };
+        let overlap = match ov.overlap {
+            Some(o) => Some(o),
+            None => from_file(&self.time.overlap, "time.overlap")?,
+        };
+        // The value's origin: the scene file's line, or the command line.
+        let here = |key: &Option<Spanned<NumOrExpr>>, from_cli: Option<f64>, option: &str, message: String| match (key, from_cli) {
+            (Some(v), None) => self.invalid(v, message),
+            (_, given) => SceneError::Setting { setting: format!("{option} {}", given.map_or("?".into(), |g| g.to_string())), message },
+        };
+        let Some(length) = length.filter(|&w| w != 0.0 || ov.window.is_none()) else {
+            return Ok(None);
+        };
+        if !(length > 0.0 && length.is_finite()) {
+            return Err(here(
+                &self.time.window,
+                ov.window,
+                "--window",
+                format!("time.window must be a positive number of seconds, got {length}"),
+            ));
+        }
+        let overlap = overlap.unwrap_or(length / 4.0);
+        if !(0.0..length).contains(&overlap) {
+            return Err(here(
+                &self.time.overlap,
+                ov.overlap,
+                "--overlap",
+                format!("time.overlap must be ≥ 0 and shorter than the window ({length} s), got {overlap}"),
+            ));
+        }
+        Ok((length < span).then_some(Windows { length, overlap }))
+    }
+}
