@@ -1,0 +1,202 @@
+//! Checks of a model at its initial state (a positive-definite kinetic matrix,
+//! independent constraints, position constraints and constraints satisfied, strictly
+//! inside every wall, every expression finite), and the same checks a solution's nodes
+//! need (the kinetic matrix, finite expressions).
+
+use nalgebra::{DMatrix, DVector};
+use toml::Spanned;
+
+use super::{Model, WallModel};
+use crate::scene::{ConstraintKind, Location, Scene, SceneError};
+
+impl Model {
+    /// Checks on the initial state at the start time: a positive-definite kinetic matrix
+    /// (masses and inertias), independent velocity constraints (∂g/∂q̇ of full row rank),
+    /// initial positions on every position constraint, initial velocities that satisfy
+    /// every constraint, and an initial position on the allowed side of every wall.
+    // `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    pub(super) fn validate_initial_state(&self, scene: &Scene) -> Result<(), SceneError> {
+        let mut ws = self.workspace();
+        let (q0, v0) = (&scene.initial_q, &scene.initial_v);
+        let file = &scene.file;
+        if let Some((what, location)) = self.non_finite_expression(scene, scene.t_start, q0, v0) {
+            let state = scene.coordinates.iter().zip(q0).map(|(c, x)| format!("{c} = {x}"));
+            let state = state.chain(scene.coordinates.iter().zip(v0).map(|(c, x)| format!("{c}_dot = {x}")));
+            return Err(SceneError::Invalid {
+                location,
+                message: format!(
+                    "{what} is not finite at the initial state ({}): the scene's expressions must be defined there",
+                    state.collect::<Vec<_>>().join(", ")
+                ),
+            });
+        }
+        let ph = self.physical(scene.t_start, q0, v0, &mut ws);
+        let min = smallest_eigenvalue(&ph.kinetic);
+        if min.is_nan() || min <= 0.0 {
+            return Err(SceneError::Invalid {
+                location: file.origin.locate_in(&file.scene.lagrangian, None),
+                message: format!(
+                    "the kinetic matrix ∂²L/∂q̇² of the Lagrangian is not positive definite at the initial state \
+                     (smallest eigenvalue {min:.3e}): check the masses and inertias in the Lagrangian"
+                ),
+            });
+        }
+        if let Some(a) = self.dependent_constraint(&ph.gv) {
+            return Err(SceneError::Invalid {
+                location: file.origin.locate_in(&file.constraints[a].expression, None),
+                message: format!(
+                    "constraint `{}` is redundant at the initial state: its gradient ∂g/∂q̇ is a combination of those of {} \
+                     (the constraints' Jacobian ∂g/∂q̇ has rank below {}), so its multiplier is not determined: remove it \
+                     or make the constraints independent",
+                    self.constraints[a].name,
+                    self.constraints[..a].iter().map(|c| format!("`{}`", c.name)).collect::<Vec<_>>().join(", "),
+                    self.constraints.len()
+                ),
+            });
+        }
+        let qmax = q0.iter().fold(1.0_f64, |m, q| m.max(q.abs()));
+        let constraint_error = |a: usize, message: String| SceneError::Invalid {
+            location: file.origin.locate_in(&file.constraints[a].expression, None),
+            message,
+        };
+        let positions = self.constraints.iter().enumerate().filter(|(_, c)| c.kind == ConstraintKind::Position).map(|(a, _)| a);
+        for (a, &h) in positions.zip(&ph.drift) {
+            let name = &self.constraints[a].name;
+            // G's row of a position constraint is ∇h; h changes by about |∇h| δq when q moves by δq.
+            let grad = ph.gv.row(a).norm();
+            if !(grad > 0.0) {
+                return Err(constraint_error(
+                    a,
+                    format!("position constraint `{name}`: ∇h = {grad:e} at the initial position: it fixes no direction there"),
+                ));
+            }
+            let tol = POSITION_TOLERANCE * grad * qmax;
+            if !(h.abs() <= tol) {
+                return Err(constraint_error(
+                    a,
+                    format!(
+                        "the initial position violates position constraint `{name}`: h(q₀, t₀) = {h:.6e} \
+                         (tolerance {tol:.1e} = {POSITION_TOLERANCE:e} · |∇h| · max(1, max|q₀|)); \
+                         choose initial coordinates on it"
+                    ),
+                ));
+            }
+        }
+        let vmax = v0.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        let tol = 1e-9 * vmax * vmax;
+        for (a, val) in ph.g.iter().enumerate() {
+            if !(val.abs() <= tol) {
+                let name = &self.constraints[a].name;
+                let (what, advice) = match self.constraints[a].kind {
+                    ConstraintKind::Velocity => (name.clone(), "choose initial velocities that satisfy it"),
+                    ConstraintKind::Position => {
+                        ("its time derivative ∇h·q̇ + ∂h/∂t".to_string(), "choose initial velocities tangent to it (∇h·q̇₀ = −∂h/∂t)")
+                    }
+                };
+                return Err(constraint_error(
+                    a,
+                    format!("the initial state violates constraint `{name}`: {what} = {val:.6e} (tolerance {tol:.1e}); {advice}"),
+                ));
+            }
+        }
+        for (j, &h) in ph.h.iter().enumerate() {
+            if !h.is_finite() {
+                return Err(SceneError::Invalid {
+                    location: file.origin.locate_in(&file.walls[j].h, None),
+                    message: format!("wall `{}`: h is not finite at the initial state ({h})", self.walls[j].name),
+                });
+            }
+            // An ideal wall may be touched at the start (sliding contact); a Gaussian wall
+            // pushes at h = 0 already, so its scene must start strictly inside.
+            let allowed = match self.wall_model {
+                WallModel::Gaussian => h < 0.0,
+                WallModel::Hard => h <= ON_WALL_TOLERANCE * qmax,
+            };
+            if !allowed {
+                let wall = &self.walls[j].name;
+                let need = match self.wall_model {
+                    WallModel::Gaussian => "h < 0, strictly on the allowed side",
+                    WallModel::Hard => "h ≤ 0, on the allowed side or touching the wall",
+                };
+                return Err(SceneError::Invalid {
+                    location: file.origin.locate_in(&file.walls[j].h, None),
+                    message: format!("wall `{wall}`: the initial position is not on the allowed side: h(q₀, t₀) = {h:.6e} (need {need})"),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The first constraint whose row of `G = ∂g/∂q̇` (n×d) depends linearly on the rows
+    /// before it (relative tolerance 1e-10 on the Gram–Schmidt remainder), if any.
+    fn dependent_constraint(&self, gv: &DMatrix<f64>) -> Option<usize> {
+        let mut basis: Vec<DVector<f64>> = Vec::new();
+        for a in 0..gv.nrows() {
+            let row: DVector<f64> = gv.row(a).transpose();
+            let mut rest = row.clone();
+            for b in &basis {
+                rest -= b * b.dot(&rest);
+            }
+            if rest.norm() <= 1e-10 * row.norm() || rest.norm().is_nan() {
+                return Some(a);
+            }
+            basis.push(rest.normalize());
+        }
+        None
+    }
+
+    /// The first node `k` at which the kinetic matrix ∂²L/∂q̇² of the states `(q[k], v[k])`
+    /// at times `t[k]` is not positive definite, with its smallest eigenvalue.
+    pub fn kinetic_loss(&self, t: &[f64], q: &[Vec<f64>], v: &[Vec<f64>]) -> Option<(usize, f64)> {
+        let mut ws = self.workspace();
+        (0..q.len()).find_map(|k| {
+            let min = smallest_eigenvalue(&self.physical(t[k], &q[k], &v[k], &mut ws).kinetic);
+            (min.is_nan() || min <= 0.0).then_some((k, min))
+        })
+    }
+
+    /// Which of the scene's expressions is not finite at the state (q, v) at time t: a
+    /// description and its place in the scene file. `None` if all are finite.
+    pub fn non_finite_expression(&self, scene: &Scene, t: f64, q: &[f64], v: &[f64]) -> Option<(String, Location)> {
+        let mut ws = self.workspace();
+        let ph = self.physical(t, q, v, &mut ws);
+        let file = &scene.file;
+        let at = |spanned: &Spanned<String>| file.origin.locate_in(spanned, None);
+        let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());
+        if let Some(j) = ph.h.iter().position(|h| !h.is_finite()) {
+            return Some((format!("the gap h of wall `{}`", self.walls[j].name), at(&file.walls[j].h)));
+        }
+        let row_finite = |m: &DMatrix<f64>, a: usize| m.row(a).iter().all(|x| x.is_finite());
+        if let Some(a) = (0..ph.g.len()).find(|&a| !ph.g[a].is_finite() || !row_finite(&ph.gv, a) || !row_finite(&ph.gq, a)) {
+            return Some((format!("constraint `{}` or its derivatives", self.constraints[a].name), at(&file.constraints[a].expression)));
+        }
+        if !ph.energy.is_finite() || !finite(&ph.p) || !finite(ph.kinetic.as_slice()) || !finite(ph.dpdq.as_slice()) {
+            return Some(("the Lagrangian or its derivatives".into(), at(&file.scene.lagrangian)));
+        }
+        let i = ph.force.iter().position(|f| !f.is_finite())?;
+        let name = &self.coordinates[i];
+        Some(match file.forces.get(name) {
+            Some(src) => (format!("the force on `{name}`, ∂L/∂{name} or a wall's force on it"), at(src)),
+            None => (format!("∂L/∂{name} or a wall's force on `{name}`"), at(&file.scene.lagrangian)),
+        })
+    }
+}
+
+/// The smallest eigenvalue of the symmetric part of a square matrix (NaN if it has a NaN).
+fn smallest_eigenvalue(m: &DMatrix<f64>) -> f64 {
+    if m.iter().any(|x| !x.is_finite()) {
+        return f64::NAN;
+    }
+    let sym = (m + m.transpose()) * 0.5;
+    sym.symmetric_eigenvalues().iter().cloned().fold(f64::INFINITY, f64::min)
+}
+
+/// Relative tolerance of the initial check `h(q₀, t₀) = 0` of a position constraint:
+/// `|h| ≤ 1e-9 · |∇h(q₀, t₀)| · max(1, maxᵢ |q₀ᵢ|)`, i.e. the initial position lies within
+/// about 1e-9 (relative to the coordinates' size) of the constraint surface.
+pub const POSITION_TOLERANCE: f64 = 1e-9;
+
+/// A start on an ideal wall (the hard-wall reference) counts as touching it while
+/// `h ≤ 1e-12 · max(1, maxᵢ |q₀ᵢ|)`.
+pub const ON_WALL_TOLERANCE: f64 = 1e-12;
