@@ -158,7 +158,7 @@ fn a_failed_newton_solve_hands_over_to_ipopt() {
 }
 
 /// Z with the plus block's coordinates from `q` (node-major) and everything else zero.
-fn guess_from(q: &[Vec<f64>], action: &skg_core::action::Action) -> Vec<f64> {
+fn guess_from(q: &[Vec<f64>], action: &skg_core::discrete::action::Action) -> Vec<f64> {
     let lay = &action.layout;
     let mut z = vec![0.0; lay.len()];
     for (k, qk) in q.iter().enumerate() {

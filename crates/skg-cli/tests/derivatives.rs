@@ -5,7 +5,7 @@
 mod common;
 
 use nalgebra::DMatrix;
-use skg_core::action::{Action, Block};
+use skg_core::discrete::action::{Action, Block};
 use skg_core::scene::{InitialVelocity, Overrides};
 use skg_core::solve::build_action;
 

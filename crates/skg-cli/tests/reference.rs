@@ -29,7 +29,7 @@ fn has_walls(name: &str) -> bool {
 fn every_shipped_scene_has_its_reference_files() {
     for name in common::SHIPPED {
         let scene = common::load(name, &Overrides::default());
-        let header = skg_core::trajectory::trajectory_header(&scene);
+        let header = skg_core::discrete::trajectory::trajectory_header(&scene);
         let (times, _) = solve::grid(&scene);
         let mut files = vec![format!("{name}.csv")];
         if has_walls(name) {

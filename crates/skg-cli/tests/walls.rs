@@ -6,11 +6,11 @@ mod common;
 use std::ops::Range;
 
 use common::G;
-use skg_core::contact;
+use skg_core::discrete::contact;
 use skg_core::scene::Overrides;
 use skg_core::solve::Outcome;
 
-/// Contact episodes of the scene's single wall (h > −6σ, [`skg_core::contact`]): beyond
+/// Contact episodes of the scene's single wall (h > −6σ, [`skg_core::discrete::contact`]): beyond
 /// 6σ the Gaussian force is below e⁻¹⁸ ≈ 1.5e-8 of its peak: free flight.
 fn contact_episodes(o: &Outcome, sigma: f64) -> Vec<Range<usize>> {
     contact::episodes(o.trajectory.h.iter().map(|h| h[0]), sigma)

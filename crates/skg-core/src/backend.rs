@@ -45,7 +45,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use crate::action::{Action, Block, MatrixPlan};
+use crate::discrete::action::{Action, Block, MatrixPlan};
 use crate::model::Workspace;
 use crate::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
 use crate::scene::{Backend, Formulation, HessianMode, IpoptValue, Scene};

@@ -23,8 +23,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use crate::discrete::trajectory::Trajectory;
 use crate::scene::Scene;
-use crate::trajectory::Trajectory;
 
 /// Errors of reading or comparing tables.
 #[derive(Debug, thiserror::Error)]
@@ -78,7 +78,11 @@ pub struct Table {
 impl Table {
     /// A trajectory as the table its CSV would hold (no comments).
     pub fn of_trajectory(scene: &Scene, tr: &Trajectory) -> Table {
-        Table { columns: crate::trajectory::trajectory_header(scene), comments: Vec::new(), rows: crate::trajectory::trajectory_rows(tr) }
+        Table {
+            columns: crate::discrete::trajectory::trajectory_header(scene),
+            comments: Vec::new(),
+            rows: crate::discrete::trajectory::trajectory_rows(tr),
+        }
     }
 
     /// Read a table; errors name the file and line. A file that the `summary.json`

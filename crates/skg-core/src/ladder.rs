@@ -35,12 +35,12 @@
 
 use std::time::Instant;
 
-use crate::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
+use crate::discrete::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
+use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::{Scene, Windows};
 use crate::solve::{self, Attempt, Guess, Method, Outcome, Run, SolveError};
-use crate::trajectory::{NodeSeries, Trajectory};
 use crate::verify::VerifyStatus;
 use crate::window::{self, WindowGrid};
 
@@ -324,7 +324,7 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
 
 /// The refinement to suggest: twice the nodes, or, when the reference shows a wall's
 /// contacts under-resolved (fewer than [`MIN_STEPS`] grid steps per contact length,
-/// [`crate::contact::fewest_steps`]), the power-of-two multiple of the nodes that reaches
+/// [`crate::discrete::contact::fewest_steps`]), the power-of-two multiple of the nodes that reaches
 /// [`RESOLVED_STEPS`] (or a wider wall).
 fn refine(scene: &Scene, o: &Outcome) -> String {
     let Some((name, r)) = under_resolved_wall(o) else {
@@ -387,7 +387,7 @@ fn segment(t: &[f64], x: f64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::trajectory::States;
+    use crate::discrete::trajectory::States;
 
     #[test]
     fn the_higher_order_operator_is_the_next_one_up_and_none_above_sbp484() {

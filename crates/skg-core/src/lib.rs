@@ -30,11 +30,10 @@
 // index loops say that more plainly than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-pub mod action;
 pub mod backend;
 pub mod check;
-pub mod contact;
 pub mod convergence;
+pub mod discrete;
 pub mod ladder;
 pub mod memory;
 pub mod model;
@@ -46,7 +45,6 @@ pub mod sbp;
 pub mod scene;
 pub mod solve;
 pub mod time_stepping;
-pub mod trajectory;
 pub mod tune;
 pub mod verify;
 pub mod window;

@@ -32,11 +32,11 @@ use indexmap::IndexMap;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use crate::discrete::trajectory::{trajectory_header, trajectory_rows};
 use crate::reference::{self, Reference};
 use crate::scene::provenance;
 use crate::scene::Scene;
 use crate::solve::{self, Outcome, SolveError};
-use crate::trajectory::{trajectory_header, trajectory_rows};
 
 /// Why an output file could not be written.
 #[derive(Debug, thiserror::Error)]

@@ -47,11 +47,11 @@
 #![allow(clippy::result_large_err)]
 use std::fmt;
 
+use crate::discrete::trajectory::Trajectory;
 use crate::model::{Model, Workspace, ON_WALL_TOLERANCE};
 use crate::ode::{self, EventHit, OdeOptions, OdeSolution, OdeStats, RhsError};
 use crate::scene::{ConstraintKind, Scene, SceneError};
 use crate::time_stepping::{integrate_model, min_spacing, rhs, split_states};
-use crate::trajectory::Trajectory;
 
 /// Errors of building a reference. The message of a wrapped error is part of the
 /// variant's text (it is not also reported as its `source`, which would print it twice).
@@ -268,7 +268,7 @@ impl fmt::Display for ReferenceKind {
 /// A reference trajectory and how it was made.
 #[derive(Debug, Clone)]
 pub struct Reference {
-    /// Same layout as the solver's trajectory (CSV columns via [`crate::trajectory::trajectory_rows`]).
+    /// Same layout as the solver's trajectory (CSV columns via [`crate::discrete::trajectory::trajectory_rows`]).
     pub trajectory: Trajectory,
     /// Which reference it is.
     pub kind: ReferenceKind,

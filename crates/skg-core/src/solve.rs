@@ -17,15 +17,15 @@ use std::time::Instant;
 use indexmap::IndexMap;
 use serde::Serialize;
 
-use crate::action::Action;
 use crate::backend::{BackendError, BackendReport, SolverStatus, SquareSolver};
-use crate::contact;
+use crate::discrete::action::Action;
+use crate::discrete::contact;
+use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::model::Model;
 use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
 use crate::scene::{Backend, ConstraintKind, Formulation, HessianMode, InitialVelocity, Scene, SceneError, Wall};
 use crate::time_stepping::{integrate_model, min_spacing, step_budget};
-use crate::trajectory::{NodeSeries, States, Trajectory};
 use crate::verify::{self, Verification, VerifyStatus};
 use skg_ipopt as ipopt;
 

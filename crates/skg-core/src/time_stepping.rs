@@ -17,9 +17,9 @@
 //! unhindered by the verification and the guess alike, and a solve that never bounced
 //! was verified against a reference that did not bounce either.
 
+use crate::discrete::trajectory::States;
 use crate::model::{DynamicsError, Model, WallModel, Workspace};
 use crate::ode::{self, OdeError, OdeOptions, OdeStats, RhsError};
-use crate::trajectory::States;
 
 /// Step attempts per node allowed to the time stepping of the initial guess and of the
 /// verification ([`step_budget`]). On the shipped scenes these take one to two steps per

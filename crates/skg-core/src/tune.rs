@@ -30,10 +30,10 @@
 
 use std::path::PathBuf;
 
-use crate::contact;
+use crate::discrete::contact;
+use crate::discrete::trajectory::Trajectory;
 use crate::scene::{NumOrExpr, Overrides, Scene, SceneFile};
 use crate::solve::{self, SolveStatus};
-use crate::trajectory::Trajectory;
 
 /// Default tolerance on the relative energy artifact.
 pub const DEFAULT_ARTIFACT_TOL: f64 = 1e-5;

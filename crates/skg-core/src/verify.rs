@@ -35,12 +35,12 @@ use std::fmt;
 use indexmap::IndexMap;
 use serde::Serialize;
 
-use crate::contact::{self, WallResolution};
+use crate::discrete::contact::{self, WallResolution};
+use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
 use crate::ode::{OdeError, OdeOptions};
 use crate::scene::Scene;
 use crate::time_stepping::{integrate_model, min_spacing, step_budget, STEPS_PER_NODE};
-use crate::trajectory::{NodeSeries, Trajectory};
 
 /// Relative tolerance of the time-stepping reference.
 pub const REFERENCE_RTOL: f64 = 1e-10;
@@ -316,8 +316,8 @@ pub fn odd_even_amplitudes(names: &[String], q: &NodeSeries) -> IndexMap<String,
 /// The first non-finite number of the trajectory, as a sentence naming the column, the
 /// node and its time.
 pub fn first_non_finite(scene: &Scene, tr: &Trajectory) -> Option<String> {
-    let columns = crate::trajectory::trajectory_header(scene);
-    let rows = crate::trajectory::trajectory_rows(tr);
+    let columns = crate::discrete::trajectory::trajectory_header(scene);
+    let rows = crate::discrete::trajectory::trajectory_rows(tr);
     rows.iter().enumerate().find_map(|(k, row)| {
         row.iter().position(|x| !x.is_finite()).map(|c| {
             format!(
@@ -351,9 +351,9 @@ mod tests {
     /// even with verification switched off, and the reason names the column and node.
     #[test]
     fn an_exact_trajectory_passes_and_a_non_finite_value_always_fails() {
+        use crate::discrete::trajectory::States;
         use crate::model::Model;
         use crate::scene::{Overrides, SceneFile};
-        use crate::trajectory::States;
         let text = "[scene]\nname = \"s\"\nlagrangian = \"x_dot^2/2\"\n[[coordinates]]\nname = \"x\"\ninitial = 0\nvelocity = 1\n\
                     [time]\nstart = 0\nend = 1\nnodes = 8\n";
         let resolve = |ov: &Overrides| SceneFile::parse(text, "s.toml").unwrap().resolve(ov).unwrap();

@@ -16,7 +16,7 @@
 //! node `s` keeps nodes `s … s + r − 1` with `r ≤ n_w − 1 − round(overlap/Δt)`; the next
 //! window starts at node `s + r` from this window's `(q, Dq)` there. `r` is the largest
 //! such index whose node and its two neighbours on each side are out of contact with
-//! every wall ([`crate::contact`]), searched down to half the window, so that no window
+//! every wall ([`crate::discrete::contact`]), searched down to half the window, so that no window
 //! starts inside a bounce (else the largest). Each window's initial guess is time
 //! stepping from its own initial state.
 //!
@@ -26,10 +26,10 @@
 use std::time::Instant;
 
 use crate::backend::{BackendReport, SquareSolver};
-use crate::contact;
+use crate::discrete::contact;
+use crate::discrete::trajectory::Trajectory;
 use crate::scene::{Scene, Windows};
 use crate::solve::{self, build_action_on, solve_piece, Guess, Method, Piece, Run, SolveError, Timings};
-use crate::trajectory::Trajectory;
 
 /// Nodes and restart of the windows of a scene.
 #[derive(Debug, Clone, Copy, PartialEq)]

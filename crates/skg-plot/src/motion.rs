@@ -20,7 +20,7 @@
 //!   never touches it; a position constraint at [`MAX_SNAPSHOTS`] evenly spaced nodes;
 //! * in an animation's frame, such a curve is drawn at the frame's time and state.
 //!
-//! Nodes in contact with a wall (gap `h > −6σ`, [`skg_core::contact`]) are marked red.
+//! Nodes in contact with a wall (gap `h > −6σ`, [`skg_core::discrete::contact`]) are marked red.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -30,11 +30,11 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use skg_core::check::Table;
-use skg_core::contact;
+use skg_core::discrete::contact;
+use skg_core::discrete::trajectory::trajectory_header;
 use skg_core::model::Model;
 use skg_core::output::{self, REFERENCE_FILE, SUMMARY_FILE, TRAJECTORY_FILE};
 use skg_core::scene::{Overrides, Scene, SceneFile, TIME, VELOCITY_SUFFIX};
-use skg_core::trajectory::trajectory_header;
 
 use crate::{color, draw_legend, e2s, register_fonts, PlotError};
 

@@ -22,11 +22,11 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use skg_core::check::Table;
+use skg_core::discrete::trajectory::{trajectory_header, trajectory_rows, NodeSeries, Trajectory};
 use skg_core::reference::{self, Reference, ReferenceError, ReferenceOptions};
 use skg_core::scene::provenance;
 use skg_core::scene::{Backend, ConstraintKind, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneError, SceneFile};
 use skg_core::solve::{self, Outcome, SolveError};
-use skg_core::trajectory::{trajectory_header, trajectory_rows, NodeSeries, Trajectory};
 use skg_core::{error_text, output};
 use skg_sweep as sweep;
 

@@ -551,7 +551,7 @@ impl SweepFile {
     /// file, does not have, before any point runs.
     fn check_compare_columns(&self, scene: &Scene) -> Result<(), SweepError> {
         let Some(compare) = &self.sweep.compare else { return Ok(()) };
-        let produced = skg_core::trajectory::trajectory_header(scene);
+        let produced = skg_core::discrete::trajectory::trajectory_header(scene);
         let reference = match self.reference() {
             Some(ReferenceSpec::File(p)) => Some((
                 Table::read(&p).map_err(|e| self.invalid(self.sweep.reference.as_ref().expect("a file reference"), e.to_string()))?.columns,

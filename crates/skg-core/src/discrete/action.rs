@@ -1,7 +1,7 @@
 //! The SBP-discretized SKG action and its exact derivatives on the whole time grid.
 //!
-//! Unknowns (docs/mathematics.md, docs/errata.md). The *plus* block `P` holds, node by node, `q+[k]` and
-//! `λ+[k]` (only at interior nodes: `λ+[1]` and `λ+[N]` enter no equation and are
+//! Unknowns (docs/mathematics.md, docs/errata.md). The *plus* block `P` holds, node by
+//! node, `q+[k]` and `λ+[k]` (only at interior nodes: `λ+[1]` and `λ+[N]` enter no equation and are
 //! pinned to 0), followed by the multipliers of the boundary conditions on minus
 //! variables `ν_q1, ν_qN` (`q-[1] = q-[N] = 0`) and `ν_λ1, ν_λN` (`λ-[1] = λ-[N] = 0`).
 //! The *minus* block `M` holds, node by node, `q-[k]`, `λ-[k]`, then the multipliers

@@ -1,7 +1,7 @@
 //! When a node is in contact with a wall: one definition, used for the contact episodes
-//! of a solve's diagnostics ([`crate::solve`]), the free nodes of the energy artifact
-//! ([`crate::tune`]) and the tests; and how finely a grid resolves the contacts
-//! ([`resolution`]).
+//! of a solve's diagnostics, the restarts of windows, the free nodes of the energy
+//! artifact (σ tuning), the motion's pictures and the tests; and how finely a grid
+//! resolves the contacts ([`resolution`]).
 //!
 //! A node is in contact with a wall of width σ when its gap `h > −CONTACT_WIDTHS·σ`.
 //! The wall's Gaussian force is `A δ_σ(h) |∇h|` with `δ_σ(h) ∝ exp(−h²/2σ²)`, so at the
@@ -12,8 +12,8 @@ use std::ops::Range;
 use indexmap::IndexMap;
 use serde::Serialize;
 
+use crate::discrete::trajectory::Trajectory;
 use crate::model::Model;
-use crate::trajectory::Trajectory;
 
 /// Contact reaches `CONTACT_WIDTHS` wall widths σ out from the wall.
 ///

@@ -1,6 +1,5 @@
-//! The trajectory at the nodes: what a solve ([`crate::solve`]) and a reference
-//! ([`crate::reference`]) produce, in one layout (the columns of the trajectory CSV,
-//! [`trajectory_header`]).
+//! The trajectory at the nodes: what a solve and a reference produce, in one layout
+//! (the columns of the trajectory CSV, [`trajectory_header`]).
 //!
 //! A trajectory is the states `(q, v, λ)` at the sample times plus their physical
 //! columns — energy, the walls' potential, constraint residuals and wall gaps — which
