@@ -109,7 +109,7 @@ fn help_explains_the_options() {
 #[test]
 fn help_states_the_default_verification_tolerance_the_code_uses() {
     let t = common::text(&common::skg(&["--help"], Path::new(".")));
-    let stated = format!("{:e}", skg_core::verify::DEFAULT_RELATIVE_TOL);
+    let stated = format!("{:e}", skg_core::stepping::verify::DEFAULT_RELATIVE_TOL);
     let flat = t.split_whitespace().collect::<Vec<_>>().join(" ");
     let starts: Vec<usize> = flat.match_indices("each coordinate's range").map(|(i, _)| i).collect();
     assert!(starts.len() >= 2, "expected the default in the overview and under --verify-tol:\n{t}");

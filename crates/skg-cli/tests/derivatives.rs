@@ -166,7 +166,8 @@ fn discrete_systems_are_square_and_nonsingular_at_small_n() {
             // At the time-stepping solution (a point near the critical point).
             let (times, _) = skg_core::solve::grid(&scene);
             let (states, _) =
-                skg_core::time_stepping::integrate_model(&action.model, action.q0(), action.v0(), &times, &Default::default()).unwrap();
+                skg_core::stepping::equations::integrate_model(&action.model, action.q0(), action.v0(), &times, &Default::default())
+                    .unwrap();
             let (q, lam) = (states.q, states.lambda);
             let mut z = vec![0.0; lay.len()];
             for k in 0..nodes {

@@ -6,9 +6,9 @@ mod common;
 
 use common::G;
 use skg_core::check::Table;
-use skg_core::ode::{self, OdeOptions};
 use skg_core::scene::Overrides;
 use skg_core::solve::Outcome;
+use skg_core::stepping::ode::{self, OdeOptions};
 
 /// l, θ0 and m of scenarios/pendulum.toml.
 const L: f64 = 1.0;
@@ -150,7 +150,7 @@ nodes = 256
     assert!(o.diagnostics.max_position_drift["hoop"] < 1.2e-4);
     // The time stepping differentiates the constraint twice, ∂g/∂t included.
     let (times, _) = skg_core::solve::grid(&scene);
-    let r = skg_core::reference::regularized(&scene, &times, &Default::default()).unwrap();
+    let r = skg_core::stepping::reference::regularized(&scene, &times, &Default::default()).unwrap();
     let e = r.trajectory.t.iter().zip(&r.trajectory.q).map(|(&t, q)| {
         let rad = r0 + u * t;
         let phi = w0 * r0 * t / rad;

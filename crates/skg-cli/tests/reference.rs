@@ -7,9 +7,9 @@ mod common;
 use common::G;
 
 use skg_core::check::Table;
-use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scene::Overrides;
 use skg_core::solve;
+use skg_core::stepping::reference::{self, ReferenceOptions};
 
 fn checked_in(file: &str) -> Table {
     Table::read(&common::root().join("references").join(file)).unwrap()

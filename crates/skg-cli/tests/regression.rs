@@ -10,10 +10,10 @@ mod common;
 
 use skg_core::check::{self, CheckOptions, Table};
 use skg_core::convergence::{fit_order, pairwise_orders};
-use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scene::{Overrides, Scene};
 use skg_core::solve::{self, Outcome};
-use skg_core::verify::VerifyStatus;
+use skg_core::stepping::reference::{self, ReferenceOptions};
+use skg_core::stepping::verify::VerifyStatus;
 
 /// The solver's trajectory as a [`Table`] (the CSV it would write).
 fn table(scene: &Scene, o: &Outcome) -> Table {

@@ -7,9 +7,9 @@ mod common;
 
 use skg_core::backend::SquareSolver;
 use skg_core::check::Table;
-use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scene::{Overrides, Scene, SceneFile};
 use skg_core::solve::{self, build_action, Guess};
+use skg_core::stepping::reference::{self, ReferenceOptions};
 
 /// m, k, c, A, Ω of scenarios/driven_oscillator.toml.
 const M: f64 = 1.0;

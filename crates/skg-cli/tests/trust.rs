@@ -11,10 +11,10 @@ use std::path::Path;
 
 use skg_core::check::{self, CheckOptions, Table};
 use skg_core::discrete::trajectory::{trajectory_header, trajectory_rows};
-use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scene::{Backend, Overrides, Scene};
 use skg_core::solve::{self, Method, Outcome};
-use skg_core::verify::VerifyStatus;
+use skg_core::stepping::reference::{self, ReferenceOptions};
+use skg_core::stepping::verify::VerifyStatus;
 
 fn plain() -> Overrides {
     Overrides { no_fallback: true, ..Default::default() }

@@ -139,7 +139,7 @@ fn a_spurious_solution_with_a_missing_bounce_is_flagged() {
     assert!(o.warnings.iter().any(|w| w.contains("contact episode") && w.contains("spurious")), "{:?}", o.warnings);
     // It converged, but it is not trusted: verification against time stepping fails.
     assert!(o.converged() && !o.trusted(), "{}", o.verification.reason);
-    assert_eq!(o.verification.status, skg_core::verify::VerifyStatus::Failed);
+    assert_eq!(o.verification.status, skg_core::stepping::verify::VerifyStatus::Failed);
     let good = common::solve("tumbler", &Overrides::default());
     assert_eq!(per_wall(&good.diagnostics.contact_episodes), vec![("drum", 2)]);
     assert!(good.warnings.is_empty(), "{:?}", good.warnings);

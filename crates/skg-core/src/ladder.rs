@@ -1,5 +1,5 @@
 //! The fallback ladder: what a solve tries when the scene's own solve does not converge
-//! or is not verified ([`crate::verify`]).
+//! or is not verified ([`crate::stepping::verify`]).
 //!
 //! 1. The scene's own solve: one global solve from the time-stepping guess, or the
 //!    scene's windows (`[time] window`). If it converged and verified, that is the answer.
@@ -41,7 +41,7 @@ use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::{Scene, Windows};
 use crate::solve::{self, Attempt, Guess, Method, Outcome, Run, SolveError};
-use crate::verify::VerifyStatus;
+use crate::stepping::verify::VerifyStatus;
 use crate::window::{self, WindowGrid};
 
 /// Windows of fewer nodes than this are not tried by the ladder.

@@ -38,15 +38,12 @@ pub mod ladder;
 pub mod memory;
 pub mod model;
 pub mod newton;
-pub mod ode;
 pub mod output;
-pub mod reference;
 pub mod sbp;
 pub mod scene;
 pub mod solve;
-pub mod time_stepping;
+pub mod stepping;
 pub mod tune;
-pub mod verify;
 pub mod window;
 
 pub use skg_expr as expr;

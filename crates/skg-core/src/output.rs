@@ -2,7 +2,7 @@
 //! reference, each written atomically (a temporary file `.skg-tmp-*` in the target
 //! directory, flushed, then renamed over the target), so an interrupted or failed run
 //! never leaves a half-written file. The end of the data flow: it reads what
-//! [`crate::solve`] and [`crate::reference`] produced and writes it.
+//! [`crate::solve`] and [`crate::stepping::reference`] produced and writes it.
 //!
 //! **The pairing rule.** A run's files belong together: `summary.json` lists every data
 //! file of its run under `files` (name → row count and SHA-256 of the bytes), and it is
@@ -33,10 +33,10 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use crate::discrete::trajectory::{trajectory_header, trajectory_rows};
-use crate::reference::{self, Reference};
 use crate::scene::provenance;
 use crate::scene::Scene;
 use crate::solve::{self, Outcome, SolveError};
+use crate::stepping::reference::{self, Reference};
 
 /// Why an output file could not be written.
 #[derive(Debug, thiserror::Error)]

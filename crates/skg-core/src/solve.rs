@@ -3,7 +3,7 @@
 //! sparse LU), and turn the critical point into a trajectory.
 //!
 //! Initial guess: the Lagrange–d'Alembert equations of the same scene are integrated
-//! by [`crate::time_stepping`] (adaptive high-order Runge–Kutta, index-reduced:
+//! by [`crate::stepping::equations`] (adaptive high-order Runge–Kutta, index-reduced:
 //! accelerations and multipliers from `[W Gᵀ; G 0]`, see [`Model::accelerations`]) at a
 //! moderate tolerance and sampled at the nodes; the minus variables start at zero and the
 //! boundary multipliers at the values that make their rows vanish. A global-in-time
@@ -22,11 +22,11 @@ use crate::discrete::action::Action;
 use crate::discrete::contact;
 use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::model::Model;
-use crate::ode::OdeOptions;
 use crate::sbp::{SbpError, SbpOperator};
 use crate::scene::{Backend, ConstraintKind, Formulation, HessianMode, InitialVelocity, Scene, SceneError, Wall};
-use crate::time_stepping::{integrate_model, min_spacing, step_budget};
-use crate::verify::{self, Verification, VerifyStatus};
+use crate::stepping::equations::{integrate_model, min_spacing, step_budget};
+use crate::stepping::ode::OdeOptions;
+use crate::stepping::verify::{self, Verification, VerifyStatus};
 use skg_ipopt as ipopt;
 
 /// A solution farther than this fraction of the coordinates' range from the
@@ -76,7 +76,7 @@ pub struct Timings {
     pub solver_internal_s: f64,
     /// Trajectory, end multipliers and diagnostics from the solution.
     pub postprocess_s: f64,
-    /// Verification against time stepping ([`crate::verify`]).
+    /// Verification against time stepping ([`crate::stepping::verify`]).
     pub verification_s: f64,
     /// Fallback attempts whose result is not the one reported ([`crate::ladder`]).
     pub other_attempts_s: f64,
@@ -453,7 +453,7 @@ pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, S
 }
 
 /// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
-/// verified against time stepping ([`crate::verify`]) and, when it fails to converge or
+/// verified against time stepping ([`crate::stepping::verify`]) and, when it fails to converge or
 /// to verify, the fallback ladder ([`crate::ladder`]).
 ///
 /// Refused before anything is allocated if its memory estimate exceeds the available

@@ -912,7 +912,7 @@ mod tests {
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(format!("{stem}.toml"));
         let scene = SceneFile::load(&path).unwrap().resolve(&Overrides::default()).unwrap();
         let times = skg_core::solve::grid(&scene).0;
-        let r = skg_core::reference::regularized(&scene, &times, &Default::default()).unwrap();
+        let r = skg_core::stepping::reference::regularized(&scene, &times, &Default::default()).unwrap();
         let table = Table::of_trajectory(&scene, &r.trajectory);
         Motion::new(stem.into(), scene, table, None).unwrap()
     }
@@ -1015,7 +1015,7 @@ nodes = 300
         // x² + y² = 1 − z².
         let scene = SceneFile::parse(BOWL, "bowl.toml").unwrap().resolve(&Overrides::default()).unwrap();
         let times = skg_core::solve::grid(&scene).0;
-        let r = skg_core::reference::regularized(&scene, &times, &Default::default()).unwrap();
+        let r = skg_core::stepping::reference::regularized(&scene, &times, &Default::default()).unwrap();
         let table = Table::of_trajectory(&scene, &r.trajectory);
         let m = Motion::new("bowl".into(), scene, table, None).unwrap();
         let s = Scenery::new(&m, view(&m)).unwrap();

@@ -2,7 +2,7 @@
 //!
 //! Every function here calls the same code as the `skg-solve` command line: a scene is
 //! loaded and resolved by `skg_core::scene`, solved by `skg_core::solve::solve_scene`
-//! (verification and fallback ladder included), integrated by `skg_core::reference`,
+//! (verification and fallback ladder included), integrated by `skg_core::stepping::reference`,
 //! written (into a locked directory) by `skg_core::output`, planned and swept by
 //! `skg_sweep::plan` and `skg_sweep::run_sweep`. Errors are raised as
 //! the exceptions of `skg._errors` with the command line's message
@@ -23,10 +23,10 @@ use pyo3::types::{PyDict, PyList};
 
 use skg_core::check::Table;
 use skg_core::discrete::trajectory::{trajectory_header, trajectory_rows, NodeSeries, Trajectory};
-use skg_core::reference::{self, Reference, ReferenceError, ReferenceOptions};
 use skg_core::scene::provenance;
 use skg_core::scene::{Backend, ConstraintKind, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneError, SceneFile};
 use skg_core::solve::{self, Outcome, SolveError};
+use skg_core::stepping::reference::{self, Reference, ReferenceError, ReferenceOptions};
 use skg_core::{error_text, output};
 use skg_sweep as sweep;
 

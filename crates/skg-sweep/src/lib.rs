@@ -213,7 +213,7 @@ pub enum ReferenceSpec {
     /// A reference CSV (`skg-solve reference`), compared by time.
     File(PathBuf),
     /// The scene's Lagrange–d'Alembert equations integrated on the point's own grid at
-    /// a tight tolerance ([`skg_core::reference::regularized`], rtol = atol = 1e-12).
+    /// a tight tolerance ([`skg_core::stepping::reference::regularized`], rtol = atol = 1e-12).
     Integrate,
 }
 
@@ -301,7 +301,7 @@ pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "initial
 pub enum Method {
     /// The SKG action solved by the scene's backend (Ipopt by default).
     Skg,
-    /// The time-stepping reference integrator (DOP853, [`skg_core::reference::regularized`])
+    /// The time-stepping reference integrator (DOP853, [`skg_core::stepping::reference::regularized`])
     /// at a relative tolerance (absolute tolerance the same).
     Ode {
         /// Relative (and absolute) tolerance.
@@ -1046,8 +1046,8 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
         }
         Method::Ode { rtol } => {
             let (times, _) = skg_core::solve::grid(&scene);
-            let opts = skg_core::reference::ReferenceOptions { rtol, atol: rtol };
-            let r = skg_core::reference::regularized(&scene, &times, &opts).map_err(|e| e.to_string())?;
+            let opts = skg_core::stepping::reference::ReferenceOptions { rtol, atol: rtol };
+            let r = skg_core::stepping::reference::regularized(&scene, &times, &opts).map_err(|e| e.to_string())?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
             rec.status = PointStatus::Converged;
             rec.solver_status = "ODE_Succeeded".into();
@@ -1093,8 +1093,12 @@ fn reference_errors(
     let reference = match reference {
         ReferenceSpec::File(p) => Table::read(p).map_err(|e| e.to_string())?,
         ReferenceSpec::Integrate => {
-            let r = skg_core::reference::regularized(scene, &solution.times(), &skg_core::reference::ReferenceOptions::default())
-                .map_err(|e| e.to_string())?;
+            let r = skg_core::stepping::reference::regularized(
+                scene,
+                &solution.times(),
+                &skg_core::stepping::reference::ReferenceOptions::default(),
+            )
+            .map_err(|e| e.to_string())?;
             Table::of_trajectory(scene, &r.trajectory)
         }
     };

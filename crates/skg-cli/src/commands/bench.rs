@@ -9,7 +9,7 @@ use clap::Args;
 
 use skg_core::output;
 use skg_core::solve::{self, Method, Outcome};
-use skg_core::verify::VerifyStatus;
+use skg_core::stepping::verify::VerifyStatus;
 
 use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
 
@@ -51,7 +51,7 @@ impl Row {
     }
 
     /// Wall seconds of the solve: the repetition's wall time without the verification
-    /// (which every solve runs, [`skg_core::verify`], and which is timed in its own
+    /// (which every solve runs, [`skg_core::stepping::verify`], and which is timed in its own
     /// column).
     fn solve_s(&self) -> f64 {
         self.wall_s - self.outcome.timings.verification_s

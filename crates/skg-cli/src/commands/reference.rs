@@ -8,9 +8,9 @@ use clap::Args;
 
 use skg_core::check::Table;
 use skg_core::output;
-use skg_core::reference::{self, ReferenceOptions};
 use skg_core::scene::Overrides;
 use skg_core::solve;
+use skg_core::stepping::reference::{self, ReferenceOptions};
 
 use super::load;
 

@@ -9,7 +9,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use skg_core::backend::SolverStatus;
-use skg_core::verify::VerifyStatus;
+use skg_core::stepping::verify::VerifyStatus;
 use skg_core::{output, solve};
 
 use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};

@@ -2,8 +2,8 @@
 //!
 //! * **Regularized** ([`regularized`]): the Lagrange–d'Alembert equations of exactly the
 //!   scene the solver discretizes (same TOML, same symbolic model and derivatives,
-//!   Gaussian walls included) integrated by [`crate::time_stepping`] (the DOP853 of
-//!   [`crate::ode`]) at a tight tolerance and sampled at the requested times from its
+//!   Gaussian walls included) integrated by [`equations`](super::equations) (the DOP853
+//!   of [`ode`]) at a tight tolerance and sampled at the requested times from its
 //!   dense output. Explicit time is the integrator's time. Velocity constraints enter
 //!   index-reduced: accelerations and multipliers solve
 //!   `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) q̇ − ∂p/∂t; −(∂g/∂q) q̇ − ∂g/∂t]`
@@ -39,7 +39,7 @@
 //! contact), and impacts that accumulate without settling into contact.
 //!
 //! Data flow: scene → model → time stepping → [`Reference`] (a [`Trajectory`] and how it
-//! was made); [`crate::output::write_reference`] writes it as CSV.
+//! was made); the output stage writes it as CSV with its [`provenance`].
 
 // `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -49,9 +49,9 @@ use std::fmt;
 
 use crate::discrete::trajectory::Trajectory;
 use crate::model::{Model, Workspace, ON_WALL_TOLERANCE};
-use crate::ode::{self, EventHit, OdeOptions, OdeSolution, OdeStats, RhsError};
 use crate::scene::{ConstraintKind, Scene, SceneError};
-use crate::time_stepping::{integrate_model, min_spacing, rhs, split_states};
+use crate::stepping::equations::{integrate_model, min_spacing, rhs, split_states};
+use crate::stepping::ode::{self, EventHit, OdeOptions, OdeSolution, OdeStats, RhsError};
 
 /// Errors of building a reference. The message of a wrapped error is part of the
 /// variant's text (it is not also reported as its `source`, which would print it twice).

@@ -1,11 +1,12 @@
 //! Time stepping of the Lagrange–d'Alembert equations of a model, independent of the SBP
-//! discretization: used for the solver's initial guess ([`crate::solve`]) and for the
-//! reference solutions ([`crate::reference`]).
+//! discretization: used for the verification of a solve ([`verify`](super::verify)), the
+//! reference solutions ([`reference`](super::reference)) and, by its callers, for initial
+//! guesses.
 //!
 //! The equations are integrated index-reduced: at each state (t, q, v) the accelerations
 //! and multipliers solve `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v − ∂p/∂t; −(∂g/∂q) v − ∂g/∂t]`
 //! ([`Model::accelerations`]), and the state `y = (q, v)` is advanced by the DOP853 of
-//! [`crate::ode`] and sampled at the requested times from its dense output. Times are
+//! [`ode`] and sampled at the requested times from its dense output. Times are
 //! absolute: the model is evaluated at the integrator's time, so an explicitly
 //! time-dependent scene can be integrated from any start time. The constraints `g = 0`
 //! (and a position constraint's `h = 0`) then hold only up to the integrator's drift.
@@ -19,7 +20,7 @@
 
 use crate::discrete::trajectory::States;
 use crate::model::{DynamicsError, Model, WallModel, Workspace};
-use crate::ode::{self, OdeError, OdeOptions, OdeStats, RhsError};
+use crate::stepping::ode::{self, OdeError, OdeOptions, OdeStats, RhsError};
 
 /// Step attempts per node allowed to the time stepping of the initial guess and of the
 /// verification ([`step_budget`]). On the shipped scenes these take one to two steps per

@@ -6,7 +6,7 @@
 //! the run backward through the end closure, a spurious critical point of a wall scene,
 //! or non-finite numbers. Every solve is therefore compared with an independent solution
 //! of the *same regularized scene*: the Lagrange–d'Alembert equations integrated by
-//! [`crate::time_stepping`] (adaptive DOP853, index-reduced) at a tight tolerance,
+//! [`equations`](super::equations) (adaptive DOP853, index-reduced) at a tight tolerance,
 //! sampled at the solve's own nodes. This costs milliseconds and catches every failure
 //! class above.
 //!
@@ -38,9 +38,9 @@ use serde::Serialize;
 use crate::discrete::contact::{self, WallResolution};
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
-use crate::ode::{OdeError, OdeOptions};
 use crate::scene::Scene;
-use crate::time_stepping::{integrate_model, min_spacing, step_budget, STEPS_PER_NODE};
+use crate::stepping::equations::{integrate_model, min_spacing, step_budget, STEPS_PER_NODE};
+use crate::stepping::ode::{OdeError, OdeOptions};
 
 /// Relative tolerance of the time-stepping reference.
 pub const REFERENCE_RTOL: f64 = 1e-10;
