@@ -4,10 +4,10 @@
 
 mod common;
 
-use skg_core::backend::{self, SolverStatus, SquareSolver};
-use skg_core::newton::NewtonStatus;
 use skg_core::scene::{Backend, Formulation, Overrides};
 use skg_core::solve;
+use skg_core::solve::backend::{self, SolverStatus, SquareSolver};
+use skg_core::solve::newton::NewtonStatus;
 
 fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
     a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)

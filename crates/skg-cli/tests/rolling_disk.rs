@@ -106,9 +106,9 @@ fn energy_drift_vanishes_at_the_operators_order() {
 /// reported as not converged, exit 3, on every rung of the fallback ladder.)
 #[test]
 fn sbp484_over_twenty_revolutions_converges_at_the_round_off_level() {
-    use skg_core::backend::SolverStatus;
-    use skg_core::newton::NewtonStatus;
     use skg_core::scene::Backend;
+    use skg_core::solve::backend::SolverStatus;
+    use skg_core::solve::newton::NewtonStatus;
     for (backend, status) in [
         (Backend::Ipopt, SolverStatus::IpoptConvergedToRoundOff),
         (Backend::Newton, SolverStatus::Newton(NewtonStatus::ConvergedToRoundOff)),

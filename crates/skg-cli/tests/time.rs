@@ -5,9 +5,9 @@
 
 mod common;
 
-use skg_core::backend::SquareSolver;
 use skg_core::check::Table;
 use skg_core::scene::{Overrides, Scene, SceneFile};
+use skg_core::solve::backend::SquareSolver;
 use skg_core::solve::{self, build_action, Guess};
 use skg_core::stepping::reference::{self, ReferenceOptions};
 

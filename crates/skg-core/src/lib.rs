@@ -30,21 +30,17 @@
 // index loops say that more plainly than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-pub mod backend;
 pub mod check;
 pub mod convergence;
 pub mod discrete;
-pub mod ladder;
 pub mod memory;
 pub mod model;
-pub mod newton;
 pub mod output;
 pub mod sbp;
 pub mod scene;
 pub mod solve;
 pub mod stepping;
 pub mod tune;
-pub mod window;
 
 pub use skg_expr as expr;
 pub use skg_ipopt as ipopt;

@@ -932,7 +932,7 @@ pub struct Record {
     pub wall_s: Option<f64>,
     /// The Newton backend's symbolic LU analysis: `computed` for this point, `reused`
     /// from the worker's previous solve of equal structure, empty when Newton did not
-    /// run ([`skg_core::backend::NewtonReport::lu_analysis`]).
+    /// run ([`skg_core::solve::backend::NewtonReport::lu_analysis`]).
     #[serde(default)]
     pub lu_analysis: String,
     /// Node count of the resolved scene.

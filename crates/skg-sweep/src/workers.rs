@@ -4,7 +4,7 @@
 //! started by the driver ([`Pool`]) and kept alive for any number of points, so that
 //! the points it runs one after the other share the process and, with the Newton
 //! backend, the symbolic LU analysis of the previous point when their Jacobian
-//! structure is equal (`skg_core::backend`, "the kept analysis"). The protocol:
+//! structure is equal (`skg_core::solve::backend`, "the kept analysis"). The protocol:
 //!
 //! 1. The driver writes the point's [`Job`] atomically to `WORK/<id>.job.json`, then the
 //!    point's id (16 hex digits) and a newline to the worker's stdin.

@@ -110,6 +110,7 @@ pub fn run(args: GalleryArgs) -> Result<ExitCode> {
             operator: outcome.settings.operator.clone(),
             method: match &outcome.method {
                 solve::Method::Global => "global".to_string(),
+                solve::Method::Windows { length, count: 1, .. } => format!("1 window of {length:.3} s"),
                 solve::Method::Windows { length, count, .. } => format!("{count} windows of {length:.3} s"),
             },
             verification: v.status.to_string(),

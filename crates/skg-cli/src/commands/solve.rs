@@ -8,7 +8,7 @@ use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use skg_core::backend::SolverStatus;
+use skg_core::solve::backend::SolverStatus;
 use skg_core::stepping::verify::VerifyStatus;
 use skg_core::{output, solve};
 

@@ -30,7 +30,7 @@
 //! [`NewtonStatus::SingularJacobian`] when the LU finds no pivot or the step is not
 //! finite; with [`NewtonStatus::InvalidNumber`] when the starting residual or a
 //! Jacobian cannot be evaluated or is not finite; and with [`NewtonStatus::MaximumIterationsExceeded`]. The caller decides
-//! what to do on failure (the solve hands over to Ipopt, [`crate::backend`]).
+//! what to do on failure (the backend hands over to Ipopt).
 
 use std::fmt;
 use std::time::Instant;

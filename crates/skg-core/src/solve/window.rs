@@ -16,7 +16,7 @@
 //! node `s` keeps nodes `s … s + r − 1` with `r ≤ n_w − 1 − round(overlap/Δt)`; the next
 //! window starts at node `s + r` from this window's `(q, Dq)` there. `r` is the largest
 //! such index whose node and its two neighbours on each side are out of contact with
-//! every wall ([`crate::discrete::contact`]), searched down to half the window, so that no window
+//! every wall ([`contact`]), searched down to half the window, so that no window
 //! starts inside a bounce (else the largest). Each window's initial guess is time
 //! stepping from its own initial state.
 //!
@@ -25,11 +25,14 @@
 
 use std::time::Instant;
 
-use crate::backend::{BackendReport, SquareSolver};
+use super::backend::{BackendReport, SquareSolver};
+use super::error::{SolveError, WindowError};
+use super::outcome::{Method, Timings};
+use super::piece::{build_action_on, grid, solve_piece, Guess, Piece};
+use super::run::{sizes, Run};
 use crate::discrete::contact;
 use crate::discrete::trajectory::Trajectory;
 use crate::scene::{Scene, Windows};
-use crate::solve::{self, build_action_on, solve_piece, Guess, Method, Piece, Run, SolveError, Timings};
 
 /// Nodes and restart of the windows of a scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,22 +49,18 @@ pub struct WindowGrid {
 }
 
 impl WindowGrid {
-    /// The windows of `scene` for `windows`, or a message saying why they do not fit
-    /// the scene's grid (too few nodes per window for the operator, nothing kept).
-    pub fn new(scene: &Scene, windows: Windows) -> Result<WindowGrid, String> {
-        let (_, dt) = solve::grid(scene);
+    /// The windows of `scene` for `windows`, or why they do not fit the scene's grid
+    /// (too few nodes per window for the operator, nothing kept).
+    pub fn new(scene: &Scene, windows: Windows) -> Result<WindowGrid, WindowError> {
+        let (_, dt) = grid(scene);
         let nodes = (windows.length / dt).round() as usize + 1;
         let dropped = (windows.overlap / dt).round() as usize;
         let min = scene.operator.min_nodes();
         if nodes < min {
-            return Err(format!(
-                "a window of {} s has {nodes} nodes at the scene's spacing Δt = {dt:.6e} s; {} needs at least {min}",
-                windows.length,
-                scene.operator.name()
-            ));
+            return Err(WindowError::TooFewNodes { length: windows.length, nodes, dt, operator: scene.operator, min });
         }
         if dropped + 1 >= nodes {
-            return Err(format!("an overlap of {} s leaves nothing to keep of a {} s window", windows.overlap, windows.length));
+            return Err(WindowError::NothingKept { overlap: windows.overlap, length: windows.length });
         }
         let keep = nodes - 1 - dropped;
         let count = (scene.nodes.saturating_sub(nodes)).div_ceil(keep) + 1;
@@ -71,13 +70,13 @@ impl WindowGrid {
 
 /// Solve `scene` in windows.
 pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError> {
-    let grid = WindowGrid::new(scene, windows).map_err(|message| SolveError::Windows { scene: scene.file.origin.path.clone(), message })?;
+    let grid = WindowGrid::new(scene, windows).map_err(|error| SolveError::Windows { scene: scene.file.origin.path.clone(), error })?;
     let t_setup = Instant::now();
     let mut action = build_action_on(scene, grid.nodes, grid.dt)?;
     // One solver for all windows: the sparsity plans and Newton's LU analysis are made
     // once and reused by every window.
     let mut solver = SquareSolver::new(scene, &action);
-    let sizes = solve::sizes(scene, &action, &solver);
+    let sizes = sizes(scene, &action, &solver);
     let mut timings = Timings::zero();
     timings.setup_s = t_setup.elapsed().as_secs_f64();
 
@@ -193,8 +192,8 @@ mod tests {
     fn windows_too_short_for_the_operator_or_the_overlap_are_refused() {
         let s = scene(1001, 10.0);
         let e = WindowGrid::new(&s, Windows { length: 0.05, overlap: 0.0 }).unwrap_err();
-        assert!(e.contains("needs at least 8"), "{e}");
+        assert_eq!(e.to_string(), "a window of 0.05 s has 6 nodes at the scene's spacing Δt = 1.000000e-2 s; SBP242 needs at least 8");
         let e = WindowGrid::new(&s, Windows { length: 1.0, overlap: 0.995 }).unwrap_err();
-        assert!(e.contains("leaves nothing"), "{e}");
+        assert_eq!(e.to_string(), "an overlap of 0.995 s leaves nothing to keep of a 1 s window");
     }
 }

@@ -1,5 +1,5 @@
 //! The solvers of the square system: Ipopt (the default) and Newton's method with a
-//! sparse LU ([`crate::newton`]), behind one interface, [`SquareSolver`].
+//! sparse LU ([`newton`]), behind one interface, [`SquareSolver`].
 //!
 //! Both see the system through the same adapters of [`skg_ipopt::Problem`]: `Reduced`
 //! (`R(P) = ∂S/∂M = 0`) and `Full` (`∇S(Z) = 0`). A [`SquareSolver`] is built once per
@@ -47,8 +47,8 @@ use serde::Serialize;
 
 use crate::discrete::action::{Action, Block, MatrixPlan};
 use crate::model::Workspace;
-use crate::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
 use crate::scene::{Backend, Formulation, HessianMode, IpoptValue, Scene};
+use crate::solve::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
 use skg_ipopt::{self as ipopt, EvalError, IterationStat, Problem};
 
 /// The status of the backend that ended a solve: Ipopt's or Newton's own.
@@ -58,8 +58,9 @@ use skg_ipopt::{self as ipopt, EvalError, IterationStat, Problem};
 pub enum SolverStatus {
     /// Ipopt's return status.
     Ipopt(ipopt::Status),
-    /// Ipopt stopped by [`StopWhenSolved`] with `max |c|` above the tolerance but at the
-    /// residual's round-off level (`Ipopt_Converged_To_Round_Off`): a success.
+    /// Ipopt stopped by its intermediate callback (`StopWhenSolved`) with `max |c|` above
+    /// the tolerance but at the residual's round-off level (`Ipopt_Converged_To_Round_Off`):
+    /// a success.
     IpoptConvergedToRoundOff,
     /// Newton's status.
     Newton(NewtonStatus),

@@ -1,5 +1,6 @@
 //! The fallback ladder: what a solve tries when the scene's own solve does not converge
-//! or is not verified ([`crate::stepping::verify`]).
+//! or is not verified against time stepping of the same scene
+//! ([`verify`](crate::stepping::verify)).
 //!
 //! 1. The scene's own solve: one global solve from the time-stepping guess, or the
 //!    scene's windows (`[time] window`). If it converged and verified, that is the answer.
@@ -24,7 +25,7 @@
 //!    until a run converges and verifies or a window would have fewer than
 //!    [`MIN_WINDOW_NODES`] nodes. This cures the parasitic odd-even mode that damping or
 //!    contraction amplifies, and convergence failures of long or contact-rich spans
-//!    ([`crate::window`]).
+//!    ([`window`]).
 //!
 //! The ladder stops at the first run that converges and verifies, or that converges
 //! and whose verification cannot run (its reference would fail on every rung alike).
@@ -35,14 +36,18 @@
 
 use std::time::Instant;
 
+use super::error::SolveError;
+use super::outcome::{Attempt, Method, Outcome};
+use super::piece::{grid, Guess};
+use super::run::{solve_global, Run};
+use super::window::{self, WindowGrid};
 use crate::discrete::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
+use crate::memory;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::{Scene, Windows};
-use crate::solve::{self, Attempt, Guess, Method, Outcome, Run, SolveError};
 use crate::stepping::verify::VerifyStatus;
-use crate::window::{self, WindowGrid};
 
 /// Windows of fewer nodes than this are not tried by the ladder.
 pub const MIN_WINDOW_NODES: usize = 24;
@@ -51,19 +56,25 @@ pub const WIDTH_FACTORS: [f64; 3] = [8.0, 4.0, 2.0];
 /// How far past the end time step 3 solves, as a fraction of the span.
 pub const END_MARGIN: f64 = 0.25;
 
-/// Solve `scene`: its own solve, then the ladder while it fails (see the module docs).
-pub fn solve(scene: &Scene) -> Result<Outcome, SolveError> {
-    solve_with_progress(scene, &mut |_| {})
+/// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
+/// verified against time stepping of the same scene and, when it fails to converge or to
+/// verify, the fallback ladder (see the module docs).
+///
+/// Refused before anything is allocated if its memory estimate exceeds the available
+/// memory ([`memory`]).
+pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    solve_scene_with_progress(scene, &mut |_| {})
 }
 
-/// [`solve`], telling `progress` what each rung is about to do ("2. coarse to fine (…)"),
-/// for a progress display: a ladder that fails can take a minute.
-pub fn solve_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
+/// [`solve_scene`], telling `progress` what each rung is about to do ("2. coarse to fine
+/// (…)"), for a progress display: a ladder that fails can take a minute.
+pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
+    memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
     let model = Model::build(scene)?;
     let mut ladder = Ladder { scene, model: &model, tried: Vec::new(), progress };
     let go_on = match scene.windows {
         Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, w))?,
-        None => ladder.attempt("one global solve", || solve::solve_global(scene, &Guess::TimeStepping))?,
+        None => ladder.attempt("one global solve", || solve_global(scene, &Guess::TimeStepping))?,
     };
     if !go_on || !scene.solver.fallback {
         return Ok(ladder.finish());
@@ -108,7 +119,7 @@ impl Ladder<'_> {
         self.announce(description);
         let start = Instant::now();
         let run = run()?;
-        let outcome = solve::outcome(self.scene, self.model, run);
+        let outcome = super::run::outcome(self.scene, self.model, run);
         let go_on = !ends_the_ladder(&outcome);
         self.tried.push(Tried { description: description.to_string(), outcome, wall_s: start.elapsed().as_secs_f64() });
         Ok(go_on)
@@ -128,18 +139,18 @@ impl Ladder<'_> {
         }
         let coarse_scene = Scene { nodes: coarse_nodes, ..scene.clone() };
         self.announce(&format!("coarse to fine (solving on {coarse_nodes} nodes first)"));
-        let coarse = solve::solve_global(&coarse_scene, &Guess::TimeStepping)?;
+        let coarse = solve_global(&coarse_scene, &Guess::TimeStepping)?;
         let coarse = coarse.solution;
         if !coarse.status.is_converged() {
             return Ok(false);
         }
-        let (times, _) = solve::grid(scene);
+        let (times, _) = grid(scene);
         let guess = Guess::States {
             q: hermite(&coarse.trajectory, &times),
             lambda: linear(&coarse.trajectory.t, &coarse.trajectory.lambda, &times),
             description: format!("the solve on {coarse_nodes} nodes, interpolated onto the grid (cubic Hermite)"),
         };
-        self.attempt(&format!("coarse to fine (initial guess from {coarse_nodes} nodes)"), || solve::solve_global(scene, &guess))?;
+        self.attempt(&format!("coarse to fine (initial guess from {coarse_nodes} nodes)"), || solve_global(scene, &guess))?;
         Ok(self.succeeded())
     }
 
@@ -155,7 +166,7 @@ impl Ladder<'_> {
             self.announce(&format!("wall-width continuation (every wall width × {factor})"));
             let mut wide = scene.clone();
             wide.walls.iter_mut().for_each(|w| w.width *= factor);
-            let run = solve::solve_global(&wide, &guess)?;
+            let run = solve_global(&wide, &guess)?;
             if run.solution.status.is_converged() {
                 guess = Guess::States {
                     q: run.solution.trajectory.q,
@@ -167,7 +178,7 @@ impl Ladder<'_> {
         }
         let Some(last) = widest_converged else { return Ok(false) };
         self.attempt(&format!("wall-width continuation (σ × {:?} down to × {last}, then the scene's σ)", WIDTH_FACTORS), || {
-            solve::solve_global(scene, &guess)
+            solve_global(scene, &guess)
         })?;
         Ok(self.succeeded())
     }
@@ -324,8 +335,8 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
 
 /// The refinement to suggest: twice the nodes, or, when the reference shows a wall's
 /// contacts under-resolved (fewer than [`MIN_STEPS`] grid steps per contact length,
-/// [`crate::discrete::contact::fewest_steps`]), the power-of-two multiple of the nodes that reaches
-/// [`RESOLVED_STEPS`] (or a wider wall).
+/// [`fewest_steps`](crate::discrete::contact::fewest_steps)), the power-of-two multiple of
+/// the nodes that reaches [`RESOLVED_STEPS`] (or a wider wall).
 fn refine(scene: &Scene, o: &Outcome) -> String {
     let Some((name, r)) = under_resolved_wall(o) else {
         return format!("refine the grid (--nodes {})", 2 * scene.nodes);

@@ -1,0 +1,45 @@
+//! The solve: the critical point of the discrete action, found by a backend, assessed,
+//! and, when it fails, the fallback ladder.
+//!
+//! In the order in which its parts use each other (each only the ones before it):
+//!
+//! * [`newton`]: Newton's method for a square sparse system with a sparse LU;
+//!   [`backend`]: the system of either formulation as an Ipopt [`Problem`], and
+//!   [`SquareSolver`], the chosen backend with its sparsity plans and LU analysis kept
+//!   between solves of equal structure.
+//! * `error.rs`: [`SolveError`], [`WindowError`]; `status.rs`: [`SolveStatus`], how a
+//!   solve ended; `outcome.rs`: [`Outcome`], what a solve produced, and [`Method`].
+//! * `piece.rs`: one solve of one action's system from an initial guess
+//!   ([`solve_piece`], [`Guess`], [`Piece`]) and the action of a scene ([`grid`],
+//!   [`build_action`]).
+//! * `run.rs`: a global run over the span ([`solve_global`], [`Run`]) and its
+//!   assessment ([`outcome`]: verification, diagnostics, warnings).
+//! * [`window`]: a run in windows of equal node count.
+//! * [`ladder`]: the entry point, [`solve_scene`]: the scene's own run, then the
+//!   fallback ladder until a run converges and verifies.
+//!
+//! **Place in the flow.** After time stepping: it uses [`scene`](crate::scene),
+//! [`memory`](crate::memory), [`model`](crate::model), [`discrete`](crate::discrete) and
+//! [`stepping`](crate::stepping) (the initial guess and the verification). The output
+//! and the consumers (check, tune, the command line, Python) call [`solve_scene`];
+//! nothing below the ladder calls up into it.
+//!
+//! [`Problem`]: skg_ipopt::Problem
+
+pub mod backend;
+mod error;
+pub mod ladder;
+pub mod newton;
+mod outcome;
+mod piece;
+mod run;
+mod status;
+pub mod window;
+
+pub use backend::SquareSolver;
+pub use error::{SolveError, WindowError};
+pub use ladder::{solve_scene, solve_scene_with_progress};
+pub use outcome::{Attempt, Diagnostics, KineticLoss, Method, Outcome, Settings, Sizes, Timings};
+pub use piece::{build_action, build_action_on, grid, solve_piece, Guess, Piece};
+pub use run::{outcome, sizes, solve_global, Run};
+pub use status::{SolveStatus, CONVERGED_RESIDUAL};

@@ -1,0 +1,336 @@
+//! What a solve produced: the [`Outcome`] with its diagnostics, settings, sizes, timings
+//! and attempts, and the [`Method`] by which a run covered the span.
+
+use std::fmt;
+
+use indexmap::IndexMap;
+use serde::Serialize;
+
+use super::backend::BackendReport;
+use super::status::SolveStatus;
+use crate::discrete::Trajectory;
+use crate::scene::{Backend, Formulation, HessianMode, InitialVelocity};
+use crate::stepping::verify::{Verification, VerifyStatus};
+use skg_ipopt as ipopt;
+
+/// Where a solve's wall time went, in seconds.
+#[derive(Debug, Clone, Serialize)]
+pub struct Timings {
+    /// Parsing, symbolic derivatives, tapes, sparsity structure.
+    pub setup_s: f64,
+    /// Time stepping for the initial guess.
+    pub initial_guess_s: f64,
+    /// Wall time of the backend (Ipopt, or Newton and Ipopt after a hand-over), split
+    /// into time in our callbacks and inside the solver.
+    pub solver_s: f64,
+    /// Time in our callbacks (residual, Jacobian, Hessian).
+    pub evaluation_s: f64,
+    /// Time inside the solver: Ipopt's own time (mostly MUMPS), Newton's LU analysis,
+    /// factorizations and solves.
+    pub solver_internal_s: f64,
+    /// Trajectory, end multipliers and diagnostics from the solution.
+    pub postprocess_s: f64,
+    /// Verification against time stepping ([`verify`](crate::stepping::verify)).
+    pub verification_s: f64,
+    /// Fallback attempts whose result is not the one reported ([`ladder`](super::ladder)).
+    pub other_attempts_s: f64,
+    /// Writing files (filled in by the output module).
+    pub output_s: f64,
+}
+
+impl Timings {
+    /// No time spent yet.
+    pub fn zero() -> Timings {
+        Timings {
+            setup_s: 0.0,
+            initial_guess_s: 0.0,
+            solver_s: 0.0,
+            evaluation_s: 0.0,
+            solver_internal_s: 0.0,
+            postprocess_s: 0.0,
+            verification_s: 0.0,
+            other_attempts_s: 0.0,
+            output_s: 0.0,
+        }
+    }
+
+    /// Add another part's times (the pieces of a windowed solve).
+    pub fn add(&mut self, other: &Timings) {
+        self.setup_s += other.setup_s;
+        self.initial_guess_s += other.initial_guess_s;
+        self.solver_s += other.solver_s;
+        self.evaluation_s += other.evaluation_s;
+        self.solver_internal_s += other.solver_internal_s;
+        self.postprocess_s += other.postprocess_s;
+        self.verification_s += other.verification_s;
+        self.other_attempts_s += other.other_attempts_s;
+        self.output_s += other.output_s;
+    }
+
+    /// The whole wall time of the solve, fallback attempts included.
+    pub fn total(&self) -> f64 {
+        self.setup_s
+            + self.initial_guess_s
+            + self.solver_s
+            + self.postprocess_s
+            + self.verification_s
+            + self.other_attempts_s
+            + self.output_s
+    }
+}
+
+/// The sizes of the problem handed to the backend.
+#[derive(Debug, Clone, Serialize)]
+pub struct Sizes {
+    /// Grid nodes N.
+    pub nodes: usize,
+    /// Coordinates d.
+    pub coordinates: usize,
+    /// Velocity constraints n.
+    pub constraints: usize,
+    /// Walls.
+    pub walls: usize,
+    /// Unknowns of the system (P for the reduced formulation, Z for the full one).
+    pub variables: usize,
+    /// Equations (as many as unknowns: the system is square).
+    pub equations: usize,
+    /// Nonzeros of the Jacobian's structure.
+    pub jacobian_nonzeros: usize,
+    /// Nonzeros of the Hessian's structure (0 unless the exact Hessian is used).
+    pub hessian_nonzeros: usize,
+    /// Instructions of the residual and Jacobian tapes.
+    pub tape_instructions: usize,
+}
+
+/// Checks of the solution: residuals, energy, walls, distance from time stepping.
+#[derive(Debug, Clone, Serialize)]
+pub struct Diagnostics {
+    /// max |c| of the system handed to the backend (unscaled), at the returned point.
+    pub max_residual: f64,
+    /// max |equation of motion| at interior nodes, unweighted (force units).
+    pub max_eom_residual: f64,
+    /// max |g^a| over interior nodes.
+    pub max_constraint_interior: f64,
+    /// max |g^a| at the last node, where the constraints are not enforced.
+    pub constraint_last_node: f64,
+    /// max |h| over all nodes of each position constraint `h(q, t) = 0` (keyed by its
+    /// name): the drift of a constraint enforced through its time derivative.
+    pub max_position_drift: IndexMap<String, f64>,
+    /// Whether the scene depends on the time `t` explicitly; the energy is then not
+    /// conserved, and `energy_drift` measures the work of the time dependence.
+    pub depends_on_time: bool,
+    /// max |E_k − E_1| of the total energy E = energy + wall_energy over nodes 1..N−2
+    /// (the last two excluded: their equations are the boundary closure). Conserved up
+    /// to the discretization error unless friction or other non-conservative forces act
+    /// or the scene depends on `t` explicitly.
+    pub energy_drift: f64,
+    /// The same over all nodes.
+    pub energy_drift_all: f64,
+    /// Largest wall gap h (positive = penetration), per wall (keyed by the wall's name).
+    pub max_wall_gap: IndexMap<String, f64>,
+    /// max over nodes and coordinates of |q − q_time-stepping|: a large value hints at a
+    /// spurious critical point or a too coarse grid.
+    pub distance_from_time_stepping: Option<f64>,
+    /// Contact episodes per wall (maximal runs of nodes in contact, [`contact`](crate::discrete::contact); keyed by
+    /// the wall's name) in the solution. A difference from the time-stepping solution
+    /// means an extra or a missing bounce: a spurious critical point (docs/solver.md) or
+    /// a too coarse grid; the solve then adds a warning.
+    pub contact_episodes: IndexMap<String, usize>,
+    /// The same for the time-stepping solution on the same nodes (if time stepping
+    /// succeeded).
+    pub contact_episodes_time_stepping: Option<IndexMap<String, usize>>,
+    /// max |q-|, |λ-| of the full formulation's solution (0 in the physical limit).
+    pub max_minus_variable: Option<f64>,
+    /// The first node at which the kinetic matrix ∂²L/∂q̇² of the solution is not
+    /// positive definite (the Lagrangian stops describing a mechanical system there: a
+    /// mass or inertia turned zero or negative); `null` if it is positive definite at
+    /// every node. A converged solve with such a node fails verification.
+    pub kinetic_loss: Option<KineticLoss>,
+}
+
+/// Where the solution's kinetic matrix stops being positive definite.
+#[derive(Debug, Clone, Serialize)]
+pub struct KineticLoss {
+    /// The node (0-based).
+    pub node: usize,
+    /// Its time.
+    pub t: f64,
+    /// The smallest eigenvalue of ∂²L/∂q̇² there (≤ 0 or NaN).
+    pub min_eigenvalue: f64,
+}
+
+impl fmt::Display for KineticLoss {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the kinetic matrix ∂²L/∂q̇² is not positive definite at node {} (t = {}, smallest eigenvalue {:.3e}): \
+             the Lagrangian stops describing a mechanical system there (a mass or inertia turned zero or negative), \
+             so the solution is not physical from there on",
+            self.node, self.t, self.min_eigenvalue
+        )
+    }
+}
+
+/// The settings a solve ran with.
+#[derive(Debug, Clone, Serialize)]
+pub struct Settings {
+    /// The SBP operator's name.
+    pub operator: String,
+    /// Grid nodes N.
+    pub nodes: usize,
+    /// Start time.
+    pub t_start: f64,
+    /// End time.
+    pub t_end: f64,
+    /// The formulation.
+    pub formulation: Formulation,
+    /// How the initial velocity was imposed.
+    pub initial_velocity: InitialVelocity,
+    /// The backend asked for (what ran: [`Outcome::backend`]).
+    pub backend: Backend,
+    /// The Hessian given to Ipopt.
+    pub hessian: HessianMode,
+    /// The tolerance on max |c| (Ipopt's `tol` and `constr_viol_tol`, Newton's stop).
+    pub tol: f64,
+    /// The iteration limit (Ipopt's, and Newton's).
+    pub max_iter: u32,
+    /// The scene's parameter values.
+    pub parameters: IndexMap<String, f64>,
+    /// How the initial guess was made.
+    pub initial_guess: String,
+}
+
+/// Everything a solve produced.
+#[derive(Debug, Clone, Serialize)]
+pub struct Outcome {
+    /// The scene's name.
+    pub scene: String,
+    /// How the solve ended (serialized as the fields `converged`, `status`,
+    /// `status_text` and `solve_status`).
+    #[serde(flatten)]
+    pub status: SolveStatus,
+    /// The trajectory checked against time stepping of the same scene ([`verify`](crate::stepping::verify)).
+    pub verification: Verification,
+    /// How the reported trajectory covered the span (one solve, or windows).
+    pub method: Method,
+    /// The Ipopt version the tool was built against.
+    pub ipopt_version: String,
+    /// Which backend ran: the one asked for, Newton's own outcome, a hand-over to Ipopt.
+    pub backend: BackendReport,
+    /// Iterations of the backend that finished.
+    pub iterations: usize,
+    /// The settings the solve ran with.
+    pub settings: Settings,
+    /// The sizes of the problem.
+    pub sizes: Sizes,
+    /// Where the time went.
+    pub timings: Timings,
+    /// Checks of the solution.
+    pub diagnostics: Diagnostics,
+    /// Suspicions about the solution (spurious critical point, residual too large, …).
+    pub warnings: Vec<String>,
+    /// Every run tried ([`ladder`](super::ladder)): the scene's own, then the fallbacks; the
+    /// one reported is marked `chosen`.
+    pub attempts: Vec<Attempt>,
+    /// What to do when the result cannot be trusted (not converged, or not verified).
+    pub remedy: Option<String>,
+    /// The iteration table of the backend that finished (Ipopt's, or Newton's in the
+    /// same layout).
+    pub history: Vec<ipopt::IterationStat>,
+    /// The solution at the nodes (written as trajectory.csv, not into the summary).
+    #[serde(skip)]
+    pub trajectory: Trajectory,
+}
+
+impl Outcome {
+    /// Whether the solve converged ([`SolveStatus::is_converged`]).
+    pub fn converged(&self) -> bool {
+        self.status.is_converged()
+    }
+
+    /// Converged, every number finite, and verified (or verification switched off):
+    /// the result a user may act on (exit status 0).
+    pub fn trusted(&self) -> bool {
+        self.converged() && self.verification.is_acceptable()
+    }
+}
+
+/// One run tried by the ladder, as recorded in `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Attempt {
+    /// What was tried (method and initial guess).
+    pub method: String,
+    /// How it ended, in words (convergence and verification).
+    pub result: String,
+    /// Whether it converged.
+    pub converged: bool,
+    /// Its verification verdict, when it converged.
+    pub verification: Option<VerifyStatus>,
+    /// Its max |q − q_reference|, when verified.
+    pub max_error: Option<f64>,
+    /// Iterations of the backend that finished.
+    pub iterations: usize,
+    /// Wall time, seconds.
+    pub wall_s: f64,
+    /// Whether its trajectory is the one reported.
+    pub chosen: bool,
+}
+
+/// How a run covered the scene's span.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Method {
+    /// One solve over the whole span.
+    Global,
+    /// Successive windows ([`window`](super::window)).
+    Windows {
+        /// Length of each window's solve, seconds.
+        length: f64,
+        /// Length discarded at the end of each window, seconds.
+        overlap: f64,
+        /// Nodes of each window's solve.
+        nodes_per_window: usize,
+        /// Number of windows.
+        count: usize,
+    },
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Method::Global => write!(f, "one solve over the whole span"),
+            Method::Windows { length, overlap, nodes_per_window, count } => {
+                let windows = counted(*count, "window");
+                write!(f, "{windows} of {length:.4} s ({nodes_per_window} nodes), each discarding its last {overlap:.4} s")
+            }
+        }
+    }
+}
+
+/// `n` and the noun, plural unless `n` is 1: "1 window", "3 windows".
+pub(super) fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// "solved as 1 windows of …" was printed for a single window.
+    #[test]
+    fn a_method_counts_its_windows_in_the_singular_or_the_plural() {
+        let one = Method::Windows { length: 7.87891, overlap: 0.5, nodes_per_window: 64, count: 1 };
+        assert_eq!(one.to_string(), "1 window of 7.8789 s (64 nodes), each discarding its last 0.5000 s");
+        let three = Method::Windows { length: 7.87891, overlap: 0.5, nodes_per_window: 64, count: 3 };
+        assert_eq!(three.to_string(), "3 windows of 7.8789 s (64 nodes), each discarding its last 0.5000 s");
+        assert_eq!(Method::Global.to_string(), "one solve over the whole span");
+        assert_eq!(
+            (counted(0, "episode"), counted(1, "episode"), counted(2, "episode")),
+            ("0 episodes".into(), "1 episode".into(), "2 episodes".into())
+        );
+    }
+}

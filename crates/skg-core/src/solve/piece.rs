@@ -1,0 +1,342 @@
+//! One solve of one action's discrete system (the whole span, or one window): build the
+//! discrete action, make a physical initial guess, hand the square system to the
+//! backend ([`backend`](super::backend): Ipopt, or Newton with a sparse LU), and turn
+//! the critical point into a trajectory ([`solve_piece`], [`Piece`]).
+//!
+//! Initial guess: the Lagrange–d'Alembert equations of the same scene are integrated
+//! by [`equations`](crate::stepping::equations) (adaptive high-order Runge–Kutta, index-reduced:
+//! accelerations and multipliers from `[W Gᵀ; G 0]`, see [`Model::accelerations`]) at a
+//! moderate tolerance and sampled at the nodes; the minus variables start at zero and the
+//! boundary multipliers at the values that make their rows vanish. A global-in-time
+//! Newton solve started there converges in a few iterations (docs/solver.md: constant
+//! velocity extrapolation did not converge on the disk). If time stepping fails, the
+//! guess falls back to constant-velocity extrapolation and the summary says so.
+
+use std::time::Instant;
+
+use super::backend::{BackendError, BackendReport, SolverStatus, SquareSolver};
+use super::error::SolveError;
+use super::outcome::Timings;
+use super::status::{SolveStatus, CONVERGED_RESIDUAL};
+use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
+use crate::discrete::Action;
+use crate::model::{Model, Physical};
+use crate::sbp::SbpOperator;
+use crate::scene::{Formulation, Scene, SceneError};
+use crate::stepping::equations::{integrate_model, min_spacing, step_budget};
+use crate::stepping::ode::OdeOptions;
+use skg_ipopt as ipopt;
+
+/// Node times of a scene's grid.
+pub fn grid(scene: &Scene) -> (Vec<f64>, f64) {
+    let n = scene.nodes;
+    let dt = (scene.t_end - scene.t_start) / (n as f64 - 1.0);
+    ((0..n).map(|k| scene.t_start + k as f64 * dt).collect(), dt)
+}
+
+/// Build the discrete action of a resolved scene on its whole grid.
+pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
+    let (_, dt) = grid(scene);
+    build_action_on(scene, scene.nodes, dt)
+}
+
+/// Build the discrete action of a scene on `nodes` nodes of spacing `dt`, from the scene's
+/// initial state (a window re-targets it with [`Action::set_window`]).
+pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, SolveError> {
+    let model = Model::build(scene)?;
+    let op = SbpOperator::new(scene.operator, nodes, dt)?;
+    Ok(Action::new(model, op, scene.initial_velocity, scene.t_start, scene.initial_q.clone(), scene.initial_v.clone()))
+}
+
+/// How the initial guess of one solve is made.
+#[derive(Debug, Clone)]
+pub enum Guess {
+    /// Time stepping of the Lagrange–d'Alembert equations from the action's initial
+    /// state, sampled at its nodes.
+    TimeStepping,
+    /// Coordinates and multipliers at the action's nodes, e.g. a coarser solve
+    /// interpolated onto this grid, or the solve of a wider wall.
+    States {
+        /// `q[k][i]` at the action's nodes.
+        q: NodeSeries,
+        /// `λ[k][a]` at the action's nodes.
+        lambda: NodeSeries,
+        /// Where they came from (for the summary).
+        description: String,
+    },
+}
+
+/// One solve of one action's discrete system: the whole span, or one window of it.
+#[derive(Debug, Clone)]
+pub struct Piece {
+    /// How the backend ended, checked against the unscaled residual.
+    pub status: SolveStatus,
+    /// Iterations of the backend that finished.
+    pub iterations: usize,
+    /// Its iteration table.
+    pub history: Vec<ipopt::IterationStat>,
+    /// Which backend ran, and Newton's own outcome.
+    pub backend: BackendReport,
+    /// The solution at the action's nodes.
+    pub trajectory: Trajectory,
+    /// max |c| of the system (unscaled) at the returned point.
+    pub max_residual: f64,
+    /// max |equation of motion| at interior nodes.
+    pub max_eom_residual: f64,
+    /// max |q-|, |λ-| for the full formulation.
+    pub max_minus_variable: Option<f64>,
+    /// The time-stepping coordinates at the nodes, when the guess made them.
+    pub time_stepping_q: Option<NodeSeries>,
+    /// How the initial guess was made.
+    pub guess: String,
+    /// Time of the guess and of the backend (setup and output are not a piece's).
+    pub timings: Timings,
+}
+
+/// Solve the discrete system of `action` (nodes at `times`) from `guess` with `solver`,
+/// which was built for this action (or one of equal structure) and keeps its sparsity
+/// plans and LU analysis for the next piece.
+pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, times: &[f64], guess: &Guess) -> Result<Piece, SolveError> {
+    let t_guess = Instant::now();
+    let mut warnings = Vec::new();
+    let (z0, guess_desc, ts_q) = initial_guess(action, times, guess, &mut warnings);
+    check_initial_guess(scene, action, times, &z0, &guess_desc, &warnings)?;
+    let initial_guess_s = t_guess.elapsed().as_secs_f64();
+
+    let solution = solver.solve(action, &z0).map_err(|e| rejected_option(scene, e.into()))?;
+    if solution.status == SolverStatus::Ipopt(ipopt::Status::InvalidOption) {
+        return Err(unusable_option(scene));
+    }
+    let z = &solution.z;
+
+    let t_post = Instant::now();
+    let (trajectory, max_eom_residual) = evaluate(action, times, z);
+    let lay = &action.layout;
+    let max_minus_variable = (scene.formulation == Formulation::Full)
+        .then(|| lay.qm.iter().chain(&lay.lm).map(|&i| z[i as usize].abs()).fold(0.0_f64, f64::max));
+    let max_residual = solution.max_residual;
+    // Only a round-off stop above CONVERGED_RESIDUAL needs the equation-by-equation test.
+    let at_round_off =
+        solution.status.is_round_off() && max_residual > CONVERGED_RESIDUAL && solver.equations_at_round_off(action, z, CONVERGED_RESIDUAL);
+    Ok(Piece {
+        status: SolveStatus::classify(solution.status, max_residual, at_round_off),
+        iterations: solution.iterations,
+        history: solution.history,
+        backend: solution.report,
+        trajectory,
+        max_residual,
+        max_eom_residual,
+        max_minus_variable,
+        time_stepping_q: ts_q,
+        guess: match warnings.first() {
+            Some(w) => format!("{guess_desc} ({w})"),
+            None => guess_desc,
+        },
+        timings: Timings {
+            initial_guess_s,
+            solver_s: solution.total_s,
+            evaluation_s: solution.evaluation_s,
+            solver_internal_s: solution.total_s - solution.evaluation_s,
+            postprocess_s: t_post.elapsed().as_secs_f64(),
+            ..Timings::zero()
+        },
+    })
+}
+
+/// Initial point Z0 and a description of how it was made; also the time-stepping
+/// coordinates when the guess made them (for the spurious-solution check).
+fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut Vec<String>) -> (Vec<f64>, String, Option<NodeSeries>) {
+    let (d, n) = (action.layout.d, action.layout.n);
+    let (q, lambda, desc, ts_q) = match guess {
+        Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None),
+        Guess::TimeStepping => {
+            // With walls, steps at most the node spacing: a larger step can jump across a
+            // thin wall that the error estimate never sees (free flight is integrated
+            // exactly). Without walls the step is left to the error control: at
+            // N = 16384 the capped guess cost as much as the whole Newton solve, the
+            // uncapped one a tenth, with the same Newton iterations on every shipped
+            // scene (docs/benchmarks.md#the-initial-guess).
+            let max_step = if action.model.walls.is_empty() { None } else { min_spacing(times) };
+            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps: step_budget(times.len()), ..OdeOptions::default() };
+            let (q0, v0) = (action.q0(), action.v0());
+            match integrate_model(&action.model, q0, v0, times, &opts) {
+                Ok((States { q, lambda, .. }, _)) => (
+                    q.clone(),
+                    lambda,
+                    "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
+                    Some(q),
+                ),
+                Err(e) => {
+                    warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
+                    let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
+                    (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
+                }
+            }
+        }
+    };
+    (point_from_states(action, &q, &lambda), desc, ts_q)
+}
+
+/// Refuse an initial guess with a value that is not finite, naming the node, the state
+/// and the scene's expression that is undefined there (Ipopt would only say "starting
+/// point x0[i] = NaN").
+/// `guess` says how the guess was made and `notes` why (a failed time stepping).
+fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64], guess: &str, notes: &[String]) -> Result<(), SolveError> {
+    let Some(bad) = z0.iter().position(|x| !x.is_finite()) else { return Ok(()) };
+    let names: Vec<String> = scene.constraints.iter().map(|c| c.name.clone()).collect();
+    let (k, what) = action.layout.describe(bad, &scene.coordinates, &names);
+    let q = action.layout.coordinates(z0);
+    let v = apply_d(&action.op, &q);
+    let source = action.model.non_finite_expression(scene, times[k], &q[k], &v[k]);
+    let state = |xs: &[f64]| xs.iter().map(|x| format!("{x:.6e}")).collect::<Vec<_>>().join(", ");
+    let message = format!(
+        "the initial guess ({guess}) is not finite: {what} at node {k} (t = {}) is {}; \
+         at that node q = ({}), q̇ = ({}){}{}",
+        times[k],
+        z0[bad],
+        state(&q[k]),
+        state(&v[k]),
+        match &source {
+            Some((expr, _)) => format!(", where {expr} is not finite (e.g. sqrt or log of a negative number, a division by zero)"),
+            None => String::new(),
+        },
+        notes.iter().map(|n| format!("; {n}")).collect::<String>()
+    );
+    let location = source.map_or_else(|| scene.file.origin.whole(), |(_, at)| at);
+    Err(SceneError::Invalid { location, message }.into())
+}
+
+/// An option Ipopt refused when it was set, as an input error at the option's place in
+/// the scene file; other errors pass through.
+fn rejected_option(scene: &Scene, e: SolveError) -> SolveError {
+    let SolveError::Backend(BackendError::Ipopt(ipopt::SolveError::BadOption { name, value })) = &e else { return e };
+    let message = format!(
+        "Ipopt refused the option {name} = {value}: it has no such option, or the value has the wrong type or is outside \
+         the option's range (Ipopt prints its reason on stdout)"
+    );
+    SceneError::Invalid { location: scene.file.solver_option_location(name), message }.into()
+}
+
+/// Ipopt's `Invalid_Option` at the start of a solve (an option value it accepted but
+/// cannot use, e.g. a linear solver whose library it cannot load), as an input error.
+fn unusable_option(scene: &Scene) -> SolveError {
+    let (location, message) = match &scene.solver.linear_solver {
+        Some(solver) => (
+            scene.file.solver_option_location("linear_solver"),
+            format!(
+                "Ipopt cannot use linear_solver = \"{solver}\" (Invalid_Option: its library could not be loaded); Debian's \
+                 Ipopt has only MUMPS: use linear_solver = \"mumps\" or remove the key"
+            ),
+        ),
+        None => {
+            (scene.file.origin.whole(), "Ipopt stopped with Invalid_Option: an option of [solver.ipopt] has a value it cannot use".into())
+        }
+    };
+    SceneError::Invalid { location, message }.into()
+}
+
+/// The unknown vector Z with the given coordinates and multipliers at the nodes, the
+/// minus variables at zero and the boundary multipliers at the values that make their
+/// rows vanish.
+fn point_from_states(action: &Action, q: &[Vec<f64>], lambda: &[Vec<f64>]) -> Vec<f64> {
+    let lay = &action.layout;
+    let (d, n) = (lay.d, lay.n);
+    let mut z = vec![0.0; lay.len()];
+    for k in 0..lay.nodes {
+        for i in 0..d {
+            z[lay.qp[k * d + i] as usize] = q[k][i];
+        }
+        for a in 0..n {
+            let zi = lay.lp[k * n + a];
+            if zi != u32::MAX {
+                z[zi as usize] = lambda[k][a];
+            }
+        }
+    }
+    let mut ws = action.model.workspace();
+    let mut r = vec![0.0; lay.n_m];
+    action.gradient(&z, true, &mut r, &mut ws);
+    let last = lay.nodes - 1;
+    let row = |zi: u32| zi as usize - lay.n_p;
+    for i in 0..d {
+        z[lay.nu_qn[i] as usize] = -r[row(lay.qm[last * d + i])];
+    }
+    for a in 0..n {
+        z[lay.nu_ln[a] as usize] = -r[row(lay.lm[last * n + a])];
+    }
+    // The first node's multipliers (strong initial velocity only).
+    for (i, &nu) in lay.nu_q1.iter().enumerate() {
+        z[nu as usize] = -r[row(lay.qm[i])];
+    }
+    for (a, &nu) in lay.nu_l1.iter().enumerate() {
+        z[nu as usize] = -r[row(lay.lm[a])];
+    }
+    z
+}
+
+/// The trajectory and the largest equation-of-motion residual
+/// |f + F − Dp − Gᵀλ| over interior nodes (force units).
+fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
+    let lay = &action.layout;
+    let (d, n, nodes) = (lay.d, lay.n, lay.nodes);
+    let model = &action.model;
+    let mut ws = model.workspace();
+    let q: Vec<Vec<f64>> = (0..nodes).map(|k| (0..d).map(|i| z[lay.qp[k * d + i] as usize]).collect()).collect();
+    let v = apply_d(&action.op, &q);
+    let phys: Vec<_> = (0..nodes).map(|k| model.physical(times[k], &q[k], &v[k], &mut ws)).collect();
+    let p: Vec<Vec<f64>> = phys.iter().map(|ph| ph.p.clone()).collect();
+    let dp = apply_d(&action.op, &p);
+    let mut lambda = vec![vec![0.0; n]; nodes];
+    let mut max_eom = 0.0_f64;
+    for k in 0..nodes {
+        // λ+ is pinned where the node's row was absorbed: the last node, and the first
+        // one with the strong initial velocity.
+        let pinned = n > 0 && lay.lp[k * n] == u32::MAX;
+        if pinned {
+            lambda[k] = end_multipliers(&phys[k], &dp[k]);
+        } else {
+            for a in 0..n {
+                lambda[k][a] = z[lay.lp[k * n + a] as usize];
+            }
+        }
+        if k == 0 || k + 1 == nodes {
+            continue;
+        }
+        for i in 0..d {
+            let gl: f64 = (0..n).map(|a| lambda[k][a] * phys[k].gv[(a, i)]).sum();
+            max_eom = max_eom.max((phys[k].force[i] - dp[k][i] - gl).abs());
+        }
+    }
+    (Trajectory::from_physical(times, States { q, v, lambda }, &phys), max_eom)
+}
+
+/// D applied to each component of a node-major series.
+fn apply_d(op: &SbpOperator, series: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let nodes = series.len();
+    let d = series.first().map_or(0, Vec::len);
+    let mut out = vec![vec![0.0; d]; nodes];
+    let mut col = vec![0.0; nodes];
+    let mut dcol = vec![0.0; nodes];
+    for i in 0..d {
+        for k in 0..nodes {
+            col[k] = series[k][i];
+        }
+        op.apply(&col, &mut dcol);
+        for k in 0..nodes {
+            out[k][i] = dcol[k];
+        }
+    }
+    out
+}
+
+/// λ at an end node: least-squares solution of that node's equation of motion
+/// `Gᵀ λ = f + F − (Dp)` (its row of ∂S/∂q- was absorbed by a boundary multiplier).
+fn end_multipliers(ph: &Physical, dp: &[f64]) -> Vec<f64> {
+    let rhs = nalgebra::DVector::from_iterator(dp.len(), ph.force.iter().zip(dp).map(|(f, d)| f - d));
+    let g = &ph.gv; // n×d
+    let normal = g * g.transpose();
+    match normal.lu().solve(&(g * rhs)) {
+        Some(l) => l.iter().copied().collect(),
+        None => vec![f64::NAN; g.nrows()],
+    }
+}
