@@ -4,6 +4,7 @@
 # (.ci/run), in this order, stopping at the first failure:
 #   cargo fmt --all --check                                formatting
 #   cargo clippy --workspace --all-targets -- -D warnings  lints, tests included
+#   RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps  the API docs, links checked
 #   cargo build --workspace --examples                     the examples compile
 #   cargo run -p skg-core --example oscillator             a scene solved from code
 #   cargo test --workspace --no-fail-fast                  the test suite
@@ -25,6 +26,7 @@ step() {
 
 step cargo fmt --all --check
 step cargo clippy --workspace --all-targets -- -D warnings
+step env RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 step cargo build --workspace --examples
 step cargo run --quiet -p skg-core --example oscillator
 step cargo test --workspace --no-fail-fast "$@"

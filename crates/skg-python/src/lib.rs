@@ -8,7 +8,7 @@
 //! the exceptions of `skg._errors` with the command line's message
 //! ([`skg_core::error_text`]). The GIL is released while Rust computes.
 //!
-//! Trajectories cross into Python as a dict of NumPy arrays ([`trajectory_dict`]); the
+//! Trajectories cross into Python as a dict of NumPy arrays (`trajectory_dict`); the
 //! Python classes (`skg.Trajectory`, `skg.Solution`, …) are written in Python.
 
 #![warn(missing_docs)]

@@ -1,7 +1,7 @@
 //! The worker processes of a sweep and the protocol between them and the driver.
 //!
 //! A worker is `skg-solve sweep-worker WORK` (the hidden subcommand, [`serve_points`]),
-//! started by the driver ([`Pool`]) and kept alive for any number of points, so that
+//! started by the driver (`Pool`) and kept alive for any number of points, so that
 //! the points it runs one after the other share the process and, with the Newton
 //! backend, the symbolic LU analysis of the previous point when their Jacobian
 //! structure is equal (`skg_core::solve::backend`, "the kept analysis"). The protocol:
@@ -27,7 +27,7 @@
 //!
 //! Points go out largest [`estimated_cost`](crate::estimated_cost) first; among the
 //! points as large as the largest one left, a worker takes one of the same structure
-//! as its previous point if there is one ([`next_point`]), so runs of equal structure
+//! as its previous point if there is one (`next_point`), so runs of equal structure
 //! stay on one worker without giving up the largest-first order.
 
 use std::collections::VecDeque;

@@ -5,6 +5,10 @@
 //! while reading or writing files, 2 a command-line usage error (clap), 3 a solve that
 //! did not converge, 4 a tolerance exceeded (`check`).
 
+// The doc comments of the clap arguments are the command line's help text, written for
+// the terminal: `[default: …]`, `<scene>` and `[verify] tol` are not rustdoc links or HTML.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+
 pub mod animate;
 pub mod bench;
 pub mod check;

@@ -45,10 +45,10 @@ use std::fmt;
 
 use serde::Serialize;
 
+use super::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
 use crate::discrete::action::{Action, Block, MatrixPlan};
 use crate::model::Workspace;
 use crate::scene::{Backend, Formulation, HessianMode, IpoptValue, Scene};
-use crate::solve::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
 use skg_ipopt::{self as ipopt, EvalError, IterationStat, Problem};
 
 /// The status of the backend that ended a solve: Ipopt's or Newton's own.

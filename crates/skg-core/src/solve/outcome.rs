@@ -32,7 +32,7 @@ pub struct Timings {
     pub postprocess_s: f64,
     /// Verification against time stepping ([`verify`](crate::stepping::verify)).
     pub verification_s: f64,
-    /// Fallback attempts whose result is not the one reported ([`ladder`](super::ladder)).
+    /// Fallback attempts whose result is not the one reported (the ladder's other rungs).
     pub other_attempts_s: f64,
     /// Writing files (filled in by the output module).
     pub output_s: f64,
@@ -229,7 +229,7 @@ pub struct Outcome {
     pub diagnostics: Diagnostics,
     /// Suspicions about the solution (spurious critical point, residual too large, …).
     pub warnings: Vec<String>,
-    /// Every run tried ([`ladder`](super::ladder)): the scene's own, then the fallbacks; the
+    /// Every run tried by the fallback ladder: the scene's own, then the fallbacks; the
     /// one reported is marked `chosen`.
     pub attempts: Vec<Attempt>,
     /// What to do when the result cannot be trusted (not converged, or not verified).
@@ -282,7 +282,7 @@ pub struct Attempt {
 pub enum Method {
     /// One solve over the whole span.
     Global,
-    /// Successive windows ([`window`](super::window)).
+    /// Successive windows, each a solve from the state the previous one reached.
     Windows {
         /// Length of each window's solve, seconds.
         length: f64,

@@ -1,7 +1,6 @@
 //! Time stepping of the Lagrange–d'Alembert equations of a model, independent of the SBP
-//! discretization: used for the verification of a solve ([`verify`](super::verify)), the
-//! reference solutions ([`reference`](super::reference)) and, by its callers, for initial
-//! guesses.
+//! discretization: used for the verification of a solve, for the reference solutions
+//! and, by its callers, for initial guesses.
 //!
 //! The equations are integrated index-reduced: at each state (t, q, v) the accelerations
 //! and multipliers solve `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v − ∂p/∂t; −(∂g/∂q) v − ∂g/∂t]`
