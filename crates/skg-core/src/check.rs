@@ -16,6 +16,10 @@
 //!
 //! Solution times outside the reference's time range are an error: nothing is
 //! extrapolated.
+//!
+//! **Place in the flow.** A consumer of results, after the output: it uses
+//! [`scene`](crate::scene) and [`discrete`](crate::discrete) (the trajectory's columns)
+//! and [`output`](crate::output) (the pairing rule every reader checks).
 
 // `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

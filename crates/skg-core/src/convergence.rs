@@ -4,6 +4,9 @@
 //!
 //! `h` is whatever measure of resolution the caller uses (a step size, or `1/N`); it is
 //! taken as given. Refinement means decreasing `h`.
+//!
+//! **Place in the flow.** The first stage, beside the operators: numbers only, it uses
+//! nothing else of this crate (the operators' tests fit their orders with it).
 
 /// Result of [`fit_order`].
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]

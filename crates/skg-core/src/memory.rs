@@ -15,6 +15,10 @@
 //! the kernel reports as available (`MemAvailable` in `/proc/meminfo`); where that
 //! cannot be read, nothing is refused. Reading one line of `/proc/meminfo` needs no
 //! crate (`sysinfo` would bring a large dependency for it).
+//!
+//! **Place in the flow.** Right after the scene: it uses only [`sbp`](crate::sbp) and
+//! [`scene`](crate::scene) (an estimate needs the resolved scene, nothing built from
+//! it), so that whatever allocates later can ask it first.
 
 use crate::sbp::OperatorKind;
 use crate::scene::{Backend, Formulation, Location, Scene, SceneError};

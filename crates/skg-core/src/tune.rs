@@ -24,6 +24,10 @@
 //!
 //! **σ selection** ([`tune_width`]): bisection in log σ between a σ with artifacts and one
 //! without, over in-process solves; it assumes the artifact decreases as σ grows.
+//!
+//! **Place in the flow.** A consumer of results, at the end: it uses
+//! [`scene`](crate::scene) (the σ of a scene file), [`model`](crate::model),
+//! [`discrete`](crate::discrete) (contact) and [`solve`].
 
 // Errors carry a SceneError (with its file:line:column text), as in the core modules.
 #![allow(clippy::result_large_err)]
