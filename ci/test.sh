@@ -3,6 +3,7 @@
 # when rustup can add them) and check the workspace. This is exactly what CI runs
 # (.ci/run), in this order, stopping at the first failure:
 #   cargo fmt --all --check                                formatting
+#   bash ci/check-links.sh                                 the docs' links, anchors and quoted paths
 #   cargo clippy --workspace --all-targets -- -D warnings  lints, tests included
 #   cargo build --workspace --examples                     the examples compile
 #   cargo run -p skg-core --example oscillator             a scene solved from code
@@ -24,6 +25,7 @@ step() {
 }
 
 step cargo fmt --all --check
+step bash ci/check-links.sh
 step cargo clippy --workspace --all-targets -- -D warnings
 step cargo build --workspace --examples
 step cargo run --quiet -p skg-core --example oscillator
