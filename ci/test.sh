@@ -3,6 +3,7 @@
 # when rustup can add them) and check the workspace. This is exactly what CI runs
 # (.ci/run), in this order, stopping at the first failure:
 #   cargo fmt --all --check                                formatting
+#   bash ci/check-links.sh                                 the docs' links, anchors and quoted paths
 #   cargo clippy --workspace --all-targets -- -D warnings  lints, tests included
 #   RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps  the API docs, links checked
 #   cargo build --workspace --examples                     the examples compile
@@ -25,6 +26,7 @@ step() {
 }
 
 step cargo fmt --all --check
+step bash ci/check-links.sh
 step cargo clippy --workspace --all-targets -- -D warnings
 step env RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 step cargo build --workspace --examples
