@@ -80,7 +80,8 @@ pub struct SceneArgs {
     #[arg(long, value_name = "TOL", allow_negative_numbers = true, value_parser = positive)]
     pub verify_tol: Option<f64>,
     /// Skip the comparison with time stepping (the result is still checked for
-    /// non-finite numbers); a converged solve then exits 0.
+    /// non-finite numbers and a positive-definite kinetic matrix); a converged solve
+    /// then exits 0 unless one of those checks fails.
     #[arg(long)]
     pub no_verify: bool,
     /// Report the scene's own solve even if it fails, without trying the fallback ladder

@@ -49,7 +49,7 @@ pub fn sweep_long_about() -> String {
 
 #[derive(Args)]
 pub struct SweepArgs {
-    /// Sweep file (TOML), e.g. scenarios/sweeps/tumbler_sigma.toml.
+    /// Sweep file (TOML), e.g. scenarios/sweeps/tumbler_sigma_ladder.toml.
     #[arg(value_name = "SWEEP.toml")]
     pub sweep: PathBuf,
     /// Output directory [default: out/sweeps/<sweep file name without .toml>].

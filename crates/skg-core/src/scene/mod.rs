@@ -11,7 +11,7 @@
 //! model is built, through [`SceneFile::parse_expression`], which reports errors as
 //! [`SceneError::Expression`] with the position in the file.
 //!
-//! The format is documented key by key in the README ("The scene file, key by key").
+//! The format is documented key by key in docs/scene-file.md.
 //!
 //! **What it holds**, one part per file:
 //! * `file.rs`: [`SceneFile`], the TOML document, with one part per table

@@ -219,7 +219,8 @@ impl Ladder<'_> {
         let attempts: Vec<Attempt> = self.tried.iter().enumerate().map(|(i, t)| record(t, i == chosen)).collect();
         let fallback_used = self.tried.len() > 1;
         let windows_tried = self.tried.iter().any(|t| matches!(t.outcome.method, Method::Windows { .. }));
-        let others_s: f64 = attempts.iter().filter(|a| !a.chosen).map(|a| a.wall_s).sum();
+        // Summed from +0.0: an empty sum of f64 is −0.0, which summary.json would print.
+        let others_s: f64 = attempts.iter().filter(|a| !a.chosen).map(|a| a.wall_s).fold(0.0, |s, x| s + x);
         let mut outcome = self.tried.swap_remove(chosen).outcome;
         outcome.timings.other_attempts_s = others_s;
         outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &outcome, fallback_used, windows_tried));
