@@ -154,18 +154,11 @@ pub enum SweepError {
         message: String,
     },
     /// The base scene, or the scene of one point (the base scene with the point's
-    /// values), is invalid. The scene's own error, with its location in the scene file,
-    /// is the [`source`](std::error::Error::source).
-    #[error("{location}: {of}: {source}")]
-    Scene {
-        /// Where in the sweep file: the `scene` key, or the table of the point.
-        location: Location,
-        /// Which scene: the base scene or a point's.
-        of: SceneOf,
-        /// The scene's error (its location is in the scene file).
-        #[source]
-        source: SceneError,
-    },
+    /// values), is invalid ([`SweepSceneError`]; boxed, to keep every result small). Its
+    /// [`source`](std::error::Error::source) is the scene's own error, with its location
+    /// in the scene file.
+    #[error(transparent)]
+    Scene(Box<SweepSceneError>),
     /// A value of a setting axis (`nodes`, `operator`, …) that is not a valid setting.
     #[error("{location}: {source}")]
     Axis {
@@ -242,10 +235,28 @@ impl SweepError {
     /// scene file.
     pub fn scene_error(&self) -> Option<&SceneError> {
         match self {
-            SweepError::Scene { source, .. } => Some(source),
+            SweepError::Scene(e) => Some(&e.source),
             _ => None,
         }
     }
+
+    fn scene(location: Location, of: SceneOf, source: SceneError) -> SweepError {
+        SweepError::Scene(Box::new(SweepSceneError { location, of, source }))
+    }
+}
+
+/// An invalid scene of a sweep: where the sweep file asks for it, which scene it is, and
+/// the scene's own error.
+#[derive(Debug, thiserror::Error)]
+#[error("{location}: {of}: {source}")]
+pub struct SweepSceneError {
+    /// Where in the sweep file: the `scene` key, or the table of the point.
+    pub location: Location,
+    /// Which scene: the base scene or a point's.
+    pub of: SceneOf,
+    /// The scene's error (its location is in the scene file).
+    #[source]
+    pub source: SceneError,
 }
 
 /// Which scene of a sweep a [`SweepError::Scene`] is about.
@@ -770,11 +781,8 @@ impl SweepFile {
     /// the base scene (parameter names, values, node counts) before anything runs.
     pub fn expand(&self) -> Result<Expanded, SweepError> {
         self.check_name()?;
-        let base = SceneFile::load(&self.scene_path()).map_err(|source| SweepError::Scene {
-            location: self.origin.locate_in(&self.sweep.scene, None),
-            of: SceneOf::Base,
-            source,
-        })?;
+        let base = SceneFile::load(&self.scene_path())
+            .map_err(|e| SweepError::scene(self.origin.locate_in(&self.sweep.scene, None), SceneOf::Base, e))?;
         if let Some(tol) = &self.sweep.artifact_tol {
             if !(*tol.get_ref() > 0.0 && tol.get_ref().is_finite()) {
                 return Err(self.invalid(tol, format!("sweep.artifact_tol must be a positive number, got {}", tol.get_ref())));
@@ -895,8 +903,7 @@ impl SweepFile {
             let mut p = Point { index: points.len(), values, evaluated: Vec::new(), method };
             // Validate by resolving the scene with the point's overrides (cheap: no model).
             let ov = p.overrides().map_err(|source| SweepError::Axis { location: loc.clone(), source })?;
-            let scene_of_point =
-                |source: SceneError| SweepError::Scene { location: loc.clone(), of: SceneOf::Point(p.canonical()), source };
+            let scene_of_point = |e| SweepError::scene(loc.clone(), SceneOf::Point(p.canonical()), e);
             let scene = base.clone().resolve(&ov).map_err(scene_of_point)?;
             let memory = match p.method {
                 Method::Skg => skg_core::memory::check(&scene, "the solve", scene.nodes, skg_core::memory::solve_bytes(&scene)),
@@ -914,11 +921,10 @@ impl SweepFile {
                 duplicates += 1;
             }
         }
-        let first = base.clone().resolve(&points[0].overrides().unwrap_or_default()).map_err(|source| SweepError::Scene {
-            location: self.origin.whole(),
-            of: SceneOf::Point(points[0].canonical()),
-            source,
-        })?;
+        let first = base
+            .clone()
+            .resolve(&points[0].overrides().unwrap_or_default())
+            .map_err(|e| SweepError::scene(self.origin.whole(), SceneOf::Point(points[0].canonical()), e))?;
         self.check_compare_columns(&first)?;
         let expression_axes = expression_axes(&axes, &points);
         let expanded = Expanded {

@@ -5,7 +5,7 @@ use std::error::Error as _;
 use std::path::{Path, PathBuf};
 
 use skg_core::scenario::{Location, SceneError};
-use skg_sweep::{SceneOf, SweepError, SweepFile, SweepOptions};
+use skg_sweep::{SceneOf, SweepError, SweepFile, SweepOptions, SweepSceneError};
 
 /// The location a scene error points at in the scene file, if it has one.
 fn scene_location(e: &SceneError) -> Option<&Location> {
@@ -53,7 +53,8 @@ fn the_base_scene_error_keeps_its_location_in_the_scene_file() {
     let err = SweepFile::load(&sweep).unwrap().expand().unwrap_err();
 
     // Where in the sweep file: the `scene` key's value, line 2, column 9.
-    let SweepError::Scene { location, of, .. } = &err else { panic!("expected a scene error, got {err:?}") };
+    let SweepError::Scene(e) = &err else { panic!("expected a scene error, got {err:?}") };
+    let SweepSceneError { location, of, .. } = &**e;
     assert_eq!((location.line, location.col), (Some(2), Some(9)), "{err}");
     assert_eq!(*of, SceneOf::Base);
 
@@ -81,7 +82,8 @@ fn a_point_whose_scene_is_invalid_names_the_point_and_the_scene_location() {
     // The second grid value is too few nodes for any solve.
     let sweep = write(dir.path(), "sweep.toml", "[sweep]\nscene = \"scene.toml\"\n\n[[grid]]\nnodes = [16, 1]\n");
     let err = SweepFile::load(&sweep).unwrap().expand().unwrap_err();
-    let SweepError::Scene { location, of, source } = &err else { panic!("expected a scene error, got {err:?}") };
+    let SweepError::Scene(e) = &err else { panic!("expected a scene error, got {err:?}") };
+    let SweepSceneError { location, of, source } = &**e;
     // The grid's table starts on line 4 of the sweep file.
     assert_eq!(location.line, Some(4), "{err}");
     assert_eq!(*of, SceneOf::Point("method=skg;nodes=1".into()), "{err}");
