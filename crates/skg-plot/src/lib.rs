@@ -42,13 +42,23 @@ pub enum PlotError {
     /// A results file that cannot be read or has a bad cell.
     #[error(transparent)]
     Results(#[from] SweepError),
-    /// plotters failed while drawing.
-    #[error("drawing {path}: {message}")]
+    /// Drawing a chart or picture failed (in plotters, for lack of data in a panel, or in
+    /// ffmpeg).
+    #[error("drawing {path}: {source}")]
     Draw {
         /// The chart file.
         path: PathBuf,
-        /// plotters' message.
-        message: String,
+        /// What failed.
+        #[source]
+        source: DrawError,
+    },
+    /// A solve's `summary.json` is not valid JSON.
+    #[error("{path}: {source}")]
+    Summary {
+        /// The file.
+        path: PathBuf,
+        /// The JSON parser's error (with its line and column).
+        source: serde_json::Error,
     },
     /// The scene of a picture of the motion is invalid.
     #[error(transparent)]
@@ -67,6 +77,52 @@ pub enum PlotError {
         /// What the system said.
         source: std::io::Error,
     },
+}
+
+/// Why drawing failed ([`PlotError::Draw`] names the file).
+#[derive(Debug, thiserror::Error)]
+pub enum DrawError {
+    /// plotters or its backend failed (its message: the error's type depends on the
+    /// backend, which a chart's file type chooses).
+    #[error("{0}")]
+    Plotters(String),
+    /// A panel has no data to draw.
+    #[error("{0}")]
+    NoData(String),
+    /// ffmpeg (for an MP4) could not be started.
+    #[error("cannot run ffmpeg ({source}): an MP4 needs ffmpeg on PATH (Debian: apt-get install ffmpeg); a .gif needs nothing")]
+    FfmpegMissing {
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// A frame could not be passed to ffmpeg, or ffmpeg could not be waited for.
+    #[error("{doing} ffmpeg: {source}")]
+    FfmpegPipe {
+        /// `writing to` or `waiting for`.
+        doing: &'static str,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// ffmpeg ended with an error.
+    #[error("ffmpeg failed ({status}): {stderr}")]
+    Ffmpeg {
+        /// Its exit status.
+        status: std::process::ExitStatus,
+        /// What it wrote to stderr.
+        stderr: String,
+    },
+}
+
+impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for DrawError {
+    fn from(e: DrawingAreaErrorKind<E>) -> DrawError {
+        DrawError::Plotters(e.to_string())
+    }
+}
+
+impl DrawError {
+    fn no_data(message: impl Into<String>) -> DrawError {
+        DrawError::NoData(message.into())
+    }
 }
 
 static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
@@ -107,16 +163,16 @@ macro_rules! render {
         for ext in ["svg", "png"] {
             let path = stem.with_extension(ext);
             let tmp = skg_core::output::temporary_beside(&path)?;
-            let drawn: Result<(), String> = if ext == "svg" {
+            let drawn: Result<(), DrawError> = if ext == "svg" {
                 let root = SVGBackend::new(&tmp, $size).into_drawing_area();
-                $draw(&root, $($arg),*).and_then(|_| root.present().map_err(|e| e.to_string()))
+                $draw(&root, $($arg),*).and_then(|_| Ok(root.present()?))
             } else {
                 let root = BitMapBackend::new(&tmp, $size).into_drawing_area();
-                $draw(&root, $($arg),*).and_then(|_| root.present().map_err(|e| e.to_string()))
+                $draw(&root, $($arg),*).and_then(|_| Ok(root.present()?))
             };
-            if let Err(message) = drawn {
+            if let Err(source) = drawn {
                 let _ = std::fs::remove_file(&tmp);
-                return Err(PlotError::Draw { path, message });
+                return Err(PlotError::Draw { path, source });
             }
             std::fs::rename(&tmp, &path).map_err(|source| PlotError::Io { path: path.clone(), source })?;
             written.push(path);
@@ -133,19 +189,14 @@ fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>
     chart: &mut ChartContext<'a, DB, CT>,
     position: SeriesLabelPosition,
     size: u32,
-) -> Result<(), String> {
-    chart
+) -> Result<(), DrawError> {
+    Ok(chart
         .configure_series_labels()
         .position(position)
         .label_font(("sans-serif", size))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .draw()
-        .map_err(e2s)
-}
-
-fn e2s<E: std::fmt::Display>(e: E) -> String {
-    e.to_string()
+        .draw()?)
 }
 
 /// Numeric value of a results cell: a number or a constant expression (`1/110`, `pi/6`).
@@ -224,17 +275,17 @@ fn draw_loglog<DB: DrawingBackend>(
     xdesc: &str,
     ydesc: &str,
     lines: &[Line],
-) -> Result<(), String> {
-    root.fill(&WHITE).map_err(e2s)?;
-    let (x0, x1) = log_range(lines.iter().flat_map(|l| l.points.iter().map(|p| p.0))).ok_or("no data to plot")?;
-    let (y0, y1) = log_range(lines.iter().flat_map(|l| l.points.iter().map(|p| p.1))).ok_or("no data to plot")?;
+) -> Result<(), DrawError> {
+    root.fill(&WHITE)?;
+    let no_data = || DrawError::no_data("no data to plot");
+    let (x0, x1) = log_range(lines.iter().flat_map(|l| l.points.iter().map(|p| p.0))).ok_or_else(no_data)?;
+    let (y0, y1) = log_range(lines.iter().flat_map(|l| l.points.iter().map(|p| p.1))).ok_or_else(no_data)?;
     let mut chart = ChartBuilder::on(root)
         .caption(title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-        .map_err(e2s)?;
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
     chart
         .configure_mesh()
         .x_desc(xdesc)
@@ -244,35 +295,30 @@ fn draw_loglog<DB: DrawingBackend>(
         .x_labels(8)
         .label_style(("sans-serif", 13))
         .light_line_style(WHITE)
-        .draw()
-        .map_err(e2s)?;
+        .draw()?;
     for l in lines {
         if !l.tags.is_empty() {
-            chart
-                .draw_series(
-                    l.points
-                        .iter()
-                        .zip(&l.tags)
-                        .map(|(&p, t)| Text::new(t.clone(), p, ("sans-serif", 10).into_font().color(&l.color.mix(0.9)))),
-                )
-                .map_err(e2s)?;
+            chart.draw_series(
+                l.points
+                    .iter()
+                    .zip(&l.tags)
+                    .map(|(&p, t)| Text::new(t.clone(), p, ("sans-serif", 10).into_font().color(&l.color.mix(0.9)))),
+            )?;
         }
         let c = l.color;
         let style = ShapeStyle::from(&c).stroke_width(2);
         if l.dashed {
             chart
-                .draw_series(DashedLineSeries::new(l.points.clone(), 6, 4, style))
-                .map_err(e2s)?
+                .draw_series(DashedLineSeries::new(l.points.clone(), 6, 4, style))?
                 .label(l.label.clone())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
-            chart.draw_series(l.points.iter().map(|&p| TriangleMarker::new(p, 5, c.filled()))).map_err(e2s)?;
+            chart.draw_series(l.points.iter().map(|&p| TriangleMarker::new(p, 5, c.filled())))?;
         } else {
             chart
-                .draw_series(LineSeries::new(l.points.clone(), style))
-                .map_err(e2s)?
+                .draw_series(LineSeries::new(l.points.clone(), style))?
                 .label(l.label.clone())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
-            chart.draw_series(l.points.iter().map(|&p| Circle::new(p, 4, c.filled()))).map_err(e2s)?;
+            chart.draw_series(l.points.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
         }
     }
     draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
@@ -413,9 +459,9 @@ fn draw_trajectory<DB: DrawingBackend>(
     title: &str,
     solutions: &[(String, Table)],
     reference: Option<&Table>,
-) -> Result<(), String> {
-    root.fill(&WHITE).map_err(e2s)?;
-    let root = root.titled(title, ("sans-serif", 20)).map_err(e2s)?;
+) -> Result<(), DrawError> {
+    root.fill(&WHITE)?;
+    let root = root.titled(title, ("sans-serif", 20))?;
     let panels = root.split_evenly((1, 2));
     let coords = coordinates(&solutions[0].1);
     // Left: coordinates over time.
@@ -447,7 +493,7 @@ fn draw_trajectory<DB: DrawingBackend>(
             t.column("energy").map(|e| (label.clone(), t.times().into_iter().zip(e).collect(), color(si), false))
         }))
         .collect();
-    let panel = |area: &DrawingArea<DB, Shift>, name: &str, ydesc: &str, data: Vec<Series>| -> Result<(), String> {
+    let panel = |area: &DrawingArea<DB, Shift>, name: &str, ydesc: &str, data: Vec<Series>| -> Result<(), DrawError> {
         let xs = data.iter().flat_map(|d| d.1.iter().map(|p| p.0));
         let (x0, x1) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
         let (y0, y1) = data
@@ -456,7 +502,7 @@ fn draw_trajectory<DB: DrawingBackend>(
             .filter(|y| y.is_finite())
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(y), b.max(y)));
         if x0.partial_cmp(&x1) != Some(std::cmp::Ordering::Less) || !y0.is_finite() {
-            return Err(format!("no data for the {name} panel"));
+            return Err(DrawError::no_data(format!("no data for the {name} panel")));
         }
         let pad = ((y1 - y0) * 0.08).max(1e-9 * y1.abs().max(1.0));
         let mut chart = ChartBuilder::on(area)
@@ -464,23 +510,20 @@ fn draw_trajectory<DB: DrawingBackend>(
             .margin(8)
             .x_label_area_size(35)
             .y_label_area_size(55)
-            .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
-            .map_err(e2s)?;
-        chart.configure_mesh().x_desc("t [s]").y_desc(ydesc).label_style(("sans-serif", 12)).light_line_style(WHITE).draw().map_err(e2s)?;
+            .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))?;
+        chart.configure_mesh().x_desc("t [s]").y_desc(ydesc).label_style(("sans-serif", 12)).light_line_style(WHITE).draw()?;
         for (label, pts, c, is_reference) in data {
             if is_reference {
                 chart
-                    .draw_series(LineSeries::new(pts, ShapeStyle::from(&c).stroke_width(1)))
-                    .map_err(e2s)?
+                    .draw_series(LineSeries::new(pts, ShapeStyle::from(&c).stroke_width(1)))?
                     .label(label)
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(1)));
             } else {
                 // The solver's nodes as markers (thinned beyond ~150 per line) on a thin line.
                 let every = pts.len().div_ceil(150).max(1);
-                chart.draw_series(pts.iter().step_by(every).map(|&p| Circle::new(p, 2, c.filled()))).map_err(e2s)?;
+                chart.draw_series(pts.iter().step_by(every).map(|&p| Circle::new(p, 2, c.filled())))?;
                 chart
-                    .draw_series(LineSeries::new(pts, ShapeStyle::from(&c.mix(0.6)).stroke_width(1)))
-                    .map_err(e2s)?
+                    .draw_series(LineSeries::new(pts, ShapeStyle::from(&c.mix(0.6)).stroke_width(1)))?
                     .label(label)
                     .legend(move |(x, y)| Circle::new((x + 9, y), 3, c.filled()));
             }
@@ -490,7 +533,7 @@ fn draw_trajectory<DB: DrawingBackend>(
     };
     panel(&panels[0], "coordinates", "q", series)?;
     if energy.is_empty() {
-        return Err("no `energy` column in the solution".into());
+        return Err(DrawError::no_data("no `energy` column in the solution"));
     }
     panel(&panels[1], "energy (without the wall potential)", "E [J]", energy)?;
     Ok(())
@@ -512,7 +555,7 @@ pub fn sweep_solutions(dir: &Path) -> Result<Vec<(String, Table)>, PlotError> {
         if !file.is_file() {
             continue;
         }
-        let t = Table::read(&file).map_err(|e| PlotError::Data(e.to_string()))?;
+        let t = Table::read(&file)?;
         let label = varying.iter().map(|&c| format!("{}={}", res.header[c], res.written(r, c))).collect::<Vec<_>>().join(", ");
         out.push((if label.is_empty() { r[id].clone() } else { label }, t));
     }
@@ -567,8 +610,8 @@ fn draw_stability<DB: DrawingBackend>(
     xs: &[String],
     ys: &[String],
     cells: &BTreeMap<(usize, usize), (Cell, Option<f64>)>,
-) -> Result<(), String> {
-    root.fill(&WHITE).map_err(e2s)?;
+) -> Result<(), DrawError> {
+    root.fill(&WHITE)?;
     let (nx, ny) = (xs.len() as i32, ys.len() as i32);
     let fill = |c: Cell| match c {
         Cell::Converged => RGBColor(120, 190, 120),
@@ -576,7 +619,7 @@ fn draw_stability<DB: DrawingBackend>(
         Cell::NotVerified => RGBColor(170, 130, 210),
         Cell::Failed => RGBColor(215, 80, 80),
     };
-    let root = root.titled(title, ("sans-serif", 20)).map_err(e2s)?;
+    let root = root.titled(title, ("sans-serif", 20))?;
     let (strip, main) = root.split_vertically(28);
     // Legend strip above the map.
     let mut x = 90;
@@ -588,16 +631,15 @@ fn draw_stability<DB: DrawingBackend>(
         ("not run", None),
     ] {
         let col = c.map_or(RGBColor(225, 225, 225), fill);
-        strip.draw(&Rectangle::new([(x, 6), (x + 16, 20)], col.filled())).map_err(e2s)?;
-        strip.draw(&Text::new(name, (x + 22, 6), ("sans-serif", 13))).map_err(e2s)?;
+        strip.draw(&Rectangle::new([(x, 6), (x + 16, 20)], col.filled()))?;
+        strip.draw(&Text::new(name, (x + 22, 6), ("sans-serif", 13)))?;
         x += 30 + 8 * name.len() as i32;
     }
     let mut chart = ChartBuilder::on(&main)
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
-        .build_cartesian_2d((0..nx - 1).into_segmented(), (0..ny - 1).into_segmented())
-        .map_err(e2s)?;
+        .build_cartesian_2d((0..nx - 1).into_segmented(), (0..ny - 1).into_segmented())?;
     let label = |v: &SegmentValue<i32>, names: &[String]| match v {
         SegmentValue::CenterOf(i) if *i >= 0 && (*i as usize) < names.len() => names[*i as usize].clone(),
         _ => String::new(),
@@ -612,34 +654,27 @@ fn draw_stability<DB: DrawingBackend>(
         .x_label_formatter(&|v| label(v, xs))
         .y_label_formatter(&|v| label(v, ys))
         .label_style(("sans-serif", 13))
-        .draw()
-        .map_err(e2s)?;
+        .draw()?;
     for i in 0..nx {
         for j in 0..ny {
             let (c, val) = cells.get(&(i as usize, j as usize)).copied().map_or((RGBColor(225, 225, 225), None), |(c, v)| (fill(c), v));
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(SegmentValue::Exact(i), SegmentValue::Exact(j)), (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1))],
-                    c.filled(),
-                )))
-                .map_err(e2s)?;
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(SegmentValue::Exact(i), SegmentValue::Exact(j)), (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1))],
-                    WHITE.stroke_width(2),
-                )))
-                .map_err(e2s)?;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(SegmentValue::Exact(i), SegmentValue::Exact(j)), (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1))],
+                c.filled(),
+            )))?;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(SegmentValue::Exact(i), SegmentValue::Exact(j)), (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1))],
+                WHITE.stroke_width(2),
+            )))?;
             if let Some(v) = val {
-                chart
-                    .draw_series(std::iter::once(Text::new(
-                        sci(v),
-                        (SegmentValue::CenterOf(i), SegmentValue::CenterOf(j)),
-                        ("sans-serif", 12).into_font().color(&BLACK).pos(plotters::style::text_anchor::Pos::new(
-                            plotters::style::text_anchor::HPos::Center,
-                            plotters::style::text_anchor::VPos::Center,
-                        )),
-                    )))
-                    .map_err(e2s)?;
+                chart.draw_series(std::iter::once(Text::new(
+                    sci(v),
+                    (SegmentValue::CenterOf(i), SegmentValue::CenterOf(j)),
+                    ("sans-serif", 12).into_font().color(&BLACK).pos(plotters::style::text_anchor::Pos::new(
+                        plotters::style::text_anchor::HPos::Center,
+                        plotters::style::text_anchor::VPos::Center,
+                    )),
+                )))?;
             }
         }
     }
@@ -696,4 +731,29 @@ pub fn stability(
     }
     let labels = |v: &[(String, String)]| v.iter().map(|(_, label)| label.clone()).collect::<Vec<_>>();
     render!(stem, SIZE, draw_stability(title, xaxis, yaxis, &labels(&xs), &labels(&ys), &cells))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A solution without an `energy` column: the energy panel has nothing to draw, and
+    /// the error names the chart's file and says what is missing, with no file left behind.
+    #[test]
+    fn a_panel_without_data_is_a_draw_error_naming_the_file() {
+        let dir = std::env::temp_dir().join(format!("skg-plot-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let columns = ["t", "x", "x_dot"].map(String::from).to_vec();
+        let rows = (0..5).map(|k| vec![k as f64 * 0.1, 1.0 - k as f64, -1.0]).collect();
+        let table = Table { columns, comments: Vec::new(), rows };
+        let stem = dir.join("chart");
+        let err = trajectory(&[("solve".into(), table)], None, "title", &stem).unwrap_err();
+        let PlotError::Draw { path, source: DrawError::NoData(what) } = &err else { panic!("expected a draw error, got {err:?}") };
+        assert_eq!(path, &stem.with_extension("svg"));
+        assert_eq!(what, "no `energy` column in the solution");
+        assert_eq!(err.to_string(), format!("drawing {}: no `energy` column in the solution", path.display()));
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert!(left.is_empty(), "files left behind: {left:?}");
+        std::fs::remove_dir(&dir).unwrap();
+    }
 }

@@ -36,7 +36,7 @@ use skg_core::model::Model;
 use skg_core::output::{self, REFERENCE_FILE, SUMMARY_FILE, TRAJECTORY_FILE};
 use skg_core::scene::{Overrides, Scene, SceneFile, TIME, VELOCITY_SUFFIX};
 
-use crate::{color, draw_legend, e2s, register_fonts, PlotError};
+use crate::{color, draw_legend, register_fonts, DrawError, PlotError};
 
 /// Curves that vary with the state are drawn at most at this many states.
 pub const MAX_SNAPSHOTS: usize = 6;
@@ -100,7 +100,7 @@ impl Motion {
         let summary_path = dir.join(SUMMARY_FILE);
         let summary: Option<serde_json::Value> = if summary_path.is_file() {
             let text = std::fs::read_to_string(&summary_path).map_err(|source| PlotError::Io { path: summary_path.clone(), source })?;
-            Some(serde_json::from_str(&text).map_err(|e| data_err(format!("{}: {e}", summary_path.display())))?)
+            Some(serde_json::from_str(&text).map_err(|source| PlotError::Summary { path: summary_path.clone(), source })?)
         } else {
             None
         };
@@ -181,14 +181,22 @@ pub enum Aspect {
     Fill,
 }
 
+/// An aspect that is none of `auto`, `equal`, `fill`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown aspect `{input}`: expected auto, equal or fill")]
+pub struct ParseAspectError {
+    /// The rejected input.
+    pub input: String,
+}
+
 impl std::str::FromStr for Aspect {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = ParseAspectError;
+    fn from_str(s: &str) -> Result<Self, ParseAspectError> {
         match s {
             "auto" => Ok(Aspect::Auto),
             "equal" => Ok(Aspect::Equal),
             "fill" => Ok(Aspect::Fill),
-            _ => Err(format!("unknown aspect `{s}`: expected auto, equal or fill")),
+            _ => Err(ParseAspectError { input: s.to_string() }),
         }
     }
 }
@@ -546,11 +554,11 @@ enum Shot {
     Frame { t: f64, compact: bool },
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot: Shot) -> Result<(), String> {
-    root.fill(&WHITE).map_err(e2s)?;
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot: Shot) -> Result<(), DrawError> {
+    root.fill(&WHITE)?;
     let compact = matches!(shot, Shot::Frame { compact: true, .. });
     let title_size = if compact { 14 } else { 18 };
-    let area = root.titled(&s.view.title, ("sans-serif", title_size)).map_err(e2s)?;
+    let area = root.titled(&s.view.title, ("sans-serif", title_size))?;
     let (margin, xlab, ylab) = if compact { (6, 30, 44) } else { (10, 38, 58) };
     let (w, h) = area.dim_in_pixel();
     let px = (w.saturating_sub(2 * margin + ylab), h.saturating_sub(2 * margin + xlab));
@@ -559,8 +567,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot
         .margin(margin)
         .x_label_area_size(xlab)
         .y_label_area_size(ylab)
-        .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
-        .map_err(e2s)?;
+        .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)?;
     chart
         .configure_mesh()
         .x_desc(axis_label(&s.view.x))
@@ -569,8 +576,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot
         .x_labels(if compact { 5 } else { 8 })
         .y_labels(if compact { 5 } else { 8 })
         .light_line_style(WHITE)
-        .draw()
-        .map_err(e2s)?;
+        .draw()?;
     // Walls and position constraints.
     let frame_time = match shot {
         Shot::Frame { t, .. } => Some(t),
@@ -608,9 +614,9 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot
                 let mid = line[line.len() / 2];
                 let series: Vec<(f64, f64)> = line;
                 let drawn = if boundary.wall {
-                    chart.draw_series(LineSeries::new(series, st)).map_err(e2s)?
+                    chart.draw_series(LineSeries::new(series, st))?
                 } else {
-                    chart.draw_series(DashedLineSeries::new(series, 7, 5, st)).map_err(e2s)?
+                    chart.draw_series(DashedLineSeries::new(series, 7, 5, st))?
                 };
                 if !labelled && !compact {
                     let what = if boundary.wall { "wall" } else { "constraint" };
@@ -621,9 +627,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot
                     labelled = true;
                 }
                 if let (Some(t), false) = (time, compact) {
-                    chart
-                        .draw_series(std::iter::once(Text::new(format!("t={t:.3}"), mid, ("sans-serif", 10).into_font().color(&c))))
-                        .map_err(e2s)?;
+                    chart.draw_series(std::iter::once(Text::new(format!("t={t:.3}"), mid, ("sans-serif", 10).into_font().color(&c))))?;
                 }
             }
         }
@@ -631,7 +635,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot
     // The reference: a thin black line (grey in frames, the whole path as a guide).
     if let Some(r) = &s.reference {
         let c = if frame_time.is_some() { RGBColor(190, 190, 190) } else { BLACK };
-        let drawn = chart.draw_series(LineSeries::new(r.clone(), ShapeStyle::from(&c).stroke_width(1))).map_err(e2s)?;
+        let drawn = chart.draw_series(LineSeries::new(r.clone(), ShapeStyle::from(&c).stroke_width(1)))?;
         if !compact {
             drawn.label("reference (time stepping)").legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(1)));
         }
@@ -650,23 +654,23 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot
     if let Some(p) = current {
         trail.push(p);
     }
-    let drawn = chart.draw_series(LineSeries::new(trail, ShapeStyle::from(&main.mix(0.8)).stroke_width(2))).map_err(e2s)?;
+    let drawn = chart.draw_series(LineSeries::new(trail, ShapeStyle::from(&main.mix(0.8)).stroke_width(2)))?;
     if !compact {
         drawn.label(format!("solution: {}", s.motion.label)).legend(move |(x, y)| Circle::new((x + 9, y), 3, main.filled()));
     }
     let every = upto.div_ceil(200).max(1);
-    chart.draw_series((0..upto).step_by(every).map(|k| Circle::new(s.path[k], 2, main.filled()))).map_err(e2s)?;
+    chart.draw_series((0..upto).step_by(every).map(|k| Circle::new(s.path[k], 2, main.filled())))?;
     let touching: Vec<usize> = (0..upto).filter(|&k| s.contact[k]).collect();
     if !touching.is_empty() {
-        let drawn = chart.draw_series(touching.iter().map(|&k| Circle::new(s.path[k], 3, CONTACT.filled()))).map_err(e2s)?;
+        let drawn = chart.draw_series(touching.iter().map(|&k| Circle::new(s.path[k], 3, CONTACT.filled())))?;
         if !compact {
             drawn.label("in contact (h > −6σ)").legend(|(x, y)| Circle::new((x + 9, y), 3, CONTACT.filled()));
         }
     }
     match (frame_time, current) {
         (Some(t), Some(p)) => {
-            chart.draw_series(std::iter::once(Circle::new(p, if compact { 5 } else { 7 }, main.filled()))).map_err(e2s)?;
-            chart.draw_series(std::iter::once(Circle::new(p, if compact { 5 } else { 7 }, BLACK.stroke_width(1)))).map_err(e2s)?;
+            chart.draw_series(std::iter::once(Circle::new(p, if compact { 5 } else { 7 }, main.filled())))?;
+            chart.draw_series(std::iter::once(Circle::new(p, if compact { 5 } else { 7 }, BLACK.stroke_width(1))))?;
             let (px0, py0) = chart.plotting_area().get_pixel_range();
             let (ax0, ay0) = area.get_pixel_range();
             let stamp = format!("t = {t:.3} s");
@@ -674,17 +678,15 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot
                 stamp,
                 (px0.start - ax0.start + 8, py0.start - ay0.start + 6),
                 ("sans-serif", if compact { 13 } else { 16 }).into_font().color(&BLACK),
-            ))
-            .map_err(e2s)?;
+            ))?;
         }
         _ => {
             let first = s.path[0];
             let last = s.path[s.path.len() - 1];
-            let start = chart.draw_series(std::iter::once(Circle::new(first, 6, RGBColor(44, 160, 44).filled()))).map_err(e2s)?;
+            let start = chart.draw_series(std::iter::once(Circle::new(first, 6, RGBColor(44, 160, 44).filled())))?;
             start.label("start").legend(|(x, y)| Circle::new((x + 9, y), 4, RGBColor(44, 160, 44).filled()));
             chart
-                .draw_series(std::iter::once(TriangleMarker::new(last, 6, BLACK.filled())))
-                .map_err(e2s)?
+                .draw_series(std::iter::once(TriangleMarker::new(last, 6, BLACK.filled())))?
                 .label("end")
                 .legend(|(x, y)| TriangleMarker::new((x + 9, y), 4, BLACK.filled()));
         }
@@ -714,12 +716,12 @@ pub fn path_png(motion: &Motion, view: &View, size: (u32, u32), file: &Path) -> 
     let drawn = (|| {
         let root = BitMapBackend::new(&tmp, size).into_drawing_area();
         draw(&root, &s, Shot::Path)?;
-        root.present().map_err(e2s)
+        Ok(root.present()?)
     })();
     finish(&tmp, file, drawn)
 }
 
-fn draw_path<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>) -> Result<(), String> {
+fn draw_path<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>) -> Result<(), DrawError> {
     draw(root, s, Shot::Path)
 }
 
@@ -767,10 +769,10 @@ fn frame_times(motion: &Motion, count: usize) -> Vec<f64> {
 }
 
 /// Rename the finished temporary file over `path`, or remove it when drawing failed.
-fn finish(tmp: &Path, path: &Path, drawn: Result<(), String>) -> Result<PathBuf, PlotError> {
-    if let Err(message) = drawn {
+fn finish(tmp: &Path, path: &Path, drawn: Result<(), DrawError>) -> Result<PathBuf, PlotError> {
+    if let Err(source) = drawn {
         let _ = std::fs::remove_file(tmp);
-        return Err(PlotError::Draw { path: path.to_path_buf(), message });
+        return Err(PlotError::Draw { path: path.to_path_buf(), source });
     }
     std::fs::rename(tmp, path).map_err(|source| PlotError::Io { path: path.to_path_buf(), source })?;
     Ok(path.to_path_buf())
@@ -791,10 +793,10 @@ pub fn animate(motion: &Motion, view: &View, frames: &Frames, path: &Path, on_fr
     let drawn = match Format::of(path)? {
         Format::Gif => (|| {
             let delay = (1000.0 / frames.fps).round().max(10.0) as u32;
-            let root = BitMapBackend::gif(&tmp, frames.size, delay).map_err(e2s)?.into_drawing_area();
+            let root = BitMapBackend::gif(&tmp, frames.size, delay).map_err(|e| DrawError::Plotters(e.to_string()))?.into_drawing_area();
             for &t in &times {
                 draw(&root, &s, Shot::Frame { t, compact: false })?;
-                root.present().map_err(e2s)?;
+                root.present()?;
                 on_frame();
             }
             Ok(())
@@ -805,7 +807,7 @@ pub fn animate(motion: &Motion, view: &View, frames: &Frames, path: &Path, on_fr
     finish(&tmp, path, drawn)
 }
 
-fn mp4(s: &Scenery<'_>, times: &[f64], frames: &Frames, tmp: &Path, on_frame: &mut dyn FnMut()) -> Result<(), String> {
+fn mp4(s: &Scenery<'_>, times: &[f64], frames: &Frames, tmp: &Path, on_frame: &mut dyn FnMut()) -> Result<(), DrawError> {
     let (w, h) = (frames.size.0 & !1, frames.size.1 & !1); // yuv420p wants even sizes
     let mut child = Command::new("ffmpeg")
         .args([
@@ -827,31 +829,29 @@ fn mp4(s: &Scenery<'_>, times: &[f64], frames: &Frames, tmp: &Path, on_frame: &m
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| {
-            format!("cannot run ffmpeg ({e}): an MP4 needs ffmpeg on PATH (Debian: apt-get install ffmpeg); a .gif needs nothing")
-        })?;
+        .map_err(|source| DrawError::FfmpegMissing { source })?;
     let mut stdin = child.stdin.take().expect("piped");
     let mut buf = vec![0u8; (w * h * 3) as usize];
     let mut result = Ok(());
     for &t in times {
         {
             let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-            if let Err(e) = draw(&root, s, Shot::Frame { t, compact: false }).and_then(|_| root.present().map_err(e2s)) {
+            if let Err(e) = draw(&root, s, Shot::Frame { t, compact: false }).and_then(|_| Ok(root.present()?)) {
                 result = Err(e);
                 break;
             }
         }
-        if let Err(e) = stdin.write_all(&buf) {
-            result = Err(format!("writing to ffmpeg: {e}"));
+        if let Err(source) = stdin.write_all(&buf) {
+            result = Err(DrawError::FfmpegPipe { doing: "writing to", source });
             break;
         }
         on_frame();
     }
     drop(stdin);
-    let out = child.wait_with_output().map_err(|e| format!("waiting for ffmpeg: {e}"))?;
+    let out = child.wait_with_output().map_err(|source| DrawError::FfmpegPipe { doing: "waiting for", source })?;
     result?;
     if !out.status.success() {
-        return Err(format!("ffmpeg failed ({}): {}", out.status, String::from_utf8_lossy(&out.stderr).trim()));
+        return Err(DrawError::Ffmpeg { status: out.status, stderr: String::from_utf8_lossy(&out.stderr).trim().to_string() });
     }
     Ok(())
 }
@@ -868,11 +868,11 @@ pub fn strip(motion: &Motion, view: &View, count: usize, panel: (u32, u32), path
     let tmp = output::temporary_beside(path)?;
     let drawn = (|| {
         let root = BitMapBackend::new(&tmp, (panel.0 * count as u32, panel.1)).into_drawing_area();
-        root.fill(&WHITE).map_err(e2s)?;
+        root.fill(&WHITE)?;
         for (area, &t) in root.split_evenly((1, count)).iter().zip(&times) {
             draw(area, &s, Shot::Frame { t, compact: true })?;
         }
-        root.present().map_err(e2s)
+        Ok(root.present()?)
     })();
     finish(&tmp, path, drawn)
 }

@@ -76,15 +76,14 @@ mod status;
 pub mod workers;
 
 pub use results::{
-    csv_line, header_names, results_columns, results_row, Column, Provenance, Results, EXPR_SUFFIX, LEADING_COLUMNS, PROVENANCE_COLUMNS,
-    RESULT_COLUMNS,
+    csv_line, header_names, results_columns, results_row, Column, Provenance, Results, SchemaError, EXPR_SUFFIX, LEADING_COLUMNS,
+    PROVENANCE_COLUMNS, RESULT_COLUMNS,
 };
 pub use status::{PointStatus, UnknownStatus};
 pub use workers::serve_points;
 
 use std::collections::{BTreeMap, BTreeSet, HashSet, VecDeque};
 use std::fmt;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -94,19 +93,55 @@ use toml::Spanned;
 
 use skg_core::check::{self, CheckOptions, Comparison, Table};
 use skg_core::output;
-use skg_core::sbp::OperatorKind;
+use skg_core::sbp::{OperatorKind, ParseOperatorKindError};
+use skg_core::scene::provenance;
 use skg_core::scene::{
-    parse_toml, read_toml, Backend, Formulation, HessianMode, InitialVelocity, Location, Origin, Overrides, Scene, SceneFile, TomlError,
+    parse_toml, read_toml, Backend, Formulation, HessianMode, InitialVelocity, Location, Origin, Overrides, ParseBackendError,
+    ParseFormulationError, ParseInitialVelocityError, Scene, SceneError, SceneFile, TomlError,
 };
 
 /// Errors of a sweep file, a results file or the sweep driver.
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
-    /// A file could not be read or written.
+    /// A file could not be read.
     #[error("cannot read {path}: {source}")]
-    Io {
+    Read {
         /// The file.
         path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// `results.csv` could not be opened to append rows to it.
+    #[error("cannot open {path} for appending: {source}")]
+    Open {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// A file could not be written, cut back or flushed to disk (a full disk, …).
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// A directory could not be created.
+    #[error("cannot create directory {path}: {source}")]
+    CreateDir {
+        /// The directory.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// A file or directory could not be moved (`--new-results` moving earlier results aside).
+    #[error("cannot move {from} to {to}: {source}")]
+    Move {
+        /// What was moved.
+        from: PathBuf,
+        /// Where to.
+        to: PathBuf,
         /// What the system said.
         source: std::io::Error,
     },
@@ -118,7 +153,41 @@ pub enum SweepError {
         /// What is wrong.
         message: String,
     },
-    /// A results file that cannot be used as asked (layout, schema, other sweep).
+    /// The base scene, or the scene of one point (the base scene with the point's
+    /// values), is invalid ([`SweepSceneError`]; boxed, to keep every result small). Its
+    /// [`source`](std::error::Error::source) is the scene's own error, with its location
+    /// in the scene file.
+    #[error(transparent)]
+    Scene(Box<SweepSceneError>),
+    /// A value of a setting axis (`nodes`, `operator`, …) that is not a valid setting.
+    #[error("{location}: {source}")]
+    Axis {
+        /// The table of the point in the sweep file.
+        location: Location,
+        /// What is wrong with the value.
+        #[source]
+        source: AxisError,
+    },
+    /// A results file of another schema version, or without the columns every results
+    /// file has.
+    #[error("{location}: {source}")]
+    Schema {
+        /// The results file, and the row's line for a row of another schema version.
+        location: Location,
+        /// What is wrong.
+        #[source]
+        source: SchemaError,
+    },
+    /// A `status` cell of a results file that is no point status.
+    #[error("{location}: {source}")]
+    Status {
+        /// The results file, and the row's line where known.
+        location: Location,
+        /// The cell.
+        #[source]
+        source: UnknownStatus,
+    },
+    /// A results file that cannot be used as asked (layout, other sweep).
     #[error("{path}: {message}")]
     Results {
         /// The results file (or output directory).
@@ -161,8 +230,104 @@ pub enum SweepError {
     },
 }
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
-    move |source| SweepError::Io { path: path.to_path_buf(), source }
+impl SweepError {
+    /// The scene error this error wraps ([`SweepError::Scene`]), with its location in the
+    /// scene file.
+    pub fn scene_error(&self) -> Option<&SceneError> {
+        match self {
+            SweepError::Scene(e) => Some(&e.source),
+            _ => None,
+        }
+    }
+
+    fn scene(location: Location, of: SceneOf, source: SceneError) -> SweepError {
+        SweepError::Scene(Box::new(SweepSceneError { location, of, source }))
+    }
+}
+
+/// An invalid scene of a sweep: where the sweep file asks for it, which scene it is, and
+/// the scene's own error.
+#[derive(Debug, thiserror::Error)]
+#[error("{location}: {of}: {source}")]
+pub struct SweepSceneError {
+    /// Where in the sweep file: the `scene` key, or the table of the point.
+    pub location: Location,
+    /// Which scene: the base scene or a point's.
+    pub of: SceneOf,
+    /// The scene's error (its location is in the scene file).
+    #[source]
+    pub source: SceneError,
+}
+
+/// Which scene of a sweep a [`SweepError::Scene`] is about.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SceneOf {
+    /// The sweep file's `scene`, as written.
+    Base,
+    /// The base scene with the values of the point with this canonical text
+    /// ([`Point::canonical`]).
+    Point(String),
+}
+
+impl fmt::Display for SceneOf {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SceneOf::Base => f.write_str("base scene"),
+            SceneOf::Point(p) => write!(f, "point {p}"),
+        }
+    }
+}
+
+/// A value of a setting axis of a sweep that is not a valid setting ([`Point::overrides`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum AxisError {
+    /// `nodes` or `max_iter` is not a whole number.
+    #[error("{axis} = {value}: expected a whole number")]
+    WholeNumber {
+        /// The axis.
+        axis: &'static str,
+        /// The value as written.
+        value: String,
+    },
+    /// An unknown SBP operator.
+    #[error("operator = {value}: {source}")]
+    Operator {
+        /// The value as written.
+        value: String,
+        /// The operator parser's error.
+        source: ParseOperatorKindError,
+    },
+    /// An unknown formulation.
+    #[error(transparent)]
+    Formulation(#[from] ParseFormulationError),
+    /// An unknown initial-velocity condition.
+    #[error(transparent)]
+    InitialVelocity(#[from] ParseInitialVelocityError),
+    /// A Hessian mode other than `zero` and `exact`.
+    #[error("hessian = {value}: expected `zero` or `exact`")]
+    Hessian {
+        /// The value as written.
+        value: String,
+    },
+    /// An unknown backend.
+    #[error(transparent)]
+    Backend(#[from] ParseBackendError),
+}
+
+fn read_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
+    move |source| SweepError::Read { path: path.to_path_buf(), source }
+}
+
+fn open_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
+    move |source| SweepError::Open { path: path.to_path_buf(), source }
+}
+
+fn write_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
+    move |source| SweepError::Write { path: path.to_path_buf(), source }
+}
+
+fn create_dir_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
+    move |source| SweepError::CreateDir { path: path.to_path_buf(), source }
 }
 
 /// One value in a grid: a number, an integer or a string (an expression, an operator
@@ -367,23 +532,24 @@ impl Point {
     }
 
     /// The scene overrides this point stands for.
-    pub fn overrides(&self) -> Result<Overrides, String> {
+    pub fn overrides(&self) -> Result<Overrides, AxisError> {
         let mut ov = Overrides::default();
         for (k, v) in &self.values {
+            let whole = |axis: &'static str| move |_| AxisError::WholeNumber { axis, value: v.clone() };
             match k.as_str() {
-                "nodes" => ov.nodes = Some(v.parse().map_err(|_| format!("nodes = {v}: expected a whole number"))?),
-                "operator" => ov.operator = Some(v.parse::<OperatorKind>().map_err(|e| format!("operator = {v}: {e}"))?),
-                "formulation" => ov.formulation = Some(v.parse::<Formulation>().map_err(|e| e.to_string())?),
-                "initial_velocity" => ov.initial_velocity = Some(v.parse::<InitialVelocity>().map_err(|e| e.to_string())?),
+                "nodes" => ov.nodes = Some(v.parse().map_err(whole("nodes"))?),
+                "operator" => ov.operator = Some(v.parse().map_err(|source| AxisError::Operator { value: v.clone(), source })?),
+                "formulation" => ov.formulation = Some(v.parse::<Formulation>()?),
+                "initial_velocity" => ov.initial_velocity = Some(v.parse::<InitialVelocity>()?),
                 "hessian" => {
                     ov.hessian = Some(match v.to_ascii_lowercase().as_str() {
                         "zero" => HessianMode::Zero,
                         "exact" => HessianMode::Exact,
-                        _ => return Err(format!("hessian = {v}: expected `zero` or `exact`")),
+                        _ => return Err(AxisError::Hessian { value: v.clone() }),
                     })
                 }
-                "max_iter" => ov.max_iter = Some(v.parse().map_err(|_| format!("max_iter = {v}: expected a whole number"))?),
-                "backend" => ov.backend = Some(v.parse::<Backend>().map_err(|e| e.to_string())?),
+                "max_iter" => ov.max_iter = Some(v.parse().map_err(whole("max_iter"))?),
+                "backend" => ov.backend = Some(v.parse::<Backend>()?),
                 _ => ov.set.push((k.clone(), v.clone())),
             }
         }
@@ -400,10 +566,18 @@ pub struct Shard {
     pub n: usize,
 }
 
+/// A shard that is not `k/n` with 1 ≤ k ≤ n.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("bad shard `{input}`: expected k/n with 1 ≤ k ≤ n, e.g. 2/8")]
+pub struct ParseShardError {
+    /// The rejected input.
+    pub input: String,
+}
+
 impl std::str::FromStr for Shard {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        let bad = || format!("bad shard `{s}`: expected k/n with 1 ≤ k ≤ n, e.g. 2/8");
+    type Err = ParseShardError;
+    fn from_str(s: &str) -> Result<Self, ParseShardError> {
+        let bad = || ParseShardError { input: s.to_string() };
         let (k, n) = s.split_once('/').ok_or_else(bad)?;
         let (k, n): (usize, usize) = (k.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
         if n == 0 || k == 0 || k > n {
@@ -484,7 +658,7 @@ impl SweepFile {
                 f.origin = origin;
                 Ok(f)
             }
-            Err(TomlError::Io { path, error }) => Err(SweepError::Io { path, source: error }),
+            Err(TomlError::Io { path, error }) => Err(SweepError::Read { path, source: error }),
             Err(TomlError::Parse { location, mut message }) => {
                 if message.contains("expected a sequence") {
                     message.push_str(" (write each grid as `[[grid]]` and each explicit point as `[[points]]`)");
@@ -607,10 +781,8 @@ impl SweepFile {
     /// the base scene (parameter names, values, node counts) before anything runs.
     pub fn expand(&self) -> Result<Expanded, SweepError> {
         self.check_name()?;
-        let base = SceneFile::load(&self.scene_path()).map_err(|e| SweepError::Invalid {
-            location: self.origin.locate_in(&self.sweep.scene, None),
-            message: format!("base scene: {e}"),
-        })?;
+        let base = SceneFile::load(&self.scene_path())
+            .map_err(|e| SweepError::scene(self.origin.locate_in(&self.sweep.scene, None), SceneOf::Base, e))?;
         if let Some(tol) = &self.sweep.artifact_tol {
             if !(*tol.get_ref() > 0.0 && tol.get_ref().is_finite()) {
                 return Err(self.invalid(tol, format!("sweep.artifact_tol must be a positive number, got {}", tol.get_ref())));
@@ -623,7 +795,7 @@ impl SweepFile {
         }
         let mut reference_hash = None;
         if let Some(ReferenceSpec::File(p)) = self.reference() {
-            reference_hash = std::fs::read(&p).ok().map(|bytes| skg_core::scene::provenance::content_hash(&bytes));
+            reference_hash = std::fs::read(&p).ok().map(|bytes| provenance::content_hash(&bytes));
             if !p.is_file() {
                 let r = self.sweep.reference.as_ref().expect("reference given");
                 return Err(self.invalid(
@@ -730,18 +902,16 @@ impl SweepFile {
         for (values, method, loc) in raw {
             let mut p = Point { index: points.len(), values, evaluated: Vec::new(), method };
             // Validate by resolving the scene with the point's overrides (cheap: no model).
-            let ov = p.overrides().map_err(|m| SweepError::Invalid { location: loc.clone(), message: m })?;
-            let scene = base
-                .clone()
-                .resolve(&ov)
-                .map_err(|e| SweepError::Invalid { location: loc.clone(), message: format!("point {}: {e}", p.canonical()) })?;
+            let ov = p.overrides().map_err(|source| SweepError::Axis { location: loc.clone(), source })?;
+            let scene_of_point = |e| SweepError::scene(loc.clone(), SceneOf::Point(p.canonical()), e);
+            let scene = base.clone().resolve(&ov).map_err(scene_of_point)?;
             let memory = match p.method {
                 Method::Skg => skg_core::memory::check(&scene, "the solve", scene.nodes, skg_core::memory::solve_bytes(&scene)),
                 Method::Ode { .. } => {
                     skg_core::memory::check(&scene, "the reference", scene.nodes, skg_core::memory::reference_bytes(&scene, scene.nodes))
                 }
             };
-            memory.map_err(|e| SweepError::Invalid { location: loc.clone(), message: format!("point {}: {e}", p.canonical()) })?;
+            memory.map_err(scene_of_point)?;
             if seen.insert(p.id()) {
                 p.evaluated = evaluated_parameters(&p, &scene);
                 costs.push(estimated_cost(&scene, &p.method));
@@ -754,7 +924,7 @@ impl SweepFile {
         let first = base
             .clone()
             .resolve(&points[0].overrides().unwrap_or_default())
-            .map_err(|e| SweepError::Invalid { location: self.origin.whole(), message: e.to_string() })?;
+            .map_err(|e| SweepError::scene(self.origin.whole(), SceneOf::Point(points[0].canonical()), e))?;
         self.check_compare_columns(&first)?;
         let expression_axes = expression_axes(&axes, &points);
         let expanded = Expanded {
@@ -1000,16 +1170,34 @@ impl Record {
 pub fn run_job(job: &Job) -> Record {
     match run_job_inner(job) {
         Ok(r) => r,
-        Err(message) => Record::new(PointStatus::Error, message),
+        Err(e) => Record::new(PointStatus::Error, skg_core::error_text(&e)),
     }
 }
 
-fn run_job_inner(job: &Job) -> Result<Record, String> {
+/// Why one point could not be computed (the message of its `error` row), or why its
+/// errors against the reference could not be measured.
+#[derive(Debug, thiserror::Error)]
+enum PointError {
+    #[error(transparent)]
+    Axis(#[from] AxisError),
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Solve(#[from] skg_core::solve::SolveError),
+    #[error(transparent)]
+    Reference(#[from] skg_core::stepping::reference::ReferenceError),
+    #[error(transparent)]
+    Check(#[from] skg_core::check::CheckError),
+    #[error(transparent)]
+    Output(#[from] output::OutputError),
+}
+
+fn run_job_inner(job: &Job) -> Result<Record, PointError> {
     let ov = job.point.overrides()?;
     let start = Instant::now();
-    let file = SceneFile::load(&job.scene).map_err(|e| e.to_string())?;
+    let file = SceneFile::load(&job.scene)?;
     let scene_hash = file.origin.content_hash();
-    let mut scene = file.resolve(&ov).map_err(|e| e.to_string())?;
+    let mut scene = file.resolve(&ov)?;
     scene.solver.fallback &= job.fallback;
     let mut rec = Record { nodes: Some(scene.nodes), scene_hash: Some(scene_hash), ..Record::new(PointStatus::Error, String::new()) };
     let compare_cols = job.compare.clone().unwrap_or_else(|| scene.coordinates.clone());
@@ -1017,7 +1205,7 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
         Method::Skg => {
             rec.operator = Some(scene.operator.name().to_string());
             rec.formulation = Some(scene.formulation.to_string());
-            let mut outcome = skg_core::solve::solve_scene(&scene).map_err(|e| e.to_string())?;
+            let mut outcome = skg_core::solve::solve_scene(&scene)?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
             rec.status = match (outcome.converged(), outcome.trusted()) {
                 (true, true) => PointStatus::Converged,
@@ -1040,21 +1228,21 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
             rec.max_residual = Some(d.max_residual);
             rec.message = outcome.warnings.join(" | ");
             if let Some(dir) = &job.keep_dir {
-                output::write_outcome(dir, &mut outcome, &scene).map_err(|e| e.to_string())?;
+                output::write_outcome(dir, &mut outcome, &scene)?;
             }
             (outcome.trajectory, None)
         }
         Method::Ode { rtol } => {
             let (times, _) = skg_core::solve::grid(&scene);
             let opts = skg_core::stepping::reference::ReferenceOptions { rtol, atol: rtol };
-            let r = skg_core::stepping::reference::regularized(&scene, &times, &opts).map_err(|e| e.to_string())?;
+            let r = skg_core::stepping::reference::regularized(&scene, &times, &opts)?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
             rec.status = PointStatus::Converged;
             rec.solver_status = "ODE_Succeeded".into();
             (r.trajectory, Some(format!("time stepping, rtol {rtol:e}")))
         }
     };
-    let model = skg_core::model::Model::build(&scene).map_err(|e| e.to_string())?;
+    let model = skg_core::model::Model::build(&scene)?;
     if skg_core::tune::conserves_energy(&scene, &model) {
         rec.energy_artifact = Some(skg_core::tune::energy_artifact(&scene, &trajectory, job.skip_last).value);
     }
@@ -1066,16 +1254,16 @@ fn run_job_inner(job: &Job) -> Result<Record, String> {
                 rec.error_rms = c.columns.iter().find(|e| e.column == c.worst_column).map(|e| e.rms);
                 rec.error_column = Some(c.worst_column);
             }
-            Err(m) => {
+            Err(e) => {
                 if !rec.message.is_empty() {
                     rec.message.push_str(" | ");
                 }
-                rec.message.push_str(&format!("reference comparison failed: {m}"));
+                rec.message.push_str(&format!("reference comparison failed: {}", skg_core::error_text(&e)));
             }
         }
     }
     if let (Some(dir), Some(comment)) = (&job.keep_dir, ode_csv) {
-        output::write_csv(&dir.join("trajectory.csv"), Some(&comment), &solution.columns, &solution.rows).map_err(|e| e.to_string())?;
+        output::write_csv(&dir.join("trajectory.csv"), Some(&comment), &solution.columns, &solution.rows)?;
     }
     Ok(rec)
 }
@@ -1089,21 +1277,20 @@ fn reference_errors(
     solution: &Table,
     columns: &[String],
     skip_last: usize,
-) -> Result<Comparison, String> {
+) -> Result<Comparison, PointError> {
     let reference = match reference {
-        ReferenceSpec::File(p) => Table::read(p).map_err(|e| e.to_string())?,
+        ReferenceSpec::File(p) => Table::read(p)?,
         ReferenceSpec::Integrate => {
             let r = skg_core::stepping::reference::regularized(
                 scene,
                 &solution.times(),
                 &skg_core::stepping::reference::ReferenceOptions::default(),
-            )
-            .map_err(|e| e.to_string())?;
+            )?;
             Table::of_trajectory(scene, &r.trajectory)
         }
     };
     let opts = CheckOptions { skip_last, columns: Some(columns.to_vec()) };
-    check::compare(solution, &reference, &opts).map_err(|e| e.to_string())
+    Ok(check::compare(solution, &reference, &opts)?)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1197,7 +1384,7 @@ impl SweepInfo {
     /// Read `sweep.json` from a results directory.
     pub fn read(dir: &Path) -> Result<SweepInfo, SweepError> {
         let path = dir.join("sweep.json");
-        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let text = std::fs::read_to_string(&path).map_err(read_err(&path))?;
         serde_json::from_str(&text).map_err(|e| SweepError::Results { path, message: format!("not a sweep.json of this skg-solve: {e}") })
     }
 }
@@ -1243,9 +1430,10 @@ fn supersede_results(dir: &Path) -> Result<Option<PathBuf>, SweepError> {
     }
     let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
     let target = dir.join(format!("superseded-{secs}"));
-    std::fs::create_dir_all(&target).map_err(io_err(&target))?;
+    std::fs::create_dir_all(&target).map_err(create_dir_err(&target))?;
     for name in present {
-        std::fs::rename(dir.join(name), target.join(name)).map_err(io_err(&dir.join(name)))?;
+        let (from, to) = (dir.join(name), target.join(name));
+        std::fs::rename(&from, &to).map_err(|source| SweepError::Move { from, to, source })?;
     }
     Ok(Some(target))
 }
@@ -1263,7 +1451,7 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
     // Worker files left by an interrupted run are stale: start from an empty .work.
     let work = dir.join(".work");
     let _ = std::fs::remove_dir_all(&work);
-    std::fs::create_dir_all(&work).map_err(io_err(&work))?;
+    std::fs::create_dir_all(&work).map_err(create_dir_err(&work))?;
     let results_path = dir.join("results.csv");
     let (mut results, done) = results::open_results(&results_path, &header_names(&columns), &provenance, opts.retry_failed)?;
 
@@ -1320,8 +1508,7 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
         std::thread::sleep(Duration::from_millis(5));
         for (point, rec) in pool.finished()? {
             let line = csv_line(&results_row(&columns, &point, &rec, artifact_tol, &provenance));
-            results.write_all(&line).map_err(io_err(&results_path))?;
-            results.sync_data().map_err(io_err(&results_path))?;
+            results::append(&mut results, &results_path, &line)?;
             report.ran += 1;
             if !rec.status.is_converged() {
                 report.failed += 1;

@@ -11,7 +11,38 @@ use skg_core::output;
 use skg_core::scene::provenance;
 use skg_core::scene::Location;
 
-use crate::{io_err, Method, Point, PointStatus, Record, SweepError};
+use crate::{open_err, read_err, write_err, Method, Point, PointStatus, Record, SweepError, UnknownStatus};
+
+/// A results file that this skg-solve does not read: written before results.csv had a
+/// schema version, with a row of another schema version, or not a results file at all.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SchemaError {
+    /// The header has a `status` column but no `schema_version` (results schema 1).
+    #[error(
+        "has no `schema_version` column: it was written before results.csv had a schema version (results schema 1), \
+         and this skg-solve {} reads results schema {} only: run the sweep again into a new directory",
+        provenance::VERSION,
+        provenance::SCHEMA_VERSION
+    )]
+    Unversioned,
+    /// The header has no `status` column.
+    #[error("no `status` column (columns: {}): not a sweep's results.csv", columns.join(", "))]
+    NotResults {
+        /// The header's columns.
+        columns: Vec<String>,
+    },
+    /// A row of another schema version.
+    #[error(
+        "row of results schema {found}; this skg-solve {} reads results schema {} only: run the sweep again into a new \
+         directory, or read it with the skg-solve that wrote it",
+        provenance::VERSION,
+        provenance::SCHEMA_VERSION
+    )]
+    OtherVersion {
+        /// The row's `schema_version` cell.
+        found: String,
+    },
+}
 
 /// Where a sweep's rows come from. Every row of `results.csv` carries these three
 /// columns, and `sweep.json` records them too.
@@ -228,7 +259,7 @@ impl Results {
     /// Read a results.csv (or a directory holding one).
     pub fn read(path: &Path) -> Result<Results, SweepError> {
         let path = if path.is_dir() { path.join("results.csv") } else { path.to_path_buf() };
-        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let text = std::fs::read_to_string(&path).map_err(read_err(&path))?;
         Self::parse(&text, &path)
     }
 
@@ -237,14 +268,14 @@ impl Results {
         let bad = |m: String| SweepError::Results { path: path.to_path_buf(), message: m };
         let mut r = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text.as_bytes());
         let header: Vec<String> = r.headers().map_err(|e| bad(e.to_string()))?.iter().map(str::to_string).collect();
-        let (schema, status) = schema_and_status_columns(&header).map_err(bad)?;
+        let file = Location::file(path.display().to_string());
+        let (schema, status) = schema_and_status_columns(&header).map_err(|source| SweepError::Schema { location: file, source })?;
         let mut rows = Vec::new();
         for rec in r.records() {
             let rec = rec.map_err(|e| bad(e.to_string()))?;
             let location = Location { file: path.display().to_string(), line: rec.position().map(|p| p.line() as usize), col: None };
-            let at = |message: String| SweepError::Invalid { location: location.clone(), message };
-            check_schema_version(&rec[schema]).map_err(at)?;
-            rec[status].parse::<PointStatus>().map_err(|e| at(e.to_string()))?;
+            check_schema_version(&rec[schema]).map_err(|source| SweepError::Schema { location: location.clone(), source })?;
+            rec[status].parse::<PointStatus>().map_err(|source| SweepError::Status { location, source })?;
             rows.push(rec.iter().map(str::to_string).collect());
         }
         Ok(Results { path: path.to_path_buf(), header, rows })
@@ -261,7 +292,9 @@ impl Results {
     /// How the point of a row ended (its `status` cell).
     pub fn status(&self, row: &[String]) -> Result<PointStatus, SweepError> {
         let i = self.require_column("status")?;
-        row[i].parse().map_err(|e: crate::status::UnknownStatus| SweepError::Results { path: self.path.clone(), message: e.to_string() })
+        row[i]
+            .parse()
+            .map_err(|source: UnknownStatus| SweepError::Status { location: Location::file(self.path.display().to_string()), source })
     }
 
     /// The `<column>_expr` column that keeps `column`'s values as written, if any.
@@ -313,30 +346,20 @@ impl Results {
 
 /// Positions of the `schema_version` and `status` columns; a file without them predates
 /// the schema versions of results.csv.
-fn schema_and_status_columns(header: &[String]) -> Result<(usize, usize), String> {
+fn schema_and_status_columns(header: &[String]) -> Result<(usize, usize), SchemaError> {
     let find = |name: &str| header.iter().position(|h| h == name);
     match (find("schema_version"), find("status")) {
         (Some(schema), Some(status)) => Ok((schema, status)),
-        (None, Some(_)) => Err(format!(
-            "has no `schema_version` column: it was written before results.csv had a schema version (results schema 1), \
-             and this skg-solve {} reads results schema {} only: run the sweep again into a new directory",
-            provenance::VERSION,
-            provenance::SCHEMA_VERSION
-        )),
-        _ => Err(format!("no `status` column (columns: {}): not a sweep's results.csv", header.join(", "))),
+        (None, Some(_)) => Err(SchemaError::Unversioned),
+        _ => Err(SchemaError::NotResults { columns: header.to_vec() }),
     }
 }
 
-fn check_schema_version(cell: &str) -> Result<(), String> {
+fn check_schema_version(cell: &str) -> Result<(), SchemaError> {
     if cell == provenance::SCHEMA_VERSION.to_string() {
         Ok(())
     } else {
-        Err(format!(
-            "row of results schema {cell}; this skg-solve {} reads results schema {} only: run the sweep again into a new \
-             directory, or read it with the skg-solve that wrote it",
-            provenance::VERSION,
-            provenance::SCHEMA_VERSION
-        ))
+        Err(SchemaError::OtherVersion { found: cell.to_string() })
     }
 }
 
@@ -351,18 +374,17 @@ pub(crate) fn open_results(
     expected: &Provenance,
     retry_failed: bool,
 ) -> Result<(std::fs::File, HashSet<String>), SweepError> {
-    let mut f = std::fs::OpenOptions::new().read(true).append(true).create(true).open(path).map_err(io_err(path))?;
+    let mut f = std::fs::OpenOptions::new().read(true).append(true).create(true).open(path).map_err(open_err(path))?;
     let mut text = Vec::new();
-    f.read_to_end(&mut text).map_err(io_err(path))?;
+    f.read_to_end(&mut text).map_err(read_err(path))?;
     let complete = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
     if complete < text.len() {
-        f.set_len(complete as u64).map_err(io_err(path))?;
-        f.seek(SeekFrom::End(0)).map_err(io_err(path))?;
+        f.set_len(complete as u64).map_err(write_err(path))?;
+        f.seek(SeekFrom::End(0)).map_err(write_err(path))?;
         text.truncate(complete);
     }
     if text.is_empty() {
-        f.write_all(&csv_line(header)).map_err(io_err(path))?;
-        f.sync_data().map_err(io_err(path))?;
+        append(&mut f, path, &csv_line(header))?;
         return Ok((f, HashSet::new()));
     }
     let text = String::from_utf8_lossy(&text);
@@ -397,10 +419,18 @@ pub(crate) fn open_results(
                 w.write_all(&csv_line(header))?;
                 existing.rows.iter().try_for_each(|row| w.write_all(&csv_line(row)))
             })?;
-            f = std::fs::OpenOptions::new().append(true).open(path).map_err(io_err(path))?;
+            f = std::fs::OpenOptions::new().append(true).open(path).map_err(open_err(path))?;
         }
     }
     Ok((f, existing.ids()))
+}
+
+/// Append `bytes` (whole lines) to the results file `path`, open as `file`, and flush
+/// them to disk: a row is in results.csv once this returns (a failure, such as a full
+/// disk, is an error naming the file as written to).
+pub(crate) fn append(file: &mut std::fs::File, path: &Path, bytes: &[u8]) -> Result<(), SweepError> {
+    file.write_all(bytes).map_err(write_err(path))?;
+    file.sync_data().map_err(write_err(path))
 }
 
 /// How the columns `found` differ from `expected`: the missing ones, the extra ones,
@@ -437,5 +467,19 @@ mod tests {
             let e = Results::parse(&text, Path::new("r.csv")).unwrap_err().to_string();
             assert!(e.starts_with(&expected), "expected `{expected}…`, got: {e}");
         }
+    }
+
+    /// A full disk while a row is appended is reported as a failed write of results.csv
+    /// (`/dev/full` fails every write with ENOSPC).
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_failed_append_is_reported_as_a_write() {
+        let mut full = std::fs::OpenOptions::new().append(true).open("/dev/full").expect("/dev/full");
+        let path = Path::new("out/sweeps/demo/results.csv");
+        let err = append(&mut full, path, b"a,b\n").unwrap_err();
+        let SweepError::Write { path: named, source } = &err else { panic!("expected a write error, got {err:?}") };
+        assert_eq!(named, path);
+        assert_eq!(source.kind(), std::io::ErrorKind::StorageFull, "{err}");
+        assert!(err.to_string().starts_with("cannot write out/sweeps/demo/results.csv: "), "{err}");
     }
 }

@@ -39,7 +39,7 @@ use std::time::Instant;
 
 use skg_core::output;
 
-use crate::{io_err, run_job, Expanded, Job, Point, PointStatus, Record, SweepError};
+use crate::{read_err, run_job, Expanded, Job, Point, PointStatus, Record, SweepError};
 
 /// Lines of a crashed worker's log quoted in its point's message.
 const TAIL_LINES: usize = 3;
@@ -58,13 +58,13 @@ fn is_point_id(id: &str) -> bool {
 /// `WORK/<id>.job.json` and write `WORK/<id>.result.json` (module documentation).
 pub fn serve_points(work: &Path, ids: impl BufRead) -> Result<(), SweepError> {
     for line in ids.lines() {
-        let line = line.map_err(io_err(Path::new("<stdin>")))?;
+        let line = line.map_err(read_err(Path::new("<stdin>")))?;
         let id = line.trim();
         if !is_point_id(id) {
             return Err(SweepError::Results { path: work.to_path_buf(), message: format!("`{id}` on stdin is not a point id") });
         }
         let (job_path, result_path) = point_files(work, id);
-        let text = std::fs::read_to_string(&job_path).map_err(io_err(&job_path))?;
+        let text = std::fs::read_to_string(&job_path).map_err(read_err(&job_path))?;
         let job: Job = serde_json::from_str(&text)
             .map_err(|e| SweepError::Results { path: job_path.clone(), message: format!("not a job of this skg-solve: {e}") })?;
         output::write_json(&result_path, &run_job(&job))?;

@@ -11,6 +11,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use skg_plot::motion::{self, Aspect, Format, Frames, Motion, View};
 
+use super::ArgError;
+
 /// What `plot path` and `animate` draw: a solution, its scene and the two axes.
 #[derive(Args)]
 pub struct MotionArgs {
@@ -91,8 +93,8 @@ pub struct AnimateArgs {
     pub quiet: bool,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("bad size `{s}`: expected WIDTHxHEIGHT, e.g. 640x480, each 64…4096");
+fn parse_size(s: &str) -> Result<(u32, u32), ArgError> {
+    let bad = || ArgError::Size(s.to_string());
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
     let (w, h): (u32, u32) = (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?);
     if !(64..=4096).contains(&w) || !(64..=4096).contains(&h) {

@@ -126,19 +126,42 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
     Ok(SceneFile::load(path)?.resolve(ov)?)
 }
 
+/// A command-line value that clap refuses (a usage error, exit status 2); clap prints
+/// it after the option's name and value.
+#[derive(Debug, thiserror::Error)]
+pub enum ArgError {
+    /// Not a number at all.
+    #[error("`{text}` is not a number: {source}")]
+    NotANumber {
+        /// The value as given.
+        text: String,
+        /// The parser's error.
+        source: std::num::ParseFloatError,
+    },
+    /// A number that must be finite and positive.
+    #[error("must be a positive number, got {0}")]
+    NotPositive(String),
+    /// A number that must be finite and not negative.
+    #[error("must be a number ≥ 0, got {0}")]
+    Negative(String),
+    /// A picture size that is not `WIDTHxHEIGHT` within 64…4096.
+    #[error("bad size `{0}`: expected WIDTHxHEIGHT, e.g. 640x480, each 64…4096")]
+    Size(String),
+}
+
 /// A command-line number that must be finite and positive (a usage error otherwise).
-fn positive(text: &str) -> Result<f64, String> {
+fn positive(text: &str) -> Result<f64, ArgError> {
     let x = number(text)?;
-    (x > 0.0 && x.is_finite()).then_some(x).ok_or_else(|| format!("must be a positive number, got {text}"))
+    (x > 0.0 && x.is_finite()).then_some(x).ok_or_else(|| ArgError::NotPositive(text.to_string()))
 }
 
 /// A command-line number that must be finite and not negative (a usage error otherwise).
-fn non_negative(text: &str) -> Result<f64, String> {
+fn non_negative(text: &str) -> Result<f64, ArgError> {
     let x = number(text)?;
-    (x >= 0.0 && x.is_finite()).then_some(x).ok_or_else(|| format!("must be a number ≥ 0, got {text}"))
+    (x >= 0.0 && x.is_finite()).then_some(x).ok_or_else(|| ArgError::Negative(text.to_string()))
 }
 
 /// A command-line number, or clap's message for a value that is not one.
-fn number(text: &str) -> Result<f64, String> {
-    text.parse().map_err(|e| format!("`{text}` is not a number: {e}"))
+fn number(text: &str) -> Result<f64, ArgError> {
+    text.parse().map_err(|source| ArgError::NotANumber { text: text.to_string(), source })
 }

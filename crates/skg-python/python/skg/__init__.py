@@ -19,6 +19,9 @@ command line does, and errors carry its messages.
   and returns a :class:`SweepResult`.
 * Errors are subclasses of :class:`skg.Error` (:class:`SceneError` is also a
   ``ValueError``).
+* Statuses are string-valued enums (:class:`SolveStatus`, :class:`SolverStatus`,
+  :class:`VerifyStatus`, :class:`PointStatus`, :class:`ReferenceKind`): each member is
+  the string summary.json and results.csv write, so ``sol.status == "converged"`` holds.
 
 The GIL is released while Rust computes, so other Python threads run meanwhile. Solves
 in several threads are safe but run one at a time (Debian's Ipopt is not thread-safe;
@@ -51,6 +54,7 @@ from ._errors import (
     SweepError,
     WorkerNotFound,
 )
+from ._status import PointStatus, ReferenceKind, SolverStatus, SolveStatus, VerifyStatus, _member_or_str, _typed_summary
 
 __all__ = [
     "solve",
@@ -63,6 +67,11 @@ __all__ = [
     "Solution",
     "Reference",
     "SweepResult",
+    "SolveStatus",
+    "SolverStatus",
+    "VerifyStatus",
+    "PointStatus",
+    "ReferenceKind",
     "Error",
     "SceneError",
     "SolveError",
@@ -130,12 +139,15 @@ class Trajectory:
         self._index = {c: i for i, c in enumerate(self.columns)}
 
     def __len__(self) -> int:
+        """The number of nodes."""
         return len(self.t)
 
     def __contains__(self, name: object) -> bool:
+        """Whether the trajectory has a column of this name."""
         return name in self._index
 
     def __getitem__(self, name: str) -> np.ndarray:
+        """A column by its CSV name, e.g. ``traj["x_dot"]`` (KeyError lists the columns)."""
         try:
             return self.table[:, self._index[name]]
         except KeyError:
@@ -155,6 +167,7 @@ class Trajectory:
         return pd.DataFrame(self.table, columns=self.columns)
 
     def __repr__(self) -> str:
+        """The class, the scene (when known), the nodes, the time span and the columns."""
         name = f"{self.scene!r}, " if self.scene else ""
         return f"<{type(self).__name__} {name}{len(self)} nodes, t = {self.t[0]:g} … {self.t[-1]:g}, columns {self.columns}>"
 
@@ -206,7 +219,11 @@ def read_trajectory(path: PathLike) -> Trajectory:
 class Solution(Trajectory):
     """The result of :func:`solve`: the trajectory (see :class:`Trajectory`) and its summary.
 
-    * ``summary``: the content of summary.json (a dict), e.g. ``summary["timings"]``;
+    * ``summary``: the content of summary.json (a dict), e.g. ``summary["timings"]``,
+      its statuses as enum members (:class:`SolveStatus`, :class:`SolverStatus`,
+      :class:`VerifyStatus`; equal to the strings of the file);
+    * ``status``, ``solver_status``, ``verification_status``: how the solve ended, the
+      finishing backend's status and the verification's verdict;
     * ``verification``: ``summary["verification"]`` (``status``, ``max_error``,
       ``errors`` per coordinate, ``tolerance``, ``reason``, ...);
     * ``converged``: the solve converged; ``trusted``: converged and verified (the
@@ -222,26 +239,45 @@ class Solution(Trajectory):
     def __init__(self, native: Any):
         super().__init__(native.trajectory())
         self._native = native
-        self.summary: Dict[str, Any] = native.summary()
+        self.summary: Dict[str, Any] = _typed_summary(native.summary())
         ref = native.reference()
         self.reference: Optional[Trajectory] = Trajectory(ref) if ref is not None else None
 
     @property
     def converged(self) -> bool:
+        """Whether the solve converged (``status`` is :attr:`SolveStatus.CONVERGED`)."""
         return bool(self._native.converged)
 
     @property
     def trusted(self) -> bool:
+        """Converged and verified, or verification switched off: the command line's exit
+        status 0."""
         return bool(self._native.trusted)
 
     @property
     def verification(self) -> Dict[str, Any]:
+        """``summary["verification"]``: ``status`` (a :class:`VerifyStatus`), ``max_error``,
+        ``errors`` per coordinate, ``tolerance``, ``reason``, ..."""
         return self.summary["verification"]
 
     @property
-    def status(self) -> str:
-        """``converged``, ``residual_too_large`` or ``not_converged``."""
+    def status(self) -> SolveStatus:
+        """How the solve ended: :class:`SolveStatus` ``converged``, ``residual_too_large``
+        or ``not_converged`` (``summary["solve_status"]``)."""
         return self.summary["solve_status"]
+
+    @property
+    def solver_status(self) -> SolverStatus:
+        """The status of the backend that finished, e.g. ``Solve_Succeeded`` or
+        ``Newton_Converged`` (:class:`SolverStatus`, ``summary["status"]``); its text is
+        ``summary["status_text"]``."""
+        return self.summary["status"]
+
+    @property
+    def verification_status(self) -> VerifyStatus:
+        """The verification's verdict: :class:`VerifyStatus` ``passed``, ``failed``,
+        ``unverified`` or ``skipped``."""
+        return self.summary["verification"]["status"]
 
     @property
     def method(self) -> Dict[str, Any]:
@@ -255,10 +291,12 @@ class Solution(Trajectory):
 
     @property
     def warnings(self) -> List[str]:
+        """The solve's warnings (also issued as :class:`SolveWarning` by :func:`solve`)."""
         return self.summary["warnings"]
 
     @property
     def timings(self) -> Dict[str, float]:
+        """Wall times of the solve's stages, in seconds (``summary["timings"]``)."""
         return self.summary["timings"]
 
     def write(self, directory: PathLike) -> List[Path]:
@@ -268,7 +306,7 @@ class Solution(Trajectory):
         paths written. Raises :class:`OutputError` when another skg-solve (or skg) is
         writing into the directory."""
         paths = [Path(p) for p in self._native.write(str(directory))]
-        self.summary = self._native.summary()
+        self.summary = _typed_summary(self._native.summary())
         return paths
 
     def raise_for_status(self) -> "Solution":
@@ -288,6 +326,7 @@ class Solution(Trajectory):
         return self
 
     def __repr__(self) -> str:
+        """The scene, status, verdict, error, nodes, operator and formulation."""
         v = self.verification
         err = v.get("max_error")
         err_text = f", max error {err:.2e}" if isinstance(err, (int, float)) else ""
@@ -307,10 +346,11 @@ class Reference(Trajectory):
         super().__init__(native.trajectory())
         self._native = native
         self.info: Dict[str, Any] = native.info()
+        self.info["kind"] = _member_or_str(ReferenceKind, self.info["kind"])
 
     @property
-    def kind(self) -> str:
-        """``regularized`` or ``hard-wall``."""
+    def kind(self) -> ReferenceKind:
+        """:class:`ReferenceKind` ``regularized`` or ``hard-wall``."""
         return self.info["kind"]
 
     @property
@@ -466,9 +506,16 @@ def find_skg_solve(exe: Optional[PathLike] = None) -> Path:
     )
 
 
-def _column_array(cells: List[str]) -> np.ndarray:
-    """A results column as an array: float (blank → NaN) when every cell is a number,
-    bool when every cell is true/false, else str."""
+#: Columns of results.csv that hold statuses, and their enums.
+_STATUS_COLUMNS = {"status": PointStatus, "solver_status": SolverStatus, "verification": VerifyStatus}
+
+
+def _column_array(cells: List[str], enum: Optional[type] = None) -> np.ndarray:
+    """A results column as an array: members of ``enum`` for a status column (blank and
+    unknown cells stay strings), float (blank → NaN) when every cell is a number, bool when
+    every cell is true/false, else str."""
+    if enum is not None:
+        return np.array([_member_or_str(enum, c) for c in cells], dtype=object)
     if all(c in ("true", "false") for c in cells) and cells:
         return np.array([c == "true" for c in cells])
     try:
@@ -479,7 +526,9 @@ def _column_array(cells: List[str]) -> np.ndarray:
 
 class SweepResult:
     """The rows of a sweep's results.csv: ``results[column]`` is a NumPy array (numbers
-    as float with NaN for blank cells, true/false as bool, text as str), ``to_pandas()``
+    as float with NaN for blank cells, true/false as bool, text as str; the columns
+    ``status``, ``solver_status`` and ``verification`` hold :class:`PointStatus`,
+    :class:`SolverStatus` and :class:`VerifyStatus` members), ``to_pandas()``
     the DataFrame; ``directory``, ``path``; ``report`` what the run did (``total``,
     ``in_shard``, ``ran``, ``skipped``, ``failed``, ``duplicates``, ``wall_s``,
     ``estimate_s`` (the rough estimate made before), ``jobs``, ``superseded`` (where
@@ -490,12 +539,16 @@ class SweepResult:
         self.directory = path.parent
         self.columns = list(header)
         self.report: Dict[str, Any] = dict(report or {})
-        self.results: Dict[str, np.ndarray] = {c: _column_array([r[i] for r in rows]) for i, c in enumerate(header)}
+        self.results: Dict[str, np.ndarray] = {
+            c: _column_array([r[i] for r in rows], _STATUS_COLUMNS.get(c)) for i, c in enumerate(header)
+        }
 
     def __len__(self) -> int:
+        """The number of rows (points)."""
         return len(next(iter(self.results.values()))) if self.results else 0
 
     def __getitem__(self, column: str) -> np.ndarray:
+        """A column by name, as an array (KeyError lists the columns)."""
         try:
             return self.results[column]
         except KeyError:
@@ -507,6 +560,7 @@ class SweepResult:
         return pd.read_csv(self.path)
 
     def __repr__(self) -> str:
+        """The results file and its number of rows."""
         return f"<SweepResult {self.path}: {len(self)} rows>"
 
 
