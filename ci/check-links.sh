@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Checks the documentation's links: every relative link and image in README.md and
+# Checks the documentation's links: every relative link and image in README.md, CONTRIBUTING.md, CHANGELOG.md and
 # docs/*.md must point to an existing file or directory, and every #anchor into a
 # Markdown file must name one of its headings (GitHub's heading slugs). Also checks that
 # repository paths quoted in the text (scenarios/…, references/…, ci/…, docs/…,
@@ -10,7 +10,7 @@ if ! command -v python3 >/dev/null 2>&1; then
     echo "check-links: python3 is needed" >&2
     exit 1
 fi
-python3 - README.md docs/*.md <<'EOF'
+python3 - README.md CONTRIBUTING.md CHANGELOG.md docs/*.md <<'EOF'
 import os, re, sys
 
 def strip_code_blocks(text):
