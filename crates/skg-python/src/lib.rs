@@ -255,10 +255,10 @@ fn solve_scene(
             (outcome, Some(written))
         }
         None => {
-            // Ipopt's log is relative to an output directory, and there is none.
-            let log = scene.solver.log_file.take();
+            // Ipopt's log is relative to an output directory, and there is none: a solve
+            // that owns no directory writes no log.
             let mut outcome = py.detach(|| solve::solve_scene(&scene)).map_err(|e| solve_err(py, &e))?;
-            if let Some(name) = log {
+            if let Some(name) = &scene.solver.log_file {
                 outcome
                     .warnings
                     .push(format!("the scene's [solver] log_file ({}) is written only by a solve into a directory (out=)", name.display()));

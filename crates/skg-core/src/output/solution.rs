@@ -14,7 +14,7 @@ use super::pairing::DataFile;
 use super::{io_err, OutputError, REFERENCE_FILE, SUMMARY_FILE, TRAJECTORY_FILE};
 use crate::discrete::trajectory::{trajectory_header, trajectory_rows};
 use crate::scene::provenance;
-use crate::scene::Scene;
+use crate::scene::{Scene, SceneError};
 use crate::solve::{self, Outcome, SolveError};
 use crate::stepping::reference::{self, Reference};
 
@@ -143,11 +143,12 @@ pub fn solve_into_with_progress(
     scene: &mut Scene,
     progress: &mut dyn FnMut(&str),
 ) -> Result<(Outcome, Written), SolveIntoError> {
+    refuse_log_over_run_files(scene)?;
     let out = OutputDir::lock(dir)?;
     let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
-    let named = std::mem::replace(&mut scene.solver.log_file, log.as_ref().map(|(_, staged)| staged.clone()));
+    scene.solver.ipopt_log = log.as_ref().map(|(_, staged)| staged.clone());
     let outcome = solve::solve_scene_with_progress(scene, progress);
-    scene.solver.log_file = named;
+    scene.solver.ipopt_log = None;
     if let Some((target, staged)) = &log {
         out.commit(staged, target)?;
     }
@@ -160,6 +161,17 @@ pub fn solve_into_with_progress(
     };
     let written = write_outcome(dir, &mut outcome, scene)?;
     Ok((outcome, written))
+}
+
+/// A scene's `log_file` may not name one of the files the solve itself writes in the
+/// output directory (the resolution of the scene already confined it to that directory).
+fn refuse_log_over_run_files(scene: &Scene) -> Result<(), SolveError> {
+    let (Some(name), Some(spanned)) = (&scene.solver.log_file, &scene.file.solver.log_file) else { return Ok(()) };
+    if [TRAJECTORY_FILE, REFERENCE_FILE, SUMMARY_FILE].iter().any(|f| name == Path::new(f)) {
+        let message = format!("solver.log_file may not be {}, which the solve itself writes", name.display());
+        return Err(SceneError::Invalid { location: scene.file.origin.locate_in(spanned, None), message }.into());
+    }
+    Ok(())
 }
 
 /// Write a reference as a trajectory CSV with its provenance ([`reference::provenance`])

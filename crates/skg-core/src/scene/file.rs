@@ -155,8 +155,8 @@ pub struct SolverSpec {
     pub linear_solver: Option<Spanned<String>>,
     /// The Hessian given to Ipopt (default zero).
     pub hessian: Option<Spanned<HessianMode>>,
-    /// Ipopt log file, relative to the output directory.
-    pub log_file: Option<String>,
+    /// Ipopt log file, relative to the output directory (and confined to it).
+    pub log_file: Option<Spanned<String>>,
     /// Further Ipopt options passed through verbatim, e.g. `mumps_pivot_order = 0`.
     #[serde(default)]
     pub ipopt: IndexMap<String, Spanned<IpoptValue>>,

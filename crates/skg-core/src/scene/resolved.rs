@@ -25,9 +25,15 @@ pub struct SolverSettings {
     pub linear_solver: Option<String>,
     /// The Hessian given to Ipopt.
     pub hessian: HessianMode,
-    /// Ipopt's log file; the scene gives it relative to the output directory and the
-    /// caller of the solve joins it to that directory.
+    /// Ipopt's log file as the scene names it: a relative path that stays inside the
+    /// output directory (checked when the scene is resolved). Only a solve into an output
+    /// directory writes it, by setting [`SolverSettings::ipopt_log`].
     pub log_file: Option<PathBuf>,
+    /// Where Ipopt writes its log in this process, if anywhere: never set from a scene
+    /// file, only by the caller that owns the output directory (a solve into a locked
+    /// directory stages the scene's `log_file` there).
+    #[serde(skip)]
+    pub ipopt_log: Option<PathBuf>,
     /// Further Ipopt options, passed through verbatim.
     pub ipopt: IndexMap<String, IpoptValue>,
     /// Whether a failed or unverified solve tries the fallback ladder (the solve's last

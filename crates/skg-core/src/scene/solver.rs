@@ -1,12 +1,13 @@
 //! The solver's settings of a scene (`[solver]`) and its verification settings
 //! (`[verify]`), with the command line's overrides.
 
-use std::path::PathBuf;
+use std::path::{Component, Path, PathBuf};
 
 use indexmap::IndexMap;
+use toml::Spanned;
 
 use super::error::SceneError;
-use super::file::SceneFile;
+use super::file::{IpoptValue, SceneFile};
 use super::overrides::Overrides;
 use super::resolved::{SolverSettings, VerifySettings};
 use super::settings::{Formulation, HessianMode};
@@ -43,10 +44,57 @@ impl SceneFile {
             print_level,
             linear_solver: s.linear_solver.as_ref().map(|l| l.get_ref().clone()),
             hessian,
-            log_file: s.log_file.as_ref().map(PathBuf::from),
-            ipopt: s.ipopt.iter().map(|(k, v)| (k.clone(), v.get_ref().clone())).collect(),
+            log_file: s.log_file.as_ref().map(|l| self.confined_log_file(l)).transpose()?,
+            ipopt_log: None,
+            ipopt: self.pass_through_options()?,
             fallback: !ov.no_fallback && s.fallback.unwrap_or(true),
         })
+    }
+
+    /// `[solver] log_file` as a path relative to the output directory, refused unless it
+    /// stays inside it: a scene file is shared and downloaded, and must not be able to
+    /// write anywhere else. Only plain names are allowed (no `..`, no root, no `.`), none
+    /// of them hidden (the directory's lock and temporary files start with a dot).
+    fn confined_log_file(&self, name: &Spanned<String>) -> Result<PathBuf, SceneError> {
+        let text = name.get_ref();
+        let path = Path::new(text);
+        let plain = |c: Component| matches!(c, Component::Normal(n) if !n.to_string_lossy().starts_with('.'));
+        if text.is_empty() || text.ends_with('/') || !path.components().all(plain) {
+            return Err(self.invalid(
+                name,
+                format!(
+                    "solver.log_file must be a file name inside the output directory (like \"ipopt.log\" or \"logs/ipopt.log\": \
+                     no absolute path, no `..`, no name starting with a dot), got {text:?}"
+                ),
+            ));
+        }
+        Ok(path.to_path_buf())
+    }
+
+    /// `[solver.ipopt]`, passed to Ipopt verbatim once checked: no option that names a
+    /// file (Ipopt would open it wherever it points: `output_file` truncates it,
+    /// `option_file_name` reads it; the log has `[solver] log_file`), and no non-finite
+    /// number.
+    fn pass_through_options(&self) -> Result<IndexMap<String, IpoptValue>, SceneError> {
+        let mut options = IndexMap::new();
+        for (key, value) in &self.solver.ipopt {
+            if names_a_file(key) {
+                return Err(self.invalid(
+                    value,
+                    format!(
+                        "[solver.ipopt] {key} names a file, which a scene may not (Ipopt would open it wherever it points); \
+                         Ipopt's log goes to [solver] log_file, inside the output directory"
+                    ),
+                ));
+            }
+            if let IpoptValue::Num(x) = value.get_ref() {
+                if !x.is_finite() {
+                    return Err(self.invalid(value, format!("[solver.ipopt] {key} must be a finite number, got {x}")));
+                }
+            }
+            options.insert(key.clone(), value.get_ref().clone());
+        }
+        Ok(options)
     }
 
     /// `[verify] tol` with the command line's overrides.
@@ -67,4 +115,12 @@ impl SceneFile {
         }
         Ok(VerifySettings { enabled: !ov.no_verify, tol })
     }
+}
+
+/// Whether an Ipopt option names a file: `output_file`, `option_file_name`, and any
+/// option of another Ipopt version whose name says it does (`…_file`, `…file_name`, a
+/// library path `…lib` like 3.14's `hsllib`). `file_print_level` names a level.
+fn names_a_file(option: &str) -> bool {
+    let option = option.to_ascii_lowercase();
+    option.ends_with("_file") || option.ends_with("file_name") || option.ends_with("lib")
 }

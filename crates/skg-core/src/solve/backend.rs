@@ -477,7 +477,7 @@ fn ipopt_options(scene: &Scene) -> ipopt::Options {
         max_iter: solver.max_iter,
         print_level: solver.print_level,
         linear_solver: solver.linear_solver.clone(),
-        output_file: solver.log_file.clone(),
+        output_file: solver.ipopt_log.clone(),
         // MUMPS's default scaling (77, automatic) made the very first factorization of
         // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
         // on Debian's MUMPS 5.5). MUMPS's automatic pivot order picks SCOTCH, whose
