@@ -1,5 +1,7 @@
-//! Sweeps: grid expansion, clear errors on bad sweep files, sharding and merge, resume
-//! after a killed run, and the σ auto-selection.
+//! Sweeps from the command line: clear errors on bad sweep files, sharding and merge,
+//! resume after a killed run, the results' columns, and the `tune` command. (The
+//! expansion of a sweep file is tested in crates/skg-sweep/tests/grid.rs, the choice of
+//! σ in crates/skg-core/tests/tune.rs.)
 
 mod common;
 
@@ -8,62 +10,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use skg_core::scene::{Overrides, SceneFile};
-use skg_core::tune::{self, TuneOptions};
-use skg_sweep::{Method, PointStatus, Results, Shard, SweepFile};
+use skg_sweep::{PointStatus, Results, Shard, SweepFile};
 
 /// Write a sweep file into `dir` whose base scene is the shipped `scene`.
 fn sweep_file(dir: &Path, scene: &str, body: &str) -> PathBuf {
     common::sweep_file(dir, &common::scenario(scene), body)
-}
-
-#[test]
-fn grid_expansion_products_points_and_peer() {
-    let dir = tempfile::tempdir().unwrap();
-    let p = sweep_file(
-        dir.path(),
-        "tumbler",
-        r#"
-[[grid]]
-nodes = [64, 128]
-operator = ["SBP121", "SBP242", "SBP363"]
-sigma = "1/80"
-
-[[grid]]
-sigma = ["1/110", 0.005]
-
-[[points]]
-nodes = 256
-sigma = "1/200"
-
-[[points]]     # the same point as the first of the first grid: dropped
-sigma = "1/80"
-operator = "SBP121"
-nodes = 64
-
-[peer]
-tolerances = [1e-6, 1e-9]
-"#,
-    );
-    let f = SweepFile::load(&p).unwrap();
-    let e = f.expand().unwrap();
-    assert_eq!(e.points.len(), 6 + 2 + 1 + 2);
-    assert_eq!(e.duplicates, 1);
-    assert_eq!(e.axes, vec!["nodes", "operator", "sigma"]);
-    // The first axis varies slowest.
-    let first: Vec<(&str, &str)> = e.points[..3].iter().map(|p| (p.value("nodes").unwrap(), p.value("operator").unwrap())).collect();
-    assert_eq!(first, vec![("64", "SBP121"), ("64", "SBP242"), ("64", "SBP363")]);
-    assert_eq!(e.points[3].value("nodes"), Some("128"));
-    assert_eq!(e.points[7].value("sigma"), Some("0.005"));
-    assert_eq!(e.points[8].value("sigma"), Some("1/200"));
-    assert_eq!(e.points[9].method, Method::Ode { rtol: 1e-6 });
-    // Indices are positions; ids are unique and stable.
-    for (k, p) in e.points.iter().enumerate() {
-        assert_eq!(p.index, k);
-    }
-    let ids: HashSet<String> = e.points.iter().map(|p| p.id()).collect();
-    assert_eq!(ids.len(), e.points.len());
-    assert_eq!(f.expand().unwrap().points[4].id(), e.points[4].id());
 }
 
 #[test]
@@ -359,24 +310,10 @@ fn merge_error(dir: &Path, input: &Path) -> String {
     common::text(&o)
 }
 
+/// The `tune` command reports its choice of σ on the tumbler at N = 256 (the choice
+/// itself is tested against the paper's in crates/skg-core/tests/tune.rs).
 #[test]
-fn sigma_auto_selection_reproduces_the_papers_choice() {
-    // Tumbler at N = 256: artifacts appear between sigma = 1/120 and 1/110 (docs/solver.md),
-    // so the smallest artifact-free width at the default tolerance lies in between.
-    let file = SceneFile::load(&common::scenario("tumbler")).unwrap();
-    let opts = TuneOptions { lo: Some(1.0 / 160.0), hi: Some(1.0 / 90.0), rel: 0.03, ..TuneOptions::default() };
-    let mut seen = 0;
-    let r = tune::tune_width(&file, &Overrides::default(), &opts, |_| seen += 1).unwrap();
-    assert_eq!(r.param, "sigma");
-    assert_eq!(seen, r.steps.len());
-    assert!(r.chosen > 1.0 / 120.0 && r.chosen <= 1.0 / 108.0, "chosen 1/{:.1}", 1.0 / r.chosen);
-    let failing = r.failing.unwrap();
-    assert!(r.chosen / failing < 1.0 + opts.rel + 1e-12);
-    // Every step is consistent with the choice (monotone artifact).
-    for s in &r.steps {
-        assert_eq!(s.ok, s.value >= r.chosen, "{s:?}");
-    }
-    // The CLI reports the choice.
+fn tune_command_reports_the_choice() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("tune.json");
     let o = common::skg(
@@ -603,7 +540,8 @@ fn resuming_a_results_file_without_a_newer_column_names_it() {
 
 /// An `initial_velocity` axis: its own column in results.csv, each point solved with its
 /// condition (the natural one more accurate on SBP484, as against the closed form in
-/// tests/initial_velocity.rs), and the work-precision chart draws one line per condition.
+/// crates/skg-core/tests/initial_velocity.rs), and the work-precision chart draws one
+/// line per condition.
 #[test]
 fn an_initial_velocity_axis_gets_its_column_and_its_chart_lines() {
     let dir = tempfile::tempdir().unwrap();

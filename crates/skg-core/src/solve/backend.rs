@@ -144,6 +144,21 @@ impl NewtonReport {
     }
 }
 
+/// What Ipopt did in a solve (with `backend = "ipopt"`, or after Newton handed over):
+/// its iterations and the evaluations of our callbacks it asked for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct IpoptReport {
+    /// Ipopt's iterations.
+    pub iterations: usize,
+    /// Residual evaluations (Ipopt's constraint callback; the recomputation of the
+    /// residual at the returned point included).
+    pub residual_evaluations: usize,
+    /// Evaluations of the Jacobian's values.
+    pub jacobian_evaluations: usize,
+    /// Evaluations of the Hessian's values (0 unless the exact Hessian is given).
+    pub hessian_evaluations: usize,
+}
+
 /// Which backend ran, and how.
 #[derive(Debug, Clone, Serialize)]
 pub struct BackendReport {
@@ -153,6 +168,8 @@ pub struct BackendReport {
     pub newton: Option<NewtonReport>,
     /// Whether Newton failed and Ipopt solved the system from the same start.
     pub handed_over_to_ipopt: bool,
+    /// Ipopt's iterations and evaluations, when Ipopt ran.
+    pub ipopt: Option<IpoptReport>,
 }
 
 /// The root of the square system as a backend found it (whatever its status).
@@ -318,7 +335,7 @@ fn solve_problem<P: Problem>(
     problem: &mut P,
     x0: &[f64],
 ) -> Result<SystemSolution, BackendError> {
-    let mut report = BackendReport { requested: settings.backend, newton: None, handed_over_to_ipopt: false };
+    let mut report = BackendReport { requested: settings.backend, newton: None, handed_over_to_ipopt: false, ipopt: None };
     let (mut total_s, mut evaluation_s) = (0.0, 0.0);
     if settings.backend == Backend::Newton {
         let mut analysis_s = 0.0;
@@ -358,6 +375,13 @@ fn solve_problem<P: Problem>(
     }
     let mut stopping = StopWhenSolved::new(problem, settings.ipopt.tol);
     let sol = ipopt::solve(&mut stopping, x0, &settings.ipopt)?;
+    let calls = |stat: ipopt::EvalStat| stat.calls as usize;
+    report.ipopt = Some(IpoptReport {
+        iterations: sol.iterations,
+        residual_evaluations: calls(sol.eval.constraints),
+        jacobian_evaluations: calls(sol.eval.jacobian),
+        hessian_evaluations: calls(sol.eval.hessian),
+    });
     Ok(SystemSolution {
         status: stopping.status(sol.status),
         max_residual: sol.max_constraint_violation,

@@ -37,7 +37,7 @@
 use std::time::Instant;
 
 use super::error::SolveError;
-use super::outcome::{Attempt, Method, Outcome};
+use super::outcome::{Attempt, Method, Outcome, Work};
 use super::piece::{grid, Guess};
 use super::run::{solve_global, Run};
 use super::window::{self, WindowGrid};
@@ -71,7 +71,7 @@ pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
 pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
     memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
     let model = Model::build(scene)?;
-    let mut ladder = Ladder { scene, model: &model, tried: Vec::new(), progress };
+    let mut ladder = Ladder { scene, model: &model, tried: Vec::new(), progress, preliminary: Work::default(), unlisted: Work::default() };
     let go_on = match scene.windows {
         Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, w))?,
         None => ladder.attempt("one global solve", || solve_global(scene, &Guess::TimeStepping))?,
@@ -105,6 +105,11 @@ struct Ladder<'a> {
     model: &'a Model,
     tried: Vec<Tried>,
     progress: &'a mut dyn FnMut(&str),
+    /// The work of the solves run so far for the next attempt (a coarse grid, wider
+    /// walls): it is counted in that attempt's work.
+    preliminary: Work,
+    /// The work of preliminary solves that led to no attempt (they did not converge).
+    unlisted: Work,
 }
 
 impl Ladder<'_> {
@@ -119,10 +124,22 @@ impl Ladder<'_> {
         self.announce(description);
         let start = Instant::now();
         let run = run()?;
-        let outcome = super::run::outcome(self.scene, self.model, run);
+        let mut outcome = super::run::outcome(self.scene, self.model, run);
+        outcome.work.add(&std::mem::take(&mut self.preliminary));
         let go_on = !ends_the_ladder(&outcome);
         self.tried.push(Tried { description: description.to_string(), outcome, wall_s: start.elapsed().as_secs_f64() });
         Ok(go_on)
+    }
+
+    /// Count a preliminary solve's work in the next attempt's.
+    fn preliminary(&mut self, run: &Run) {
+        self.preliminary.add(&run.solution.work);
+    }
+
+    /// The preliminary solves lead to no attempt: their work counts in the whole solve's
+    /// only.
+    fn set_aside_preliminary(&mut self) {
+        self.unlisted.add(&std::mem::take(&mut self.preliminary));
     }
 
     /// Whether the last attempt ends the ladder ([`ends_the_ladder`]).
@@ -140,8 +157,10 @@ impl Ladder<'_> {
         let coarse_scene = Scene { nodes: coarse_nodes, ..scene.clone() };
         self.announce(&format!("coarse to fine (solving on {coarse_nodes} nodes first)"));
         let coarse = solve_global(&coarse_scene, &Guess::TimeStepping)?;
+        self.preliminary(&coarse);
         let coarse = coarse.solution;
         if !coarse.status.is_converged() {
+            self.set_aside_preliminary();
             return Ok(false);
         }
         let (times, _) = grid(scene);
@@ -167,6 +186,7 @@ impl Ladder<'_> {
             let mut wide = scene.clone();
             wide.walls.iter_mut().for_each(|w| w.width *= factor);
             let run = solve_global(&wide, &guess)?;
+            self.preliminary(&run);
             if run.solution.status.is_converged() {
                 guess = Guess::States {
                     q: run.solution.trajectory.q,
@@ -176,7 +196,10 @@ impl Ladder<'_> {
                 widest_converged = Some(factor);
             }
         }
-        let Some(last) = widest_converged else { return Ok(false) };
+        let Some(last) = widest_converged else {
+            self.set_aside_preliminary();
+            return Ok(false);
+        };
         self.attempt(&format!("wall-width continuation (σ × {:?} down to × {last}, then the scene's σ)", WIDTH_FACTORS), || {
             solve_global(scene, &guess)
         })?;
@@ -221,8 +244,12 @@ impl Ladder<'_> {
         let windows_tried = self.tried.iter().any(|t| matches!(t.outcome.method, Method::Windows { .. }));
         // Summed from +0.0: an empty sum of f64 is −0.0, which summary.json would print.
         let others_s: f64 = attempts.iter().filter(|a| !a.chosen).map(|a| a.wall_s).fold(0.0, |s, x| s + x);
+        let mut work = self.unlisted;
+        work.add(&self.preliminary);
+        attempts.iter().for_each(|a| work.add(&a.work));
         let mut outcome = self.tried.swap_remove(chosen).outcome;
         outcome.timings.other_attempts_s = others_s;
+        outcome.work = work;
         outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &outcome, fallback_used, windows_tried));
         outcome.attempts = attempts;
         outcome
@@ -266,6 +293,7 @@ fn record(t: &Tried, chosen: bool) -> Attempt {
         verification: o.converged().then_some(v.status),
         max_error: v.max_error,
         iterations: o.iterations,
+        work: o.work,
         wall_s: t.wall_s,
         chosen,
     }

@@ -39,7 +39,7 @@ pub mod window;
 pub use backend::SquareSolver;
 pub use error::{SolveError, WindowError};
 pub use ladder::{solve_scene, solve_scene_with_progress};
-pub use outcome::{Attempt, Diagnostics, KineticLoss, Method, Outcome, Settings, Sizes, Timings};
+pub use outcome::{Attempt, Diagnostics, KineticLoss, Method, Outcome, Settings, Sizes, Timings, Work};
 pub use piece::{build_action, build_action_on, grid, solve_piece, Guess, Piece};
 pub use run::{outcome, sizes, solve_global, Run};
 pub use status::{SolveStatus, CONVERGED_RESIDUAL};

@@ -10,6 +10,7 @@ use super::backend::BackendReport;
 use super::status::SolveStatus;
 use crate::discrete::Trajectory;
 use crate::scene::{Backend, Formulation, HessianMode, InitialVelocity};
+use crate::stepping::ode::OdeStats;
 use crate::stepping::verify::{Verification, VerifyStatus};
 use skg_ipopt as ipopt;
 
@@ -76,6 +77,70 @@ impl Timings {
             + self.verification_s
             + self.other_attempts_s
             + self.output_s
+    }
+}
+
+/// Counts of the work a solve did: how many systems it solved, the backends'
+/// iterations and evaluations, and the steps of its time steppings. Unlike the
+/// [`Timings`] they do not depend on the machine's speed, and for the same build they
+/// are the same from run to run (Ipopt with MUMPS's AMF ordering is deterministic,
+/// docs/solver.md), so a change that makes a solve do more work shows in them; the
+/// snapshot test `crates/skg-core/tests/solver_work.rs` pins them for the shipped
+/// scenes. (`summary.json`: `work`, and `work` of each attempt.)
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Work {
+    /// Discrete systems solved: 1 for a global solve, one per window.
+    pub systems: usize,
+    /// Newton steps (`backend = "newton"`).
+    pub newton_iterations: usize,
+    /// Ipopt iterations (`backend = "ipopt"`, or after Newton handed over).
+    pub ipopt_iterations: usize,
+    /// Residual evaluations of both backends (Newton's line-search trials and Ipopt's
+    /// recomputation at the returned point included).
+    pub residual_evaluations: usize,
+    /// Jacobian evaluations of both backends (each of Newton's is followed by one numeric
+    /// LU factorization).
+    pub jacobian_evaluations: usize,
+    /// Hessian evaluations (Ipopt with `hessian = "exact"`).
+    pub hessian_evaluations: usize,
+    /// The time stepping of the initial guesses: accepted and rejected steps and
+    /// right-hand-side evaluations (not counted when it failed and the guess fell back to
+    /// constant-velocity extrapolation).
+    pub guess_steps: OdeStats,
+    /// The time stepping of the verification's reference (not counted when it failed or
+    /// verification was off).
+    pub verification_steps: OdeStats,
+}
+
+impl Work {
+    /// The work of one solve of a system: its backends' counts (Newton's and, when it
+    /// ran, Ipopt's) and the time stepping of its initial guess.
+    pub fn of_system(backend: &BackendReport, guess_steps: OdeStats) -> Work {
+        let mut work = Work { systems: 1, guess_steps, ..Work::default() };
+        if let Some(n) = &backend.newton {
+            work.newton_iterations = n.iterations;
+            work.residual_evaluations += n.stats.residual_evaluations;
+            work.jacobian_evaluations += n.stats.jacobian_evaluations;
+        }
+        if let Some(i) = &backend.ipopt {
+            work.ipopt_iterations = i.iterations;
+            work.residual_evaluations += i.residual_evaluations;
+            work.jacobian_evaluations += i.jacobian_evaluations;
+            work.hessian_evaluations += i.hessian_evaluations;
+        }
+        work
+    }
+
+    /// Add another part's work (the windows of a run, the attempts of a ladder).
+    pub fn add(&mut self, other: &Work) {
+        self.systems += other.systems;
+        self.newton_iterations += other.newton_iterations;
+        self.ipopt_iterations += other.ipopt_iterations;
+        self.residual_evaluations += other.residual_evaluations;
+        self.jacobian_evaluations += other.jacobian_evaluations;
+        self.hessian_evaluations += other.hessian_evaluations;
+        self.guess_steps.add(&other.guess_steps);
+        self.verification_steps.add(&other.verification_steps);
     }
 }
 
@@ -225,6 +290,10 @@ pub struct Outcome {
     pub sizes: Sizes,
     /// Where the time went.
     pub timings: Timings,
+    /// The work of the whole solve: every attempt of the fallback ladder (each attempt's
+    /// own is in [`Attempt::work`]) and the preliminary solves the ladder ran without
+    /// listing them as attempts (a coarse grid or wider walls that did not converge).
+    pub work: Work,
     /// Checks of the solution.
     pub diagnostics: Diagnostics,
     /// Suspicions about the solution (spurious critical point, residual too large, …).
@@ -270,6 +339,9 @@ pub struct Attempt {
     pub max_error: Option<f64>,
     /// Iterations of the backend that finished.
     pub iterations: usize,
+    /// Its work: its run, the verification, and the preliminary solves it started from
+    /// (the coarse grid of coarse to fine, the wider walls of the continuation).
+    pub work: Work,
     /// Wall time, seconds.
     pub wall_s: f64,
     /// Whether its trajectory is the one reported.

@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use super::backend::{BackendError, BackendReport, SolverStatus, SquareSolver};
 use super::error::SolveError;
-use super::outcome::Timings;
+use super::outcome::{Timings, Work};
 use super::status::{SolveStatus, CONVERGED_RESIDUAL};
 use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::discrete::Action;
@@ -24,7 +24,7 @@ use crate::model::{Model, Physical};
 use crate::sbp::SbpOperator;
 use crate::scene::{Formulation, Scene, SceneError};
 use crate::stepping::equations::{integrate_model, min_spacing, step_budget};
-use crate::stepping::ode::OdeOptions;
+use crate::stepping::ode::{OdeOptions, OdeStats};
 use skg_ipopt as ipopt;
 
 /// Node times of a scene's grid.
@@ -91,6 +91,9 @@ pub struct Piece {
     pub guess: String,
     /// Time of the guess and of the backend (setup and output are not a piece's).
     pub timings: Timings,
+    /// Its work: the backends' counts and the guess's time stepping (the verification's
+    /// is added by [`outcome`](super::run::outcome)).
+    pub work: Work,
 }
 
 /// Solve the discrete system of `action` (nodes at `times`) from `guess` with `solver`,
@@ -99,7 +102,7 @@ pub struct Piece {
 pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, times: &[f64], guess: &Guess) -> Result<Piece, SolveError> {
     let t_guess = Instant::now();
     let mut warnings = Vec::new();
-    let (z0, guess_desc, ts_q) = initial_guess(action, times, guess, &mut warnings);
+    let (z0, guess_desc, ts_q, guess_steps) = initial_guess(action, times, guess, &mut warnings);
     check_initial_guess(scene, action, times, &z0, &guess_desc, &warnings)?;
     let initial_guess_s = t_guess.elapsed().as_secs_f64();
 
@@ -119,6 +122,7 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     let at_round_off =
         solution.status.is_round_off() && max_residual > CONVERGED_RESIDUAL && solver.equations_at_round_off(action, z, CONVERGED_RESIDUAL);
     Ok(Piece {
+        work: Work::of_system(&solution.report, guess_steps),
         status: SolveStatus::classify(solution.status, max_residual, at_round_off),
         iterations: solution.iterations,
         history: solution.history,
@@ -144,11 +148,17 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
 }
 
 /// Initial point Z0 and a description of how it was made; also the time-stepping
-/// coordinates when the guess made them (for the spurious-solution check).
-fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut Vec<String>) -> (Vec<f64>, String, Option<NodeSeries>) {
+/// coordinates when the guess made them (for the spurious-solution check) and the work
+/// of that time stepping.
+fn initial_guess(
+    action: &Action,
+    times: &[f64],
+    guess: &Guess,
+    warnings: &mut Vec<String>,
+) -> (Vec<f64>, String, Option<NodeSeries>, OdeStats) {
     let (d, n) = (action.layout.d, action.layout.n);
-    let (q, lambda, desc, ts_q) = match guess {
-        Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None),
+    let (q, lambda, desc, ts_q, steps) = match guess {
+        Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None, OdeStats::default()),
         Guess::TimeStepping => {
             // With walls, steps at most the node spacing: a larger step can jump across a
             // thin wall that the error estimate never sees (free flight is integrated
@@ -160,21 +170,22 @@ fn initial_guess(action: &Action, times: &[f64], guess: &Guess, warnings: &mut V
             let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps: step_budget(times.len()), ..OdeOptions::default() };
             let (q0, v0) = (action.q0(), action.v0());
             match integrate_model(&action.model, q0, v0, times, &opts) {
-                Ok((States { q, lambda, .. }, _)) => (
+                Ok((States { q, lambda, .. }, steps)) => (
                     q.clone(),
                     lambda,
                     "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
                     Some(q),
+                    steps,
                 ),
                 Err(e) => {
                     warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
                     let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
-                    (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None)
+                    (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None, OdeStats::default())
                 }
             }
         }
     };
-    (point_from_states(action, &q, &lambda), desc, ts_q)
+    (point_from_states(action, &q, &lambda), desc, ts_q, steps)
 }
 
 /// Refuse an initial guess with a value that is not finite, naming the node, the state

@@ -57,6 +57,8 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
     let mut verification = verify::verify(scene, model, &run.trajectory);
     let mut timings = run.timings.clone();
     timings.verification_s = t.elapsed().as_secs_f64();
+    let mut work = run.work;
+    work.verification_steps.add(&verification.steps);
     let diagnostics = diagnose(model, &run);
     let mut warnings = suspicions(&diagnostics, run.time_stepping_q.as_deref(), run.status);
     if let Some(newton) = run.backend.newton.as_ref().filter(|_| run.backend.handed_over_to_ipopt) {
@@ -82,6 +84,7 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
         settings: settings(scene, &run.trajectory.t, run.guess),
         sizes,
         timings,
+        work,
         diagnostics,
         warnings,
         attempts: Vec::new(),

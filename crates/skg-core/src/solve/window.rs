@@ -27,7 +27,7 @@ use std::time::Instant;
 
 use super::backend::{BackendReport, SquareSolver};
 use super::error::{SolveError, WindowError};
-use super::outcome::{Method, Timings};
+use super::outcome::{Method, Timings, Work};
 use super::piece::{build_action_on, grid, solve_piece, Guess, Piece};
 use super::run::{sizes, Run};
 use crate::discrete::contact;
@@ -79,6 +79,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
     let sizes = sizes(scene, &action, &solver);
     let mut timings = Timings::zero();
     timings.setup_s = t_setup.elapsed().as_secs_f64();
+    let mut work = Work::default();
 
     let total = scene.nodes;
     let mut trajectory = Trajectory::empty();
@@ -96,6 +97,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
         action.set_window(times[0], &q0, &v0);
         let piece = solve_piece(scene, &action, &mut solver, &times, &Guess::TimeStepping)?;
         timings.add(&piece.timings);
+        work.add(&piece.work);
         iterations += piece.iterations;
         history.extend(piece.history);
         if backend.as_ref().is_none_or(|b| piece.backend.handed_over_to_ipopt && !b.handed_over_to_ipopt) {
@@ -147,6 +149,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
         guess: "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) from each window's initial state"
             .into(),
         timings,
+        work,
     };
     Ok(Run { method, sizes, solution })
 }

@@ -551,9 +551,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         }
         ts.extend_from_slice(&times[states.len()..]);
         let (sol, hit) = integrate_phase(&model, contact.map(|(j, _)| j), &y, &ts, &ode_opts)?;
-        stats.accepted += sol.stats.accepted;
-        stats.rejected += sol.stats.rejected;
-        stats.rhs_evals += sol.stats.rhs_evals;
+        stats.add(&sol.stats);
         let skip = usize::from(!first);
         states.extend(sol.states.into_iter().skip(skip));
         first = false;

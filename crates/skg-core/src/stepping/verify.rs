@@ -40,7 +40,7 @@ use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
 use crate::scene::Scene;
 use crate::stepping::equations::{integrate_model, min_spacing, step_budget, STEPS_PER_NODE};
-use crate::stepping::ode::{OdeError, OdeOptions};
+use crate::stepping::ode::{OdeError, OdeOptions, OdeStats};
 
 /// Relative tolerance of the time-stepping reference.
 pub const REFERENCE_RTOL: f64 = 1e-10;
@@ -126,6 +126,10 @@ pub struct Verification {
     /// The reference at the nodes (written as `reference.csv`).
     #[serde(skip)]
     pub reference_trajectory: Option<Trajectory>,
+    /// The work of the reference's time stepping (zero when it did not run or failed);
+    /// summary.json reports it in the solve's `work` ([`Work`](crate::solve::Work)).
+    #[serde(skip)]
+    pub steps: OdeStats,
 }
 
 impl Verification {
@@ -162,6 +166,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
         reason: String::new(),
         wall_resolution: IndexMap::new(),
         reference_trajectory: None,
+        steps: OdeStats::default(),
     };
     if let Some(bad) = first_non_finite(scene, tr) {
         return Verification { status: VerifyStatus::Failed, reason: bad, ..base };
@@ -179,8 +184,8 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
     let reference = format!(
         "time stepping of the same scene (DOP853, rtol {REFERENCE_RTOL:e}, atol {REFERENCE_ATOL:e}, step at most the node spacing) at the solve's nodes"
     );
-    let states = match integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts) {
-        Ok((states, _)) => states,
+    let (states, steps) = match integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts) {
+        Ok(integrated) => integrated,
         Err(e) => {
             return Verification {
                 status: VerifyStatus::Unverified,
@@ -242,6 +247,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
         reason,
         wall_resolution: contact::resolution(model, &reference_trajectory),
         reference_trajectory: Some(reference_trajectory),
+        steps,
         ..base
     }
 }

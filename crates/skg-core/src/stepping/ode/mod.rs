@@ -84,6 +84,16 @@ pub struct OdeStats {
     pub rhs_evals: usize,
 }
 
+impl OdeStats {
+    /// Add another integration's counts (the pieces of one time stepping, or the time
+    /// steppings of one solve).
+    pub fn add(&mut self, other: &OdeStats) {
+        self.accepted += other.accepted;
+        self.rejected += other.rejected;
+        self.rhs_evals += other.rhs_evals;
+    }
+}
+
 /// Why the right-hand side `f(t, y)` could not be evaluated: the caller's message (e.g.
 /// "the constrained mass matrix is singular"), or a non-finite derivative.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -3,8 +3,8 @@
 //! error against the hard-wall reference as σ shrinks (the paper's Fig. 3, centre).
 //!
 //! The tolerances come from the measured study in docs/validation.md ("Convergence against the
-//! references"): `cargo test --release --test regression -- --ignored --nocapture
-//! measure` prints that table again.
+//! references"): `cargo test --release -p skg-core --test regression -- --ignored
+//! --nocapture measure` prints that table again.
 
 mod common;
 

@@ -10,7 +10,7 @@
 //! hour on 2 cores) is the ignored test, with the count and seed from the environment:
 //!
 //! ```sh
-//! SKG_FUZZ_MUTANTS=100000 SKG_FUZZ_SEED=1 cargo test -p skg-cli --test fuzz -- --ignored --nocapture
+//! SKG_FUZZ_MUTANTS=100000 SKG_FUZZ_SEED=1 cargo test -p skg-core --test fuzz -- --ignored --nocapture
 //! ```
 //!
 //! A failure names the seed and the mutant's number and writes the mutant's text to

@@ -1,13 +1,12 @@
-//! Exit 0 only for a verified trajectory. One test per failure class of a global solve
-//! (damping, contraction, a contact near the end, non-finite numbers, friction with a
-//! stop, a stiff wall), each on a scene written for the tests (tests/scenes): the plain
-//! solve is caught (exit 4, or 3) where that is the honest answer, and the fallback
-//! ladder's remedy passes verification. Truth is a closed form or time stepping at a
-//! tight tolerance, never the solver's own earlier output.
+//! Trusted only when verified. One test per failure class of a global solve (damping,
+//! contraction, a contact near the end, friction with a stop, a stiff wall), each on a
+//! scene written for the tests (crates/skg-core/tests/scenes): the plain solve is caught
+//! (not trusted: the command line exits 4, or 3, as crates/skg-cli/tests/exit_status.rs
+//! checks) where that is the honest answer, and the fallback ladder's remedy passes
+//! verification. Truth is a closed form or time stepping at a tight tolerance, never the
+//! solver's own earlier output.
 
 mod common;
-
-use std::path::Path;
 
 use skg_core::check::{self, CheckOptions, Table};
 use skg_core::discrete::trajectory::{trajectory_header, trajectory_rows};
@@ -26,7 +25,8 @@ fn solve(name: &str, ov: &Overrides) -> (Scene, Outcome) {
     (scene, o)
 }
 
-/// The damped oscillator's closed form (tests/scenes/damped_oscillator.toml).
+/// The damped oscillator's closed form
+/// (crates/skg-core/tests/scenes/damped_oscillator.toml).
 fn damped_exact(t: f64) -> Vec<f64> {
     let (m, k, c, x0, v0) = (1.0_f64, 4.0_f64, 3.0_f64, 1.0_f64, 0.0_f64);
     let w = (k / m - c * c / (4.0 * m * m)).sqrt();
@@ -142,50 +142,6 @@ fn a_stiff_tumbler_wall_converges_at_256_nodes() {
     assert!(o.converged());
 }
 
-#[test]
-fn non_finite_numbers_at_the_start_are_an_input_error_naming_the_expression() {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = common::test_scene("nan_at_start");
-    let o = common::skg(&[scene.to_str().unwrap(), "-o", "out"], dir.path());
-    let t = common::text(&o);
-    assert_eq!(o.status.code(), Some(1), "{t}");
-    assert!(t.contains("nan_at_start.toml:4:") && t.contains("not finite at the initial state") && t.contains("x = -1"), "{t}");
-}
-
-#[test]
-fn exit_status_says_converged_and_verified() {
-    let dir = tempfile::tempdir().unwrap();
-    let damped = common::test_scene("damped_oscillator");
-    let damped = damped.to_str().unwrap();
-    let run = |args: &[&str]| common::skg(args, dir.path());
-
-    let o = run(&[damped, "-o", "plain", "--no-fallback"]);
-    let t = common::text(&o);
-    assert_eq!(o.status.code(), Some(4), "{t}");
-    assert!(t.contains("verification failed") && t.contains("remedy:") && t.contains("--window"), "{t}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("plain/summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["verification"]["status"], "failed");
-    assert!(dir.path().join("plain/reference.csv").is_file());
-
-    let o = run(&[damped, "-o", "cured"]);
-    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
-    let o = run(&[damped, "-o", "cured2", "--window", "1.25"]);
-    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
-    assert!(common::text(&o).contains("windows of 1.2"), "{}", common::text(&o));
-    let o = run(&[damped, "-o", "unchecked", "--no-fallback", "--no-verify"]);
-    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
-    assert!(!dir.path().join("unchecked/reference.csv").exists());
-
-    let tumbler = common::scenario("tumbler");
-    let o = run(&[tumbler.to_str().unwrap(), "-o", "short", "--max-iter", "1", "--no-fallback"]);
-    assert_eq!(o.status.code(), Some(3), "{}", common::text(&o));
-    // An option value out of range is a usage error.
-    let o = run(&[damped, "-o", "x", "--verify-tol", "0"]);
-    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
-    assert!(Path::new(dir.path()).join("short/summary.json").is_file());
-}
-
 /// Windows agree with the global solve where both run: the tumbler's drum over 2 s
 /// (8 bounces) and the rolling disk over four revolutions, each within its tolerance of
 /// tight time stepping and of each other.
@@ -240,8 +196,8 @@ fn the_remedy_after_a_failed_ladder_names_only_untried_steps_that_apply() {
 
 /// A scene none of the shipped ones resembles: a ball rolling on a spinning turntable
 /// (two nonholonomic constraints, Euler angles). Its centre circles at 2/7 of the
-/// turntable's rate (closed form in tests/scenes/turntable_ball.toml); both backends
-/// verify and follow the closed form over one whole circle.
+/// turntable's rate (closed form in crates/skg-core/tests/scenes/turntable_ball.toml);
+/// both backends verify and follow the closed form over one whole circle.
 #[test]
 fn a_ball_on_a_turntable_circles_at_two_sevenths_of_the_rotation() {
     let w = 2.0 / 7.0;
@@ -258,11 +214,12 @@ fn a_ball_on_a_turntable_circles_at_two_sevenths_of_the_rotation() {
 }
 
 /// A wall 3200 times thinner than the distance travelled between nodes
-/// (tests/scenes/thin_wall.toml). Time stepping must bounce off it however large its
-/// steps may be, so the verification's reference is the true motion `min(t, 2 − t)`.
-/// The grid cannot resolve the wall, so the solve must not exit 0. (Before the
-/// integrator's wall bound, the reference stepped over the wall as the solve did, and
-/// the run was "verified" with max error 0 while the particle ended 2 m from the truth.)
+/// (crates/skg-core/tests/scenes/thin_wall.toml). Time stepping must bounce off it
+/// however large its steps may be, so the verification's reference is the true motion
+/// `min(t, 2 − t)`. The grid cannot resolve the wall, so the solve must not be trusted
+/// (exit 4: crates/skg-cli/tests/exit_status.rs). (Before the integrator's wall bound,
+/// the reference stepped over the wall as the solve did, and the run was "verified" with
+/// max error 0 while the particle ended 2 m from the truth.)
 #[test]
 fn a_wall_thinner_than_a_step_is_not_stepped_over_by_the_verification() {
     let (scene, o) = solve("thin_wall", &Overrides::default());
@@ -274,18 +231,14 @@ fn a_wall_thinner_than_a_step_is_not_stepped_over_by_the_verification() {
     }
     // The verification measured the solve against that reference: its error is the true one.
     assert_estimate_matches(&o, true_error(&o, truth), "thin wall");
-    let out = tempfile::tempdir().unwrap();
-    let path = common::test_scene("thin_wall");
-    let run = common::skg(&[path.to_str().unwrap(), "-o", out.path().to_str().unwrap()], Path::new("."));
-    assert_eq!(run.status.code(), Some(4), "{}", common::text(&run));
 }
 
-/// A small coordinate beside a large one (tests/scenes/rotor_and_spring.toml): with the
-/// default tolerance each coordinate is judged on its own range. On 160 nodes the spring
-/// is off by 4 cm against an amplitude of 1 cm while the rotor is exact; the largest
-/// range (1000 rad) would have allowed 0.1 everywhere and the run exited 0. Now it is
-/// refused, and on 2048 nodes it passes with the spring within its tolerance of the
-/// closed form.
+/// A small coordinate beside a large one
+/// (crates/skg-core/tests/scenes/rotor_and_spring.toml): with the default tolerance each
+/// coordinate is judged on its own range. On 160 nodes the spring is off by 4 cm against
+/// an amplitude of 1 cm while the rotor is exact; the largest range (1000 rad) would have
+/// allowed 0.1 everywhere and the run exited 0. Now it is refused, and on 2048 nodes it
+/// passes with the spring within its tolerance of the closed form.
 #[test]
 fn each_coordinate_is_verified_on_its_own_scale() {
     let truth = |t: f64| vec![100.0 * t, 0.01 * (20.0 * t).cos()];
@@ -302,12 +255,12 @@ fn each_coordinate_is_verified_on_its_own_scale() {
     assert!(x_error(&fine) <= fine.verification.tolerances["x"], "x error {:e}", x_error(&fine));
 }
 
-/// A converged solve whose verification cannot run (tests/scenes/stiff_overdamped.toml:
-/// explicit time stepping exceeds its step budget) ends the ladder at once: every rung
-/// would be verified against the same time stepping at the same nodes. The remedy names
-/// --no-verify. The solve itself is close to the closed form: within 2 % of the motion's
-/// range of 0.01 (the fast initial layer of 1e-3 s lies inside the first of its 1.6 s
-/// steps; measured 1.1e-4).
+/// A converged solve whose verification cannot run
+/// (crates/skg-core/tests/scenes/stiff_overdamped.toml: explicit time stepping exceeds
+/// its step budget) ends the ladder at once: every rung would be verified against the
+/// same time stepping at the same nodes. The remedy names --no-verify. The solve itself
+/// is close to the closed form: within 2 % of the motion's range of 0.01 (the fast
+/// initial layer of 1e-3 s lies inside the first of its 1.6 s steps; measured 1.1e-4).
 #[test]
 fn a_solve_whose_reference_cannot_run_ends_the_ladder_at_once() {
     let (c, k, m) = (1e4_f64, 1.0_f64, 1.0_f64);
@@ -334,11 +287,11 @@ fn tune_refuses_a_scene_with_wall_friction() {
     assert!(e.contains("has wall friction") && e.contains("energy artifact"), "{e}");
 }
 
-/// The last nodes are verified too (tests/scenes/contact_at_the_end.toml). Solved past
-/// the end time, the run is within the tolerance everywhere but at the last two nodes,
-/// where the contact meets the end of the span; it exited 0 when the verification left
-/// them out. Now it is refused, and its largest error against tight time stepping lies
-/// at one of those nodes.
+/// The last nodes are verified too
+/// (crates/skg-core/tests/scenes/contact_at_the_end.toml). Solved past the end time, the
+/// run is within the tolerance everywhere but at the last two nodes, where the contact
+/// meets the end of the span; it exited 0 when the verification left them out. Now it is
+/// refused, and its largest error against tight time stepping lies at one of those nodes.
 #[test]
 fn the_final_state_is_verified() {
     let (scene, o) = solve("contact_at_the_end", &Overrides::default());
@@ -367,11 +320,12 @@ fn a_span_that_does_not_converge_is_not_lengthened() {
     assert!(methods.iter().any(|m| m.starts_with("windows")), "{methods:?}");
 }
 
-/// A block stopped by friction on a floor (tests/scenes/friction_stop.toml). At rest the
-/// regularized friction is a stiff damper: with the default ε = 1e-3 m/s the solve on 256
-/// nodes fails, and the remedy names friction_velocity. With ε = 1e-2 the same kind of
-/// grid verifies, and the block stops where Coulomb friction stops it, v0²/(2 μ g), to the
-/// regularization's error (about ε²/(μ g) = 3e-5 m).
+/// A block stopped by friction on a floor
+/// (crates/skg-core/tests/scenes/friction_stop.toml). At rest the regularized friction is
+/// a stiff damper: with the default ε = 1e-3 m/s the solve on 256 nodes fails, and the
+/// remedy names friction_velocity. With ε = 1e-2 the same kind of grid verifies, and the
+/// block stops where Coulomb friction stops it, v0²/(2 μ g), to the regularization's
+/// error (about ε²/(μ g) = 3e-5 m).
 #[test]
 fn a_block_stopped_by_friction_names_friction_velocity_and_is_cured_by_it() {
     let (_, stiff) = solve("friction_stop", &Overrides::default());
@@ -390,10 +344,10 @@ fn a_block_stopped_by_friction_names_friction_velocity_and_is_cured_by_it() {
     assert!((x_end - stop).abs() < 1e-4, "x at the end {x_end}, Coulomb friction stops at {stop}");
 }
 
-/// A bounce the grid does not resolve (tests/scenes/two_walls.toml: the ball turns
-/// about 1.3 σ short of each wall and at N = 1024 crosses a contact's length in about
-/// 0.6 grid steps). The solve is refused, and the remedy names the grid that resolves
-/// the contacts, which then verifies against time stepping.
+/// A bounce the grid does not resolve (crates/skg-core/tests/scenes/two_walls.toml: the
+/// ball turns about 1.3 σ short of each wall and at N = 1024 crosses a contact's length
+/// in about 0.6 grid steps). The solve is refused, and the remedy names the grid that
+/// resolves the contacts, which then verifies against time stepping.
 #[test]
 fn an_unresolved_bounce_is_refused_and_the_remedy_names_the_grid_that_resolves_it() {
     let (_, coarse) = solve("two_walls", &plain());
@@ -425,9 +379,9 @@ fn every_attempt_of_the_ladder_is_announced_before_it_runs() {
 }
 
 /// A strongly damped, contracting scene the tool does not ship
-/// (tests/scenes/overdamped_2d.toml): with the whole fallback ladder, N = 1024 is still
-/// refused (the odd-even mode and the fast start), and N = 4096 verifies against time
-/// stepping, in windows.
+/// (crates/skg-core/tests/scenes/overdamped_2d.toml): with the whole fallback ladder, N =
+/// 1024 is still refused (the odd-even mode and the fast start), and N = 4096 verifies
+/// against time stepping, in windows.
 #[test]
 fn a_strongly_contracting_scene_is_refused_on_a_coarse_grid_and_verified_on_a_fine_one() {
     let (_, coarse) = solve("overdamped_2d", &Overrides::default());

@@ -1,0 +1,238 @@
+//! Snapshot of the solver's work: for every shipped scene (`scenarios/*.toml`) on both
+//! backends, the counts of what its whole solve did ([`Outcome::work`], a [`Work`]:
+//! systems solved, Newton and Ipopt iterations, residual, Jacobian and Hessian
+//! evaluations, the steps of the guess's and the verification's time stepping, and the
+//! attempts of the fallback ladder) against the checked-in table
+//! `tests/snapshots/solver_work.toml`. A change that makes a solve do more work fails
+//! here, with the old and the new counts.
+//!
+//! Each scene is solved as `skg-solve SCENE --backend B` would: its own grid and
+//! settings, the whole fallback ladder. All 12 scenes on both backends take 2.6 s in the
+//! test profile (measured; the longest, `drum_long` on its 20481 nodes, 1.0 s with Ipopt
+//! and 0.65 s with Newton), so none is replaced by a cheaper variant.
+//!
+//! **Exact counts.** The solver's counts (iterations, evaluations, systems, attempts)
+//! must not exceed the snapshot at all: for one build they are the same from run to run
+//! (Newton is sequential, Ipopt uses MUMPS's deterministic AMF ordering). The
+//! time-stepping counts (accepted and rejected steps, right-hand-side evaluations) may
+//! exceed it by [`STEPS_SLACK`] of their value, rounded down (none below 100): each of
+//! their hundreds of step-size decisions compares a floating-point error estimate with 1,
+//! so another machine (another libm, other vector kernels) can move a few of them, while
+//! a change of the method or its tolerances moves many.
+//!
+//! **Fewer counts** pass, and the test prints them (`--nocapture`) so that the snapshot
+//! can be tightened.
+//!
+//! **Updating the snapshot.** When a change legitimately alters the work (a better guess,
+//! another stopping test), rewrite the table and commit it with the change:
+//!
+//! ```sh
+//! SKG_UPDATE_SNAPSHOTS=1 cargo test -p skg-core --test solver_work
+//! ```
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use skg_core::scene::{Backend, Overrides};
+use skg_core::solve::{self, Outcome, Work};
+
+/// Relative slack of the time-stepping counts (see the module documentation).
+const STEPS_SLACK: f64 = 0.01;
+
+/// The counts of one scene's solve on one backend, by name, in the snapshot's order.
+fn counts(o: &Outcome) -> Vec<(&'static str, usize)> {
+    let Work {
+        systems,
+        newton_iterations,
+        ipopt_iterations,
+        residual_evaluations,
+        jacobian_evaluations,
+        hessian_evaluations,
+        guess_steps: g,
+        verification_steps: v,
+    } = o.work;
+    vec![
+        ("attempts", o.attempts.len()),
+        ("systems", systems),
+        ("newton_iterations", newton_iterations),
+        ("ipopt_iterations", ipopt_iterations),
+        ("residual_evaluations", residual_evaluations),
+        ("jacobian_evaluations", jacobian_evaluations),
+        ("hessian_evaluations", hessian_evaluations),
+        ("guess_accepted_steps", g.accepted),
+        ("guess_rejected_steps", g.rejected),
+        ("guess_rhs_evaluations", g.rhs_evals),
+        ("verification_accepted_steps", v.accepted),
+        ("verification_rejected_steps", v.rejected),
+        ("verification_rhs_evaluations", v.rhs_evals),
+    ]
+}
+
+/// Whether a count is a time-stepping count (allowed [`STEPS_SLACK`]).
+fn is_time_stepping(name: &str) -> bool {
+    name.starts_with("guess_") || name.starts_with("verification_")
+}
+
+/// The largest value of a count the snapshot's `expected` allows.
+fn allowed(name: &str, expected: usize) -> usize {
+    if is_time_stepping(name) {
+        expected + (STEPS_SLACK * expected as f64).floor() as usize
+    } else {
+        expected
+    }
+}
+
+fn snapshot_path() -> PathBuf {
+    common::root().join("crates/skg-core/tests/snapshots/solver_work.toml")
+}
+
+/// Every shipped scene, by name (the files of `scenarios/`).
+fn shipped() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(common::root().join("scenarios"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Solve a shipped scene on `backend` with the whole ladder.
+fn solve(name: &str, backend: Backend) -> Outcome {
+    solve::solve_scene(&common::load(name, &Overrides { backend: Some(backend), ..Overrides::default() })).unwrap()
+}
+
+/// The snapshot's text: one table per scene and backend.
+fn render(measured: &BTreeMap<String, Vec<(&'static str, usize)>>) -> String {
+    let mut s = String::from(
+        "# The solver's work on each shipped scene and backend (the ladder's attempts and the counts of\n\
+         # skg_core::solve::Work), checked by crates/skg-core/tests/solver_work.rs, which says how\n\
+         # exact they must be. Rewritten by `SKG_UPDATE_SNAPSHOTS=1 cargo test -p skg-core --test solver_work`.\n",
+    );
+    for (key, counts) in measured {
+        let _ = write!(s, "\n[{key}]\n");
+        for (name, value) in counts {
+            let _ = writeln!(s, "{name} = {value}");
+        }
+    }
+    s
+}
+
+#[test]
+fn the_solver_does_no_more_work_than_the_snapshot_says() {
+    let start = Instant::now();
+    let mut measured = BTreeMap::new();
+    for name in shipped() {
+        for backend in [Backend::Ipopt, Backend::Newton] {
+            let t = Instant::now();
+            let o = solve(&name, backend);
+            assert!(o.converged(), "{name} on {backend}: {}", o.status);
+            eprintln!("{name} on {backend}: {:.3} s", t.elapsed().as_secs_f64());
+            measured.insert(format!("{name}.{backend}"), counts(&o));
+        }
+    }
+    eprintln!("solved {} scenes on both backends in {:.2} s", measured.len() / 2, start.elapsed().as_secs_f64());
+    let path = snapshot_path();
+    if std::env::var_os("SKG_UPDATE_SNAPSHOTS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, render(&measured)).unwrap();
+        eprintln!("wrote {}", path.display());
+        return;
+    }
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let snapshot: toml::Table = text.parse().unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let expected = |key: &str, name: &str| -> Option<usize> {
+        let (scene, backend) = key.split_once('.').unwrap();
+        snapshot.get(scene)?.get(backend)?.get(name)?.as_integer().map(|v| v as usize)
+    };
+    let (mut more, mut fewer) = (Vec::new(), Vec::new());
+    for (key, counts) in &measured {
+        for &(name, value) in counts {
+            match expected(key, name) {
+                None => more.push(format!("{key}: {name} = {value} is not in the snapshot")),
+                Some(e) if value > allowed(name, e) => more.push(format!("{key}: {name} = {value}, the snapshot says {e}")),
+                Some(e) if value < e => fewer.push(format!("{key}: {name} = {value}, the snapshot says {e}")),
+                Some(_) => {}
+            }
+        }
+    }
+    for (scene, backends) in &snapshot {
+        for backend in backends.as_table().into_iter().flat_map(|t| t.keys()) {
+            if !measured.contains_key(&format!("{scene}.{backend}")) {
+                more.push(format!("{scene}.{backend} is in the snapshot but not a shipped scene and backend"));
+            }
+        }
+    }
+    let update = "if the change of work is intended, rewrite the snapshot with \
+                  `SKG_UPDATE_SNAPSHOTS=1 cargo test -p skg-core --test solver_work` and commit it";
+    if !fewer.is_empty() {
+        eprintln!("less work than {} (tighten it: {update}):\n  {}", path.display(), fewer.join("\n  "));
+    }
+    assert!(more.is_empty(), "more work than {} says:\n  {}\n{update}", path.display(), more.join("\n  "));
+}
+
+/// The count `name` in Ipopt's own statistics at the end of its log
+/// ("Number of equality constraint evaluations = 4").
+fn ipopt_log_count(log: &str, name: &str) -> usize {
+    let line = log.lines().find(|l| l.starts_with(&format!("Number of {name}"))).unwrap_or_else(|| panic!("no `{name}` in:\n{log}"));
+    line.rsplit('=').next().unwrap().trim().parse().unwrap()
+}
+
+/// The counts are what the solve did, checked against independent records: Ipopt's own
+/// statistics in its log, Newton's iteration table, the node spacing that bounds the
+/// verification's steps, and the ladder's documented attempts.
+#[test]
+fn the_work_counts_what_the_solve_did() {
+    // Ipopt with the exact Hessian: the evaluations Ipopt reports in its log, and one
+    // more residual, the recomputation at the returned point.
+    let dir = tempfile::tempdir().unwrap();
+    let log_path = dir.path().join("ipopt.log");
+    let ov = Overrides { backend: Some(Backend::Ipopt), hessian: Some(skg_core::scene::HessianMode::Exact), ..Overrides::default() };
+    let mut scene = common::load("rolling_disk", &ov);
+    scene.solver.log_file = Some(log_path.clone());
+    let o = solve::solve_scene(&scene).unwrap();
+    let log = std::fs::read_to_string(&log_path).unwrap();
+    let w = o.work;
+    assert_eq!((w.systems, w.ipopt_iterations, w.newton_iterations), (1, o.iterations, 0), "{w:?}");
+    assert_eq!(w.residual_evaluations, ipopt_log_count(&log, "equality constraint evaluations") + 1, "{w:?}");
+    assert_eq!(w.jacobian_evaluations, ipopt_log_count(&log, "equality constraint Jacobian evaluations"), "{w:?}");
+    assert_eq!(w.hessian_evaluations, ipopt_log_count(&log, "Lagrangian Hessian evaluations"), "{w:?}");
+    assert!(w.hessian_evaluations > 0);
+    // The verification steps at most one node spacing at a time.
+    assert!(w.verification_steps.accepted >= scene.nodes - 1, "{w:?}");
+    assert_eq!(o.attempts.len(), 1);
+    assert_eq!(o.attempts[0].work, w);
+
+    // Newton: one residual at the start and one per line-search trial (its iteration
+    // table's `ls_trials`), one Jacobian per step; no verification, no verification steps.
+    let ov = Overrides { backend: Some(Backend::Newton), no_verify: true, ..Overrides::default() };
+    let o = solve::solve_scene(&common::load("rolling_disk", &ov)).unwrap();
+    let w = o.work;
+    let trials: usize = o.history.iter().map(|s| s.ls_trials as usize).sum();
+    assert_eq!((w.newton_iterations, w.ipopt_iterations, w.jacobian_evaluations), (o.iterations, 0, o.iterations), "{w:?}");
+    assert_eq!(w.residual_evaluations, 1 + trials, "{w:?}");
+    assert!(w.guess_steps.accepted > 0 && w.guess_steps.rhs_evals > w.guess_steps.accepted, "{w:?}");
+    assert_eq!(w.verification_steps, Default::default(), "{w:?}");
+
+    // Windows: one system each, their iterations summed.
+    let ov = Overrides { backend: Some(Backend::Newton), window: Some(2.0), no_fallback: true, ..Overrides::default() };
+    let o = solve::solve_scene(&common::load("rolling_disk", &ov)).unwrap();
+    let solve::Method::Windows { count, .. } = o.method else { panic!("{:?}", o.method) };
+    assert!(count > 1);
+    assert_eq!((o.work.systems, o.work.newton_iterations), (count, o.iterations), "{:?}", o.work);
+
+    // A ladder that fails throughout: every attempt's work, and the coarse solve that
+    // coarse to fine ran first and does not list (it did not converge either).
+    let ov = Overrides { max_iter: Some(1), ..Overrides::default() };
+    let o = solve::solve_scene(&common::load("pendulum", &ov)).unwrap();
+    assert!(!o.converged() && o.attempts.len() > 2, "{:?}", o.attempts);
+    let listed: usize = o.attempts.iter().map(|a| a.work.systems).sum();
+    assert_eq!(o.work.systems, listed + 1, "{:?}", o.work);
+    let iterations: usize = o.attempts.iter().map(|a| a.work.ipopt_iterations).sum();
+    assert_eq!(o.work.ipopt_iterations, iterations + 1, "the coarse solve's one iteration: {:?}", o.work);
+}
