@@ -194,7 +194,7 @@ fn the_work_counts_what_the_solve_did() {
     let log_path = dir.path().join("ipopt.log");
     let ov = Overrides { backend: Some(Backend::Ipopt), hessian: Some(skg_core::scene::HessianMode::Exact), ..Overrides::default() };
     let mut scene = common::load("rolling_disk", &ov);
-    scene.solver.log_file = Some(log_path.clone());
+    scene.solver.ipopt_log = Some(log_path.clone());
     let o = solve::solve_scene(&scene).unwrap();
     let log = std::fs::read_to_string(&log_path).unwrap();
     let w = o.work;
