@@ -80,7 +80,7 @@ pub use results::{
     PROVENANCE_COLUMNS, RESULT_COLUMNS,
 };
 pub use status::{PointStatus, UnknownStatus};
-pub use workers::serve_points;
+pub use workers::{die_of, serve_points, stop_on_signals, stop_signal};
 
 use std::collections::{BTreeMap, BTreeSet, HashSet, VecDeque};
 use std::fmt;
@@ -212,6 +212,20 @@ pub enum SweepError {
         /// What the run would do ([`Plan::text`]).
         plan: String,
     },
+    /// The driver received SIGTERM or SIGINT after [`stop_on_signals`]: it killed its
+    /// workers and stopped with whole rows in results.csv.
+    #[error(
+        "stopped by signal {signal} ({}) after {recorded} new row(s); {results} holds whole rows only: run the same command again to resume",
+        signal_name(*signal)
+    )]
+    Stopped {
+        /// The signal.
+        signal: i32,
+        /// Rows this run appended before it stopped.
+        recorded: usize,
+        /// The results file.
+        results: PathBuf,
+    },
     /// The shards given to [`merge`] do not hold every point of the sweep.
     #[error(
         "the shards hold {present} of the sweep's {total} points{}; missing: {}. Run the missing shards, or merge what there is with --partial",
@@ -312,6 +326,15 @@ pub enum AxisError {
     /// An unknown backend.
     #[error(transparent)]
     Backend(#[from] ParseBackendError),
+}
+
+/// `SIGTERM`, `SIGINT` or `signal N`.
+fn signal_name(signal: i32) -> String {
+    match signal {
+        libc::SIGTERM => "SIGTERM".into(),
+        libc::SIGINT => "SIGINT".into(),
+        s => format!("signal {s}"),
+    }
 }
 
 fn read_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
@@ -1498,6 +1521,12 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
     };
     let mut pool = workers::Pool::new(&opts.worker_exe, &work, opts.jobs, file.sweep.timeout.as_ref().map(|t| *t.get_ref()));
     loop {
+        if let Some(signal) = stop_signal() {
+            // Every row written is whole; the points in flight are lost with their workers.
+            drop(pool);
+            bar.finish_and_clear();
+            return Err(SweepError::Stopped { signal, recorded: report.ran, results: results_path });
+        }
         while pool.hand_out(&mut queue, expanded, job_of)? {}
         if queue.is_empty() {
             pool.close_idle();
@@ -1566,7 +1595,7 @@ pub fn merge(inputs: &[PathBuf], output_dir: &Path, partial: bool) -> Result<Mer
     let mut shards = BTreeSet::new();
     let mut report = MergeReport::default();
     for input in inputs {
-        let res = Results::read(input)?;
+        let res = Results::read_whole_rows(input)?;
         let path = res.path.clone();
         let info = SweepInfo::read(path.parent().unwrap_or(Path::new(".")))?;
         let not_shards =

@@ -108,7 +108,16 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
     if !args.quiet {
         eprintln!("{}", plan.text);
     }
-    let r = sweep::run_sweep(&file, &plan.expanded, &opts)?;
+    // SIGTERM (scancel, a Slurm time limit) and Ctrl-C stop the sweep between two rows;
+    // then this process dies of the same signal.
+    sweep::stop_on_signals();
+    let r = match sweep::run_sweep(&file, &plan.expanded, &opts) {
+        Err(e @ sweep::SweepError::Stopped { signal, .. }) => {
+            eprintln!("{e}");
+            sweep::die_of(signal)
+        }
+        r => r?,
+    };
     if !args.quiet {
         if let Some(old) = &r.superseded {
             println!("  moved the previous results to {}", old.display());
