@@ -8,7 +8,11 @@
 #   RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps  the API docs, links checked
 #   cargo build --workspace --examples                     the examples compile
 #   cargo run -p skg-core --example oscillator             a scene solved from code
-#   cargo test --workspace --no-fail-fast                  the test suite
+#   cargo test --workspace --no-fail-fast                  the test suite, with SKG_REQUIRE_SLURM=1: the
+#                                                          tests of sweeps on Slurm (crates/skg-cli/tests/slurm.rs)
+#                                                          start a cluster with ci/slurm-local.sh (root; it
+#                                                          installs Debian's slurmctld, slurmd and munge if
+#                                                          missing) and fail instead of skipping without one
 #   maturin develop, then pytest crates/skg-python/tests   the Python package (skg), in .venv
 # Extra arguments go to `cargo test`.
 set -euo pipefail
@@ -31,7 +35,7 @@ step cargo clippy --workspace --all-targets -- -D warnings
 step env RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 step cargo build --workspace --examples
 step cargo run --quiet -p skg-core --example oscillator
-step cargo test --workspace --no-fail-fast "$@"
+step env SKG_REQUIRE_SLURM=1 cargo test --workspace --no-fail-fast "$@"
 
 # The Python package: .venv with maturin, numpy, pytest and pandas (ci/python-env.sh),
 # the extension built by maturin in the dev profile, and its tests, which compare with

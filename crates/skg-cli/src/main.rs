@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use commands::{animate, bench, check, gallery, plot, reference, solve, sweep, tune};
+use commands::{animate, bench, check, gallery, plot, reference, solve, status, sweep, tune};
 
 #[derive(Parser)]
 #[command(
@@ -56,6 +56,9 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Join the results of a sweep's shards into one results.csv.
     Merge(sweep::MergeArgs),
+    /// The points of a sweep directory that are converged, failed and missing, per shard
+    /// for a sweep run with --slurm, with the Slurm jobs' states while Slurm knows them.
+    Status(status::StatusArgs),
     /// Find the smallest wall width σ whose energy artifact stays below a tolerance
     /// at the scene's N (bisection over solves).
     Tune(tune::TuneArgs),
@@ -72,6 +75,10 @@ enum Command {
     /// (protocol: the `skg_sweep::workers` module).
     #[command(hide = true)]
     SweepWorker { work: PathBuf },
+    /// The merge job of a sweep on Slurm (internal): merges DIR/shards/* into
+    /// DIR/results.csv when every point is there.
+    #[command(hide = true)]
+    SweepMerge { dir: PathBuf },
     /// Integrate the Lagrange–d'Alembert equations of a scene with a tight-tolerance
     /// adaptive integrator (DOP853) and write a reference CSV with the solver's columns.
     Reference(reference::ReferenceArgs),
@@ -86,6 +93,8 @@ fn main() -> ExitCode {
         Some(Command::Bench(a)) => bench::run(a),
         Some(Command::Sweep(a)) => sweep::run(a),
         Some(Command::Merge(a)) => sweep::run_merge(a),
+        Some(Command::Status(a)) => status::run(a),
+        Some(Command::SweepMerge { dir }) => sweep::run_merge_shards(&dir),
         Some(Command::Tune(a)) => tune::run(a),
         Some(Command::Plot(k)) => plot::run(k),
         Some(Command::Animate(a)) => animate::run(a),

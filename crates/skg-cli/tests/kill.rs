@@ -149,3 +149,69 @@ fn a_sweep_killed_at_random_moments_and_resumed_has_each_point_once() {
     assert!(!out.join(".work").exists());
     assert_eq!(temporaries(&out), Vec::<PathBuf>::new());
 }
+
+/// The processes whose parent is `pid` (from `/proc/*/stat`).
+fn children(pid: u32) -> Vec<u32> {
+    let mut found = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else { continue };
+        // The fields after "(comm) ": state, ppid, …
+        let Some(rest) = stat.rsplit_once(") ").map(|(_, r)| r) else { continue };
+        if rest.split(' ').nth(1).and_then(|p| p.parse::<u32>().ok()) == Some(pid) {
+            found.extend(e.file_name().to_str().and_then(|n| n.parse::<u32>().ok()));
+        }
+    }
+    found
+}
+
+fn send(signal: &str, pids: &[u32]) {
+    let pids: Vec<String> = pids.iter().map(u32::to_string).collect();
+    let status = Command::new("kill").arg(format!("-{signal}")).args(&pids).status().unwrap();
+    assert!(status.success(), "kill -{signal} {pids:?}");
+}
+
+/// SIGTERM (what Slurm's `scancel` sends to every process of a job at once) stops a
+/// sweep between two rows: the driver dies of SIGTERM, results.csv ends with a whole row,
+/// and the points whose workers died of the same SIGTERM are not recorded as crashed:
+/// the resume runs them. Here the workers get the signal 0.3 s before the driver, the
+/// worst order for the driver (without the grace for its own signal it records them as
+/// crashed rows, which a resume would keep).
+#[test]
+fn a_sweep_stopped_by_sigterm_leaves_whole_rows_and_no_crashed_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep =
+        common::sweep_file(dir.path(), &common::scenario("damped_oscillator"), "[[grid]]\nc = [0.25, 0.5, 1, 2]\nnodes = [2048, 4096]\n");
+    let out = dir.path().join("out");
+    let args = ["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "2", "-q"];
+    let child = skg(&args).stderr(Stdio::piped()).spawn().unwrap();
+    // Wait until both workers run points.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let workers = loop {
+        let w = children(child.id());
+        if w.len() == 2 || Instant::now() > deadline {
+            break w;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(workers.len(), 2, "two workers started");
+    std::thread::sleep(Duration::from_millis(300));
+    send("TERM", &workers);
+    std::thread::sleep(Duration::from_millis(300));
+    send("TERM", &[child.id()]);
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(output.status.signal(), Some(15), "the driver dies of SIGTERM: {:?} {stderr}", output.status);
+    assert!(stderr.contains("stopped by signal 15 (SIGTERM)") && stderr.contains("run the same command again"), "{stderr}");
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert!(text.ends_with('\n'), "whole rows only: {text}");
+    assert!(!text.contains(",crashed,"), "a point stopped by SIGTERM is no crashed point: {text}");
+    let before = complete_row_ids(&out).len();
+    assert!(before < 8, "stopped before the end ({before} rows)");
+    complete(&args);
+    let ids = complete_row_ids(&out);
+    assert_eq!(ids.len(), 8, "{ids:?}");
+    assert!(ids.values().all(|&c| c == 1), "{ids:?}");
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert!(!text.contains(",crashed,"), "{text}");
+}

@@ -4,7 +4,8 @@
 //! loaded and resolved by `skg_core::scene`, solved by `skg_core::solve::solve_scene`
 //! (verification and fallback ladder included), integrated by `skg_core::stepping::reference`,
 //! written (into a locked directory) by `skg_core::output`, planned and swept by
-//! `skg_sweep::plan` and `skg_sweep::run_sweep`. Errors are raised as
+//! `skg_sweep::plan` and `skg_sweep::run_sweep` (split into shards for an executor by
+//! `skg_sweep::shards`). Errors are raised as
 //! the exceptions of `skg._errors` with the command line's message
 //! ([`skg_core::error_text`]). The GIL is released while Rust computes.
 //!
@@ -413,6 +414,76 @@ fn plan_sweep(
     Ok(NativeSweepPlan { file, plan, opts })
 }
 
+/// Make (or check) the sharded directory of a sweep whose shards an executor runs
+/// ([`sweep::shards::prepare`], under the directory's lock): a dict with the directory,
+/// the sweep's name and file, the number of shards and points, the plan's line and each
+/// shard's state (`k`, `points`, `converged`, `failed`, `missing`).
+#[pyfunction]
+#[pyo3(signature = (path, *, out=None, shards=None, yes=false))]
+fn plan_shards<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    out: Option<PathBuf>,
+    shards: Option<usize>,
+    yes: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let file = py.detach(|| sweep::SweepFile::load(&path)).map_err(|e| sweep_err(py, &e))?;
+    let out = out.unwrap_or_else(|| sweep::default_out_dir(&file));
+    let dir = std::path::absolute(&out).map_err(|e| raise(py, "OutputError", &e))?;
+    let opts = sweep::SweepOptions {
+        out_dir: dir.clone(),
+        jobs: 1,
+        shard: None,
+        worker_exe: PathBuf::from("skg-solve"),
+        progress: false,
+        retry_failed: false,
+        new_results: false,
+    };
+    let prepare = sweep::shards::PrepareOptions { shards, runner: sweep::shards::Runner::Executor };
+    let (plan, layout, states) = py
+        .detach(|| {
+            let plan = sweep::plan(&file, &opts, yes)?;
+            let lock = output::OutputDir::lock(&dir)?;
+            let (layout, states) = sweep::shards::prepare(&file, &plan.expanded, &dir, &prepare)?;
+            drop(lock);
+            Ok((plan, layout, states))
+        })
+        .map_err(|e: sweep::SweepError| sweep_err(py, &e))?;
+    let d = PyDict::new(py);
+    d.set_item("dir", &dir)?;
+    d.set_item("name", &layout.name)?;
+    d.set_item("sweep_file", &layout.sweep_file)?;
+    d.set_item("shards", layout.shards)?;
+    d.set_item("total", layout.total_points)?;
+    d.set_item("text", &plan.text)?;
+    let list = PyList::empty(py);
+    for s in &states {
+        let e = PyDict::new(py);
+        e.set_item("k", s.k)?;
+        e.set_item("points", s.points)?;
+        e.set_item("converged", s.converged)?;
+        e.set_item("failed", s.failed)?;
+        e.set_item("missing", s.missing)?;
+        e.set_item("dir", sweep::shards::shard_dir(&dir, s.k))?;
+        list.append(e)?;
+    }
+    d.set_item("states", list)?;
+    Ok(d)
+}
+
+/// Merge the shards of a sharded directory into its results.csv
+/// ([`sweep::shards::merge_shards`]: nothing is written unless every point is there);
+/// returns `rows`, `total` and `duplicates`.
+#[pyfunction]
+fn merge_shards<'py>(py: Python<'py>, dir: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let r = py.detach(|| sweep::shards::merge_shards(&dir)).map_err(|e| sweep_err(py, &e))?;
+    let d = PyDict::new(py);
+    d.set_item("rows", r.rows)?;
+    d.set_item("total", r.total)?;
+    d.set_item("duplicates", r.duplicates)?;
+    Ok(d)
+}
+
 /// A sweep's results.csv (or its directory), checked as `plot` and `merge` read it:
 /// `(header, rows)` with every cell as text.
 #[pyfunction]
@@ -436,6 +507,8 @@ fn _skg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_scene, m)?)?;
     m.add_function(wrap_pyfunction!(integrate_reference, m)?)?;
     m.add_function(wrap_pyfunction!(plan_sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_shards, m)?)?;
+    m.add_function(wrap_pyfunction!(merge_shards, m)?)?;
     m.add_function(wrap_pyfunction!(read_results, m)?)?;
     m.add_function(wrap_pyfunction!(read_table, m)?)?;
     m.add_class::<NativeSolution>()?;

@@ -72,6 +72,8 @@
 #![allow(clippy::result_large_err)]
 
 mod results;
+pub mod shards;
+pub mod slurm;
 mod status;
 pub mod workers;
 
@@ -80,7 +82,7 @@ pub use results::{
     PROVENANCE_COLUMNS, RESULT_COLUMNS,
 };
 pub use status::{PointStatus, UnknownStatus};
-pub use workers::serve_points;
+pub use workers::{die_of, serve_points, stop_on_signals, stop_signal};
 
 use std::collections::{BTreeMap, BTreeSet, HashSet, VecDeque};
 use std::fmt;
@@ -212,6 +214,20 @@ pub enum SweepError {
         /// What the run would do ([`Plan::text`]).
         plan: String,
     },
+    /// The driver received SIGTERM or SIGINT after [`stop_on_signals`]: it killed its
+    /// workers and stopped with whole rows in results.csv.
+    #[error(
+        "stopped by signal {signal} ({}) after {recorded} new row(s); {results} holds whole rows only: run the same command again to resume",
+        signal_name(*signal)
+    )]
+    Stopped {
+        /// The signal.
+        signal: i32,
+        /// Rows this run appended before it stopped.
+        recorded: usize,
+        /// The results file.
+        results: PathBuf,
+    },
     /// The shards given to [`merge`] do not hold every point of the sweep.
     #[error(
         "the shards hold {present} of the sweep's {total} points{}; missing: {}. Run the missing shards, or merge what there is with --partial",
@@ -226,6 +242,27 @@ pub enum SweepError {
         /// The shards given (`k/n`).
         shards: Vec<String>,
         /// (index, id) of every missing point.
+        missing: Vec<(usize, String)>,
+    },
+    /// The shards of a sharded directory ([`shards::merge_shards`]) do not hold every
+    /// point of the sweep.
+    #[error(
+        "{}: the shards hold {present} of the sweep's {total} points, so nothing was merged; incomplete shards: {incomplete}{}. \
+         Run the sweep again to run only these (they resume), or see `skg-solve status {}`",
+        dir.display(),
+        if missing.is_empty() { String::new() } else { format!("; missing: {}", list_points(missing)) },
+        dir.display()
+    )]
+    IncompleteShards {
+        /// The sharded directory.
+        dir: PathBuf,
+        /// Points present.
+        present: usize,
+        /// Points of the sweep.
+        total: usize,
+        /// The incomplete shards.
+        incomplete: shards::Incomplete,
+        /// (index, id) of every missing point (empty when no shard has results yet).
         missing: Vec<(usize, String)>,
     },
 }
@@ -312,6 +349,15 @@ pub enum AxisError {
     /// An unknown backend.
     #[error(transparent)]
     Backend(#[from] ParseBackendError),
+}
+
+/// `SIGTERM`, `SIGINT` or `signal N`.
+fn signal_name(signal: i32) -> String {
+    match signal {
+        libc::SIGTERM => "SIGTERM".into(),
+        libc::SIGINT => "SIGINT".into(),
+        s => format!("signal {s}"),
+    }
 }
 
 fn read_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
@@ -1445,6 +1491,17 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
     let provenance = Provenance::current(expanded.scene_hash.clone(), expanded.reference_hash.clone());
     let dir = &opts.out_dir;
     let _lock = output::OutputDir::lock(dir)?;
+    if dir.join(shards::LAYOUT_FILE).exists() {
+        return Err(SweepError::Results {
+            path: dir.clone(),
+            message: format!(
+                "is the directory of a sweep split into shards ({}): its results.csv is written only by the merge of \
+                 its shards. Run it as it was started (`skg-solve sweep FILE --slurm -o DIR`, or skg.sweep(..., \
+                 executor=...)), see `skg-solve status DIR`, or use another output directory",
+                shards::LAYOUT_FILE
+            ),
+        });
+    }
     let superseded = if opts.new_results { supersede_results(dir)? } else { None };
     let settings = file.row_settings();
     check_row_settings(dir, &settings)?;
@@ -1498,6 +1555,12 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
     };
     let mut pool = workers::Pool::new(&opts.worker_exe, &work, opts.jobs, file.sweep.timeout.as_ref().map(|t| *t.get_ref()));
     loop {
+        if let Some(signal) = stop_signal() {
+            // Every row written is whole; the points in flight are lost with their workers.
+            drop(pool);
+            bar.finish_and_clear();
+            return Err(SweepError::Stopped { signal, recorded: report.ran, results: results_path });
+        }
         while pool.hand_out(&mut queue, expanded, job_of)? {}
         if queue.is_empty() {
             pool.close_idle();
@@ -1560,13 +1623,64 @@ pub struct MergeReport {
 /// the error lists the missing points; with `partial` the rows present are merged
 /// anyway and [`MergeReport::missing`] lists the others.
 pub fn merge(inputs: &[PathBuf], output_dir: &Path, partial: bool) -> Result<MergeReport, SweepError> {
+    let merged = collect_rows(inputs, output_dir)?;
+    if !merged.report.missing.is_empty() && !partial {
+        return Err(merged.incomplete());
+    }
+    let lock = output::OutputDir::lock(output_dir)?;
+    merged.write(&lock, output_dir)
+}
+
+/// The rows of shards read for a merge, not yet written.
+struct Merged {
+    /// The first input's results (its header and path; its rows are in `rows`).
+    first: Results,
+    /// The first input's sweep.json.
+    info: SweepInfo,
+    /// Every distinct row, sorted by point index.
+    rows: Vec<Vec<String>>,
+    /// The shards given (`k/n`).
+    shards: BTreeSet<String>,
+    report: MergeReport,
+}
+
+impl Merged {
+    /// The error of a merge with points missing.
+    fn incomplete(self) -> SweepError {
+        SweepError::Incomplete {
+            present: self.report.total - self.report.missing.len(),
+            total: self.report.total,
+            shards: self.shards.into_iter().collect(),
+            missing: self.report.missing,
+        }
+    }
+
+    /// Write `results.csv` and `sweep.json` into `output_dir`, whose lock the caller holds.
+    fn write(self, _lock: &output::OutputDir, output_dir: &Path) -> Result<MergeReport, SweepError> {
+        let Merged { first, info, rows, mut report, .. } = self;
+        report.rows = rows.len();
+        output::write_atomic(&output_dir.join("results.csv"), |w| {
+            w.write_all(&csv_line(&first.header))?;
+            rows.iter().try_for_each(|r| w.write_all(&csv_line(r)))
+        })?;
+        let id_col = first.require_column("id")?;
+        let merged = SweepInfo { shard: None, ids: rows.iter().map(|r| r[id_col].clone()).collect(), ..info };
+        output::write_json(&output_dir.join("sweep.json"), &merged)?;
+        Ok(report)
+    }
+}
+
+/// Read the whole rows of the shards `inputs` (each a results.csv or its directory, with
+/// its sweep.json), check that they are shards of one sweep, drop duplicate rows and sort
+/// the rest by point index; `output_dir` names the merge in an error about no input.
+fn collect_rows(inputs: &[PathBuf], output_dir: &Path) -> Result<Merged, SweepError> {
     let mut first: Option<(Results, SweepInfo)> = None;
     let mut rows: Vec<Vec<String>> = Vec::new();
     let mut ids = HashSet::new();
     let mut shards = BTreeSet::new();
     let mut report = MergeReport::default();
     for input in inputs {
-        let res = Results::read(input)?;
+        let res = Results::read_whole_rows(input)?;
         let path = res.path.clone();
         let info = SweepInfo::read(path.parent().unwrap_or(Path::new(".")))?;
         let not_shards =
@@ -1601,26 +1715,10 @@ pub fn merge(inputs: &[PathBuf], output_dir: &Path, partial: bool) -> Result<Mer
     let (first, info) = first.ok_or_else(|| SweepError::Results { path: output_dir.to_path_buf(), message: "nothing to merge".into() })?;
     report.total = info.all_ids.len();
     report.missing = info.all_ids.iter().enumerate().filter(|(_, id)| !ids.contains(*id)).map(|(k, id)| (k, id.clone())).collect();
-    if !report.missing.is_empty() && !partial {
-        return Err(SweepError::Incomplete {
-            present: report.total - report.missing.len(),
-            total: report.total,
-            shards: shards.into_iter().collect(),
-            missing: report.missing,
-        });
-    }
     let idx = first.require_column("index")?;
     rows.sort_by_key(|r| r[idx].parse::<usize>().unwrap_or(usize::MAX));
     report.rows = rows.len();
-    let _lock = output::OutputDir::lock(output_dir)?;
-    output::write_atomic(&output_dir.join("results.csv"), |w| {
-        w.write_all(&csv_line(&first.header))?;
-        rows.iter().try_for_each(|r| w.write_all(&csv_line(r)))
-    })?;
-    let id_col = first.require_column("id")?;
-    let merged = SweepInfo { shard: None, ids: rows.iter().map(|r| r[id_col].clone()).collect(), ..info };
-    output::write_json(&output_dir.join("sweep.json"), &merged)?;
-    Ok(report)
+    Ok(Merged { first, info, rows, shards, report })
 }
 
 /// At most this many missing points are listed in a message.

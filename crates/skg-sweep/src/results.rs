@@ -263,6 +263,16 @@ impl Results {
         Self::parse(&text, &path)
     }
 
+    /// Read a results file written by a sweep driver (or its directory's) up to its last
+    /// newline: a row is in the file once its newline is, so a partial last line (a driver
+    /// killed while writing it) is not a row and is left out, as a resume cuts it off.
+    pub fn read_whole_rows(path: &Path) -> Result<Results, SweepError> {
+        let path = if path.is_dir() { path.join("results.csv") } else { path.to_path_buf() };
+        let mut text = std::fs::read_to_string(&path).map_err(read_err(&path))?;
+        text.truncate(text.rfind('\n').map_or(0, |i| i + 1));
+        Self::parse(&text, &path)
+    }
+
     /// Parse the text of a results file; `path` labels error messages.
     pub fn parse(text: &str, path: &Path) -> Result<Results, SweepError> {
         let bad = |m: String| SweepError::Results { path: path.to_path_buf(), message: m };

@@ -20,6 +20,16 @@
 //!    is recorded [`PointStatus::TimedOut`]. Either way the worker is gone and a fresh
 //!    one takes the next point: a crash or a timeout costs only the point in flight.
 //!
+//! **Stopping.** A command-line driver calls [`stop_on_signals`]: SIGTERM (Slurm's
+//! `scancel`, a job past its time limit) and SIGINT (Ctrl-C) then only set a flag, and the
+//! driver, between two rows, kills its workers and returns [`SweepError::Stopped`], so
+//! `results.csv` ends with a whole row; the command then dies of the same signal
+//! ([`die_of`]). Both signals usually reach the workers too (Slurm signals every process
+//! of the job, a terminal its whole process group), and a worker may die of it before the
+//! driver sees the flag: a point whose worker died of SIGTERM or SIGINT is therefore
+//! recorded as crashed only if no stop follows within [`STOP_GRACE`]. Otherwise it stays
+//! unrecorded and runs again on a resume.
+//!
 //! A worker's stderr goes to `WORK/worker-<k>.log` (its stdout, where Ipopt would
 //! print, is discarded as before); the driver notes the file's length when it hands
 //! out a point, so the log since then is that point's. A worker dies with the driver (`PR_SET_PDEATHSIG`, Linux); closing its
@@ -35,7 +45,8 @@ use std::fs::File;
 use std::io::{BufRead, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
-use std::time::Instant;
+use std::sync::atomic::{AtomicI32, Ordering};
+use std::time::{Duration, Instant};
 
 use skg_core::output;
 
@@ -43,6 +54,66 @@ use crate::{read_err, run_job, Expanded, Job, Point, PointStatus, Record, SweepE
 
 /// Lines of a crashed worker's log quoted in its point's message.
 const TAIL_LINES: usize = 3;
+
+/// The signal that asked the driver to stop (0: none yet), set by [`on_stop_signal`].
+static STOP_SIGNAL: AtomicI32 = AtomicI32::new(0);
+
+/// How long the driver waits for its own stop signal after a worker died of SIGTERM or
+/// SIGINT, before recording the worker's point as crashed.
+pub const STOP_GRACE: Duration = Duration::from_secs(1);
+
+extern "C" fn on_stop_signal(signal: libc::c_int) {
+    // Only an atomic store: async-signal-safe.
+    STOP_SIGNAL.store(signal, Ordering::SeqCst);
+}
+
+/// Make SIGTERM and SIGINT stop a sweep of this process between two rows instead of
+/// killing it at once ([module documentation](self)). For the command line; a library
+/// caller (the Python module) keeps its own handlers.
+pub fn stop_on_signals() {
+    for signal in [libc::SIGTERM, libc::SIGINT] {
+        // SAFETY: the handler only stores into an atomic.
+        unsafe {
+            libc::signal(signal, on_stop_signal as extern "C" fn(libc::c_int) as libc::sighandler_t);
+        }
+    }
+}
+
+/// The signal received since [`stop_on_signals`], if any.
+pub fn stop_signal() -> Option<i32> {
+    match STOP_SIGNAL.load(Ordering::SeqCst) {
+        0 => None,
+        s => Some(s),
+    }
+}
+
+/// End this process by `signal` with its default action (after a sweep stopped on it), so
+/// that the caller (a shell, Slurm) sees the process killed by that signal.
+pub fn die_of(signal: i32) -> ! {
+    // SAFETY: restoring the default action and raising a signal in this process.
+    unsafe {
+        libc::signal(signal, libc::SIG_DFL);
+        libc::raise(signal);
+    }
+    // Not reached for SIGTERM and SIGINT; for anything else, the conventional status.
+    std::process::exit(128 + signal)
+}
+
+/// Whether a worker that exited with `exit` was killed by SIGTERM or SIGINT.
+fn killed_by_stop_signal(exit: &ExitStatus) -> bool {
+    use std::os::unix::process::ExitStatusExt;
+    matches!(exit.signal(), Some(libc::SIGTERM | libc::SIGINT))
+}
+
+/// After a worker died of SIGTERM or SIGINT: whether this driver is being stopped too
+/// (its own signal arrives within [`STOP_GRACE`]).
+fn stop_follows() -> bool {
+    let deadline = Instant::now() + STOP_GRACE;
+    while stop_signal().is_none() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    stop_signal().is_some()
+}
 
 /// The job and result files of the point `id` in the work directory.
 fn point_files(work: &Path, id: &str) -> (PathBuf, PathBuf) {
@@ -198,6 +269,9 @@ impl Pool {
             let elapsed = flight.started.elapsed().as_secs_f64();
             let rec = match (reported, exit) {
                 (Some(rec), _) => rec,
+                // The whole sweep is being stopped: the point is not recorded (the
+                // driver stops before recording anything more).
+                (None, Some(exit)) if killed_by_stop_signal(&exit) && stop_follows() => return Ok(done),
                 (None, Some(exit)) => crashed_record(&w.log, flight.log_offset, exit),
                 (None, None) => match self.timeout_s {
                     Some(limit) if elapsed > limit => {

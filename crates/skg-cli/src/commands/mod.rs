@@ -15,7 +15,9 @@ pub mod check;
 pub mod gallery;
 pub mod plot;
 pub mod reference;
+pub mod slurm;
 pub mod solve;
+pub mod status;
 pub mod sweep;
 pub mod tune;
 

@@ -77,6 +77,29 @@ pub struct SweepArgs {
     /// time estimate are printed first).
     #[arg(short, long)]
     pub yes: bool,
+    /// Run the sweep on a Slurm cluster: write DIR/slurm/shard.sh (an array job whose
+    /// task k runs shard k/K into DIR/shards/k, with one worker per CPU Slurm gives it) and
+    /// DIR/slurm/merge.sh (a job after the array that merges the shards into
+    /// DIR/results.csv), submit both with sbatch, print the job ids. Run again, it submits
+    /// only the incomplete shards (they resume). DIR must be on a file system the nodes
+    /// share.
+    #[arg(long, conflicts_with_all = ["shard", "jobs", "retry_failed", "new_results"])]
+    pub slurm: bool,
+    /// Shards of a --slurm sweep (the array's tasks), 1 to 1000 [default: one per 10
+    /// points, at most 100; a directory keeps the number it was started with].
+    #[arg(long, value_name = "K", requires = "slurm", value_parser = clap::value_parser!(u64).range(1..=1000))]
+    pub shards: Option<u64>,
+    /// An argument for sbatch, for the array and the merge job (repeatable), e.g.
+    /// `--sbatch-arg=--partition=short --sbatch-arg=--time=2:00:00 --sbatch-arg=--cpus-per-task=8`.
+    #[arg(long = "sbatch-arg", value_name = "ARG", requires = "slurm", allow_hyphen_values = true)]
+    pub sbatch_args: Vec<String>,
+    /// With --slurm: wait until the merge job has ended; exit 0 when DIR/results.csv holds
+    /// every point, else 1.
+    #[arg(long, requires = "slurm", conflicts_with = "dry_run")]
+    pub wait: bool,
+    /// With --slurm: write the scripts and print the sbatch commands without submitting.
+    #[arg(long, requires = "slurm")]
+    pub dry_run: bool,
 }
 
 #[derive(Args)]
@@ -95,6 +118,9 @@ pub struct MergeArgs {
 
 pub fn run(args: SweepArgs) -> Result<ExitCode> {
     let file = sweep::SweepFile::load(&args.sweep)?;
+    if args.slurm {
+        return super::slurm::run(&args, &file);
+    }
     let opts = sweep::SweepOptions {
         out_dir: args.output.unwrap_or_else(|| sweep::default_out_dir(&file)),
         jobs: args.jobs.unwrap_or_else(sweep::default_jobs).max(1),
@@ -108,7 +134,16 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
     if !args.quiet {
         eprintln!("{}", plan.text);
     }
-    let r = sweep::run_sweep(&file, &plan.expanded, &opts)?;
+    // SIGTERM (scancel, a Slurm time limit) and Ctrl-C stop the sweep between two rows;
+    // then this process dies of the same signal.
+    sweep::stop_on_signals();
+    let r = match sweep::run_sweep(&file, &plan.expanded, &opts) {
+        Err(e @ sweep::SweepError::Stopped { signal, .. }) => {
+            eprintln!("{e}");
+            sweep::die_of(signal)
+        }
+        r => r?,
+    };
     if !args.quiet {
         if let Some(old) = &r.superseded {
             println!("  moved the previous results to {}", old.display());
@@ -132,6 +167,13 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
 
 pub fn run_worker(work: &Path) -> Result<ExitCode> {
     sweep::serve_points(work, std::io::stdin().lock())?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `skg-solve sweep-merge DIR` (hidden): the merge job of a sweep on Slurm.
+pub fn run_merge_shards(dir: &Path) -> Result<ExitCode> {
+    let r = sweep::shards::merge_shards(dir)?;
+    println!("merged {} rows into {}: every point of the sweep ({}) is present", r.rows, dir.join("results.csv").display(), r.total);
     Ok(ExitCode::SUCCESS)
 }
 

@@ -16,7 +16,8 @@ command line does, and errors carry its messages.
   :func:`read_trajectory` a :class:`Trajectory` from a CSV; all three share the
   trajectory's arrays and column access.
 * :func:`sweep` runs a sweep file in worker processes of the ``skg-solve`` executable
-  and returns a :class:`SweepResult`.
+  and returns a :class:`SweepResult`; with ``executor=`` its shards run as the tasks of
+  any ``concurrent.futures.Executor`` (a process pool, Dask, a cluster's) and are merged.
 * Errors are subclasses of :class:`skg.Error` (:class:`SceneError` is also a
   ``ValueError``).
 * Statuses are string-valued enums (:class:`SolveStatus`, :class:`SolverStatus`,
@@ -34,9 +35,10 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 import warnings
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Union
+from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
@@ -573,6 +575,83 @@ def read_results(path: PathLike) -> SweepResult:
     return SweepResult(p, header, rows)
 
 
+def _run_shard(
+    exe: str, sweep_file: str, k: int, shards: int, out_dir: str, jobs: int, retry_failed: bool
+) -> Tuple[int, int, str]:
+    """Run shard ``k/shards`` of a sweep into ``out_dir`` with the ``skg-solve`` executable
+    ``exe`` (the task :func:`sweep` gives an executor; a module-level function, so that a
+    process pool or a cluster's executor can pickle it). Returns ``(k, exit status, the
+    end of its stderr)``; a rerun resumes the shard."""
+    cmd = [exe, "sweep", sweep_file, "--shard", f"{k}/{shards}", "-o", out_dir, "--jobs", str(jobs), "--yes", "--quiet"]
+    if retry_failed:
+        cmd.append("--retry-failed")
+    done = subprocess.run(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    return k, done.returncode, done.stderr.strip()[-2000:]
+
+
+def _sweep_with_executor(
+    sweep_file: PathLike,
+    executor: Any,
+    *,
+    out: Optional[PathLike],
+    shards: Optional[int],
+    jobs: Optional[int],
+    exe: Optional[PathLike],
+    retry_failed: bool,
+    yes: bool,
+    progress: bool,
+) -> SweepResult:
+    """:func:`sweep` with ``executor=``: the incomplete shards as tasks, then the merge."""
+    started = time.monotonic()
+    worker = find_skg_solve(exe)
+    plan = _skg.plan_shards(os.fspath(sweep_file), out=None if out is None else os.fspath(out), shards=shards, yes=yes)
+    count = plan["shards"]
+    todo = [s for s in plan["states"] if s["missing"] > 0 or (retry_failed and s["failed"] > 0)]
+    if progress:
+        print(
+            f"{plan['name']}: {plan['total']} points in {count} shards in {plan['dir']}; "
+            f"{len(todo)} shard(s) to run, each with {jobs or 1} worker(s)",
+            file=sys.stderr,
+        )
+    futures = [
+        executor.submit(
+            _run_shard, str(worker), str(plan["sweep_file"]), s["k"], count, str(s["dir"]), jobs or 1, retry_failed
+        )
+        for s in todo
+    ]
+    failures = []
+    for s, future in zip(todo, futures):
+        try:
+            k, code, stderr = future.result()
+        except Exception as e:  # the executor could not run the task
+            failures.append(f"shard {s['k']}/{count}: the executor raised {type(e).__name__}: {e}")
+            continue
+        if code != 0:
+            failures.append(f"shard {k}/{count} exited with status {code}: {stderr}")
+        elif progress:
+            print(f"  shard {k}/{count} done", file=sys.stderr)
+    if failures:
+        raise SweepError(
+            "; ".join(failures)
+            + f". The other shards' results are kept in {plan['dir']}/shards: the same call runs only the incomplete shards"
+        )
+    merged = _skg.merge_shards(str(plan["dir"]))
+    path = Path(plan["dir"]) / "results.csv"
+    header, rows = _skg.read_results(str(path))
+    report = {
+        "name": plan["name"],
+        "total": plan["total"],
+        "shards": count,
+        "submitted": [s["k"] for s in todo],
+        "rows": merged["rows"],
+        "duplicates": merged["duplicates"],
+        "results": str(path),
+        "wall_s": time.monotonic() - started,
+        "jobs": jobs or 1,
+    }
+    return SweepResult(path, header, rows, report)
+
+
 def sweep(
     sweep_file: PathLike,
     *,
@@ -584,6 +663,8 @@ def sweep(
     new_results: bool = False,
     yes: bool = False,
     progress: bool = True,
+    executor: Any = None,
+    shards: Optional[int] = None,
 ) -> SweepResult:
     """Run (or resume) a sweep as ``skg-solve sweep`` does and return its results.
 
@@ -599,7 +680,37 @@ def sweep(
     10 000 points start only with ``yes=True`` (``--yes``). A second sweep into the same
     directory is refused. ``progress`` prints the plan (points, a rough time estimate)
     and shows the progress bar on stderr when it is a terminal.
+
+    ``executor=`` (any :class:`concurrent.futures.Executor`: a ``ThreadPoolExecutor`` or
+    ``ProcessPoolExecutor`` on this machine, ``dask.distributed.Client(...).get_executor()``,
+    ``mpi4py.futures.MPIPoolExecutor``, a Slurm executor such as submitit's) splits the
+    sweep into ``shards`` shards (default: one per 10 points, at most 100) and runs each as
+    one task of the executor: ``skg-solve sweep FILE --shard k/K -o out/shards/k`` with
+    ``jobs`` worker processes (default 1). When every task has ended the shards are merged
+    into ``out/results.csv``, which only the merge writes. A shard that fails raises
+    :class:`SweepError` naming it; the same call again runs only the shards that are
+    incomplete (they resume) and those with failed points if ``retry_failed``. The
+    ``skg-solve`` executable, the sweep file and ``out`` must be reachable at the same
+    paths where the executor runs its tasks. ``shard`` and ``new_results`` do not combine
+    with it. The report then has ``total``, ``shards``, ``submitted`` (the shards run by
+    this call), ``rows``, ``duplicates``, ``wall_s`` and ``jobs``.
     """
+    if executor is not None:
+        if shard is not None or new_results:
+            raise ValueError("executor= runs every shard of the sweep: it does not combine with shard= or new_results=")
+        return _sweep_with_executor(
+            sweep_file,
+            executor,
+            out=out,
+            shards=shards,
+            jobs=jobs,
+            exe=exe,
+            retry_failed=retry_failed,
+            yes=yes,
+            progress=progress,
+        )
+    if shards is not None:
+        raise ValueError("shards= needs executor= (the executor runs the shards)")
     worker = find_skg_solve(exe)
     plan = _skg.plan_sweep(
         os.fspath(sweep_file),

@@ -1,0 +1,127 @@
+//! `skg-solve sweep FILE --slurm -o DIR`: the sweep's shards as a Slurm job array and a
+//! merge job after it (`skg_sweep::slurm`), and `--wait` for the merge.
+
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+
+use skg_sweep as sweep;
+use skg_sweep::shards::{self, ShardLayout, ShardState};
+use skg_sweep::slurm::{self, SubmitOptions, SubmitReport};
+
+use super::sweep::SweepArgs;
+
+/// Exit status of a command-line usage error.
+const EXIT_USAGE: u8 = 2;
+
+pub fn run(args: &SweepArgs, file: &sweep::SweepFile) -> Result<ExitCode> {
+    let out = args.output.clone().unwrap_or_else(|| sweep::default_out_dir(file));
+    let exe = std::env::current_exe().context("locating the skg-solve executable for the jobs")?;
+    // The same checks as a local run: every point valid, --yes above 10000 points.
+    let plan_opts = sweep::SweepOptions {
+        out_dir: out.clone(),
+        jobs: 1,
+        shard: None,
+        worker_exe: exe.clone(),
+        progress: false,
+        retry_failed: false,
+        new_results: false,
+    };
+    let plan = sweep::plan(file, &plan_opts, args.yes)?;
+    let opts = SubmitOptions { shards: args.shards.map(|k| k as usize), sbatch_args: args.sbatch_args.clone(), exe, dry_run: args.dry_run };
+    let report = match slurm::submit(file, &plan.expanded, &out, &opts) {
+        Err(e) if e.is_usage() => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_USAGE));
+        }
+        r => r?,
+    };
+    let name = &report.layout.name;
+    let total = report.layout.total_points;
+    if report.submitted.is_empty() && report.merged {
+        println!("{name}: every point of the sweep ({total}) is in {}: nothing to submit", report.dir.join("results.csv").display());
+        return Ok(ExitCode::SUCCESS);
+    }
+    let what = submitted_text(&report);
+    for note in &report.notes {
+        eprintln!("note: {note}");
+    }
+    if args.dry_run {
+        println!(
+            "{name}: {total} points in {} shards; would submit {what} (dry run: nothing submitted). Scripts in {}:",
+            report.layout.shards,
+            report.dir.join("slurm").display()
+        );
+        for c in &report.commands {
+            println!("  {c}");
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let merge = report.merge_job.clone().unwrap_or_default();
+    let ids: Vec<String> = report.array_job.iter().cloned().chain([merge.clone()]).collect();
+    println!(
+        "{name}: {total} points in {} shards; submitted {what}: {}",
+        report.layout.shards,
+        match &report.array_job {
+            Some(a) => format!("array job {a} and merge job {merge} (after the array)"),
+            None => format!("merge job {merge}"),
+        }
+    );
+    println!("  scripts and logs: {}", report.dir.join("slurm").display());
+    println!("  follow them: squeue -j {}   or   skg-solve status {}", ids.join(","), report.dir.display());
+    println!(
+        "  when the merge has ended, {} holds every point; if a shard did not finish, run the same command again: only the incomplete shards run",
+        report.dir.join("results.csv").display()
+    );
+    if !args.wait {
+        return Ok(ExitCode::SUCCESS);
+    }
+    let outcome = slurm::wait_for_merge(report.array_job.as_deref(), &merge, |line| eprintln!("  {line}"))?;
+    finish(&report, outcome.merge.as_ref())
+}
+
+/// `shards 1-4 (4 of 4) and their merge`, or `the merge of the complete shards`.
+fn submitted_text(report: &SubmitReport) -> String {
+    if report.submitted.is_empty() {
+        "the merge of the complete shards".into()
+    } else {
+        let word = if report.submitted.len() == 1 { "shard" } else { "shards" };
+        format!("{word} {} ({} of {}) and their merge", slurm::array_spec(&report.submitted), report.submitted.len(), report.layout.shards)
+    }
+}
+
+/// After the merge job of `--wait` has ended: 0 if DIR/results.csv holds every point,
+/// else 1 with the incomplete shards.
+fn finish(report: &SubmitReport, merge: Option<&slurm::JobState>) -> Result<ExitCode> {
+    let dir = &report.dir;
+    let merge_id = report.merge_job.as_deref().unwrap_or("?");
+    let log = dir.join("slurm").join("logs").join(format!("merge-{merge_id}.out"));
+    if shards::merged(dir) {
+        let state = shards::results_state(dir)?;
+        println!(
+            "merged: {} holds every point ({}): {} converged, {} failed",
+            dir.join("results.csv").display(),
+            state.points,
+            state.converged,
+            state.failed
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    let states = shards::shard_states(dir, &report.layout)?;
+    eprintln!(
+        "error: the merge job {merge_id} ended ({}) without merging: {}; its log: {}. Run the same command again to submit the incomplete shards (they resume)",
+        merge.map_or("state no longer known to Slurm".into(), |s| s.state.clone()),
+        incomplete_text(&report.layout, &states),
+        log.display()
+    );
+    Ok(ExitCode::FAILURE)
+}
+
+/// `2 of 4 shards incomplete (2: 3 of 3 points missing, …)`.
+pub fn incomplete_text(layout: &ShardLayout, states: &[ShardState]) -> String {
+    let incomplete = shards::Incomplete(states.iter().filter(|s| !s.complete()).map(|s| (s.k, s.missing, s.points)).collect());
+    if incomplete.0.is_empty() {
+        return format!("every shard of {} is complete", layout.shards);
+    }
+    format!("{} of {} shards incomplete: {incomplete}", incomplete.0.len(), layout.shards)
+}

@@ -1,0 +1,677 @@
+//! Sweeps on a Slurm cluster (`skg-solve sweep FILE --slurm -o DIR`): the shards of a
+//! sharded directory ([`crate::shards`]) run as the tasks of one job array, and a merge
+//! job that depends on the array (`afterany`) merges them into `DIR/results.csv`.
+//!
+//! ```text
+//! DIR/slurm/shard.sh      the array job: task k runs `skg-solve sweep FILE --shard k/K -o DIR/shards/k`
+//! DIR/slurm/merge.sh      the merge job: `skg-solve sweep-merge DIR` (shards::merge_shards)
+//! DIR/slurm/jobs.json     every submission: array job id, shards, merge job id, sbatch arguments
+//! DIR/slurm/logs/         shard-<array id>_<k>.out, merge-<job id>.out
+//! ```
+//!
+//! What Slurm does is taken from its commands only (`sbatch --parsable`, `squeue`, and
+//! `scancel` when a merge job cannot be submitted), never from its accounting (`sacct`),
+//! which many clusters do not keep; Slurm forgets a finished job after `MinJobAge`
+//! (5 minutes by default), so whether a shard is done comes from the shard's files, and
+//! job states are only shown while Slurm knows them. `sbatch --wait` is not used: it
+//! polls at 2 s, 10 s, 42 s…; [`wait_for_merge`] polls `squeue` itself. A dependency is
+//! only ever on a job id that sbatch has just returned (Slurm treats a dependency on an
+//! id it no longer knows as satisfied).
+//!
+//! Every path in the scripts is absolute (the skg-solve executable that submitted them,
+//! the sweep file, DIR), and each script changes into DIR itself and fails if it cannot
+//! (Slurm runs a job in /tmp when its working directory is missing). DIR must therefore
+//! be on a file system that the compute nodes share with the submitting machine.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
+
+use skg_core::output;
+
+use crate::shards::{self, PrepareOptions, Runner, ShardLayout, ShardState};
+use crate::{Expanded, SweepError, SweepFile};
+
+/// How long sbatch may take (it retries an unreachable controller for about 10 s).
+const SBATCH_TIMEOUT: Duration = Duration::from_secs(120);
+/// How long squeue and scancel may take.
+const QUERY_TIMEOUT: Duration = Duration::from_secs(60);
+/// How long [`wait_for_merge`] keeps polling while squeue fails (a controller restarting).
+const QUERY_FAILURES_FOR: Duration = Duration::from_secs(600);
+
+/// Options of sbatch that skg-solve sets itself (an `--sbatch-arg` with one of them is
+/// refused): long names, and their short forms.
+const RESERVED: &[(&str, Option<&str>)] = &[
+    ("--array", Some("-a")),
+    ("--dependency", Some("-d")),
+    ("--output", Some("-o")),
+    ("--error", Some("-e")),
+    ("--parsable", None),
+    ("--wait", Some("-W")),
+];
+
+/// Job states in which a job still runs or may run (`squeue`'s `%T`).
+const ACTIVE_STATES: &[&str] = &[
+    "PENDING",
+    "RUNNING",
+    "CONFIGURING",
+    "COMPLETING",
+    "SUSPENDED",
+    "REQUEUED",
+    "REQUEUE_FED",
+    "REQUEUE_HOLD",
+    "RESIZING",
+    "SIGNALING",
+    "STAGE_OUT",
+    "STOPPED",
+];
+
+/// Errors of a submission to Slurm.
+#[derive(Debug, thiserror::Error)]
+pub enum SlurmError {
+    /// The sweep, its shards or its files.
+    #[error(transparent)]
+    Sweep(#[from] SweepError),
+    /// Writing the scripts or `jobs.json`.
+    #[error(transparent)]
+    Output(#[from] output::OutputError),
+    /// A Slurm command is not on `PATH`.
+    #[error("`{program}` is not on PATH: --slurm needs Slurm's commands (sbatch, squeue); run it where they are, e.g. on the cluster's login node (--dry-run writes the scripts without them)")]
+    Missing {
+        /// The command.
+        program: String,
+    },
+    /// A Slurm command could not be started or waited for.
+    #[error("cannot run `{command}`: {source}")]
+    Run {
+        /// The command line.
+        command: String,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// A Slurm command failed; its message is quoted.
+    #[error("`{command}` failed ({status}): {message}")]
+    Failed {
+        /// The command line.
+        command: String,
+        /// Its exit status.
+        status: String,
+        /// What it printed on stderr (or stdout).
+        message: String,
+    },
+    /// A Slurm command did not finish in time (it was killed).
+    #[error("`{command}` did not finish within {seconds} s (is the Slurm controller reachable?)")]
+    TimedOut {
+        /// The command line.
+        command: String,
+        /// The limit.
+        seconds: u64,
+    },
+    /// sbatch succeeded but printed no job id.
+    #[error("`{command}` printed no job id: {stdout:?}")]
+    NoJobId {
+        /// The command line.
+        command: String,
+        /// What it printed.
+        stdout: String,
+    },
+    /// Jobs of an earlier submission into the directory still run or wait.
+    #[error(
+        "jobs of an earlier submission into {} are still queued or running ({jobs}): a shard or the merge would run twice. \
+         Wait until they end (squeue -j {ids}; skg-solve status {}), or cancel them (scancel {ids}), then run the command again",
+        dir.display(),
+        dir.display()
+    )]
+    Active {
+        /// The sweep directory.
+        dir: PathBuf,
+        /// The active jobs with their states.
+        jobs: String,
+        /// Their ids, comma-separated.
+        ids: String,
+    },
+    /// The submission's jobs cannot be checked without squeue.
+    #[error("{} records earlier submissions ({ids}), and whether they still run cannot be checked: {reason}", dir.display())]
+    Unchecked {
+        /// The sweep directory.
+        dir: PathBuf,
+        /// The recorded job ids.
+        ids: String,
+        /// Why (squeue's error).
+        reason: String,
+    },
+    /// An `--sbatch-arg` that skg-solve sets itself.
+    #[error("--sbatch-arg {arg}: skg-solve sets {option} itself (the array of shards, the merge's dependency, the logs in DIR/slurm/logs); leave it out")]
+    Reserved {
+        /// The argument.
+        arg: String,
+        /// The option it sets.
+        option: String,
+    },
+    /// A path that Slurm's file name patterns or the scripts cannot hold.
+    #[error("{}: a path with {what} cannot be given to Slurm (sbatch expands % in file names); use another output directory", path.display())]
+    Path {
+        /// The path.
+        path: PathBuf,
+        /// What is wrong.
+        what: &'static str,
+    },
+    /// The array was submitted but its merge job was not.
+    #[error("submitted the shards as array job {array}, but the merge job could not be submitted: {source}; {cancelled}")]
+    MergeNotSubmitted {
+        /// The array job id.
+        array: String,
+        /// The merge submission's error.
+        source: Box<SlurmError>,
+        /// What became of the array job.
+        cancelled: String,
+    },
+}
+
+impl SlurmError {
+    /// Whether the error is a usage error of the command line (an `--sbatch-arg` that
+    /// skg-solve sets itself).
+    pub fn is_usage(&self) -> bool {
+        matches!(self, SlurmError::Reserved { .. })
+    }
+}
+
+/// One submission into a directory (`DIR/slurm/jobs.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Submission {
+    /// When (seconds since 1970).
+    pub submitted_unix: u64,
+    /// The array job's id, if shards were submitted.
+    pub array_job: Option<String>,
+    /// The shards submitted (the array's indices).
+    pub shards: Vec<usize>,
+    /// The merge job's id (None if its submission failed).
+    pub merge_job: Option<String>,
+    /// The `--sbatch-arg` arguments given.
+    pub sbatch_args: Vec<String>,
+}
+
+impl Submission {
+    /// The job ids of this submission.
+    pub fn job_ids(&self) -> Vec<String> {
+        self.array_job.iter().chain(self.merge_job.iter()).cloned().collect()
+    }
+}
+
+/// `DIR/slurm/jobs.json`: every submission into the directory, oldest first.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct JobsFile {
+    /// The submissions.
+    pub submissions: Vec<Submission>,
+}
+
+impl JobsFile {
+    /// The jobs file of the sweep directory `dir`.
+    pub fn path(dir: &Path) -> PathBuf {
+        dir.join("slurm").join("jobs.json")
+    }
+
+    /// Read the jobs file of `dir` (empty if there is none).
+    pub fn read(dir: &Path) -> Result<JobsFile, SweepError> {
+        let path = Self::path(dir);
+        if !path.exists() {
+            return Ok(JobsFile::default());
+        }
+        let text = std::fs::read_to_string(&path).map_err(crate::read_err(&path))?;
+        serde_json::from_str(&text).map_err(|e| SweepError::Results { path, message: format!("not a jobs.json of this skg-solve: {e}") })
+    }
+}
+
+/// A job (or array task, `A_k`) as squeue shows it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct JobState {
+    /// The job id, `A_k` for an array task.
+    pub id: String,
+    /// The state (`PENDING`, `RUNNING`, `COMPLETED`, `FAILED`, `CANCELLED`, `TIMEOUT`, …).
+    pub state: String,
+    /// The reason squeue gives (`None`, `Dependency`, `Resources`, …).
+    pub reason: String,
+}
+
+impl JobState {
+    /// Whether the job still runs or may run.
+    pub fn active(&self) -> bool {
+        ACTIVE_STATES.contains(&self.state.as_str())
+    }
+
+    /// The shard of an array task `A_k` of the array `array`.
+    pub fn task_of(&self, array: &str) -> Option<usize> {
+        self.id.strip_prefix(array)?.strip_prefix('_')?.parse().ok()
+    }
+}
+
+/// A word for a shell command line: as it is when it has no special characters, else in
+/// single quotes.
+pub fn shell_quote(word: &str) -> String {
+    let plain = !word.is_empty() && word.bytes().all(|b| b.is_ascii_alphanumeric() || b"_./:=@%+,-".contains(&b));
+    if plain {
+        word.to_string()
+    } else {
+        format!("'{}'", word.replace('\'', r"'\''"))
+    }
+}
+
+fn command_text(program: &str, args: &[String]) -> String {
+    std::iter::once(program.to_string()).chain(args.iter().map(|a| shell_quote(a))).collect::<Vec<_>>().join(" ")
+}
+
+/// Run `program args` and wait at most `timeout`; its stdout, or an error quoting what it
+/// printed when it fails.
+fn run(program: &str, args: &[String], timeout: Duration) -> Result<String, SlurmError> {
+    let command = command_text(program, args);
+    let mut child =
+        Command::new(program).args(args).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().map_err(|source| {
+            if source.kind() == std::io::ErrorKind::NotFound {
+                SlurmError::Missing { program: program.to_string() }
+            } else {
+                SlurmError::Run { command: command.clone(), source }
+            }
+        })?;
+    // Read both pipes in threads, so that a long answer cannot block the command.
+    let reader = |pipe: Option<Box<dyn Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut text = String::new();
+            if let Some(mut p) = pipe {
+                let _ = p.read_to_string(&mut text);
+            }
+            text
+        })
+    };
+    let out = reader(child.stdout.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
+    let err = reader(child.stderr.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
+    let deadline = Instant::now() + timeout;
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(20)),
+            Ok(None) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(SlurmError::TimedOut { command, seconds: timeout.as_secs() });
+            }
+            Err(source) => return Err(SlurmError::Run { command, source }),
+        }
+    };
+    let (stdout, stderr) = (out.join().unwrap_or_default(), err.join().unwrap_or_default());
+    if status.success() {
+        return Ok(stdout);
+    }
+    let message = if stderr.trim().is_empty() { stdout } else { stderr };
+    let message = message.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(" / ");
+    Err(SlurmError::Failed { command, status: status.to_string(), message })
+}
+
+/// The states of the jobs `ids` (array jobs as one line per task, `A_k`) that Slurm still
+/// knows; jobs it has forgotten are left out.
+pub fn job_states(ids: &[String]) -> Result<Vec<JobState>, SlurmError> {
+    if ids.is_empty() {
+        return Ok(Vec::new());
+    }
+    let args: Vec<String> = ["-h", "-r", "-t", "all", "-j", &ids.join(","), "-o", "%i|%T|%r"].map(String::from).to_vec();
+    let out = match run("squeue", &args, QUERY_TIMEOUT) {
+        Ok(out) => out,
+        // Every id unknown (finished and forgotten): squeue says so and exits 1.
+        Err(SlurmError::Failed { message, .. }) if message.contains("Invalid job id") => return Ok(Vec::new()),
+        Err(e) => return Err(e),
+    };
+    Ok(out
+        .lines()
+        .filter_map(|line| {
+            let mut f = line.trim().splitn(3, '|');
+            let (id, state, reason) = (f.next()?, f.next()?, f.next().unwrap_or(""));
+            Some(JobState { id: id.to_string(), state: state.to_string(), reason: reason.to_string() })
+        })
+        .collect())
+}
+
+/// Refuse an `--sbatch-arg` that sets what skg-solve sets itself.
+fn check_sbatch_args(args: &[String]) -> Result<(), SlurmError> {
+    for arg in args {
+        let name = arg.split('=').next().unwrap_or(arg);
+        for (long, short) in RESERVED {
+            // getopt also takes an unambiguous abbreviation of a long option (--arr, --dep).
+            let is_long = name == *long || (name.len() >= 5 && name.starts_with("--") && long.starts_with(name));
+            let is_short = short.is_some_and(|s| arg.starts_with(s) && !arg.starts_with("--"));
+            if is_long || is_short {
+                return Err(SlurmError::Reserved { arg: arg.clone(), option: long.to_string() });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The array specification of the shards `ks` (sorted): `1-3,7,9-12`.
+pub fn array_spec(ks: &[usize]) -> String {
+    let mut parts = Vec::new();
+    let mut i = 0;
+    while i < ks.len() {
+        let mut j = i;
+        while j + 1 < ks.len() && ks[j + 1] == ks[j] + 1 {
+            j += 1;
+        }
+        parts.push(if j == i { ks[i].to_string() } else { format!("{}-{}", ks[i], ks[j]) });
+        i = j + 1;
+    }
+    parts.join(",")
+}
+
+/// The scripts of a submission into `dir`.
+struct Scripts {
+    shard: PathBuf,
+    merge: PathBuf,
+    logs: PathBuf,
+}
+
+/// Write `DIR/slurm/shard.sh` and `merge.sh` (every path absolute) and create
+/// `DIR/slurm/logs` (Slurm fails a task whose output file cannot be opened, silently).
+fn write_scripts(dir: &Path, layout: &ShardLayout, exe: &Path) -> Result<Scripts, SlurmError> {
+    let slurm = dir.join("slurm");
+    let logs = slurm.join("logs");
+    std::fs::create_dir_all(&logs).map_err(|source| SweepError::CreateDir { path: logs.clone(), source })?;
+    let (q_dir, q_exe, q_file) =
+        (shell_quote(&dir.to_string_lossy()), shell_quote(&exe.to_string_lossy()), shell_quote(&layout.sweep_file.to_string_lossy()));
+    let shards_dir = shell_quote(&format!("{}/", dir.join("shards").display()));
+    let version = skg_core::scene::provenance::VERSION;
+    let shard = format!(
+        "#!/bin/bash\n\
+         # Written by skg-solve {version} (`skg-solve sweep --slurm`). Task k of the array job runs shard\n\
+         # k/{k} of the sweep {name} into {dir}/shards/k with one worker per CPU that Slurm\n\
+         # gives it (--cpus-per-task, else the CPUs of its allocation). Submitted with\n\
+         # --array=<the incomplete shards>: see {dir}/slurm/jobs.json.\n\
+         cd {q_dir} || exit 1\n\
+         k=${{SLURM_ARRAY_TASK_ID:?this script runs as a task of a Slurm array job}}\n\
+         jobs=${{SLURM_CPUS_PER_TASK:-${{SLURM_CPUS_ON_NODE:-1}}}}\n\
+         exec {q_exe} sweep {q_file} --shard \"$k/{k}\" -o {shards_dir}\"$k\" --jobs \"$jobs\" --yes\n",
+        k = layout.shards,
+        name = layout.name,
+        dir = dir.display(),
+    );
+    let merge = format!(
+        "#!/bin/bash\n\
+         # Written by skg-solve {version} (`skg-solve sweep --slurm`). Runs after the array job of the\n\
+         # shards has ended (--dependency=afterany): merges {dir}/shards/* into\n\
+         # {dir}/results.csv if every point is there (else exits 1 naming the\n\
+         # incomplete shards; running the same skg-solve sweep --slurm again submits only them).\n\
+         cd {q_dir} || exit 1\n\
+         exec {q_exe} sweep-merge {q_dir}\n",
+        dir = dir.display(),
+    );
+    let paths = Scripts { shard: slurm.join("shard.sh"), merge: slurm.join("merge.sh"), logs };
+    for (path, text) in [(&paths.shard, shard), (&paths.merge, merge)] {
+        output::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+        use std::os::unix::fs::PermissionsExt;
+        let _ = std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o755));
+    }
+    Ok(paths)
+}
+
+/// Options of [`submit`].
+#[derive(Debug, Clone)]
+pub struct SubmitOptions {
+    /// The number of shards (None: the directory's, or [`shards::default_shards`]).
+    pub shards: Option<usize>,
+    /// Extra arguments for both sbatch commands (`--partition=…`, `--time=…`).
+    pub sbatch_args: Vec<String>,
+    /// The skg-solve executable the jobs run (absolute).
+    pub exe: PathBuf,
+    /// Write the scripts and say what would be submitted, without submitting.
+    pub dry_run: bool,
+}
+
+/// What [`submit`] did.
+#[derive(Debug, Clone)]
+pub struct SubmitReport {
+    /// The sweep directory (absolute).
+    pub dir: PathBuf,
+    /// Its layout.
+    pub layout: ShardLayout,
+    /// Each shard's state before the submission.
+    pub states: Vec<ShardState>,
+    /// The shards submitted (or that a dry run would submit).
+    pub submitted: Vec<usize>,
+    /// The array job's id (None: no shard to run, or a dry run).
+    pub array_job: Option<String>,
+    /// The merge job's id (None: nothing to do, or a dry run).
+    pub merge_job: Option<String>,
+    /// The sbatch command lines, as a shell would read them (a dry run's merge command
+    /// depends on `<array job id>`).
+    pub commands: Vec<String>,
+    /// Whether `DIR/results.csv` already holds every point (nothing submitted).
+    pub merged: bool,
+    /// Things the user should know (a check that could not be made in a dry run).
+    pub notes: Vec<String>,
+}
+
+/// Submit the incomplete shards of the sweep `file` into `dir` as one array job and a
+/// merge job after it (the module documentation); on a directory with every shard
+/// complete but no merge, only the merge job; with every point merged, nothing. Refused
+/// while jobs of an earlier submission into `dir` are queued or running. The directory's
+/// lock is held while it is inspected and the jobs are submitted (the merge job waits for
+/// it).
+pub fn submit(file: &SweepFile, expanded: &Expanded, dir: &Path, opts: &SubmitOptions) -> Result<SubmitReport, SlurmError> {
+    check_sbatch_args(&opts.sbatch_args)?;
+    let dir = std::path::absolute(dir).map_err(crate::read_err(dir))?;
+    let text = dir.to_string_lossy();
+    if text.contains('%') || text.contains('\\') {
+        return Err(SlurmError::Path { path: dir.clone(), what: "`%` or `\\`" });
+    }
+    if text.contains('\n') {
+        return Err(SlurmError::Path { path: dir.clone(), what: "a line break" });
+    }
+    let lock = output::OutputDir::lock(&dir).map_err(SweepError::from)?;
+    let (layout, states) = shards::prepare(file, expanded, &dir, &PrepareOptions { shards: opts.shards, runner: Runner::Slurm })?;
+    let mut report = SubmitReport {
+        dir: dir.clone(),
+        layout: layout.clone(),
+        submitted: states.iter().filter(|s| !s.complete()).map(|s| s.k).collect(),
+        states,
+        array_job: None,
+        merge_job: None,
+        commands: Vec::new(),
+        merged: shards::merged(&dir),
+        notes: Vec::new(),
+    };
+    let mut jobs = JobsFile::read(&dir)?;
+    let earlier: Vec<String> = jobs.submissions.iter().flat_map(Submission::job_ids).collect();
+    if !earlier.is_empty() {
+        match job_states(&earlier) {
+            Ok(states) => {
+                let active: Vec<&JobState> = states.iter().filter(|s| s.active()).collect();
+                if !active.is_empty() {
+                    let list: Vec<String> = active.iter().map(|s| format!("{} {}", s.id, s.state)).collect();
+                    return Err(SlurmError::Active { dir, jobs: list.join(", "), ids: earlier.join(",") });
+                }
+            }
+            Err(e) if opts.dry_run => {
+                report.notes.push(format!("not checked whether the earlier jobs ({}) still run: {e}", earlier.join(",")))
+            }
+            Err(e) => return Err(SlurmError::Unchecked { dir, ids: earlier.join(","), reason: e.to_string() }),
+        }
+    }
+    if report.submitted.is_empty() && report.merged {
+        return Ok(report);
+    }
+    let scripts = write_scripts(&dir, &layout, &opts.exe)?;
+    let job_name = format!("skg-{}", layout.name);
+    let array_args = (!report.submitted.is_empty()).then(|| {
+        let mut a = vec![
+            "--parsable".to_string(),
+            format!("--array={}", array_spec(&report.submitted)),
+            format!("--job-name={job_name}"),
+            format!("--output={}", scripts.logs.join("shard-%A_%a.out").display()),
+        ];
+        a.extend(opts.sbatch_args.iter().cloned());
+        a.push(scripts.shard.display().to_string());
+        a
+    });
+    let merge_args = |dependency: Option<&str>| {
+        let mut a = vec!["--parsable".to_string()];
+        a.extend(dependency.map(|id| format!("--dependency=afterany:{id}")));
+        a.push(format!("--job-name={job_name}-merge"));
+        a.push(format!("--output={}", scripts.logs.join("merge-%j.out").display()));
+        a.extend(opts.sbatch_args.iter().cloned());
+        a.push(scripts.merge.display().to_string());
+        a
+    };
+    if opts.dry_run {
+        report.commands.extend(array_args.as_ref().map(|a| command_text("sbatch", a)));
+        report.commands.push(command_text("sbatch", &merge_args(array_args.as_ref().map(|_| "<array job id>"))));
+        drop(lock);
+        return Ok(report);
+    }
+    let job_id = |args: &[String]| -> Result<String, SlurmError> {
+        let out = run("sbatch", args, SBATCH_TIMEOUT)?;
+        // `N`, or `N;cluster` on a federation.
+        let id = out.trim().split(';').next().unwrap_or("").trim().to_string();
+        if id.is_empty() || !id.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(SlurmError::NoJobId { command: command_text("sbatch", args), stdout: out });
+        }
+        Ok(id)
+    };
+    let mut submission = Submission {
+        submitted_unix: std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs()),
+        array_job: None,
+        shards: report.submitted.clone(),
+        merge_job: None,
+        sbatch_args: opts.sbatch_args.clone(),
+    };
+    if let Some(args) = &array_args {
+        report.commands.push(command_text("sbatch", args));
+        submission.array_job = Some(job_id(args)?);
+    }
+    let args = merge_args(submission.array_job.as_deref());
+    report.commands.push(command_text("sbatch", &args));
+    let merge = job_id(&args);
+    if let Ok(id) = &merge {
+        submission.merge_job = Some(id.clone());
+    }
+    jobs.submissions.push(submission.clone());
+    output::write_json(&JobsFile::path(&dir), &jobs)?;
+    drop(lock);
+    match (merge, submission.array_job.clone()) {
+        (Ok(_), _) => {}
+        (Err(e), None) => return Err(e),
+        (Err(e), Some(array)) => {
+            let cancelled = match run("scancel", std::slice::from_ref(&array), QUERY_TIMEOUT) {
+                Ok(_) => format!("cancelled array job {array}; run the command again"),
+                Err(c) => format!("cancelling array job {array} failed too ({c}): cancel it yourself (scancel {array})"),
+            };
+            return Err(SlurmError::MergeNotSubmitted { array, source: Box::new(e), cancelled });
+        }
+    }
+    report.array_job = submission.array_job;
+    report.merge_job = submission.merge_job;
+    Ok(report)
+}
+
+/// What [`wait_for_merge`] saw last.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WaitOutcome {
+    /// The merge job's last state seen (None if Slurm had already forgotten it).
+    pub merge: Option<JobState>,
+}
+
+/// Poll squeue until the merge job `merge` has ended (every 0.5 s at first, then less
+/// often, up to every 30 s), calling `progress` with a line on the jobs whenever it
+/// changes. squeue failing (a controller restarting) is reported through `progress` and
+/// tolerated for 10 minutes in a row.
+pub fn wait_for_merge(array: Option<&str>, merge: &str, mut progress: impl FnMut(&str)) -> Result<WaitOutcome, SlurmError> {
+    let ids: Vec<String> = array.into_iter().map(str::to_string).chain([merge.to_string()]).collect();
+    let started = Instant::now();
+    let mut last_text = String::new();
+    let mut last_merge = None;
+    let mut failing_since: Option<Instant> = None;
+    loop {
+        match job_states(&ids) {
+            Ok(states) => {
+                failing_since = None;
+                let merge_state = states.iter().find(|s| s.id == merge).cloned();
+                let text = progress_text(array, merge, &states);
+                if text != last_text {
+                    progress(&text);
+                    last_text = text;
+                }
+                match merge_state {
+                    Some(s) if s.active() => last_merge = Some(s),
+                    Some(s) => return Ok(WaitOutcome { merge: Some(s) }),
+                    // Forgotten: it ended more than MinJobAge ago (or was never known).
+                    None => return Ok(WaitOutcome { merge: last_merge.filter(|s: &JobState| !s.active()) }),
+                }
+            }
+            Err(e) => {
+                let since = *failing_since.get_or_insert_with(Instant::now);
+                if since.elapsed() > QUERY_FAILURES_FOR {
+                    return Err(e);
+                }
+                progress(&format!("squeue failed ({e}); trying again"));
+            }
+        }
+        let pause = (started.elapsed() / 20).clamp(Duration::from_millis(500), Duration::from_secs(30));
+        std::thread::sleep(pause);
+    }
+}
+
+/// `array 17: 2 RUNNING, 1 PENDING; merge 18: PENDING (Dependency)`.
+fn progress_text(array: Option<&str>, merge: &str, states: &[JobState]) -> String {
+    let mut parts = Vec::new();
+    if let Some(a) = array {
+        let mut counts: std::collections::BTreeMap<&str, usize> = Default::default();
+        for s in states.iter().filter(|s| s.task_of(a).is_some()) {
+            *counts.entry(s.state.as_str()).or_insert(0) += 1;
+        }
+        let text: Vec<String> = counts.iter().map(|(state, n)| format!("{n} {state}")).collect();
+        parts.push(format!("array job {a}: {}", if text.is_empty() { "ended".into() } else { text.join(", ") }));
+    }
+    let m = states.iter().find(|s| s.id == merge);
+    parts.push(match m {
+        Some(s) if s.reason.is_empty() || s.reason == "None" => format!("merge job {merge}: {}", s.state),
+        Some(s) => format!("merge job {merge}: {} ({})", s.state, s.reason),
+        None => format!("merge job {merge}: ended"),
+    });
+    parts.join("; ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn array_specs_and_quoting() {
+        assert_eq!(array_spec(&[1, 2, 3, 7, 9, 10, 11, 12]), "1-3,7,9-12");
+        assert_eq!(array_spec(&[4]), "4");
+        assert_eq!(shell_quote("/a/b-c_d.toml"), "/a/b-c_d.toml");
+        assert_eq!(shell_quote("/my dir/it's"), r"'/my dir/it'\''s'");
+        assert_eq!(shell_quote(""), "''");
+    }
+
+    #[test]
+    fn options_that_skg_solve_sets_are_refused() {
+        for bad in
+            ["--array=1-3", "--array", "--arr=2", "-a", "-a1", "--dependency=afterok:3", "--output=x", "-o", "--parsable", "--wait", "-W"]
+        {
+            assert!(check_sbatch_args(&[bad.to_string()]).is_err(), "{bad}");
+        }
+        for good in
+            ["--partition=debug", "-p", "debug", "--time=1:00:00", "--mem=4G", "-c", "4", "--cpus-per-task=8", "--account=x", "--qos=long"]
+        {
+            assert!(check_sbatch_args(&[good.to_string()]).is_ok(), "{good}");
+        }
+    }
+
+    #[test]
+    fn task_ids_name_their_shard() {
+        let s = JobState { id: "17_3".into(), state: "RUNNING".into(), reason: "None".into() };
+        assert_eq!(s.task_of("17"), Some(3));
+        assert_eq!(s.task_of("1"), None);
+        assert!(s.active());
+        assert!(!JobState { state: "CANCELLED".into(), ..s }.active());
+    }
+}
