@@ -386,9 +386,11 @@ fn under_resolved_wall(o: &Outcome) -> Option<(&String, &WallResolution)> {
     o.verification.wall_resolution.iter().min_by(|a, b| a.1.steps.total_cmp(&b.1.steps)).filter(|(_, r)| r.steps < MIN_STEPS)
 }
 
-/// The operator of the next higher order, if there is one.
+/// The operator of the next higher order in the same family (centred, or dissipative),
+/// if there is one.
 fn higher_order(op: OperatorKind) -> Option<OperatorKind> {
-    OperatorKind::ALL.iter().position(|&k| k == op).and_then(|i| OperatorKind::ALL.get(i + 1)).copied()
+    let family = if op.is_dissipative() { OperatorKind::DISSIPATIVE } else { OperatorKind::CENTRED };
+    family.iter().position(|&k| k == op).and_then(|i| family.get(i + 1)).copied()
 }
 
 /// Cubic Hermite interpolation of the coordinates of `tr` (values and velocities) at `times`.
@@ -435,6 +437,9 @@ mod tests {
         assert_eq!(higher_order(OperatorKind::Sbp242), Some(OperatorKind::Sbp363));
         assert_eq!(higher_order(OperatorKind::Sbp363), Some(OperatorKind::Sbp484));
         assert_eq!(higher_order(OperatorKind::Sbp484), None);
+        assert_eq!(higher_order(OperatorKind::Sbp121Ad), Some(OperatorKind::Sbp242Ad));
+        assert_eq!(higher_order(OperatorKind::Sbp363Ad), Some(OperatorKind::Sbp484Ad));
+        assert_eq!(higher_order(OperatorKind::Sbp484Ad), None);
     }
 
     #[test]
