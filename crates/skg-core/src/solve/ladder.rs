@@ -341,16 +341,24 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
         }
         _ if v.max_error.is_none() => "fix the scene so that every quantity stays finite along the motion".to_string(),
         _ => {
-            let oddeven = v.max_error.is_some_and(|e| v.odd_even_max >= 0.25 * e);
+            // A dissipative operator damps the mode: its odd-even amplitude is a smooth
+            // transient (verify's module documentation).
+            let oddeven = v.max_error.is_some_and(|e| v.odd_even_max >= 0.25 * e) && !scene.operator.is_dissipative();
             let windows = matches!(o.method, Method::Windows { .. });
+            let damped = scene.operator.dissipative();
             let cure = if oddeven && !windows && !windows_tried {
-                format!("solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even mode's growth")
+                format!(
+                    "solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even \
+                     mode's growth, or use the dissipative operator {damped} (--operator {damped}), which damps it"
+                )
             } else {
                 let refine = refine(scene, o);
                 let refine = match higher_order(scene.operator).filter(|_| under_resolved_wall(o).is_none()) {
                     Some(op) => format!("{refine} or use a higher-order operator (--operator {})", op.name()),
                     None => refine,
                 };
+                let refine =
+                    if oddeven { format!("{refine}, or the dissipative operator {damped}, which damps the odd-even mode") } else { refine };
                 if friction {
                     format!("{refine}, or {friction_hint}")
                 } else {
