@@ -8,8 +8,8 @@
 //! ```
 //!
 //! with `ε` = [`EPSILON`] = 1/10 and `D_p` the `(N − p) × N` matrix of undivided `p`-th
-//! differences, `(D_p u)_k = Σ_{l=0..p} (−1)^{p−l} C(p, l) u_{k+l}`, `p` = boundary order
-//! + 1 ([`OperatorKind::dissipation_order`]). MSN2004 write the dissipation as
+//! differences, `(D_p u)_k = Σ_{l=0..p} (−1)^{p−l} C(p, l) u_{k+l}`, and `p` one more than
+//! the boundary order ([`OperatorKind::dissipation_order`](super::OperatorKind::dissipation_order)). MSN2004 write the dissipation as
 //! `H⁻¹ D_pᵀ B_p D_p` with a boundary-aware weight `B_p`; here `B_p = I` and `D_p` has no
 //! boundary rows (the simplification measured in the research for issue 22).
 //!
@@ -86,7 +86,7 @@ fn binomial(n: usize, k: usize) -> i128 {
 
 /// The stencil of one row of `D_p`: `c_l = (−1)^{p−l} C(p, l)`, `l = 0..=p`.
 fn difference_stencil(p: usize) -> Vec<i128> {
-    (0..=p).map(|l| if (p - l) % 2 == 0 { binomial(p, l) } else { -binomial(p, l) }).collect()
+    (0..=p).map(|l| if (p - l).is_multiple_of(2) { binomial(p, l) } else { -binomial(p, l) }).collect()
 }
 
 /// The closures and the interior stencil of `Δt·D+`, as exact fractions.

@@ -286,7 +286,7 @@ fn undivided_differences(n: usize, p: usize) -> Vec<Vec<f64>> {
         .map(|k| {
             let mut row = vec![0.0; n];
             for l in 0..=p {
-                row[k + l] = if (p - l) % 2 == 0 { binom(l) } else { -binom(l) };
+                row[k + l] = if (p - l).is_multiple_of(2) { binom(l) } else { -binom(l) };
             }
             row
         })
