@@ -1013,8 +1013,9 @@ pub fn estimated_cost(scene: &Scene, method: &Method) -> f64 {
         Method::Skg => {
             let width = match scene.operator {
                 OperatorKind::Sbp121 => 1.0,
-                OperatorKind::Sbp242 => 2.0,
-                _ => 3.0,
+                OperatorKind::Sbp242 | OperatorKind::Sbp121Ad => 2.0,
+                OperatorKind::Sbp363 | OperatorKind::Sbp484 | OperatorKind::Sbp242Ad => 3.0,
+                OperatorKind::Sbp363Ad | OperatorKind::Sbp484Ad => 4.0,
             };
             let full = if scene.formulation == Formulation::Full { 2.0 } else { 1.0 };
             n * width * full

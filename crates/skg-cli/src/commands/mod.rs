@@ -43,7 +43,9 @@ pub struct SceneArgs {
     /// Set a scene parameter, e.g. `--set sigma=1/200` (repeatable; value: number or expression).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Override the SBP operator: SBP121, SBP242 (alias SBP424), SBP363, SBP484.
+    /// Override the SBP operator: SBP121, SBP242 (alias SBP424), SBP363, SBP484, or one
+    /// with artificial dissipation, SBP121-AD, SBP242-AD, SBP363-AD, SBP484-AD (damps the
+    /// odd-even mode that damping or contraction amplifies; docs/mathematics.md §3).
     #[arg(long, value_name = "NAME")]
     pub operator: Option<OperatorKind>,
     /// Formulation: `reduced` (physical limit, half the unknowns; default) or `full`
@@ -69,8 +71,9 @@ pub struct SceneArgs {
     #[arg(long, value_name = "NAME")]
     pub backend: Option<Backend>,
     /// Solve in successive windows of SECONDS (each starts from the state the previous one
-    /// reached and discards its last --overlap); cures the odd-even mode that damping
-    /// amplifies and makes long spans linear in cost. 0 turns the scene's windows off.
+    /// reached and discards its last --overlap); bounds the odd-even mode that damping
+    /// amplifies (an -AD operator damps it) and makes long spans linear in cost. 0 turns
+    /// the scene's windows off.
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = non_negative)]
     pub window: Option<f64>,
     /// Seconds discarded at the end of each window [default: a quarter of the window].

@@ -110,7 +110,11 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         } else {
             ""
         };
-        println!("  residual {:.1e}, energy drift {:.3e} (last two nodes excluded{energy_note})", d.max_residual, d.energy_drift);
+        let excluded = match d.energy_drift_skip {
+            2 => "last two nodes excluded".to_string(),
+            k => format!("last {k} nodes excluded: the end layer of {}", scene.operator),
+        };
+        println!("  residual {:.1e}, energy drift {:.3e} ({excluded}{energy_note})", d.max_residual, d.energy_drift);
         for (name, drift) in &d.max_position_drift {
             println!("  position constraint {name}: drift max |h| {drift:.1e}");
         }

@@ -27,6 +27,39 @@
 //! the SBP identity and the accuracy conditions (see the documentation there); the tests
 //! are in `sbp/tests.rs`.
 //!
+//! # Dissipative operators
+//!
+//! Each centred operator has a dissipative sibling, `SBP121-AD`, `SBP242-AD`,
+//! `SBP363-AD`, `SBP484-AD` ([`OperatorKind::DISSIPATIVE`]): the centred `D` plus
+//! SBP-compatible artificial dissipation (Mattsson, Svärd & Nordström, *Stable and
+//! accurate artificial dissipation*, J. Sci. Comput. 21 (2004) 57–79),
+//!
+//! ```text
+//! D+ = D − ε H⁻¹ D_pᵀ D_p,   D− = D + ε H⁻¹ D_pᵀ D_p,   ε = 1/10,  p = boundary order + 1,
+//! ```
+//!
+//! `D_p` the undivided `p`-th difference (with `B_p = I`, a simplification of MSN2004's
+//! `D_pᵀ B_p D_p`; module [`dissipation`]). `(H, D+, D−)` is an upwind SBP pair
+//! (Mattsson, *Diagonal-norm upwind SBP operators*, J. Comput. Phys. 335 (2017)
+//! 283–310):
+//!
+//! ```text
+//! H D+ + (H D−)ᵀ = B,   (D+ + D−)/2 = D,   H (D+ − D−) = −2ε D_pᵀ D_p ≤ 0.
+//! ```
+//!
+//! The norm, the orders, the quadrature and the exactness degrees are the centred
+//! operator's; the stencils are wider (interior half-width `p` instead of the centred
+//! radius), and `SBP121-AD` has two boundary rows instead of one (min. 4 nodes). The
+//! [`SbpOperator`] of a dissipative kind is `D+`, the operator of every time derivative in
+//! the action; [`SbpOperator::partner`] is `D−`, which summation by parts puts into the
+//! equations of motion (docs/mathematics.md §3). `D+` damps the odd-even mode of the
+//! centred stencils that damping or contraction amplifies. Its coefficients are not
+//! tabulated: they are built in exact rational arithmetic from the centred tables, the
+//! binomial coefficients and ε, and the tests compare them with an independent table.
+//!
+//! [`OperatorKind::ALL`] lists all eight kinds (parsing, listings);
+//! [`OperatorKind::CENTRED`] the centred family, an order ladder from SBP121 to SBP484.
+//!
 //! **Place in the flow.** The first stage: the operators are numbers on a grid and use
 //! nothing else of this crate (their tests fit observed orders with
 //! [`convergence`](crate::convergence), which is as low). The scene names its operator
@@ -39,12 +72,25 @@ use std::str::FromStr;
 pub type Frac = (i64, i64);
 
 pub mod coefficients;
+pub mod dissipation;
 
-/// The coefficient set of one operator kind.
+/// The centred coefficient set of one operator kind (a dissipative kind's is its centred
+/// operator's).
 struct Coefficients {
     norm: &'static [Frac],
     boundary: &'static [&'static [Frac]],
     interior: &'static [Frac],
+}
+
+/// The coefficients of `Δt·D` (for a dissipative kind `Δt·D+`) as exact fractions.
+struct Blocks {
+    norm: &'static [Frac],
+    /// Row `i` of the left closure, from column 0.
+    left: Vec<Vec<Frac>>,
+    /// Row `N−1−i` of the right closure, entry `j` for column `N−1−j`.
+    right: Vec<Vec<Frac>>,
+    /// The interior stencil at offsets `−r..=r`.
+    interior: Vec<Frac>,
 }
 
 fn frac(f: Frac) -> f64 {
@@ -53,9 +99,11 @@ fn frac(f: Frac) -> f64 {
 
 /// Which SBP first-derivative operator to use.
 ///
-/// Serialized as its canonical name (`"SBP121"`, `"SBP242"`, `"SBP363"`, `"SBP484"`); deserialization
-/// also takes the lower-case names and the alias `"SBP424"` of SBP242. [`FromStr`] is
-/// case-insensitive.
+/// Serialized as its canonical name (`"SBP121"`, `"SBP242"`, `"SBP363"`, `"SBP484"`,
+/// `"SBP121-AD"`, `"SBP242-AD"`, `"SBP363-AD"`, `"SBP484-AD"`); deserialization also takes
+/// the lower-case names and the alias `"SBP424"` of SBP242. [`FromStr`] is
+/// case-insensitive and also takes the dissipative names without the hyphen
+/// (`"SBP242AD"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum OperatorKind {
     /// Second order inside, first order at the boundary; trapezoid-rule norm.
@@ -70,29 +118,100 @@ pub enum OperatorKind {
     /// Eighth order inside, fourth order at the boundary.
     #[serde(rename = "SBP484", alias = "sbp484", alias = "Sbp484")]
     Sbp484,
+    /// SBP121 with artificial dissipation of order 2 (see the module documentation).
+    #[serde(rename = "SBP121-AD", alias = "sbp121-ad")]
+    Sbp121Ad,
+    /// SBP242 with artificial dissipation of order 3.
+    #[serde(rename = "SBP242-AD", alias = "sbp242-ad")]
+    Sbp242Ad,
+    /// SBP363 with artificial dissipation of order 4.
+    #[serde(rename = "SBP363-AD", alias = "sbp363-ad")]
+    Sbp363Ad,
+    /// SBP484 with artificial dissipation of order 5.
+    #[serde(rename = "SBP484-AD", alias = "sbp484-ad")]
+    Sbp484Ad,
 }
 
 impl OperatorKind {
-    /// Every operator kind, from lowest to highest order.
-    pub const ALL: [OperatorKind; 4] = [OperatorKind::Sbp121, OperatorKind::Sbp242, OperatorKind::Sbp363, OperatorKind::Sbp484];
+    /// The centred operators, from lowest to highest order: the order ladder
+    /// (a remedy's "higher-order operator" climbs it).
+    pub const CENTRED: [OperatorKind; 4] = [OperatorKind::Sbp121, OperatorKind::Sbp242, OperatorKind::Sbp363, OperatorKind::Sbp484];
 
-    /// Canonical name: `"SBP121"`, `"SBP242"`, `"SBP363"`, `"SBP484"`.
+    /// The dissipative operators, from lowest to highest order, in the order of their
+    /// centred operators.
+    pub const DISSIPATIVE: [OperatorKind; 4] =
+        [OperatorKind::Sbp121Ad, OperatorKind::Sbp242Ad, OperatorKind::Sbp363Ad, OperatorKind::Sbp484Ad];
+
+    /// Every operator kind: the centred ones from lowest to highest order, then the
+    /// dissipative ones in the same order (for parsing and listing; an order ladder
+    /// iterates [`CENTRED`](Self::CENTRED) or [`DISSIPATIVE`](Self::DISSIPATIVE)).
+    pub const ALL: [OperatorKind; 8] = [
+        OperatorKind::Sbp121,
+        OperatorKind::Sbp242,
+        OperatorKind::Sbp363,
+        OperatorKind::Sbp484,
+        OperatorKind::Sbp121Ad,
+        OperatorKind::Sbp242Ad,
+        OperatorKind::Sbp363Ad,
+        OperatorKind::Sbp484Ad,
+    ];
+
+    /// Canonical name: `"SBP121"`, `"SBP242"`, `"SBP363"`, `"SBP484"`, `"SBP121-AD"`,
+    /// `"SBP242-AD"`, `"SBP363-AD"`, `"SBP484-AD"`.
     pub fn name(self) -> &'static str {
         match self {
             OperatorKind::Sbp121 => "SBP121",
             OperatorKind::Sbp242 => "SBP242",
             OperatorKind::Sbp363 => "SBP363",
             OperatorKind::Sbp484 => "SBP484",
+            OperatorKind::Sbp121Ad => "SBP121-AD",
+            OperatorKind::Sbp242Ad => "SBP242-AD",
+            OperatorKind::Sbp363Ad => "SBP363-AD",
+            OperatorKind::Sbp484Ad => "SBP484-AD",
         }
     }
 
-    /// Order of accuracy of the interior (central) stencil: 2, 4, 6, 8.
-    pub fn interior_order(self) -> usize {
+    /// The centred operator: the kind itself, or the one a dissipative kind is built on.
+    pub fn centred(self) -> OperatorKind {
         match self {
+            OperatorKind::Sbp121Ad => OperatorKind::Sbp121,
+            OperatorKind::Sbp242Ad => OperatorKind::Sbp242,
+            OperatorKind::Sbp363Ad => OperatorKind::Sbp363,
+            OperatorKind::Sbp484Ad => OperatorKind::Sbp484,
+            centred => centred,
+        }
+    }
+
+    /// The dissipative operator built on this kind's centred operator (a dissipative
+    /// kind is its own).
+    pub fn dissipative(self) -> OperatorKind {
+        match self.centred() {
+            OperatorKind::Sbp121 => OperatorKind::Sbp121Ad,
+            OperatorKind::Sbp242 => OperatorKind::Sbp242Ad,
+            OperatorKind::Sbp363 => OperatorKind::Sbp363Ad,
+            _ => OperatorKind::Sbp484Ad,
+        }
+    }
+
+    /// Whether the operator carries artificial dissipation (`D+ ≠ D−`).
+    pub fn is_dissipative(self) -> bool {
+        self != self.centred()
+    }
+
+    /// The order `p` of the dissipation `ε H⁻¹ D_pᵀ D_p` (boundary order + 1: 2, 3, 4, 5),
+    /// or `None` for a centred operator.
+    pub fn dissipation_order(self) -> Option<usize> {
+        self.is_dissipative().then(|| self.boundary_order() + 1)
+    }
+
+    /// Order of accuracy of the interior stencil: 2, 4, 6, 8 (a dissipative kind's is
+    /// its centred operator's: the dissipation is of higher order there).
+    pub fn interior_order(self) -> usize {
+        match self.centred() {
             OperatorKind::Sbp121 => 2,
             OperatorKind::Sbp242 => 4,
             OperatorKind::Sbp363 => 6,
-            OperatorKind::Sbp484 => 8,
+            _ => 8,
         }
     }
 
@@ -108,9 +227,11 @@ impl OperatorKind {
     }
 
     /// Number of rows at each end of the grid whose stencil is a boundary closure
-    /// (1, 4, 6, 8); the rows in between use the interior stencil.
+    /// (1, 4, 6, 8; 2, 4, 6, 8 for the dissipative kinds); the rows in between use the
+    /// interior stencil.
     pub fn boundary_rows(self) -> usize {
-        self.coefficients().boundary.len()
+        let centred = self.coefficients().boundary.len();
+        self.dissipation_order().map_or(centred, |p| centred.max(p))
     }
 
     /// Literature reference for the coefficients.
@@ -128,22 +249,46 @@ impl OperatorKind {
             OperatorKind::Sbp484 => {
                 "K. Mattsson and J. Nordstrom, J. Comput. Phys. 199 (2004) 503-540, order 8 (exact fractions as in SummationByPartsOperators.jl, MattssonNordstrom2004)"
             }
+            _ => {
+                "the centred operator plus artificial dissipation -eps H^-1 D_p^T D_p (eps = 1/10, B_p = I): K. Mattsson, M. Svard and \
+                 J. Nordstrom, J. Sci. Comput. 21 (2004) 57-79; an upwind SBP pair as in K. Mattsson, J. Comput. Phys. 335 (2017) 283-310"
+            }
         }
     }
 
     /// Smallest number of grid nodes for which the operator is defined (the two boundary
-    /// blocks must not overlap): 2 for SBP121, 8 for SBP242, 12 for SBP363, 16 for SBP484.
+    /// blocks must not overlap): 2 for SBP121, 4 for SBP121-AD, 8 for SBP242(-AD), 12 for
+    /// SBP363(-AD), 16 for SBP484(-AD).
     pub fn min_nodes(self) -> usize {
         2 * self.boundary_rows()
     }
 
+    /// The centred coefficient tables of this kind's centred operator.
     fn coefficients(self) -> Coefficients {
         use coefficients::*;
-        match self {
+        match self.centred() {
             OperatorKind::Sbp121 => Coefficients { norm: &H_121, boundary: &D_121, interior: &INTERIOR_121 },
             OperatorKind::Sbp242 => Coefficients { norm: &H_242, boundary: &D_242, interior: &INTERIOR_242 },
             OperatorKind::Sbp363 => Coefficients { norm: &H_363, boundary: &D_363, interior: &INTERIOR_363 },
-            OperatorKind::Sbp484 => Coefficients { norm: &H_484, boundary: &D_484, interior: &INTERIOR_484 },
+            _ => Coefficients { norm: &H_484, boundary: &D_484, interior: &INTERIOR_484 },
+        }
+    }
+
+    /// The exact coefficients of `Δt·D` (`Δt·D+` for a dissipative kind): the centred
+    /// tables with the right closure the negated mirror of the left one, or the
+    /// construction of [`dissipation`].
+    fn blocks(self) -> Blocks {
+        let c = self.coefficients();
+        match self.dissipation_order() {
+            None => {
+                let left: Vec<Vec<Frac>> = c.boundary.iter().map(|row| row.to_vec()).collect();
+                let right = left.iter().map(|row| row.iter().map(|&(a, b)| (-a, b)).collect()).collect();
+                Blocks { norm: c.norm, left, right, interior: c.interior.to_vec() }
+            }
+            Some(p) => {
+                let b = dissipation::blocks(c.norm, c.boundary, c.interior, p);
+                Blocks { norm: c.norm, left: b.left, right: b.right, interior: b.interior }
+            }
         }
     }
 }
@@ -156,7 +301,10 @@ impl fmt::Display for OperatorKind {
 
 /// Error of parsing an [`OperatorKind`] from a string.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown SBP operator `{input}`: expected one of SBP121, SBP242 (alias SBP424), SBP363, SBP484 (case-insensitive)")]
+#[error(
+    "unknown SBP operator `{input}`: expected one of SBP121, SBP242 (alias SBP424), SBP363, SBP484, or a dissipative SBP121-AD, \
+     SBP242-AD, SBP363-AD, SBP484-AD (case-insensitive)"
+)]
 pub struct ParseOperatorKindError {
     /// The rejected input.
     pub input: String,
@@ -166,15 +314,22 @@ impl FromStr for OperatorKind {
     type Err = ParseOperatorKindError;
 
     /// Case-insensitive; surrounding whitespace is ignored. `"SBP424"` (the paper's name
-    /// for the fourth-order operator) is an alias of `"SBP242"`.
+    /// for the fourth-order operator) is an alias of `"SBP242"`; a dissipative kind is
+    /// its centred name with the suffix `-AD` (or `AD`).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.trim().to_ascii_uppercase().as_str() {
-            "SBP121" => Ok(OperatorKind::Sbp121),
-            "SBP242" | "SBP424" => Ok(OperatorKind::Sbp242),
-            "SBP363" => Ok(OperatorKind::Sbp363),
-            "SBP484" => Ok(OperatorKind::Sbp484),
-            _ => Err(ParseOperatorKindError { input: s.to_string() }),
-        }
+        let upper = s.trim().to_ascii_uppercase();
+        let (centred, dissipative) = match upper.strip_suffix("-AD").or_else(|| upper.strip_suffix("AD")) {
+            Some(base) => (base, true),
+            None => (upper.as_str(), false),
+        };
+        let kind = match centred {
+            "SBP121" => OperatorKind::Sbp121,
+            "SBP242" | "SBP424" => OperatorKind::Sbp242,
+            "SBP363" => OperatorKind::Sbp363,
+            "SBP484" => OperatorKind::Sbp484,
+            _ => return Err(ParseOperatorKindError { input: s.to_string() }),
+        };
+        Ok(if dissipative { kind.dissipative() } else { kind })
     }
 }
 
@@ -198,10 +353,11 @@ pub enum SbpError {
 
 /// An SBP first-derivative operator on a uniform grid of `n` nodes with step `dt`,
 /// applied matrix-free (as SummationByPartsOperators.jl does): the left boundary
-/// closure rows, the interior stencil on every row in between, and the right closure,
-/// which mirrors the left one with the opposite sign
-/// (`D[N−1−i, N−1−j] = −D[i, j]`, 0-based). Only the nonzero coefficients of `D`
-/// (Δt included) are stored.
+/// closure rows, the interior stencil on every row in between, and the right closure.
+/// For a centred kind the right closure mirrors the left one with the opposite sign
+/// (`D[N−1−i, N−1−j] = −D[i, j]`, 0-based); for a dissipative kind it does not, and
+/// the operator is `D+` ([`partner`](Self::partner) gives `D−`). Only the nonzero
+/// coefficients (Δt included) are stored.
 #[derive(Debug, Clone)]
 pub struct SbpOperator {
     kind: OperatorKind,
@@ -210,10 +366,15 @@ pub struct SbpOperator {
     h: Vec<f64>,
     /// Nonzero entries `(column, D[i, column])` of each left boundary row `i`, columns ascending.
     left: Vec<Vec<(usize, f64)>>,
+    /// Nonzero entries `(j, D[N−1−i, N−1−j])` of each right boundary row `N−1−i`, `j` ascending.
+    right: Vec<Vec<(usize, f64)>>,
     /// Nonzero entries `(k, D[i, i − r + k])` of the interior stencil of half-width `r`.
     interior: Vec<(usize, f64)>,
     /// Half-width `r` of the interior stencil.
     radius: usize,
+    /// Whether this is the partner `D−` of the kind's operator `D+` (for a centred kind
+    /// the two are equal).
+    minus: bool,
 }
 
 /// Which part of the operator row `i` belongs to.
@@ -222,7 +383,7 @@ enum Part {
     Left(usize),
     /// An interior row.
     Interior,
-    /// A right boundary row: the mirror of left boundary row `m`.
+    /// A right boundary row: row `N−1−m`.
     Right(usize),
 }
 
@@ -236,7 +397,7 @@ impl SbpOperator {
         if n < min {
             return Err(SbpError::TooFewNodes { kind, nodes: n, min });
         }
-        let c = kind.coefficients();
+        let c = kind.blocks();
         let mut h = vec![dt; n];
         for (i, &w) in c.norm.iter().enumerate() {
             h[i] = frac(w) * dt;
@@ -246,9 +407,33 @@ impl SbpOperator {
         let nonzero = |row: &[Frac]| -> Vec<(usize, f64)> {
             row.iter().enumerate().filter(|(_, v)| v.0 != 0).map(|(j, &v)| (j, frac(v) / dt)).collect()
         };
-        let left = c.boundary.iter().map(|row| nonzero(row)).collect();
-        let interior = nonzero(c.interior);
-        Ok(SbpOperator { kind, n, dt, h, left, interior, radius: c.interior.len() / 2 })
+        let left = c.left.iter().map(|row| nonzero(row)).collect();
+        let right = c.right.iter().map(|row| nonzero(row)).collect();
+        let interior = nonzero(&c.interior);
+        Ok(SbpOperator { kind, n, dt, h, left, right, interior, radius: c.interior.len() / 2, minus: false })
+    }
+
+    /// The SBP partner `D− = −J D J` (`J` the flip of the grid): `H D + (H D−)ᵀ = B`.
+    /// For a centred kind it is the operator itself; for a dissipative kind's `D+` it is
+    /// `D−`, the operator of the equations of motion (and the partner of `D−` is `D+`).
+    pub fn partner(&self) -> SbpOperator {
+        let negated = |rows: &[Vec<(usize, f64)>]| -> Vec<Vec<(usize, f64)>> {
+            rows.iter().map(|row| row.iter().map(|&(j, c)| (j, -c)).collect()).collect()
+        };
+        let width = 2 * self.radius;
+        let interior = self.interior.iter().rev().map(|&(k, c)| (width - k, -c)).collect();
+        SbpOperator {
+            left: negated(&self.right),
+            right: negated(&self.left),
+            interior,
+            minus: !self.minus && self.kind.is_dissipative(),
+            ..self.clone()
+        }
+    }
+
+    /// Whether this is the partner `D−` of a dissipative kind ([`partner`](Self::partner)).
+    pub fn is_partner(&self) -> bool {
+        self.minus
     }
 
     /// The operator kind.
@@ -296,7 +481,7 @@ impl SbpOperator {
         match self.part(i) {
             Part::Left(m) => self.left[m].clone(),
             Part::Interior => self.interior.iter().map(|&(k, c)| (i + k - self.radius, c)).collect(),
-            Part::Right(m) => self.left[m].iter().rev().map(|&(j, c)| (self.n - 1 - j, -c)).collect(),
+            Part::Right(m) => self.right[m].iter().rev().map(|&(j, c)| (self.n - 1 - j, c)).collect(),
         }
     }
 
@@ -325,7 +510,7 @@ impl SbpOperator {
             *o = match self.part(i) {
                 Part::Left(m) => self.left[m].iter().fold(0.0, |acc, &(j, c)| acc + c * at(j)),
                 Part::Interior => self.interior.iter().fold(0.0, |acc, &(k, c)| acc + c * at(i + k - self.radius)),
-                Part::Right(m) => self.left[m].iter().rev().fold(0.0, |acc, &(j, c)| acc + -c * at(self.n - 1 - j)),
+                Part::Right(m) => self.right[m].iter().rev().fold(0.0, |acc, &(j, c)| acc + c * at(self.n - 1 - j)),
             };
         }
     }

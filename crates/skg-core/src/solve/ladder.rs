@@ -341,16 +341,24 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
         }
         _ if v.max_error.is_none() => "fix the scene so that every quantity stays finite along the motion".to_string(),
         _ => {
-            let oddeven = v.max_error.is_some_and(|e| v.odd_even_max >= 0.25 * e);
+            // A dissipative operator damps the mode: its odd-even amplitude is a smooth
+            // transient (verify's module documentation).
+            let oddeven = v.max_error.is_some_and(|e| v.odd_even_max >= 0.25 * e) && !scene.operator.is_dissipative();
             let windows = matches!(o.method, Method::Windows { .. });
+            let damped = scene.operator.dissipative();
             let cure = if oddeven && !windows && !windows_tried {
-                format!("solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even mode's growth")
+                format!(
+                    "solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even \
+                     mode's growth, or use the dissipative operator {damped} (--operator {damped}), which damps it"
+                )
             } else {
                 let refine = refine(scene, o);
                 let refine = match higher_order(scene.operator).filter(|_| under_resolved_wall(o).is_none()) {
                     Some(op) => format!("{refine} or use a higher-order operator (--operator {})", op.name()),
                     None => refine,
                 };
+                let refine =
+                    if oddeven { format!("{refine}, or the dissipative operator {damped}, which damps the odd-even mode") } else { refine };
                 if friction {
                     format!("{refine}, or {friction_hint}")
                 } else {
@@ -386,9 +394,11 @@ fn under_resolved_wall(o: &Outcome) -> Option<(&String, &WallResolution)> {
     o.verification.wall_resolution.iter().min_by(|a, b| a.1.steps.total_cmp(&b.1.steps)).filter(|(_, r)| r.steps < MIN_STEPS)
 }
 
-/// The operator of the next higher order, if there is one.
+/// The operator of the next higher order in the same family (centred, or dissipative),
+/// if there is one.
 fn higher_order(op: OperatorKind) -> Option<OperatorKind> {
-    OperatorKind::ALL.iter().position(|&k| k == op).and_then(|i| OperatorKind::ALL.get(i + 1)).copied()
+    let family = if op.is_dissipative() { OperatorKind::DISSIPATIVE } else { OperatorKind::CENTRED };
+    family.iter().position(|&k| k == op).and_then(|i| family.get(i + 1)).copied()
 }
 
 /// Cubic Hermite interpolation of the coordinates of `tr` (values and velocities) at `times`.
@@ -435,6 +445,9 @@ mod tests {
         assert_eq!(higher_order(OperatorKind::Sbp242), Some(OperatorKind::Sbp363));
         assert_eq!(higher_order(OperatorKind::Sbp363), Some(OperatorKind::Sbp484));
         assert_eq!(higher_order(OperatorKind::Sbp484), None);
+        assert_eq!(higher_order(OperatorKind::Sbp121Ad), Some(OperatorKind::Sbp242Ad));
+        assert_eq!(higher_order(OperatorKind::Sbp363Ad), Some(OperatorKind::Sbp484Ad));
+        assert_eq!(higher_order(OperatorKind::Sbp484Ad), None);
     }
 
     #[test]

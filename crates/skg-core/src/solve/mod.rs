@@ -41,5 +41,5 @@ pub use error::{SolveError, WindowError};
 pub use ladder::{solve_scene, solve_scene_with_progress};
 pub use outcome::{Attempt, Diagnostics, KineticLoss, Method, Outcome, Settings, Sizes, Timings, Work};
 pub use piece::{build_action, build_action_on, grid, solve_piece, Guess, Piece};
-pub use run::{outcome, sizes, solve_global, Run};
+pub use run::{energy_drift_skip, outcome, sizes, solve_global, Run};
 pub use status::{SolveStatus, CONVERGED_RESIDUAL};

@@ -184,11 +184,15 @@ pub struct Diagnostics {
     /// Whether the scene depends on the time `t` explicitly; the energy is then not
     /// conserved, and `energy_drift` measures the work of the time dependence.
     pub depends_on_time: bool,
-    /// max |E_k − E_1| of the total energy E = energy + wall_energy over nodes 1..N−2
-    /// (the last two excluded: their equations are the boundary closure). Conserved up
-    /// to the discretization error unless friction or other non-conservative forces act
-    /// or the scene depends on `t` explicitly.
+    /// max |E_k − E_1| of the total energy E = energy + wall_energy over all nodes but
+    /// the last [`energy_drift_skip`](Self::energy_drift_skip) (the last two: their
+    /// equations are the boundary closure; for a dissipative operator its boundary rows,
+    /// where `D+`'s end closure carries a layer in the velocity). Conserved up to the
+    /// discretization error unless friction or other non-conservative forces act or the
+    /// scene depends on `t` explicitly.
     pub energy_drift: f64,
+    /// End nodes left out of `energy_drift` ([`energy_drift_skip`](super::energy_drift_skip)).
+    pub energy_drift_skip: usize,
     /// The same over all nodes.
     pub energy_drift_all: f64,
     /// Largest wall gap h (positive = penetration), per wall (keyed by the wall's name).

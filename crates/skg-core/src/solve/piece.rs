@@ -286,7 +286,10 @@ fn point_from_states(action: &Action, q: &[Vec<f64>], lambda: &[Vec<f64>]) -> Ve
 }
 
 /// The trajectory and the largest equation-of-motion residual
-/// |f + F − Dp − Gᵀλ| over interior nodes (force units).
+/// |f + F − D−p − Gᵀλ| over interior nodes (force units). The velocities are `D q`, the
+/// operator of the action; the equations of motion carry its SBP partner `D−`
+/// (docs/mathematics.md §3: for a centred operator `D− = D`, for a dissipative one
+/// `D− = D + ε H⁻¹ D_pᵀ D_p`).
 fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
     let lay = &action.layout;
     let (d, n, nodes) = (lay.d, lay.n, lay.nodes);
@@ -296,7 +299,7 @@ fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
     let v = apply_d(&action.op, &q);
     let phys: Vec<_> = (0..nodes).map(|k| model.physical(times[k], &q[k], &v[k], &mut ws)).collect();
     let p: Vec<Vec<f64>> = phys.iter().map(|ph| ph.p.clone()).collect();
-    let dp = apply_d(&action.op, &p);
+    let dp = apply_d(&action.op.partner(), &p);
     let mut lambda = vec![vec![0.0; n]; nodes];
     let mut max_eom = 0.0_f64;
     for k in 0..nodes {
@@ -321,7 +324,7 @@ fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
     (Trajectory::from_physical(times, States { q, v, lambda }, &phys), max_eom)
 }
 
-/// D applied to each component of a node-major series.
+/// An operator applied to each component of a node-major series.
 fn apply_d(op: &SbpOperator, series: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let nodes = series.len();
     let d = series.first().map_or(0, Vec::len);
@@ -341,7 +344,7 @@ fn apply_d(op: &SbpOperator, series: &[Vec<f64>]) -> Vec<Vec<f64>> {
 }
 
 /// λ at an end node: least-squares solution of that node's equation of motion
-/// `Gᵀ λ = f + F − (Dp)` (its row of ∂S/∂q- was absorbed by a boundary multiplier).
+/// `Gᵀ λ = f + F − (D−p)` (its row of ∂S/∂q- was absorbed by a boundary multiplier).
 fn end_multipliers(ph: &Physical, dp: &[f64]) -> Vec<f64> {
     let rhs = nalgebra::DVector::from_iterator(dp.len(), ph.force.iter().zip(dp).map(|(f, d)| f - d));
     let g = &ph.gv; // n×d

@@ -26,7 +26,15 @@
 //! * The odd-even amplitude of each coordinate is the amplitude of its (−1)^k component,
 //!   measured by the fourth difference `|q[k−2] − 4q[k−1] + 6q[k] − 4q[k+1] + q[k+2]| / 16`
 //!   (exactly 1 for `(−1)^k`, `Δt⁴ q''''/16` for a smooth q), maximized over the nodes
-//!   whose stencil avoids the excluded end nodes.
+//!   whose stencil avoids the excluded end nodes. When it is at least a quarter of the
+//!   error of a solve that failed, the reason names the parasitic mode of the centred
+//!   stencils. Not for a dissipative operator (`SBP…-AD`): its dissipation damps that mode
+//!   (the parasitic roots lie inside the unit circle), and what the fourth difference
+//!   measures there is a fast, smooth transient. Measured on
+//!   crates/skg-core/tests/scenes/overdamped_2d.toml at N = 724 (natural initial
+//!   velocity): SBP242-AD has an amplitude of 1.4e-4 at node 3 (t = 0.08, the start's
+//!   12 /s transient) and below 1e-9 after t = 2 s, beside an error of 2.3e-4; SBP242's
+//!   1.2e-1 sits at t = 19.4, near the end, where the mode has grown.
 //! * Any non-finite number in the trajectory or its derived columns fails verification,
 //!   even when verification is switched off.
 
@@ -227,7 +235,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
     } else {
         let mut r =
             format!("max |q − q_ref| = {worst_error:.3e} ({worst_name} at t = {worst_t:.6}) exceeds the tolerance{own} {worst_tol:.3e}");
-        if odd_even_max >= 0.25 * max_error {
+        if odd_even_max >= 0.25 * max_error && !scene.operator.is_dissipative() {
             r.push_str(&format!(
                 "; the odd-even (−1)^k component of the solution is {odd_even_max:.3e}: the parasitic mode of centred SBP stencils, \
                  which damping, contraction or a long contact amplifies"

@@ -402,7 +402,8 @@ def solve(
     The keyword arguments are the command line's options: ``nodes`` (``--nodes``),
     ``set`` (``--set``, a mapping such as ``{"sigma": 1/200, "V0": "2*g"}``: numbers, or
     expressions as strings), ``operator`` (``"SBP121"``, ``"SBP242"``, ``"SBP363"``,
-    ``"SBP484"``), ``formulation`` (``"reduced"``, ``"full"``), ``initial_velocity``
+    ``"SBP484"``, or the dissipative ``"SBP121-AD"`` … ``"SBP484-AD"``), ``formulation``
+    (``"reduced"``, ``"full"``), ``initial_velocity``
     (``"strong"``, ``"natural"``), ``hessian`` (``"zero"``, ``"exact"``), ``max_iter``,
     ``backend`` (``"ipopt"``, ``"newton"``), ``window`` and ``overlap`` (seconds;
     ``window=0`` turns the scene's windows off), ``verify_tol``, ``no_verify``,
