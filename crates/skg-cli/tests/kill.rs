@@ -164,6 +164,11 @@ fn children(pid: u32) -> Vec<u32> {
     found
 }
 
+/// Sends SIGTERM to each of `pids` that still exists; the number signalled.
+fn signal_running(pids: &[u32]) -> usize {
+    pids.iter().filter(|p| Command::new("kill").arg("-TERM").arg(p.to_string()).stderr(Stdio::null()).status().unwrap().success()).count()
+}
+
 fn send(signal: &str, pids: &[u32]) {
     let pids: Vec<String> = pids.iter().map(u32::to_string).collect();
     let status = Command::new("kill").arg(format!("-{signal}")).args(&pids).status().unwrap();
@@ -180,7 +185,9 @@ fn send(signal: &str, pids: &[u32]) {
 fn a_sweep_stopped_by_sigterm_leaves_whole_rows_and_no_crashed_point() {
     let dir = tempfile::tempdir().unwrap();
     let sweep =
-        common::sweep_file(dir.path(), &common::scenario("damped_oscillator"), "[[grid]]\nc = [0.25, 0.5, 1, 2]\nnodes = [2048, 4096]\n");
+        // Points of about a second each (debug build), so that the workers still run
+        // them when the signal comes.
+        common::sweep_file(dir.path(), &common::scenario("damped_oscillator"), "[[grid]]\nc = [0.25, 0.5, 1, 2]\nnodes = [40000, 100000]\n");
     let out = dir.path().join("out");
     let args = ["sweep", sweep.to_str().unwrap(), "-o", out.to_str().unwrap(), "-j", "2", "-q"];
     let child = skg(&args).stderr(Stdio::piped()).spawn().unwrap();
@@ -194,8 +201,13 @@ fn a_sweep_stopped_by_sigterm_leaves_whole_rows_and_no_crashed_point() {
         std::thread::sleep(Duration::from_millis(20));
     };
     assert_eq!(workers.len(), 2, "two workers started");
-    std::thread::sleep(Duration::from_millis(300));
-    send("TERM", &workers);
+    std::thread::sleep(Duration::from_millis(100));
+    // A worker may have finished its point in between: signal those running now.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while signal_running(&children(child.id())) == 0 {
+        assert!(Instant::now() < deadline, "no worker ran a point");
+        std::thread::sleep(Duration::from_millis(5));
+    }
     std::thread::sleep(Duration::from_millis(300));
     send("TERM", &[child.id()]);
     let output = child.wait_with_output().unwrap();
