@@ -44,7 +44,7 @@
 //! expr    := term (("+" | "-") term)*
 //! term    := unary (("*" | "/") unary)*
 //! unary   := ("-" | "+") unary | power
-//! power   := primary ("^" unary)?            (right-associative)
+//! power   := primary (("^" | "**") unary)?   (right-associative)
 //! primary := number | name | name "(" expr ("," expr)* ")" | "(" expr ")"
 //! number  := digits ["." digits] [exponent] | "." digits [exponent]
 //!            (also "1." ; exponent := ("e" | "E") ["+" | "-"] digits)
@@ -54,7 +54,8 @@
 //! * `^` binds tighter than unary minus and is right-associative: `-x^2 = -(x^2)`,
 //!   `2^3^2 = 2^(3^2) = 512`, and `x^-2 = x^(-2)`. `*` and `/` are left-associative
 //!   (`8/4/2 = 1`), as are `+` and `-` (`1-2-3 = -4`). There is no implicit
-//!   multiplication: write `2*x`, not `2x`. Write powers with `^` (`**` is rejected).
+//!   multiplication: write `2*x`, not `2x`. `**` is the same operator as `^` (Python's and
+//!   SymPy's spelling of a power): `x**2 = x^2`, `2**3**2 = 512`.
 //! * Functions of one argument: `sin cos tan exp log sqrt abs sinh cosh tanh atan`
 //!   (`log` is the natural logarithm); of two arguments: `atan2(y, x)`.
 //!   A name followed by `(` is always a function call.

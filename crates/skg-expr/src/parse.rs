@@ -125,8 +125,11 @@ fn lex(chars: &[char]) -> Vec<(Tok, usize)> {
         let tok = match c {
             '+' => Tok::Plus,
             '-' => Tok::Minus,
+            // `**` is a power as `^` is (Python's and SymPy's spelling).
             '*' if chars.get(i + 1) == Some(&'*') => {
-                Tok::Bad(ParseErrorKind::UnexpectedToken, "`**` is not an operator (write powers with `^`)".into())
+                toks.push((Tok::Caret, start));
+                i += 2;
+                continue;
             }
             '*' => Tok::Star,
             '/' => Tok::Slash,

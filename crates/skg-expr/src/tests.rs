@@ -81,6 +81,22 @@ fn precedence_and_associativity() {
 }
 
 #[test]
+fn double_star_is_a_power_with_the_precedence_of_python() {
+    // Each case's value as Python (and so SymPy's printed form) means it.
+    let v = [3.0, 2.0, 5.0, 7.0];
+    assert_eq!(value("2**3**2", &v), 512.0);
+    assert_eq!(value("-x**2", &v), -9.0);
+    assert_eq!(value("2*x**2", &v), 18.0);
+    assert_eq!(value("x**(-2)", &v), 1.0 / 9.0);
+    assert_eq!(value("x**-1", &v), 1.0 / 3.0);
+    assert_eq!(value("x**(3/2)", &v), 3f64.powf(1.5));
+    assert_eq!(value("x ** 2 + y^2", &v), 13.0);
+    assert_eq!(value("-x**y/2", &v), -4.5);
+    // `* *` with a space is not a power
+    assert_eq!(parse_err("x* *2").position, 3);
+}
+
+#[test]
 fn functions_parse_and_evaluate() {
     let v: [f64; 4] = [0.3, 0.7, 1.9, 2.0];
     let (x, y) = (v[0], v[1]);
@@ -162,10 +178,9 @@ fn error_kinds_and_positions() {
     assert_eq!(err.position, 0);
     let err = parse_err("x*x + ψ");
     assert_eq!(err.position, 6);
-    // `**` gets advice
-    let err = parse_err("x**2");
-    assert_eq!(err.position, 1);
-    assert!(err.message.contains('^'), "{}", err.message);
+    // `**` is a power like `^`: an error after it points at it as at `^`
+    let err = parse_err("x** * 2");
+    assert_eq!((err.kind, err.position), (UnexpectedToken, 4), "{err}");
 }
 
 #[test]
