@@ -283,7 +283,8 @@ impl Results {
         let mut rows = Vec::new();
         for rec in r.records() {
             let rec = rec.map_err(|e| bad(e.to_string()))?;
-            let location = Location { file: path.display().to_string(), line: rec.position().map(|p| p.line() as usize), col: None };
+            let location =
+                Location { file: path.display().to_string(), line: rec.position().map(|p| p.line() as usize), col: None, field: None };
             check_schema_version(&rec[schema]).map_err(|source| SweepError::Schema { location: location.clone(), source })?;
             rec[status].parse::<PointStatus>().map_err(|source| SweepError::Status { location, source })?;
             rows.push(rec.iter().map(str::to_string).collect());

@@ -11,8 +11,9 @@ use serde::{Deserialize, Serialize};
 use skg_expr::ParseError;
 use toml::Spanned;
 
+use super::emit::write_toml;
 use super::error::SceneError;
-use super::location::{parse_toml, read_toml, Location, Origin};
+use super::location::{parse_origin, parse_toml, read_toml, Location, Origin};
 use super::settings::{Backend, Formulation, HessianMode, InitialVelocity};
 
 /// A number or an expression of the scene's parameters, e.g. `0.5` or `"pi/6"`.
@@ -224,6 +225,19 @@ impl SceneFile {
     /// Deserialize a scene from its text; `path` only labels error messages.
     pub fn parse(text: &str, path: &str) -> Result<SceneFile, SceneError> {
         let (mut file, origin): (SceneFile, Origin) = parse_toml(text, path)?;
+        file.origin = origin;
+        Ok(file)
+    }
+
+    /// Deserialize a scene built in code as a TOML table (Python's `skg.Scene(mapping)`).
+    /// Its text is written by [`write_toml`] (one key per line) and parsed as a file's
+    /// would be, so that it is validated alike and its provenance hashes that text;
+    /// errors name the field (`<python>: coordinates[3].initial: …`, with `name` as the
+    /// label in place of a file).
+    pub fn from_table(table: &toml::Table, name: &str) -> Result<SceneFile, SceneError> {
+        let generated = write_toml(table);
+        let origin = Origin { path: name.to_string(), text: generated.text, fields: Some(generated.fields.into()) };
+        let (mut file, origin): (SceneFile, Origin) = parse_origin(origin)?;
         file.origin = origin;
         Ok(file)
     }

@@ -5,32 +5,42 @@
 
 use std::fmt;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use serde::Serialize;
 use toml::Spanned;
 
 /// A place in an input file: the file and, where known, the line and column (both
-/// 1-based, columns counted in characters). Displayed as `file:line:col`.
+/// 1-based, columns counted in characters). Displayed as `file:line:col`. In a scene
+/// built in code (Python's `skg.Scene(mapping)`) the place is a field instead, e.g.
+/// `coordinates[3].initial`, displayed as `<python>: coordinates[3].initial`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Location {
-    /// The file, as the user named it.
+    /// The file, as the user named it (`<python>` for a scene built in code).
     pub file: String,
     /// 1-based line, if known.
     pub line: Option<usize>,
     /// 1-based column in characters, if known.
     pub col: Option<usize>,
+    /// The key path of the value, for a scene built in code (then `line` and `col`,
+    /// which are of the generated text, are not set).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub field: Option<String>,
 }
 
 impl Location {
     /// The file as a whole (no line or column).
     pub fn file(path: impl Into<String>) -> Location {
-        Location { file: path.into(), line: None, col: None }
+        Location { file: path.into(), line: None, col: None, field: None }
     }
 }
 
 impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}", self.file)?;
+        if let Some(field) = self.field.as_deref().filter(|s| !s.is_empty()) {
+            return write!(f, ": {field}");
+        }
         if let Some(line) = self.line {
             write!(f, ":{line}")?;
             if let Some(col) = self.col {
@@ -48,16 +58,25 @@ pub struct Origin {
     pub path: String,
     /// Its whole text.
     pub text: String,
+    /// For a text generated from a table built in code ([`write_toml`](super::emit::write_toml)):
+    /// the key path of each line, so that a place is named by its field rather than by a
+    /// line of a text the user never wrote.
+    pub fields: Option<Arc<[String]>>,
 }
 
 impl Origin {
-    /// `file:line:column` of a byte offset (1-based line and column, columns in chars).
+    /// `file:line:column` of a byte offset (1-based line and column, columns in chars);
+    /// the field at that line for a generated text.
     pub fn locate(&self, offset: usize) -> Location {
         let offset = offset.min(self.text.len());
         let before = &self.text[..offset];
         let line = before.matches('\n').count() + 1;
+        if let Some(fields) = &self.fields {
+            let field = fields.get(line - 1).cloned().unwrap_or_default();
+            return Location { file: self.path.clone(), line: None, col: None, field: Some(field) };
+        }
         let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-        Location { file: self.path.clone(), line: Some(line), col: Some(col) }
+        Location { file: self.path.clone(), line: Some(line), col: Some(col), field: None }
     }
 
     /// The file as a whole, for errors that belong to no single key.
@@ -116,8 +135,12 @@ pub fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<(T, Orig
 
 /// Deserialize TOML text; `path` only labels error locations (`file:line:col`).
 pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &str) -> Result<(T, Origin), TomlError> {
-    let origin = Origin { path: path.to_string(), text: text.to_string() };
-    match toml::from_str(text) {
+    parse_origin(Origin { path: path.to_string(), text: text.to_string(), fields: None })
+}
+
+/// Deserialize the text of `origin`, locating errors by it.
+pub(super) fn parse_origin<T: serde::de::DeserializeOwned>(origin: Origin) -> Result<(T, Origin), TomlError> {
+    match toml::from_str(&origin.text) {
         Ok(value) => Ok((value, origin)),
         Err(e) => {
             let location = e.span().map_or_else(|| origin.whole(), |span| origin.locate(span.start));

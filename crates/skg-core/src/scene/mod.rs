@@ -1,9 +1,11 @@
 //! The scene: the TOML file a user writes, its validation and its resolution into
 //! numbers.
 //!
-//! A scene file is read in two steps. [`SceneFile::parse`] (or [`SceneFile::load`])
-//! deserializes the TOML (unknown keys and type errors are reported with file, line and
-//! column by the `toml` crate, through [`parse_toml`], which sweep files use too).
+//! A scene file is read in two steps. [`SceneFile::parse`] (or [`SceneFile::load`], or
+//! [`SceneFile::from_table`] for a scene built in code) deserializes the TOML (unknown
+//! keys and type errors are reported with file, line and column by the `toml` crate,
+//! through [`parse_toml`], which sweep files use too; with the field's name for a scene
+//! built in code).
 //! [`SceneFile::resolve`] then evaluates the parameters (numbers or expressions of other
 //! parameters), applies the [`Overrides`] of the command line, a sweep point or Python,
 //! and checks every number a solve depends on, giving a [`Scene`]. Expressions of the
@@ -27,6 +29,8 @@
 //! * the resolution into a [`Scene`] (`resolved.rs`): `resolve.rs` (names, initial
 //!   state, constraints, forces, walls), `parameters.rs`, `time.rs` (span, operator,
 //!   nodes, windows), `solver.rs` (solver and verification settings);
+//! * [`emit`]: the TOML text of a scene built in code (Python's `skg.Scene`), one key
+//!   per line with the key path of each, read by [`SceneFile::from_table`];
 //! * [`provenance`]: the tool's version, the output's schema version and the content
 //!   hash that every written file carries.
 //!
@@ -37,6 +41,7 @@
 //!
 //! [`OperatorKind`]: crate::sbp::OperatorKind
 
+pub mod emit;
 mod error;
 mod file;
 mod location;

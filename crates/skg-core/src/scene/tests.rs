@@ -102,3 +102,61 @@ fn time_grids_not_resolved_by_floating_point_are_refused_with_their_reason() {
          from 0 (shift start and end), or use a longer span or fewer nodes"
     );
 }
+
+/// A scene built in code (as Python's `skg.Scene(mapping)`) reads as its file does,
+/// and its errors name the field instead of a line of the generated text.
+#[test]
+fn a_scene_built_as_a_table_names_fields_in_errors() {
+    let table: toml::Table = MINIMAL.parse().unwrap();
+    let file = SceneFile::from_table(&table, "<python>").unwrap();
+    let from_text = SceneFile::parse(MINIMAL, "mem.toml").unwrap();
+    let (a, b) = (file.clone().resolve(&Overrides::default()).unwrap(), from_text.resolve(&Overrides::default()).unwrap());
+    assert_eq!((a.initial_q, a.coordinates), (b.initial_q, b.coordinates));
+    // the generated text is what the provenance hashes, and reads back as the same table
+    assert_eq!(file.origin.text.parse::<toml::Table>().unwrap(), table);
+    assert_eq!(file.origin.content_hash(), provenance::content_hash(file.origin.text.as_bytes()));
+
+    let with = |edit: &dyn Fn(&mut toml::Table)| {
+        let mut t = table.clone();
+        edit(&mut t);
+        SceneFile::from_table(&t, "<python>").and_then(|f| f.resolve(&Overrides::default())).unwrap_err().to_string()
+    };
+    let coordinate = |t: &mut toml::Table| t["coordinates"].as_array_mut().unwrap()[0].as_table_mut().unwrap().clone();
+    let set_coordinates = |t: &mut toml::Table, c: Vec<toml::Table>| {
+        t.insert("coordinates".into(), toml::Value::Array(c.into_iter().map(toml::Value::Table).collect()));
+    };
+    // an unknown parameter in the second coordinate's initial value (resolution)
+    let msg = with(&|t| {
+        let mut y = coordinate(t);
+        y.insert("name".into(), "y".into());
+        y.insert("initial".into(), "2*gg".into());
+        let x = coordinate(t);
+        set_coordinates(t, vec![x, y]);
+    });
+    assert!(msg.starts_with("<python>: coordinates[1].initial: "), "{msg}");
+    assert!(msg.contains("gg"), "{msg}");
+    // a value of the wrong type (the TOML parser)
+    let msg = with(&|t| {
+        t["time"].as_table_mut().unwrap().insert("nodes".into(), "many".into());
+    });
+    assert!(msg.starts_with("<python>: time.nodes: "), "{msg}");
+    // an unknown key, and a missing one (located at the table)
+    let msg = with(&|t| {
+        t["scene"].as_table_mut().unwrap().insert("lagrangain".into(), "0".into());
+    });
+    assert!(msg.starts_with("<python>: scene.lagrangain: ") && msg.contains("unknown field"), "{msg}");
+    let msg = with(&|t| {
+        let mut x = coordinate(t);
+        x.remove("velocity");
+        set_coordinates(t, vec![x]);
+    });
+    assert!(msg.starts_with("<python>: coordinates[0]: ") && msg.contains("velocity"), "{msg}");
+    // a constraint's expression: the field, then the expression with its caret
+    let msg = with(&|t| {
+        let mut c = toml::Table::new();
+        c.insert("name".into(), "c".into());
+        c.insert("expression".into(), "x + tt".into());
+        t.insert("constraints".into(), toml::Value::Array(vec![toml::Value::Table(c)]));
+    });
+    assert!(msg.starts_with("<python>: constraints[0].expression: ") && msg.contains("unknown symbol `tt`"), "{msg}");
+}
