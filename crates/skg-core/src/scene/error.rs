@@ -29,16 +29,15 @@ pub enum SceneError {
     },
     /// An expression (Lagrangian, constraint, force, wall, parameter) does not parse or
     /// names something unknown.
-    #[error("{location}: in `{key}`: {error}\n{caret}")]
+    #[error("{location}: in `{key}`: {error}\n{}", .error.caret_line())]
     Expression {
         /// Where the error is, inside the expression's string.
         location: Location,
         /// The key holding the expression, e.g. `constraints.g1.expression`.
         key: String,
-        /// The parser's error.
+        /// The parser's error (displayed with the expression and a caret under the
+        /// error's position).
         error: Box<ParseError>,
-        /// The expression with a caret under the error's position.
-        caret: String,
     },
     /// A value is out of range, a name clashes, the initial state is inadmissible, ….
     #[error("{location}: {message}")]

@@ -249,13 +249,7 @@ impl SceneFile {
 
     /// Error for an expression at a spanned string value.
     pub fn expression_error(&self, v: &Spanned<String>, key: &str, error: ParseError) -> SceneError {
-        let caret = error.caret_line();
-        SceneError::Expression {
-            location: self.origin.locate_in(v, Some(error.position)),
-            key: key.to_string(),
-            error: Box::new(error),
-            caret,
-        }
+        SceneError::Expression { location: self.origin.locate_in(v, Some(error.position)), key: key.to_string(), error: Box::new(error) }
     }
 
     /// Where the scene sets the Ipopt option `name` (`[solver]` or `[solver.ipopt]`);
