@@ -20,7 +20,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyBool, PyDict, PyList, PyString, PyTuple};
 
 use skg_core::check::Table;
 use skg_core::discrete::trajectory::{trajectory_header, trajectory_rows, NodeSeries, Trajectory};
@@ -98,9 +98,213 @@ fn assignments(set: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)
     Ok(out)
 }
 
-/// Load a scene file and resolve it with the overrides (what the command line's `load` does).
-fn load(py: Python<'_>, path: &std::path::Path, ov: &Overrides) -> PyResult<Scene> {
-    py.detach(|| SceneFile::load(path).and_then(|f| f.resolve(ov))).map_err(|e| scene_err(py, &e))
+/// What `solve` and `reference` take: a scene file's path or a [`NativeScene`].
+#[derive(FromPyObject)]
+enum SceneArg {
+    /// A scene read or built in Python.
+    Scene(Py<NativeScene>),
+    /// A scene file.
+    Path(PathBuf),
+}
+
+impl SceneArg {
+    /// The scene's origin as the provenance of a reference names it: the file as given, or
+    /// a Scene's origin (the file it was read from, or `<python>`).
+    fn label(&self) -> String {
+        match self {
+            SceneArg::Scene(s) => s.get().file.origin.path.clone(),
+            SceneArg::Path(p) => p.display().to_string(),
+        }
+    }
+}
+
+/// Load a scene file (or take a Scene's) and resolve it with the overrides (what the
+/// command line's `load` does).
+fn load(py: Python<'_>, scene: &SceneArg, ov: &Overrides) -> PyResult<Scene> {
+    let resolved = match scene {
+        SceneArg::Path(path) => py.detach(|| SceneFile::load(path).and_then(|f| f.resolve(ov))),
+        SceneArg::Scene(s) => {
+            let file = s.get().file.clone();
+            py.detach(|| file.resolve(ov))
+        }
+    };
+    resolved.map_err(|e| scene_err(py, &e))
+}
+
+/// The label of a scene built in Python, in place of a file name in its errors.
+const PYTHON_ORIGIN: &str = "<python>";
+
+/// Append `key` to the key path `path` as errors show it (`coordinates[3].initial`).
+fn key_path(path: &str, key: &str) -> String {
+    if path.is_empty() {
+        key.to_string()
+    } else {
+        format!("{path}.{key}")
+    }
+}
+
+/// A Python value as a TOML value: dict (string keys; a key whose value is None is left
+/// out), list or tuple, str, bool, int, float (NumPy's scalars too). `path` names the
+/// value in errors.
+fn toml_value(v: &Bound<'_, PyAny>, path: &str) -> Result<Option<toml::Value>, String> {
+    let at = |what: String| format!("{PYTHON_ORIGIN}: {}: {what}", if path.is_empty() { "the scene" } else { path });
+    if v.is_none() {
+        return Ok(None);
+    }
+    if let Ok(b) = v.cast::<PyBool>() {
+        return Ok(Some(toml::Value::Boolean(b.is_true())));
+    }
+    if let Ok(s) = v.cast::<PyString>() {
+        return Ok(Some(toml::Value::String(s.to_cow().map_err(|e| at(e.to_string()))?.into_owned())));
+    }
+    if let Ok(d) = v.cast::<PyDict>() {
+        let mut table = toml::Table::new();
+        for (k, item) in d.iter() {
+            let key: String = k
+                .extract()
+                .map_err(|_| at(format!("keys must be strings, got {}", k.repr().map_or_else(|_| "?".into(), |r| r.to_string()))))?;
+            if let Some(value) = toml_value(&item, &key_path(path, &key))? {
+                table.insert(key, value);
+            }
+        }
+        return Ok(Some(toml::Value::Table(table)));
+    }
+    if v.cast::<PyList>().is_ok() || v.cast::<PyTuple>().is_ok() {
+        let mut items = Vec::new();
+        for (i, item) in v.try_iter().map_err(|e| at(e.to_string()))?.enumerate() {
+            let item = item.map_err(|e| at(e.to_string()))?;
+            let p = format!("{path}[{i}]");
+            match toml_value(&item, &p)? {
+                Some(value) => items.push(value),
+                None => return Err(format!("{PYTHON_ORIGIN}: {p}: None is not a value (TOML has no null)")),
+            }
+        }
+        return Ok(Some(toml::Value::Array(items)));
+    }
+    let type_name = v.get_type().name().map_or_else(|_| "?".into(), |n| n.to_string());
+    // Integers (int and NumPy's integers, by __index__) before floats.
+    if v.hasattr("__index__").unwrap_or(false) {
+        return match v.extract::<i64>() {
+            Ok(i) => Ok(Some(toml::Value::Integer(i))),
+            Err(_) => {
+                Err(at(format!("the integer {} is out of TOML's range (64-bit)", v.str().map_or_else(|_| "?".into(), |r| r.to_string()))))
+            }
+        };
+    }
+    if let Ok(x) = v.extract::<f64>() {
+        return Ok(Some(toml::Value::Float(x)));
+    }
+    Err(at(format!(
+        "a value of type {type_name} is not one a scene holds (a number, a string, a boolean, a list or a dict; a SymPy expression where an expression is expected)"
+    )))
+}
+
+/// A TOML value as a Python object (dict, list, str, int, float, bool; a date as text).
+fn py_value<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        toml::Value::String(s) => s.into_pyobject(py)?.into_any(),
+        toml::Value::Integer(i) => i.into_pyobject(py)?.into_any(),
+        toml::Value::Float(x) => x.into_pyobject(py)?.into_any(),
+        toml::Value::Boolean(b) => b.into_pyobject(py)?.to_owned().into_any(),
+        toml::Value::Datetime(d) => d.to_string().into_pyobject(py)?.into_any(),
+        toml::Value::Array(items) => PyList::new(py, items.iter().map(|i| py_value(py, i)).collect::<PyResult<Vec<_>>>()?)?.into_any(),
+        toml::Value::Table(t) => {
+            let d = PyDict::new(py);
+            for (k, item) in t {
+                d.set_item(k, py_value(py, item)?)?;
+            }
+            d.into_any()
+        }
+    })
+}
+
+/// A mapping as a TOML table ([`toml_value`]), or the error `SceneError` names.
+fn toml_table(py: Python<'_>, mapping: &Bound<'_, PyAny>) -> PyResult<toml::Table> {
+    match toml_value(mapping, "") {
+        Ok(Some(toml::Value::Table(t))) => Ok(t),
+        Ok(_) => Err(raise_text(py, "SceneError", format!("{PYTHON_ORIGIN}: a scene is a dict of its tables, got {}", mapping.get_type()))),
+        Err(message) => Err(raise_text(py, "SceneError", message)),
+    }
+}
+
+/// A scene as Python holds it (`skg.Scene`): its file as read, or as built from a
+/// mapping ([`SceneFile::from_table`]), unresolved (parameters, overrides and checks are
+/// applied when it is solved, as for a file).
+#[pyclass(module = "skg._skg", frozen)]
+struct NativeScene {
+    file: SceneFile,
+}
+
+#[pymethods]
+impl NativeScene {
+    /// A scene built in code: `mapping` has the scene file's structure. Its TOML text is
+    /// written one key per line; errors name the field (`<python>: coordinates[3].initial`).
+    #[staticmethod]
+    fn from_mapping(py: Python<'_>, mapping: &Bound<'_, PyAny>) -> PyResult<NativeScene> {
+        let table = toml_table(py, mapping)?;
+        let file = py.detach(|| SceneFile::from_table(&table, PYTHON_ORIGIN)).map_err(|e| scene_err(py, &e))?;
+        Ok(NativeScene { file })
+    }
+
+    /// A scene from its TOML text; `name` labels errors (`name:line:column`).
+    #[staticmethod]
+    fn from_toml(py: Python<'_>, text: &str, name: &str) -> PyResult<NativeScene> {
+        let file = py.detach(|| SceneFile::parse(text, name)).map_err(|e| scene_err(py, &e))?;
+        Ok(NativeScene { file })
+    }
+
+    /// A scene file.
+    #[staticmethod]
+    fn read(py: Python<'_>, path: PathBuf) -> PyResult<NativeScene> {
+        let file = py.detach(|| SceneFile::load(&path)).map_err(|e| scene_err(py, &e))?;
+        Ok(NativeScene { file })
+    }
+
+    /// The scene's TOML text: the file's as read, or the one written for a mapping.
+    #[getter]
+    fn text(&self) -> &str {
+        &self.file.origin.text
+    }
+
+    /// Where it came from: the file, the name given to `from_toml`, or `<python>`.
+    #[getter]
+    fn origin(&self) -> &str {
+        &self.file.origin.path
+    }
+
+    /// `[scene] name`.
+    #[getter]
+    fn name(&self) -> &str {
+        &self.file.scene.name
+    }
+
+    /// The hash of the TOML text, as summary.json's `scene_hash` gives it.
+    #[getter]
+    fn hash(&self) -> String {
+        self.file.origin.content_hash()
+    }
+
+    /// The scene's structure as a dict (the TOML text read back as plain values).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let table: toml::Table = self.file.origin.text.parse().map_err(|e: toml::de::Error| PyValueError::new_err(e.to_string()))?;
+        py_value(py, &toml::Value::Table(table))
+    }
+
+    /// Resolve the scene with `set` (as a solve would, without solving): raises the
+    /// scene's first error; returns the coordinates' names.
+    #[pyo3(signature = (*, set=None))]
+    fn check(&self, py: Python<'_>, set: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<String>> {
+        let ov = Overrides { set: assignments(set)?, ..Overrides::default() };
+        let file = self.file.clone();
+        let scene = py.detach(|| file.resolve(&ov)).map_err(|e| scene_err(py, &e))?;
+        Ok(scene.coordinates)
+    }
+}
+
+/// A mapping as TOML text, one key per line (how a sweep given as a mapping is written).
+#[pyfunction]
+fn toml_text(py: Python<'_>, mapping: &Bound<'_, PyAny>) -> PyResult<String> {
+    Ok(skg_core::scene::emit::write_toml(&toml_table(py, mapping)?).text)
 }
 
 /// A `NodeSeries` (`rows[k][i]`) as an N×d array (d may be 0).
@@ -197,7 +401,7 @@ impl NativeSolution {
     }
 }
 
-/// Solve a scene file as `skg-solve SCENE` does; with `out`, into that directory as
+/// Solve a scene file (or a [`NativeScene`]) as `skg-solve SCENE` does; with `out`, into that directory as
 /// `skg-solve SCENE -o OUT` does ([`output::solve_into`]), else without writing files.
 #[pyfunction]
 #[pyo3(signature = (path, *, out=None, nodes=None, set=None, operator=None, formulation=None, initial_velocity=None,
@@ -206,7 +410,7 @@ impl NativeSolution {
 #[allow(clippy::too_many_arguments)]
 fn solve_scene(
     py: Python<'_>,
-    path: PathBuf,
+    path: SceneArg,
     out: Option<PathBuf>,
     nodes: Option<usize>,
     set: Option<&Bound<'_, PyDict>>,
@@ -317,14 +521,14 @@ impl NativeReference {
     }
 }
 
-/// Integrate a scene as `skg-solve reference` does (without writing the CSV).
+/// Integrate a scene (a file or a [`NativeScene`]) as `skg-solve reference` does (without writing the CSV).
 #[pyfunction]
 #[pyo3(signature = (path, *, nodes=None, set=None, hard_walls=false, rtol=1e-12, atol=None, times=None))]
 #[pyo3(name = "reference")]
 #[allow(clippy::too_many_arguments)]
 fn integrate_reference(
     py: Python<'_>,
-    path: PathBuf,
+    path: SceneArg,
     nodes: Option<usize>,
     set: Option<&Bound<'_, PyDict>>,
     hard_walls: bool,
@@ -342,7 +546,7 @@ fn integrate_reference(
     let r = py
         .detach(|| if hard_walls { reference::hard_wall(&scene, &times, &opts) } else { reference::regularized(&scene, &times, &opts) })
         .map_err(|e| reference_err(py, &e))?;
-    Ok(NativeReference { scene, path: path.display().to_string(), reference: r })
+    Ok(NativeReference { scene, path: path.label(), reference: r })
 }
 
 /// A sweep about to run: what [`plan_sweep`] found and what `run` needs.
@@ -511,6 +715,8 @@ fn _skg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(merge_shards, m)?)?;
     m.add_function(wrap_pyfunction!(read_results, m)?)?;
     m.add_function(wrap_pyfunction!(read_table, m)?)?;
+    m.add_function(wrap_pyfunction!(toml_text, m)?)?;
+    m.add_class::<NativeScene>()?;
     m.add_class::<NativeSolution>()?;
     m.add_class::<NativeReference>()?;
     m.add_class::<NativeSweepPlan>()?;

@@ -11,7 +11,12 @@ command line does, and errors carry its messages.
 >>> sol.to_pandas()                        # needs pandas
 >>> sol.write("out/tumbler")               # trajectory.csv, reference.csv, summary.json
 >>> skg.solve("scenarios/tumbler.toml", out="out/tumbler")   # solve into a directory, as the CLI does
+>>> scene = skg.Scene({"scene": {...}, "coordinates": [...], "time": {...}})   # a scene built in code
+>>> skg.solve(scene, backend="newton"); scene.write("my_scene.toml")
 
+* :class:`Scene` is a scene file read (``Scene.read``) or built in code from a mapping
+  of the file's structure, with SymPy expressions where expressions go; :func:`solve`,
+  :func:`reference` and :func:`sweep` take one wherever they take a path.
 * :func:`solve` returns a :class:`Solution`, :func:`reference` a :class:`Reference`,
   :func:`read_trajectory` a :class:`Trajectory` from a CSV; all three share the
   trajectory's arrays and column access.
@@ -56,9 +61,11 @@ from ._errors import (
     SweepError,
     WorkerNotFound,
 )
+from ._scene import Scene, scene_arg as _scene_arg, sweep_file_of as _sweep_file_of
 from ._status import PointStatus, ReferenceKind, SolverStatus, SolveStatus, VerifyStatus, _member_or_str, _typed_summary
 
 __all__ = [
+    "Scene",
     "solve",
     "reference",
     "sweep",
@@ -374,7 +381,7 @@ def _set_dict(set: Optional[Mapping[str, Number]]) -> Optional[Dict[str, Number]
 
 
 def solve(
-    scene: PathLike,
+    scene: Union[PathLike, Scene],
     *,
     out: Optional[PathLike] = None,
     nodes: Optional[int] = None,
@@ -391,7 +398,8 @@ def solve(
     no_verify: bool = False,
     no_fallback: bool = False,
 ) -> Solution:
-    """Solve a scene file as ``skg-solve SCENE`` does; without ``out``, no file is written.
+    """Solve a scene file (or a :class:`Scene`, or a mapping that makes one) as
+    ``skg-solve SCENE`` does; without ``out``, no file is written.
 
     With ``out``, the solve runs as ``skg-solve SCENE -o OUT``: the directory is locked
     for the whole solve (a second writer is refused with :class:`OutputError`), the
@@ -416,7 +424,7 @@ def solve(
     and :class:`SolveError` when the solve cannot run.
     """
     native = _skg.solve(
-        os.fspath(scene),
+        _scene_arg(scene),
         out=None if out is None else os.fspath(out),
         nodes=nodes,
         set=_set_dict(set),
@@ -439,7 +447,7 @@ def solve(
 
 
 def reference(
-    scene: PathLike,
+    scene: Union[PathLike, Scene],
     *,
     nodes: Optional[int] = None,
     set: Optional[Mapping[str, Number]] = None,
@@ -448,7 +456,8 @@ def reference(
     atol: Optional[float] = None,
     times: Optional[Any] = None,
 ) -> Reference:
-    """Integrate a scene as ``skg-solve reference`` does (DOP853), without writing the CSV.
+    """Integrate a scene file (or a :class:`Scene`) as ``skg-solve reference`` does
+    (DOP853), without writing the CSV.
 
     Sampled on the scene's grid (``nodes`` overrides its N) or at ``times`` (an array
     starting at the scene's start time, like ``--grid-from``). ``hard_walls=True`` makes
@@ -457,7 +466,7 @@ def reference(
     """
     t = None if times is None else [float(x) for x in np.asarray(times, dtype=float).ravel()]
     native = _skg.reference(
-        os.fspath(scene), nodes=nodes, set=_set_dict(set), hard_walls=hard_walls, rtol=rtol, atol=atol, times=t
+        _scene_arg(scene), nodes=nodes, set=_set_dict(set), hard_walls=hard_walls, rtol=rtol, atol=atol, times=t
     )
     return Reference(native)
 
@@ -654,7 +663,7 @@ def _sweep_with_executor(
 
 
 def sweep(
-    sweep_file: PathLike,
+    sweep_file: Union[PathLike, Mapping[str, Any]],
     *,
     out: Optional[PathLike] = None,
     jobs: Optional[int] = None,
@@ -695,7 +704,16 @@ def sweep(
     paths where the executor runs its tasks. ``shard`` and ``new_results`` do not combine
     with it. The report then has ``total``, ``shards``, ``submitted`` (the shards run by
     this call), ``rows``, ``duplicates``, ``wall_s`` and ``jobs``.
+
+    ``sweep_file`` may also be a mapping of the sweep file's structure, whose
+    ``sweep.scene`` is a :class:`Scene` (or a path): the Scene and the sweep are then
+    written into ``OUT/inputs/`` under names holding a hash of their content
+    (``scene-<hash>.toml``, ``sweep-<hash>.toml``; never rewritten, so earlier results
+    keep their scene) and the sweep runs from there; paths in it are taken relative to
+    the current directory, and ``OUT`` defaults to ``out/sweeps/<sweep.name>``.
     """
+    if isinstance(sweep_file, Mapping):
+        sweep_file, out = _sweep_file_of(sweep_file, out)
     if executor is not None:
         if shard is not None or new_results:
             raise ValueError("executor= runs every shard of the sweep: it does not combine with shard= or new_results=")
