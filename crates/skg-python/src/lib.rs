@@ -24,6 +24,7 @@ use pyo3::types::{PyBool, PyDict, PyList, PyString, PyTuple};
 
 use skg_core::check::Table;
 use skg_core::discrete::trajectory::{trajectory_header, trajectory_rows, NodeSeries, Trajectory};
+use skg_core::model::Model;
 use skg_core::scene::provenance;
 use skg_core::scene::{Backend, ConstraintKind, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneError, SceneFile};
 use skg_core::solve::{self, Outcome, SolveError};
@@ -290,13 +291,14 @@ impl NativeScene {
         py_value(py, &toml::Value::Table(table))
     }
 
-    /// Resolve the scene with `set` (as a solve would, without solving): raises the
-    /// scene's first error; returns the coordinates' names.
+    /// Resolve the scene with `set` and build its model (its expressions parsed and
+    /// differentiated), as a solve begins, without solving: raises the scene's first
+    /// error; returns the coordinates' names.
     #[pyo3(signature = (*, set=None))]
     fn check(&self, py: Python<'_>, set: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<String>> {
         let ov = Overrides { set: assignments(set)?, ..Overrides::default() };
         let file = self.file.clone();
-        let scene = py.detach(|| file.resolve(&ov)).map_err(|e| scene_err(py, &e))?;
+        let scene = py.detach(|| file.resolve(&ov).and_then(|s| Model::build(&s).map(|_| s))).map_err(|e| scene_err(py, &e))?;
         Ok(scene.coordinates)
     }
 }

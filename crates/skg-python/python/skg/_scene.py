@@ -46,7 +46,7 @@ _FUNCTIONS = {
 
 def is_sympy(value: Any) -> bool:
     """Whether ``value`` is a SymPy object (checked without importing SymPy)."""
-    return type(value).__module__.split(".")[0] == "sympy"
+    return any((getattr(c, "__module__", None) or "").split(".")[0] == "sympy" for c in type(value).__mro__)
 
 
 def _printer_class():
@@ -240,10 +240,10 @@ class Scene:
         return self._native.to_dict()
 
     def check(self, *, set: Optional[Mapping[str, Any]] = None) -> "Scene":
-        """Resolve the scene (with ``set`` as :func:`solve` takes it) without solving:
-        raises :class:`SceneError` for a parameter, a value or an initial state that a
-        solve would refuse (expressions of the model are checked by the solve). Returns
-        the scene."""
+        """Resolve the scene (with ``set`` as :func:`solve` takes it) and build its model
+        without solving: raises :class:`SceneError` for a parameter, a value, an
+        expression or an initial state that a solve would refuse before it starts.
+        Returns the scene."""
         self._native.check(set=None if set is None else dict(plain(dict(set), "set")))
         return self
 
