@@ -194,6 +194,16 @@ def test_sympy_dynamicsymbols_and_the_closed_form():
     assert scene.to_dict()["scene"]["lagrangian"] == "-k*q**2/2 + m*q_dot**2/2"
     sol = skg.solve(scene)
     np.testing.assert_allclose(sol.q[:, 0], np.cos(2 * sol.t), rtol=0, atol=2e-5)
+    # SymPy values in set= (a number, an expression) and a symbol as a force's key
+    c = sp.Symbol("c")
+    mapping["parameters"]["c"] = 0
+    mapping["forces"] = {q: -c * q.diff(t)}
+    damped = skg.Scene(mapping)
+    assert damped.to_dict()["forces"] == {"q": "-c*q_dot"}
+    a = skg.solve(damped, set={"c": sp.Rational(1, 10), "k": sp.Integer(8)}, no_verify=True)
+    b = skg.solve(damped, set={"c": "1/10", "k": 8}, no_verify=True)
+    np.testing.assert_array_equal(a.q, b.q)
+    assert a.summary["settings"]["parameters"]["c"] == 0.1
 
 
 def test_sympy_forms_parse_and_evaluate_as_sympy_does():

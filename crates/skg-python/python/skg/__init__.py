@@ -61,7 +61,7 @@ from ._errors import (
     SweepError,
     WorkerNotFound,
 )
-from ._scene import Scene, scene_arg as _scene_arg, sweep_file_of as _sweep_file_of
+from ._scene import Scene, plain as _plain, scene_arg as _scene_arg, sweep_file_of as _sweep_file_of
 from ._status import PointStatus, ReferenceKind, SolverStatus, SolveStatus, VerifyStatus, _member_or_str, _typed_summary
 
 __all__ = [
@@ -377,7 +377,7 @@ def _set_dict(set: Optional[Mapping[str, Number]]) -> Optional[Dict[str, Number]
         return None
     if not isinstance(set, Mapping):
         raise TypeError(f"set must be a mapping of parameter names to values, e.g. {{'sigma': 1/200}}, got {type(set).__name__}")
-    return dict(set)
+    return _plain(dict(set), "set")
 
 
 def solve(
@@ -409,7 +409,7 @@ def solve(
 
     The keyword arguments are the command line's options: ``nodes`` (``--nodes``),
     ``set`` (``--set``, a mapping such as ``{"sigma": 1/200, "V0": "2*g"}``: numbers, or
-    expressions as strings), ``operator`` (``"SBP121"``, ``"SBP242"``, ``"SBP363"``,
+    expressions as strings or SymPy expressions), ``operator`` (``"SBP121"``, ``"SBP242"``, ``"SBP363"``,
     ``"SBP484"``, or the dissipative ``"SBP121-AD"`` … ``"SBP484-AD"``), ``formulation``
     (``"reduced"``, ``"full"``), ``initial_velocity``
     (``"strong"``, ``"natural"``), ``hessian`` (``"zero"``, ``"exact"``), ``max_iter``,

@@ -148,7 +148,9 @@ def plain(value: Any, path: str = "") -> Any:
                 return float(value)
         return sympy_text(value, path)
     if isinstance(value, Mapping):
-        return {k: plain(v, _field(path, k)) for k, v in value.items()}
+        # a SymPy symbol as a key (``forces={x: -c*x_dot}``) stands for its name
+        keys = [k.name if is_sympy(k) and hasattr(k, "name") else k for k in value]
+        return {k: plain(v, _field(path, k)) for k, v in zip(keys, value.values())}
     if isinstance(value, (list, tuple)):
         return [plain(v, f"{path}[{i}]") for i, v in enumerate(value)]
     return value
@@ -244,7 +246,7 @@ class Scene:
         without solving: raises :class:`SceneError` for a parameter, a value, an
         expression or an initial state that a solve would refuse before it starts.
         Returns the scene."""
-        self._native.check(set=None if set is None else dict(plain(dict(set), "set")))
+        self._native.check(set=None if set is None else plain(dict(set), "set"))
         return self
 
     @property
