@@ -25,7 +25,7 @@ pub struct Location {
     /// The key path of the value, for a scene built in code (then `line` and `col`,
     /// which are of the generated text, are not set).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub field: Option<String>,
+    pub field: Option<Box<str>>,
 }
 
 impl Location {
@@ -72,8 +72,8 @@ impl Origin {
         let before = &self.text[..offset];
         let line = before.matches('\n').count() + 1;
         if let Some(fields) = &self.fields {
-            let field = fields.get(line - 1).cloned().unwrap_or_default();
-            return Location { file: self.path.clone(), line: None, col: None, field: Some(field) };
+            let field = fields.get(line - 1).map_or("", String::as_str);
+            return Location { file: self.path.clone(), line: None, col: None, field: Some(field.into()) };
         }
         let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
         Location { file: self.path.clone(), line: Some(line), col: Some(col), field: None }
