@@ -173,8 +173,8 @@ class Scene:
     too (:func:`sympy_text`). The mapping is written as TOML text (:meth:`to_toml`) and
     read as a file is: type errors and unknown keys are raised here as
     :class:`SceneError` naming the field (``<python>: coordinates[3].initial: …``,
-    arrays counted from 0); the rest (expressions, parameters, the initial state) when
-    the scene is solved or :meth:`check` ed, named the same way.
+    arrays counted from 0); the rest (expressions, parameters, the initial state) by
+    :meth:`check` or when the scene is solved, named the same way.
 
     :func:`solve`, :func:`reference` and :func:`sweep` take a Scene wherever they take a
     scene file's path. The summary's ``scene_hash`` is the hash of :meth:`to_toml`'s
