@@ -54,9 +54,10 @@ pub struct Candidate {
 }
 
 impl Candidate {
-    /// Every candidate a choice considers: each operator with the strong condition, and
-    /// with the natural one except where it leaves the odd-even mode free (`SBP121`:
-    /// the knife edge converges to a wrong trajectory, docs/mathematics.md §5).
+    /// Every candidate a choice considers: each operator, centred and dissipative, with
+    /// the strong condition, and with the natural one except where it leaves the
+    /// odd-even mode free (`SBP121`: the knife edge converges to a wrong trajectory,
+    /// docs/mathematics.md §5; `SBP121-AD` damps it).
     pub fn all() -> Vec<Candidate> {
         let mut all = Vec::new();
         for operator in OperatorKind::ALL {
@@ -251,8 +252,10 @@ fn proxy_errors(scene: &Scene, s: &Samples, c: Candidate, n: usize) -> Vec<f64> 
     let dt = (scene.t_end - scene.t_start) / (n as f64 - 1.0);
     let Ok(op) = SbpOperator::new(c.operator, n, dt) else { return vec![f64::INFINITY; d] };
     let da: Vec<Vec<(usize, f64)>> = (0..n).map(|i| op.row(i)).collect();
-    // The equations' operator D_b: D itself for a centred operator.
-    let db = &da;
+    // The equations' operator D_b: the partner D− of a dissipative operator, D itself
+    // for a centred one.
+    let partner = op.partner();
+    let db: Vec<Vec<(usize, f64)>> = (0..n).map(|i| partner.row(i)).collect();
     let h0 = op.norm()[0];
     let second_row = |i: usize| -> Vec<(usize, f64)> {
         let mut row: Vec<(usize, f64)> = db[i].iter().flat_map(|&(j, b)| da[j].iter().map(move |&(k, a)| (k, b * a))).collect();

@@ -42,7 +42,7 @@ use super::error::SolveError;
 use super::ladder::{self, hermite, linear, Rungs};
 use super::outcome::{Outcome, RefinedGrid, Refinement, Work};
 use super::piece::{grid, Guess};
-use super::predict::{Candidate, Predictor};
+use super::predict::{Candidate, Predictor, FINE_NODES};
 use crate::discrete::contact::{self, RESOLVED_STEPS};
 use crate::memory;
 use crate::model::Model;
@@ -61,9 +61,9 @@ const EXTRAPOLATE_FROM: usize = 257;
 /// A first grid predicted at more than this many times the tolerance is not solved: it
 /// cannot pass, and the refinement starts on the grid predicted to.
 const HOPELESS: f64 = 16.0;
-/// The proxy is computed on grids up to this size; beyond, its error is extrapolated
-/// with the order it shows between the two largest grids computed.
-const PROXY_MAX_NODES: usize = 1 << 16;
+/// The proxy is computed on grids up to the reference's fine grid; beyond, its error is
+/// extrapolated with the order it shows between the two largest of them.
+const PROXY_MAX_NODES: usize = FINE_NODES;
 
 /// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
 /// verified against time stepping of the same scene, the fallback ladder when it fails
@@ -162,10 +162,18 @@ impl<'a> Refiner<'a> {
         ((nodes - 1) as f64 * RESOLVED_STEPS / fewest).ceil() as usize + 1
     }
 
+    /// The calibration of `c`: its last measured one; else the largest measured in its
+    /// family (centred or dissipative: a centred operator's odd-even mode on a
+    /// contracting scene says nothing of a dissipative one's error), at least 1; else 1.
     fn calibration_of(&self, c: Candidate) -> f64 {
         match self.calibration.iter().rev().find(|(k, _)| *k == c) {
             Some(&(_, g)) => g,
-            None => self.calibration.iter().map(|&(_, g)| g).fold(1.0, f64::max),
+            None => self
+                .calibration
+                .iter()
+                .filter(|(k, _)| k.operator.is_dissipative() == c.operator.is_dissipative())
+                .map(|&(_, g)| g)
+                .fold(1.0, f64::max),
         }
     }
 
@@ -197,10 +205,13 @@ impl<'a> Refiner<'a> {
         if at_from <= AIM {
             return Some((from, at_from));
         }
-        // Double until the aim is met, then interpolate in log-log between the last two.
+        // Up the grids of 2^j + 1 nodes (on which the proxy is computed; between them it
+        // is interpolated) until the aim is met, then interpolate in log-log between the
+        // last two.
         let (mut lo, mut r_lo) = (from, at_from);
         loop {
-            let hi = (2 * (lo - 1) + 1).min(self.max_nodes);
+            let p = (lo - 1).next_power_of_two();
+            let hi = if p + 1 > lo { p + 1 } else { 2 * p + 1 }.min(self.max_nodes);
             if hi <= lo || too_dear(lo as f64) {
                 return None;
             }
@@ -477,7 +488,7 @@ fn proxy_ratio(p: &mut Predictor, c: Candidate, nodes: usize) -> Result<f64, Sol
     if nodes <= PROXY_MAX_NODES {
         return p.ratio_between(c, nodes);
     }
-    let (hi, lo) = (PROXY_MAX_NODES + 1, PROXY_MAX_NODES / 2 + 1);
+    let (hi, lo) = (PROXY_MAX_NODES, (PROXY_MAX_NODES - 1) / 2 + 1);
     let (r_hi, r_lo) = (p.ratio(c, hi)?, p.ratio(c, lo)?);
     let order = (r_lo / r_hi).ln() / 2f64.ln();
     if !(order.is_finite() && order > 0.0) {
