@@ -1,5 +1,6 @@
 //! The default command: solve one scene and write its trajectory and summary.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -68,7 +69,17 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         PathBuf::from("out").join(stem)
     });
     let spinner = progress_spinner(args.quiet, &scene.name);
-    let solved = output::solve_into_with_progress(&dir, &mut scene, &mut |attempt| spinner.set_message(attempt.to_string()));
+    // On a terminal the spinner names the attempt under way; elsewhere (a log, a pipe,
+    // a batch job) one plain line per attempt, so that a long solve is not silent.
+    let lines = !args.quiet && !std::io::stderr().is_terminal();
+    let name = scene.name.clone();
+    let started = std::time::Instant::now();
+    let solved = output::solve_into_with_progress(&dir, &mut scene, &mut |attempt| {
+        if lines {
+            eprintln!("{name}: {attempt} ({:.1} s)", started.elapsed().as_secs_f64());
+        }
+        spinner.set_message(attempt.to_string())
+    });
     spinner.finish_and_clear();
     let (outcome, written) = solved?;
     for w in &outcome.warnings {

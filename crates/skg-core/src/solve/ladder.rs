@@ -401,6 +401,9 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
         if !windows_tried {
             steps.push(format!("solve in windows (--window {suggested_window})"));
         }
+        if !scene.verify.refine {
+            steps.push("let --refine choose finer grids until the solve converges and verifies".to_string());
+        }
         let last = steps.pop().expect("one step at least");
         let steps = if steps.is_empty() { last } else { format!("{}, or {last}", steps.join(", ")) };
         return format!("{ladder}{steps}");
@@ -436,7 +439,15 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
                     refine
                 }
             };
-            format!("{ladder}{cure}; or, if this accuracy is enough for you, state it with `[verify] tol` or --verify-tol")
+            // The refinement does all of the above by itself, at the least predicted cost.
+            let auto = if scene.verify.refine {
+                String::new()
+            } else {
+                "let the tool choose: --refine solves on finer grids (and, unless --operator names one, with the operator) \
+                 predicted to meet the tolerance at the least cost; or "
+                    .to_string()
+            };
+            format!("{ladder}{auto}{cure}; or, if this accuracy is enough for you, state it with `[verify] tol` or --verify-tol")
         }
     }
 }

@@ -46,6 +46,7 @@ use super::predict::{Candidate, Predictor, FINE_NODES};
 use crate::discrete::contact::{self, RESOLVED_STEPS};
 use crate::memory;
 use crate::model::Model;
+use crate::sbp::OperatorKind;
 use crate::scene::Scene;
 use crate::stepping::verify::VerifyStatus;
 
@@ -307,6 +308,14 @@ impl<'a> Refiner<'a> {
         let result = loop {
             let number = self.grids.len() + 1;
             let what = format!("{} on {nodes} nodes", c.describe());
+            // A grid beyond the memory ends the refinement, unless it is the first.
+            let sized = Scene { nodes, operator: c.operator, ..self.scene.clone() };
+            if let Err(e) = memory::check(&sized, "the solve", nodes, memory::solve_bytes(&sized)) {
+                if self.grids.is_empty() {
+                    return Err(e.into());
+                }
+                break format!("stopped before grid {number} ({what}): {e}");
+            }
             progress(&format!("grid {number}: {what}"));
             let outcome = self.solve_on(c, nodes, predicted, &mut |step: &str| progress(&format!("grid {number} ({what}), {step}")))?;
             let trusted = outcome.trusted();
@@ -338,7 +347,6 @@ impl<'a> Refiner<'a> {
         progress: &mut dyn FnMut(&str),
     ) -> Result<Outcome, SolveError> {
         let scene = Scene { nodes, operator: c.operator, initial_velocity: c.initial_velocity, ..self.scene.clone() };
-        memory::check(&scene, "the solve", scene.nodes, memory::solve_bytes(&scene))?;
         // The ladder's other rungs repair the scene's own discretization; a grid the
         // refinement chose that fails gets a better one instead (and a refinement of the
         // scene's own that is predicted to fail, too).
@@ -485,16 +493,17 @@ fn counted_grids(n: usize) -> String {
 /// The proxy's ratio of `c` on `nodes` nodes, extrapolated beyond [`PROXY_MAX_NODES`]
 /// with the order between the two largest grids computed.
 fn proxy_ratio(p: &mut Predictor, c: Candidate, nodes: usize) -> Result<f64, SolveError> {
+    let floor = p.roundoff_ratio(nodes);
     if nodes <= PROXY_MAX_NODES {
-        return p.ratio_between(c, nodes);
+        return Ok(p.ratio_between(c, nodes)?.max(floor));
     }
     let (hi, lo) = (PROXY_MAX_NODES, (PROXY_MAX_NODES - 1) / 2 + 1);
     let (r_hi, r_lo) = (p.ratio(c, hi)?, p.ratio(c, lo)?);
     let order = (r_lo / r_hi).ln() / 2f64.ln();
     if !(order.is_finite() && order > 0.0) {
-        return Ok(r_hi);
+        return Ok(r_hi.max(floor));
     }
-    Ok(r_hi * ((hi - 1) as f64 / (nodes - 1) as f64).powf(order))
+    Ok((r_hi * ((hi - 1) as f64 / (nodes - 1) as f64).powf(order)).max(floor))
 }
 
 /// The largest grid a refinement may use and why: `--max-nodes`, else the largest the
@@ -503,9 +512,12 @@ fn budget(scene: &Scene) -> (usize, String) {
     if let Some(n) = scene.verify.max_nodes {
         return (n, "--max-nodes or [verify] max_nodes".to_string());
     }
+    // The largest estimate among the operators the refinement may use.
+    let operators: Vec<OperatorKind> = if scene.choose_operator { OperatorKind::ALL.to_vec() } else { vec![scene.operator] };
     let fits = |n: usize| {
-        let s = Scene { nodes: n, operator: crate::sbp::OperatorKind::Sbp484, ..scene.clone() };
-        memory::available_bytes().is_none_or(|avail| memory::solve_bytes(&s) <= avail)
+        let need =
+            operators.iter().map(|&operator| memory::solve_bytes(&Scene { nodes: n, operator, ..scene.clone() })).fold(0.0, f64::max);
+        memory::available_bytes().is_none_or(|avail| need <= avail)
     };
     if fits(MAX_NODES_DEFAULT) {
         return (MAX_NODES_DEFAULT, format!("the default, 2^{}", MAX_NODES_DEFAULT.trailing_zeros()));

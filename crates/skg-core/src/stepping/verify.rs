@@ -205,12 +205,17 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory) -> Verification {
         );
         (integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts), reference)
     };
-    let (mut integrated, mut reference) = integrate(REFERENCE_RTOL, REFERENCE_ATOL);
-    // A tight tolerance needs a tighter reference (its tolerances are known only once
-    // the motion's ranges are).
+    // A tight tolerance needs a tighter reference. A given tolerance is judged on the
+    // motion's size as the solve found it; the default ones, relative to the ranges,
+    // only once the reference has them (then a second pass if they are tight).
+    let first_rtol = match scene.verify.tol {
+        Some(tol) => reference_rtol(&[tol], &tr.q),
+        None => REFERENCE_RTOL,
+    };
+    let (mut integrated, mut reference) = integrate(first_rtol, first_rtol * (REFERENCE_ATOL / REFERENCE_RTOL));
     if let Ok((states, steps)) = &integrated {
         let rtol = reference_rtol(&tolerances(scene, &states.q).0, &states.q);
-        if rtol < REFERENCE_RTOL {
+        if rtol < 0.5 * first_rtol {
             let first = *steps;
             (integrated, reference) = integrate(rtol, rtol * (REFERENCE_ATOL / REFERENCE_RTOL));
             if let Ok((_, steps)) = &mut integrated {
