@@ -141,7 +141,7 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         };
         let excluded = match d.energy_drift_skip {
             2 => "last two nodes excluded".to_string(),
-            k => format!("last {k} nodes excluded: the end layer of {}", scene.operator),
+            k => format!("last {k} nodes excluded: the end layer of {}", outcome.settings.operator),
         };
         println!("  residual {:.1e}, energy drift {:.3e} ({excluded}{energy_note})", d.max_residual, d.energy_drift);
         for (name, drift) in &d.max_position_drift {

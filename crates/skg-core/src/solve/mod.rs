@@ -27,6 +27,7 @@
 //! [`Problem`]: skg_ipopt::Problem
 
 pub mod backend;
+pub mod band;
 pub mod cost;
 mod error;
 pub mod ladder;

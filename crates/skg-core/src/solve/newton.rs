@@ -363,38 +363,6 @@ impl SystemSolver {
         Ok(NewtonSolution { status, max_residual: max_abs(&f), x, iterations, history, stats, total_s: start.elapsed().as_secs_f64() })
     }
 
-    /// Solve the linear systems `A xⱼ = bⱼ` for the `columns` right-hand sides stored one
-    /// after the other in `rhs` (overwritten with the solutions), with `A`'s values given
-    /// per entry of the structure this solver was built for (duplicates summed). `false`
-    /// when `A` is singular or a solution is not finite.
-    pub fn solve_linear(&mut self, structure_values: &[f64], rhs: &mut [f64], columns: usize) -> bool {
-        assert_eq!(structure_values.len(), self.structure.len(), "SystemSolver::solve_linear: one value per structure entry");
-        assert_eq!(rhs.len(), self.n * columns, "SystemSolver::solve_linear: rhs holds `columns` vectors of the solver's size");
-        let mut values = vec![0.0; self.row_idx.len()];
-        for (&s, &v) in self.slot.iter().zip(structure_values) {
-            values[s] += v;
-        }
-        let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
-        let matrix = SparseColMatRef::new(pattern, &values);
-        let Ok(lu) = self.symbolic.factorize_numeric_lu(
-            &mut self.numeric,
-            matrix,
-            Par::Seq,
-            MemStack::new(&mut self.factor_work),
-            Default::default(),
-        ) else {
-            return false;
-        };
-        let mut work = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(columns, Par::Seq));
-        lu.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(rhs, self.n, columns),
-            Par::Seq,
-            MemStack::new(&mut work),
-        );
-        rhs.iter().all(|v| v.is_finite())
-    }
-
     /// The entries (row, column, value) of the compressed matrix with `values`.
     fn entries<'a>(&'a self, values: &'a [f64]) -> impl Iterator<Item = (usize, usize, f64)> + 'a {
         (0..self.n).flat_map(move |c| {
