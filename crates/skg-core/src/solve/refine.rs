@@ -2,7 +2,7 @@
 //! the grid refined, and the operator chosen, until the verification passes.
 //!
 //! Without `--refine` and with a named operator, a solve is the scene's own solve and
-//! the fallback ladder ([`ladder`](super::ladder)). Otherwise:
+//! the fallback ladder ([`ladder`]). Otherwise:
 //!
 //! * **`--operator auto`** (or a refinement with no operator named): among the
 //!   candidates ([`Candidate::all`]: `SBP121` … `SBP484`, each with the strong and, above
