@@ -395,6 +395,91 @@ pub fn work_precision(res: &Results, filters: &[(String, String)], title: &str, 
     render!(stem, SIZE, draw_loglog(title, "wall time [s]", "max error against the reference", &lines))
 }
 
+/// Accuracy asked against accuracy reached: the points of a sweep over the
+/// verification's tolerance (`verify_tol`) solved with `refine`, their error against the
+/// reference (`error_max`, every node) over the tolerance asked, each tagged with the
+/// operator and grid it ended on; beside them the time stepper's rtol ladder (the peer)
+/// and the line "reached = asked". A second chart (`<stem>-time`) draws the wall time
+/// over the tolerance asked for both. The refined points are grouped by the sweep's
+/// other axes (e.g. `backend`) when there are several.
+pub fn tolerance(res: &Results, filters: &[(String, String)], title: &str, stem: &Path) -> Result<Vec<PathBuf>, PlotError> {
+    let rows = filtered(res, filters)?;
+    let (im, io, inodes, itol, iw, ie, irtol) = (
+        col(res, "method")?,
+        col(res, "operator")?,
+        col(res, "nodes")?,
+        col(res, "verify_tol").map_err(|_| PlotError::Data("no verify_tol column: the sweep needs a verify_tol axis".into()))?,
+        col(res, "wall_s")?,
+        col(res, "error_max")?,
+        col(res, "rtol")?,
+    );
+    let ib = col(res, "backend").ok();
+    let mut refined: BTreeMap<String, Vec<(f64, f64, f64, String)>> = BTreeMap::new();
+    let mut peer: Vec<(f64, f64, f64)> = Vec::new();
+    for r in &rows {
+        if r[im] == "ode" {
+            if let (Some(rtol), Some(e), Some(w)) = (cell_value(&r[irtol]), cell_value(&r[ie]), cell_value(&r[iw])) {
+                peer.push((rtol, e, w));
+            }
+            continue;
+        }
+        if !res.status(r)?.is_converged() {
+            continue;
+        }
+        if let (Some(tol), Some(e), Some(w)) = (cell_value(&r[itol]), cell_value(&r[ie]), cell_value(&r[iw])) {
+            let label = ib.map_or_else(|| "skg-solve --refine".to_string(), |i| format!("skg-solve --refine ({})", r[i]));
+            refined.entry(label).or_default().push((tol, e, w, format!(" {} {}", r[io], r[inodes])));
+        }
+    }
+    if refined.is_empty() {
+        return Err(PlotError::Data("no converged refined point has a tolerance, an error and a wall time".into()));
+    }
+    peer.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut accuracy = Vec::new();
+    let mut time = Vec::new();
+    for (i, (label, mut pts)) in refined.into_iter().enumerate() {
+        pts.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let tags: Vec<String> = pts.iter().map(|p| p.3.clone()).collect();
+        accuracy.push(Line {
+            label: label.clone(),
+            tags: tags.clone(),
+            points: pts.iter().map(|p| (p.0, p.1)).collect(),
+            color: color(i),
+            dashed: false,
+        });
+        time.push(Line { label, tags, points: pts.iter().map(|p| (p.0, p.2)).collect(), color: color(i), dashed: false });
+    }
+    let (lo, hi) =
+        accuracy.iter().flat_map(|l| l.points.iter().map(|p| p.0)).fold((f64::INFINITY, 0.0_f64), |(a, b), x| (a.min(x), b.max(x)));
+    if !peer.is_empty() {
+        let label = format!("time stepping (DOP853) at rtol {} … {}", sci(peer[0].0), sci(peer[peer.len() - 1].0));
+        let tags: Vec<String> = Vec::new();
+        accuracy.push(Line {
+            label: label.clone(),
+            tags: tags.clone(),
+            points: peer.iter().map(|p| (p.0, p.1)).collect(),
+            color: RGBColor(0, 0, 0),
+            dashed: true,
+        });
+        time.push(Line { label, tags, points: peer.iter().map(|p| (p.0, p.2)).collect(), color: RGBColor(0, 0, 0), dashed: true });
+    }
+    accuracy.push(Line {
+        label: "reached = asked".into(),
+        tags: Vec::new(),
+        points: vec![(lo, lo), (hi, hi)],
+        color: RGBColor(150, 150, 150),
+        dashed: true,
+    });
+    const TOL_AXIS: &str = "tolerance asked (verify_tol; rtol for time stepping)";
+    fn chart(stem: &Path, title: &str, ydesc: &str, lines: &[Line]) -> Result<Vec<PathBuf>, PlotError> {
+        render!(stem, SIZE, draw_loglog(title, TOL_AXIS, ydesc, lines))
+    }
+    let mut written = chart(stem, title, "max error against the reference", &accuracy)?;
+    let time_stem = stem.with_file_name(format!("{}-time", stem.file_name().map_or("tolerance".into(), |n| n.to_string_lossy())));
+    written.extend(chart(&time_stem, &format!("{title}: wall time"), "wall time [s]", &time)?);
+    Ok(written)
+}
+
 /// Scaling chart: solve time versus N, log-log, one line per benchmark (label and
 /// points (N, seconds)), with a dashed line of slope 1 (cost proportional to N) through
 /// the last line's largest N for comparison.

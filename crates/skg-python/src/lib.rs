@@ -407,7 +407,8 @@ impl NativeSolution {
 /// `skg-solve SCENE -o OUT` does ([`output::solve_into`]), else without writing files.
 #[pyfunction]
 #[pyo3(signature = (path, *, out=None, nodes=None, set=None, operator=None, formulation=None, initial_velocity=None,
-    hessian=None, max_iter=None, backend=None, window=None, overlap=None, verify_tol=None, no_verify=false, no_fallback=false))]
+    hessian=None, max_iter=None, backend=None, window=None, overlap=None, verify_tol=None, no_verify=false, no_fallback=false,
+    refine=false, max_nodes=None, time_limit=None))]
 #[pyo3(name = "solve")]
 #[allow(clippy::too_many_arguments)]
 fn solve_scene(
@@ -427,8 +428,21 @@ fn solve_scene(
     verify_tol: Option<f64>,
     no_verify: bool,
     no_fallback: bool,
+    refine: bool,
+    max_nodes: Option<usize>,
+    time_limit: Option<f64>,
 ) -> PyResult<NativeSolution> {
-    let operator = operator.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("operator: {e}")))).transpose()?;
+    let auto_operator = operator.is_some_and(|s| s.trim().eq_ignore_ascii_case("auto"));
+    let operator = operator
+        .filter(|_| !auto_operator)
+        .map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("operator: {e}, or \"auto\""))))
+        .transpose()?;
+    if max_nodes.is_some_and(|n| n < 2) {
+        return Err(PyValueError::new_err("max_nodes: must be at least 2"));
+    }
+    if time_limit.is_some_and(|t| !(t > 0.0 && t.is_finite())) {
+        return Err(PyValueError::new_err("time_limit: must be a positive number of seconds"));
+    }
     let formulation: Option<Formulation> =
         formulation.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("formulation: {e}")))).transpose()?;
     let initial_velocity: Option<InitialVelocity> =
@@ -454,6 +468,10 @@ fn solve_scene(
         verify_tol,
         no_verify,
         no_fallback,
+        auto_operator,
+        refine,
+        max_nodes,
+        time_limit,
     };
     let mut scene = load(py, &path, &ov)?;
     let state = match out {

@@ -176,3 +176,30 @@ def test_read_trajectory_reads_what_write_wrote(scene, tmp_path):
     assert back.columns == sol.columns and back.positions == ["rod"] and back.constraints == ["rod"]
     for name in ["t", "q", "v", "lambda_", "energy", "g", "drift", "h"]:
         np.testing.assert_array_equal(getattr(back, name), getattr(sol, name), err_msg=name)
+
+
+def test_refine_with_auto_operator_meets_the_tolerance_against_the_closed_form(scene):
+    # From a grid far too coarse (N = 17), refine=True with operator="auto" chooses the
+    # operator and the grid; the result must verify at 1e-6 and agree with the closed form
+    # to that accuracy (within the tolerance's meaning: relative to the motion's size).
+    sol = skg.solve(scene("rolling_disk"), nodes=17, operator="auto", refine=True, verify_tol=1e-6, backend="newton")
+    assert sol.trusted, sol
+    r = sol.refinement
+    assert r["refine"] and r["operator_chosen"]
+    assert r["grids"][-1]["verdict"] == "verified" and r["grids"][-1]["nodes"] == len(sol)
+    assert all(g["nodes"] > 17 for g in r["grids"])
+    exact = rolling_disk_exact(sol.t)
+    scale = np.abs(exact[:, :3]).max()
+    err = np.abs(sol.q - exact)[:-2, :3].max()
+    assert err < 1e-6 * scale * 3, (err, scale)
+    # without refine, the same coarse grid fails, and the remedy names refine
+    coarse = skg.solve(scene("rolling_disk"), nodes=17, verify_tol=1e-6, backend="newton", no_fallback=True)
+    assert not coarse.trusted and coarse.refinement is None
+    assert "--refine" in coarse.summary["remedy"]
+
+
+def test_bad_refinement_arguments_are_value_errors(scene):
+    with pytest.raises(ValueError, match="max_nodes"):
+        skg.solve(scene("free_fall"), refine=True, max_nodes=1)
+    with pytest.raises(ValueError, match="time_limit"):
+        skg.solve(scene("free_fall"), time_limit=-1.0)

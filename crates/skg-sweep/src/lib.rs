@@ -340,6 +340,12 @@ pub enum AxisError {
     /// An unknown initial-velocity condition.
     #[error(transparent)]
     InitialVelocity(#[from] ParseInitialVelocityError),
+    /// A verification tolerance that is not a positive number.
+    #[error("verify_tol = {value}: expected a positive number")]
+    VerifyTol {
+        /// The value as written.
+        value: String,
+    },
     /// A Hessian mode other than `zero` and `exact`.
     #[error("hessian = {value}: expected `zero` or `exact`")]
     Hessian {
@@ -460,6 +466,12 @@ pub struct SweepMeta {
     /// a sweep measures the scene's own solve at every point).
     #[serde(default)]
     pub fallback: bool,
+    /// Solve each point to the verification's tolerance as `skg-solve SCENE --refine`
+    /// does: finer grids (and, unless the point or the scene names one, the operator)
+    /// until it verifies (default false). A point's row then holds the grid and operator
+    /// it ended on.
+    #[serde(default)]
+    pub refine: bool,
     /// Wall-time limit of one point in seconds: a worker still running then is killed and
     /// the point recorded as [`PointStatus::TimedOut`] (default: no limit).
     #[serde(default)]
@@ -505,7 +517,7 @@ pub const MAX_POINTS: usize = 10_000_000;
 pub const CONFIRM_ABOVE: usize = 10_000;
 
 /// Axes that are not scene parameters.
-pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "initial_velocity", "hessian", "max_iter", "backend"];
+pub const SETTING_AXES: &[&str] = &["nodes", "operator", "formulation", "initial_velocity", "hessian", "max_iter", "backend", "verify_tol"];
 
 /// How a point is computed.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -584,7 +596,15 @@ impl Point {
             let whole = |axis: &'static str| move |_| AxisError::WholeNumber { axis, value: v.clone() };
             match k.as_str() {
                 "nodes" => ov.nodes = Some(v.parse().map_err(whole("nodes"))?),
+                "operator" if v.trim().eq_ignore_ascii_case("auto") => ov.auto_operator = true,
                 "operator" => ov.operator = Some(v.parse().map_err(|source| AxisError::Operator { value: v.clone(), source })?),
+                "verify_tol" => {
+                    let tol: f64 = v.trim().parse().map_err(|_| AxisError::VerifyTol { value: v.clone() })?;
+                    if !(tol > 0.0 && tol.is_finite()) {
+                        return Err(AxisError::VerifyTol { value: v.clone() });
+                    }
+                    ov.verify_tol = Some(tol);
+                }
                 "formulation" => ov.formulation = Some(v.parse::<Formulation>()?),
                 "initial_velocity" => ov.initial_velocity = Some(v.parse::<InitialVelocity>()?),
                 "hessian" => {
@@ -1131,6 +1151,9 @@ pub struct Job {
     pub keep_dir: Option<PathBuf>,
     /// Whether the point may use the fallback ladder.
     pub fallback: bool,
+    /// Whether the point is solved to its tolerance (`[sweep] refine`).
+    #[serde(default)]
+    pub refine: bool,
 }
 
 /// What a worker reports about one point (the columns of its row in results.csv).
@@ -1240,7 +1263,8 @@ enum PointError {
 }
 
 fn run_job_inner(job: &Job) -> Result<Record, PointError> {
-    let ov = job.point.overrides()?;
+    let mut ov = job.point.overrides()?;
+    ov.refine |= job.refine;
     let start = Instant::now();
     let file = SceneFile::load(&job.scene)?;
     let scene_hash = file.origin.content_hash();
@@ -1254,6 +1278,14 @@ fn run_job_inner(job: &Job) -> Result<Record, PointError> {
             rec.formulation = Some(scene.formulation.to_string());
             let mut outcome = skg_core::solve::solve_scene(&scene)?;
             rec.wall_s = Some(start.elapsed().as_secs_f64());
+            if outcome.refinement.is_some() {
+                // The grid and operator the solve ended on, for the row and the errors.
+                scene.nodes = outcome.settings.nodes;
+                scene.operator = outcome.settings.operator.parse().unwrap_or(scene.operator);
+                scene.initial_velocity = outcome.settings.initial_velocity;
+                rec.nodes = Some(scene.nodes);
+                rec.operator = Some(outcome.settings.operator.clone());
+            }
             rec.status = match (outcome.converged(), outcome.trusted()) {
                 (true, true) => PointStatus::Converged,
                 (true, false) => PointStatus::NotVerified,
@@ -1553,6 +1585,7 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
         compare: file.sweep.compare.as_ref().map(|c| c.get_ref().clone()),
         skip_last: file.skip_last(),
         fallback: file.sweep.fallback,
+        refine: file.sweep.refine,
     };
     let mut pool = workers::Pool::new(&opts.worker_exe, &work, opts.jobs, file.sweep.timeout.as_ref().map(|t| *t.get_ref()));
     loop {

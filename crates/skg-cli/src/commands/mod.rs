@@ -45,9 +45,11 @@ pub struct SceneArgs {
     pub set: Vec<String>,
     /// Override the SBP operator: SBP121, SBP242 (alias SBP424), SBP363, SBP484, or one
     /// with artificial dissipation, SBP121-AD, SBP242-AD, SBP363-AD, SBP484-AD (damps the
-    /// odd-even mode that damping or contraction amplifies; docs/mathematics.md §3).
+    /// odd-even mode that damping or contraction amplifies; docs/mathematics.md §3); or
+    /// `auto`: the one (with its initial-velocity condition, unless one is given)
+    /// predicted to meet the verification's tolerance at the least cost.
     #[arg(long, value_name = "NAME")]
-    pub operator: Option<OperatorKind>,
+    pub operator: Option<OperatorArg>,
     /// Formulation: `reduced` (physical limit, half the unknowns; default) or `full`
     /// (the paper's doubled unknowns).
     #[arg(long, value_name = "KIND")]
@@ -95,6 +97,26 @@ pub struct SceneArgs {
     pub no_fallback: bool,
 }
 
+/// `--operator`: an operator's name, or `auto`.
+#[derive(Clone, Copy, Debug)]
+pub enum OperatorArg {
+    /// Chosen by predicted cost.
+    Auto,
+    /// This operator.
+    Named(OperatorKind),
+}
+
+impl std::str::FromStr for OperatorArg {
+    type Err = skg_core::sbp::ParseOperatorKindError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.trim().eq_ignore_ascii_case("auto") {
+            return Ok(OperatorArg::Auto);
+        }
+        s.parse().map(OperatorArg::Named)
+    }
+}
+
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum HessianArg {
     Zero,
@@ -108,7 +130,11 @@ impl SceneArgs {
         Ok(Overrides {
             set,
             nodes,
-            operator: self.operator,
+            operator: match self.operator {
+                Some(OperatorArg::Named(k)) => Some(k),
+                _ => None,
+            },
+            auto_operator: matches!(self.operator, Some(OperatorArg::Auto)),
             formulation: self.formulation,
             initial_velocity: self.initial_velocity,
             hessian: self.hessian.map(|h| match h {
@@ -122,6 +148,7 @@ impl SceneArgs {
             verify_tol: self.verify_tol,
             no_verify: self.no_verify,
             no_fallback: self.no_fallback,
+            ..Overrides::default()
         })
     }
 }
@@ -155,7 +182,7 @@ pub enum ArgError {
 }
 
 /// A command-line number that must be finite and positive (a usage error otherwise).
-fn positive(text: &str) -> Result<f64, ArgError> {
+pub(crate) fn positive(text: &str) -> Result<f64, ArgError> {
     let x = number(text)?;
     (x > 0.0 && x.is_finite()).then_some(x).ok_or_else(|| ArgError::NotPositive(text.to_string()))
 }

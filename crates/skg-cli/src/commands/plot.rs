@@ -17,6 +17,10 @@ pub enum PlotKind {
     WorkPrecision(ResultsPlotArgs),
     /// Error versus N (log-log), the fitted order in the legend.
     Convergence(ResultsPlotArgs),
+    /// Accuracy asked versus reached: a sweep over `verify_tol` with `refine = true`,
+    /// error and wall time over the tolerance asked (one line per backend), beside the
+    /// time stepper's rtol ladder (writes STEM and STEM-time).
+    Tolerance(ResultsPlotArgs),
     /// Map over two grid axes: verified / verified with energy artifacts / converged but
     /// not verified / failed, each cell labelled with a column's value.
     Stability {
@@ -121,6 +125,10 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
         PlotKind::WorkPrecision(c) => {
             let r = sweep::Results::read(&c.results)?;
             plot::work_precision(&r, &parse_filters(&c.filters)?, &title_for(&c, "work-precision"), &c.output)?
+        }
+        PlotKind::Tolerance(c) => {
+            let r = sweep::Results::read(&c.results)?;
+            plot::tolerance(&r, &parse_filters(&c.filters)?, &title_for(&c, "accuracy asked and reached"), &c.output)?
         }
         PlotKind::Convergence(c) => {
             let r = sweep::Results::read(&c.results)?;

@@ -1,5 +1,6 @@
 //! The default command: solve one scene and write its trajectory and summary.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -27,6 +28,20 @@ pub struct SolveArgs {
     pub nodes: Option<usize>,
     #[command(flatten)]
     pub scene: SceneArgs,
+    /// Solve to the verification's tolerance: while the solve is not verified, solve
+    /// again on the next grid (and, unless --operator names one, with the operator)
+    /// predicted to meet the tolerance at the least cost; the scene's N is the first
+    /// grid. See docs/trust.md#refinement.
+    #[arg(long)]
+    pub refine: bool,
+    /// The largest grid --refine may use [default: the scene's [verify] max_nodes, else
+    /// the largest the available memory allows, at most 1048576].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(2..=100_000_000))]
+    pub max_nodes: Option<u64>,
+    /// Seconds the whole solve may take (fallback ladder and refinement included),
+    /// checked between attempts: the best attempt so far is then reported.
+    #[arg(long, value_name = "SECONDS", value_parser = super::positive)]
+    pub time_limit: Option<f64>,
     /// Print only errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -44,14 +59,27 @@ fn solver_name(outcome: &solve::Outcome) -> &'static str {
 
 pub fn run(args: SolveArgs) -> Result<ExitCode> {
     let path = args.scenario.expect("clap requires the scenario");
-    let ov = args.scene.overrides(args.nodes)?;
+    let mut ov = args.scene.overrides(args.nodes)?;
+    ov.refine = args.refine;
+    ov.max_nodes = args.max_nodes.map(|n| n as usize);
+    ov.time_limit = args.time_limit;
     let mut scene = load(&path, &ov)?;
     let dir = args.output.unwrap_or_else(|| {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
     let spinner = progress_spinner(args.quiet, &scene.name);
-    let solved = output::solve_into_with_progress(&dir, &mut scene, &mut |attempt| spinner.set_message(attempt.to_string()));
+    // On a terminal the spinner names the attempt under way; elsewhere (a log, a pipe,
+    // a batch job) one plain line per attempt, so that a long solve is not silent.
+    let lines = !args.quiet && !std::io::stderr().is_terminal();
+    let name = scene.name.clone();
+    let started = std::time::Instant::now();
+    let solved = output::solve_into_with_progress(&dir, &mut scene, &mut |attempt| {
+        if lines {
+            eprintln!("{name}: {attempt} ({:.1} s)", started.elapsed().as_secs_f64());
+        }
+        spinner.set_message(attempt.to_string())
+    });
     spinner.finish_and_clear();
     let (outcome, written) = solved?;
     for w in &outcome.warnings {
@@ -59,6 +87,7 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
     }
     let v = &outcome.verification;
     print_attempts(&outcome, args.quiet);
+    print_refinement(&outcome, args.quiet);
     if !outcome.converged() {
         eprintln!(
             "error: {}: the solve did not converge: {} ({} iterations, residual {:.3e}); summary in {}",
@@ -112,7 +141,7 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         };
         let excluded = match d.energy_drift_skip {
             2 => "last two nodes excluded".to_string(),
-            k => format!("last {k} nodes excluded: the end layer of {}", scene.operator),
+            k => format!("last {k} nodes excluded: the end layer of {}", outcome.settings.operator),
         };
         println!("  residual {:.1e}, energy drift {:.3e} ({excluded}{energy_note})", d.max_residual, d.energy_drift);
         for (name, drift) in &d.max_position_drift {
@@ -150,6 +179,36 @@ fn print_attempts(outcome: &solve::Outcome, quiet: bool) {
     for (i, a) in outcome.attempts.iter().enumerate() {
         eprintln!("  {}. {}{} ({:.2} s): {}", i + 1, a.method, if a.chosen { " [reported]" } else { "" }, a.wall_s, a.result);
     }
+}
+
+/// When the grid was refined or the operator chosen, one line per discretization solved
+/// (on stderr, as notes).
+fn print_refinement(outcome: &solve::Outcome, quiet: bool) {
+    let Some(r) = &outcome.refinement else { return };
+    if quiet && outcome.trusted() {
+        return;
+    }
+    let what = match (r.refine, r.operator_chosen) {
+        (true, true) => "refined the grid and chose the operator",
+        (true, false) => "refined the grid",
+        (false, _) => "chose the operator",
+    };
+    eprintln!("note: {what} for the tolerance ({}):", r.tolerance);
+    for (i, g) in r.grids.iter().enumerate() {
+        let ratio = |x: Option<f64>| x.map_or("–".to_string(), |x| format!("{x:.2}"));
+        eprintln!(
+            "  {}. {} ({}) on {} nodes: {} (error/tolerance {}, predicted {}) ({:.2} s)",
+            i + 1,
+            g.operator,
+            g.initial_velocity,
+            g.nodes,
+            g.verdict,
+            ratio(g.measured),
+            ratio(g.predicted),
+            g.wall_s
+        );
+    }
+    eprintln!("  {}", r.result);
 }
 
 /// Print what to do about a result that cannot be trusted.

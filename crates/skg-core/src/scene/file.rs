@@ -123,6 +123,12 @@ pub struct VerifySpec {
     /// Absolute tolerance on max |q − q_reference| (coordinate units).
     #[serde(default)]
     pub tol: Option<Spanned<NumOrExpr>>,
+    /// Refine the grid until the verification passes (default false).
+    #[serde(default)]
+    pub refine: Option<bool>,
+    /// The largest grid refinement may use (default: what the memory allows, at most 2²⁰).
+    #[serde(default)]
+    pub max_nodes: Option<Spanned<i64>>,
 }
 
 /// The `[discretization]` table.
@@ -163,6 +169,9 @@ pub struct SolverSpec {
     pub ipopt: IndexMap<String, Spanned<IpoptValue>>,
     /// When the solve fails or is not verified, try the fallback ladder (default true).
     pub fallback: Option<bool>,
+    /// Seconds the whole solve may take, fallback ladder and refinement included.
+    #[serde(default)]
+    pub time_limit: Option<Spanned<f64>>,
 }
 
 /// The value of a pass-through Ipopt option: integer, number or string, as Ipopt's

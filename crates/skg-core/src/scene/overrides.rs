@@ -16,6 +16,9 @@ pub struct Overrides {
     pub nodes: Option<usize>,
     /// SBP operator.
     pub operator: Option<OperatorKind>,
+    /// Choose the operator (and the initial-velocity condition, unless one is given) by
+    /// predicted cost (`--operator auto`).
+    pub auto_operator: bool,
     /// Formulation.
     pub formulation: Option<Formulation>,
     /// How the initial velocity is imposed.
@@ -36,6 +39,12 @@ pub struct Overrides {
     pub no_verify: bool,
     /// Do not try the fallback ladder (`--no-fallback`).
     pub no_fallback: bool,
+    /// Refine the grid until the verification passes (`--refine`).
+    pub refine: bool,
+    /// The largest grid refinement may use (`--max-nodes`).
+    pub max_nodes: Option<usize>,
+    /// Seconds the whole solve may take (`--time-limit`).
+    pub time_limit: Option<f64>,
 }
 
 impl Overrides {

@@ -31,6 +31,9 @@ impl SceneFile {
         let solver = self.resolve_solver(ov, formulation)?;
         let windows = self.resolve_windows(ov, &params, grid.t_end - grid.t_start)?;
         let verify = self.resolve_verify(ov, &params)?;
+        // A refinement chooses the operator too unless one is named.
+        let choose_operator = grid.auto_operator || (verify.refine && !grid.operator_named);
+        let choose_initial_velocity = choose_operator && ov.initial_velocity.is_none() && self.discretization.initial_velocity.is_none();
         Ok(Scene {
             name: self.scene.name.clone(),
             parameters: params,
@@ -43,6 +46,8 @@ impl SceneFile {
             t_end: grid.t_end,
             nodes: grid.nodes,
             operator: grid.operator,
+            choose_operator,
+            choose_initial_velocity,
             formulation,
             initial_velocity,
             solver,

@@ -39,6 +39,9 @@ pub struct SolverSettings {
     /// Whether a failed or unverified solve tries the fallback ladder (the solve's last
     /// stage).
     pub fallback: bool,
+    /// Seconds the whole solve may take (fallback ladder and refinement included):
+    /// checked between attempts; the best attempt so far is reported.
+    pub time_limit: Option<f64>,
 }
 
 /// Successive time windows: each solves `length` seconds from the state the previous
@@ -60,6 +63,12 @@ pub struct VerifySettings {
     /// gives one (otherwise the verification's default, relative to each coordinate's
     /// range).
     pub tol: Option<f64>,
+    /// Solve on finer grids (and, when chosen, other operators) until the verification
+    /// passes (`[verify] refine`, `--refine`).
+    pub refine: bool,
+    /// The largest grid refinement may use, if given (`[verify] max_nodes`,
+    /// `--max-nodes`).
+    pub max_nodes: Option<usize>,
 }
 
 /// A wall, resolved to numbers (its `h` and friction direction expressions are parsed
@@ -124,8 +133,14 @@ pub struct Scene {
     pub t_end: f64,
     /// Number of grid nodes N (at least the operator's minimum).
     pub nodes: usize,
-    /// The SBP operator.
+    /// The SBP operator (the one chosen by the solve when `choose_operator`).
     pub operator: OperatorKind,
+    /// The solve chooses the operator by predicted cost: `operator = "auto"`, or a
+    /// refinement with no operator named in the scene or on the command line.
+    pub choose_operator: bool,
+    /// The solve chooses the initial-velocity condition too (it chooses the operator,
+    /// and no condition is named).
+    pub choose_initial_velocity: bool,
     /// The formulation.
     pub formulation: Formulation,
     /// How the initial velocity is imposed.

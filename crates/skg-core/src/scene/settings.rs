@@ -49,7 +49,7 @@ impl fmt::Display for Formulation {
 
 /// How the initial velocity enters the discrete action (docs/mathematics.md §5). The
 /// initial position is imposed the same way by both (`q+[1] = q_i`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum InitialVelocity {
     /// `(D q+)[1] = q̇_i` through a multiplier, with `q-[1] = 0`: the velocity of the

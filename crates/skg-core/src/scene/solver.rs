@@ -11,6 +11,7 @@ use super::file::{IpoptValue, SceneFile};
 use super::overrides::Overrides;
 use super::resolved::{SolverSettings, VerifySettings};
 use super::settings::{Formulation, HessianMode};
+use super::time::MAX_NODES;
 
 impl SceneFile {
     /// `[solver]` with the command line's overrides: a positive tolerance, an exact
@@ -48,6 +49,7 @@ impl SceneFile {
             ipopt_log: None,
             ipopt: self.pass_through_options()?,
             fallback: !ov.no_fallback && s.fallback.unwrap_or(true),
+            time_limit: self.resolve_time_limit(ov)?,
         })
     }
 
@@ -113,7 +115,40 @@ impl SceneFile {
                 });
             }
         }
-        Ok(VerifySettings { enabled: !ov.no_verify, tol })
+        let max_nodes = match (ov.max_nodes, &self.verify.max_nodes) {
+            (Some(n), _) => Some(n),
+            (None, Some(n)) => {
+                let value = *n.get_ref();
+                if value < 2 || value > MAX_NODES as i64 {
+                    return Err(self.invalid(n, format!("verify.max_nodes must be an integer from 2 to {MAX_NODES}, got {value}")));
+                }
+                Some(value as usize)
+            }
+            (None, None) => None,
+        };
+        Ok(VerifySettings { enabled: !ov.no_verify, tol, refine: ov.refine || self.verify.refine.unwrap_or(false), max_nodes })
+    }
+
+    /// `[solver] time_limit` or `--time-limit`: a positive number of seconds.
+    fn resolve_time_limit(&self, ov: &Overrides) -> Result<Option<f64>, SceneError> {
+        let limit = match (ov.time_limit, &self.solver.time_limit) {
+            (Some(t), _) => t,
+            (None, Some(t)) => {
+                let value = *t.get_ref();
+                if !(value > 0.0 && value.is_finite()) {
+                    return Err(self.invalid(t, format!("solver.time_limit must be a positive number of seconds, got {value}")));
+                }
+                value
+            }
+            (None, None) => return Ok(None),
+        };
+        if !(limit > 0.0 && limit.is_finite()) {
+            return Err(SceneError::Setting {
+                setting: format!("--time-limit {limit}"),
+                message: "must be a positive number of seconds".into(),
+            });
+        }
+        Ok(Some(limit))
     }
 }
 

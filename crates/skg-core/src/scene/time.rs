@@ -86,6 +86,10 @@ pub(super) struct Grid {
     pub(super) t_start: f64,
     pub(super) t_end: f64,
     pub(super) operator: OperatorKind,
+    /// The scene or the command line asks for `operator = "auto"`.
+    pub(super) auto_operator: bool,
+    /// The scene or the command line names an operator (not `auto`).
+    pub(super) operator_named: bool,
     pub(super) nodes: usize,
 }
 
@@ -99,28 +103,36 @@ impl SceneFile {
         if t_end <= t_start {
             return Err(self.invalid(&self.time.end, format!("the time span must be positive: end ({t_end}) ≤ start ({t_start})")));
         }
-        let operator = match (&ov.operator, &self.discretization.operator) {
-            (Some(k), _) => *k,
-            (None, Some(s)) => s.get_ref().parse::<OperatorKind>().map_err(|e| self.invalid(s, e.to_string()))?,
-            (None, None) => OperatorKind::Sbp242,
+        let auto = |s: &Spanned<String>| s.get_ref().trim().eq_ignore_ascii_case("auto");
+        let (operator, auto_operator) = match (&ov.operator, ov.auto_operator, &self.discretization.operator) {
+            (Some(k), _, _) => (*k, false),
+            (None, true, _) => (OperatorKind::Sbp242, true),
+            (None, false, Some(s)) if auto(s) => (OperatorKind::Sbp242, true),
+            (None, false, Some(s)) => {
+                let kind = s.get_ref().parse::<OperatorKind>().map_err(|e| self.invalid(s, format!("{e}, or auto")))?;
+                (kind, false)
+            }
+            (None, false, None) => (OperatorKind::Sbp242, false),
         };
+        let operator_named = !auto_operator && (ov.operator.is_some() || self.discretization.operator.is_some());
+        // A chosen operator is checked against the grid when it is chosen: here only the
+        // smallest operator's minimum applies.
+        let min_nodes = if auto_operator { OperatorKind::Sbp121.min_nodes() } else { operator.min_nodes() };
         let nodes_raw = match ov.nodes {
             Some(n) => n as i128,
             None => *self.time.nodes.get_ref() as i128,
         };
         let nodes_origin = if ov.nodes.is_some() { " (set by --nodes or a sweep point)" } else { "" };
-        if nodes_raw < operator.min_nodes() as i128 {
-            return Err(self.invalid(
-                &self.time.nodes,
-                format!("{} needs at least {} nodes, got {nodes_raw}{nodes_origin}", operator.name(), operator.min_nodes()),
-            ));
+        if nodes_raw < min_nodes as i128 {
+            let which = if auto_operator { "every operator".to_string() } else { operator.name().to_string() };
+            return Err(self.invalid(&self.time.nodes, format!("{which} needs at least {min_nodes} nodes, got {nodes_raw}{nodes_origin}")));
         }
         if nodes_raw > MAX_NODES as i128 {
             return Err(self.invalid(&self.time.nodes, format!("at most {MAX_NODES} nodes are supported, got {nodes_raw}{nodes_origin}")));
         }
         let nodes = nodes_raw as usize;
         check_time_resolution(t_start, t_end, nodes).map_err(|m| self.invalid(&self.time.end, format!("{m}{nodes_origin}")))?;
-        Ok(Grid { t_start, t_end, operator, nodes })
+        Ok(Grid { t_start, t_end, operator, auto_operator, operator_named, nodes })
     }
 
     /// `[time] window` and `overlap`, with the command line's overrides (a window of 0

@@ -20,6 +20,10 @@ pub enum SolveError {
     /// recover from; Newton's structure).
     #[error(transparent)]
     Backend(#[from] BackendError),
+    /// The prediction of the discretization error failed (its time-stepping reference
+    /// could not be computed): the reason.
+    #[error("the error of the discretizations cannot be predicted: {0}")]
+    Prediction(String),
     /// The scene's windows do not fit its grid.
     #[error("{scene}: [time] window: {error}")]
     Windows {

@@ -43,7 +43,6 @@ use super::run::{solve_global, Run};
 use super::window::{self, WindowGrid};
 use crate::discrete::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
-use crate::memory;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::{Scene, Windows};
@@ -56,30 +55,62 @@ pub const WIDTH_FACTORS: [f64; 3] = [8.0, 4.0, 2.0];
 /// How far past the end time step 3 solves, as a fraction of the span.
 pub const END_MARGIN: f64 = 0.25;
 
-/// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
-/// verified against time stepping of the same scene and, when it fails to converge or to
-/// verify, the fallback ladder (see the module docs).
-///
-/// Refused before anything is allocated if its memory estimate exceeds the available
-/// memory ([`memory`]).
-pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
-    solve_scene_with_progress(scene, &mut |_| {})
+/// The ladder's attempts stop once it has taken this many times the wall time of the
+/// scene's own solve (or [`LADDER_FLOOR_S`], whichever is longer): a ladder whose every
+/// rung fails can otherwise take minutes on a large grid (the knife edge at N = 10⁵ ran
+/// for over ten minutes), and a rung that has not helped by then rarely does.
+pub const LADDER_COST_FACTOR: f64 = 8.0;
+/// The time every ladder may take regardless of [`LADDER_COST_FACTOR`], seconds.
+pub const LADDER_FLOOR_S: f64 = 2.0;
+
+/// Which rungs the ladder may climb after the scene's own solve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rungs {
+    /// Every rung that applies (see the module docs).
+    All,
+    /// Only the wall-width continuation, when the solve did not converge: for a grid of
+    /// a refinement, whose initial guess already comes from a coarser grid and whose
+    /// failures to verify the next, finer grid addresses.
+    GuessOnly,
 }
 
-/// [`solve_scene`], telling `progress` what each rung is about to do ("2. coarse to fine
-/// (…)"), for a progress display: a ladder that fails can take a minute.
-pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
-    memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
-    let model = Model::build(scene)?;
-    let mut ladder = Ladder { scene, model: &model, tried: Vec::new(), progress, preliminary: Work::default(), unlisted: Work::default() };
+/// The scene's own solve from `guess` (one global solve, or the scene's windows) and,
+/// when it fails to converge or to verify, the ladder's `rungs` (see the module docs),
+/// stopped at `deadline` and by [`LADDER_COST_FACTOR`]. `progress` is told what each
+/// attempt is about to do ("2. coarse to fine (…)").
+pub fn climb(
+    scene: &Scene,
+    model: &Model,
+    guess: &Guess,
+    rungs: Rungs,
+    deadline: Option<Instant>,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Outcome, SolveError> {
+    let mut ladder = Ladder {
+        scene,
+        model,
+        tried: Vec::new(),
+        progress,
+        preliminary: Work::default(),
+        unlisted: Work::default(),
+        started: Instant::now(),
+        deadline,
+        stopped: None,
+    };
     let go_on = match scene.windows {
         Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, w))?,
-        None => ladder.attempt("one global solve", || solve_global(scene, &Guess::TimeStepping))?,
+        None => ladder.attempt("one global solve", || solve_global(scene, guess))?,
     };
     if !go_on || !scene.solver.fallback {
         return Ok(ladder.finish());
     }
     let converged = ladder.tried[0].outcome.converged();
+    if rungs == Rungs::GuessOnly {
+        if !converged && scene.windows.is_none() {
+            ladder.width_continuation()?;
+        }
+        return Ok(ladder.finish());
+    }
     if !converged && scene.windows.is_none() && (ladder.coarse_to_fine()? || ladder.width_continuation()?) {
         return Ok(ladder.finish());
     }
@@ -110,6 +141,12 @@ struct Ladder<'a> {
     preliminary: Work,
     /// The work of preliminary solves that led to no attempt (they did not converge).
     unlisted: Work,
+    /// When the ladder started.
+    started: Instant,
+    /// The whole solve's deadline (`--time-limit`), if any.
+    deadline: Option<Instant>,
+    /// Why the ladder stopped before its rungs were done, if it did.
+    stopped: Option<String>,
 }
 
 impl Ladder<'_> {
@@ -118,9 +155,36 @@ impl Ladder<'_> {
         (self.progress)(&format!("{}. {description}", self.tried.len() + 1));
     }
 
+    /// Whether the ladder may start another attempt: within the whole solve's time limit
+    /// and within [`LADDER_COST_FACTOR`] of the scene's own solve. The first time it may
+    /// not, the reason is kept for the summary's warnings.
+    fn may_go_on(&mut self) -> bool {
+        if self.stopped.is_some() {
+            return false;
+        }
+        let elapsed = self.started.elapsed().as_secs_f64();
+        if self.deadline.is_some_and(|d| Instant::now() >= d) {
+            self.stopped = Some(format!("the fallback ladder stopped at the time limit after {elapsed:.1} s"));
+        } else if let Some(first) = self.tried.first() {
+            let bound = (LADDER_COST_FACTOR * first.wall_s).max(LADDER_FLOOR_S);
+            if elapsed >= bound {
+                self.stopped = Some(format!(
+                    "the fallback ladder stopped after {} in {elapsed:.1} s: it may take {LADDER_COST_FACTOR}× the scene's own \
+                     solve ({:.2} s) or {LADDER_FLOOR_S} s, whichever is longer",
+                    super::outcome::counted(self.tried.len(), "attempt"),
+                    first.wall_s
+                ));
+            }
+        }
+        self.stopped.is_none()
+    }
+
     /// Run and assess one attempt; `Ok(true)` means the ladder should go on (the run
-    /// did not converge or did not verify).
+    /// did not converge or did not verify, and the ladder has time left).
     fn attempt(&mut self, description: &str, run: impl FnOnce() -> Result<Run, SolveError>) -> Result<bool, SolveError> {
+        if !self.tried.is_empty() && !self.may_go_on() {
+            return Ok(false);
+        }
         self.announce(description);
         let start = Instant::now();
         let run = run()?;
@@ -128,7 +192,7 @@ impl Ladder<'_> {
         outcome.work.add(&std::mem::take(&mut self.preliminary));
         let go_on = !ends_the_ladder(&outcome);
         self.tried.push(Tried { description: description.to_string(), outcome, wall_s: start.elapsed().as_secs_f64() });
-        Ok(go_on)
+        Ok(go_on && self.may_go_on())
     }
 
     /// Count a preliminary solve's work in the next attempt's.
@@ -151,7 +215,7 @@ impl Ladder<'_> {
     fn coarse_to_fine(&mut self) -> Result<bool, SolveError> {
         let scene = self.scene;
         let coarse_nodes = (scene.nodes - 1) / 2 + 1;
-        if coarse_nodes < scene.operator.min_nodes().max(8) {
+        if coarse_nodes < scene.operator.min_nodes().max(8) || !self.may_go_on() {
             return Ok(false);
         }
         let coarse_scene = Scene { nodes: coarse_nodes, ..scene.clone() };
@@ -182,6 +246,9 @@ impl Ladder<'_> {
         let mut guess = Guess::TimeStepping;
         let mut widest_converged = None;
         for factor in WIDTH_FACTORS {
+            if !self.may_go_on() {
+                break;
+            }
             self.announce(&format!("wall-width continuation (every wall width × {factor})"));
             let mut wide = scene.clone();
             wide.walls.iter_mut().for_each(|w| w.width *= factor);
@@ -210,7 +277,7 @@ impl Ladder<'_> {
     fn past_the_end(&mut self) -> Result<bool, SolveError> {
         let span = self.scene.t_end - self.scene.t_start;
         let windows = Windows { length: span * (1.0 + END_MARGIN), overlap: span * END_MARGIN };
-        if WindowGrid::new(self.scene, windows).is_err() {
+        if WindowGrid::new(self.scene, windows).is_err() || !self.may_go_on() {
             return Ok(false);
         }
         self.attempt(&format!("one solve {:.0} % past the end time", 100.0 * END_MARGIN), || window::solve_windows(self.scene, windows))?;
@@ -222,6 +289,9 @@ impl Ladder<'_> {
         let scene = self.scene;
         let mut length = scene.windows.map_or(scene.t_end - scene.t_start, |w| w.length) / 2.0;
         loop {
+            if !self.may_go_on() {
+                return Ok(());
+            }
             let windows = Windows { length, overlap: length / 4.0 };
             match WindowGrid::new(scene, windows) {
                 Ok(grid) if grid.nodes >= MIN_WINDOW_NODES => {}
@@ -251,6 +321,7 @@ impl Ladder<'_> {
         outcome.timings.other_attempts_s = others_s;
         outcome.work = work;
         outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &outcome, fallback_used, windows_tried));
+        outcome.warnings.extend(self.stopped.take());
         outcome.attempts = attempts;
         outcome
     }
@@ -330,6 +401,9 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
         if !windows_tried {
             steps.push(format!("solve in windows (--window {suggested_window})"));
         }
+        if !scene.verify.refine {
+            steps.push("let --refine choose finer grids until the solve converges and verifies".to_string());
+        }
         let last = steps.pop().expect("one step at least");
         let steps = if steps.is_empty() { last } else { format!("{}, or {last}", steps.join(", ")) };
         return format!("{ladder}{steps}");
@@ -365,7 +439,15 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
                     refine
                 }
             };
-            format!("{ladder}{cure}; or, if this accuracy is enough for you, state it with `[verify] tol` or --verify-tol")
+            // The refinement does all of the above by itself, at the least predicted cost.
+            let auto = if scene.verify.refine {
+                String::new()
+            } else {
+                "let the tool choose: --refine solves on finer grids (and, unless --operator names one, with the operator) \
+                 predicted to meet the tolerance at the least cost; or "
+                    .to_string()
+            };
+            format!("{ladder}{auto}{cure}; or, if this accuracy is enough for you, state it with `[verify] tol` or --verify-tol")
         }
     }
 }
@@ -402,7 +484,7 @@ fn higher_order(op: OperatorKind) -> Option<OperatorKind> {
 }
 
 /// Cubic Hermite interpolation of the coordinates of `tr` (values and velocities) at `times`.
-fn hermite(tr: &Trajectory, times: &[f64]) -> NodeSeries {
+pub(super) fn hermite(tr: &Trajectory, times: &[f64]) -> NodeSeries {
     times
         .iter()
         .map(|&t| {
@@ -418,7 +500,7 @@ fn hermite(tr: &Trajectory, times: &[f64]) -> NodeSeries {
 }
 
 /// Linear interpolation of a node series at `times`.
-fn linear(t: &[f64], series: &NodeSeries, times: &[f64]) -> NodeSeries {
+pub(super) fn linear(t: &[f64], series: &NodeSeries, times: &[f64]) -> NodeSeries {
     times
         .iter()
         .map(|&x| {

@@ -307,6 +307,9 @@ pub struct Outcome {
     pub attempts: Vec<Attempt>,
     /// What to do when the result cannot be trusted (not converged, or not verified).
     pub remedy: Option<String>,
+    /// The grids and operators a refinement or an operator choice tried (`null` when the
+    /// scene's own discretization was solved as given).
+    pub refinement: Option<Refinement>,
     /// The iteration table of the backend that finished (Ipopt's, or Newton's in the
     /// same layout).
     pub history: Vec<ipopt::IterationStat>,
@@ -350,6 +353,51 @@ pub struct Attempt {
     pub wall_s: f64,
     /// Whether its trajectory is the one reported.
     pub chosen: bool,
+}
+
+/// What a refinement ([`refine`](super::refine)) did: every discretization it solved,
+/// and why it stopped (`summary.json`: `refinement`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Refinement {
+    /// Whether the grid was refined (`--refine`), or only the operator chosen for the
+    /// scene's grid (`--operator auto`).
+    pub refine: bool,
+    /// Whether the operator (and the initial-velocity condition) was chosen.
+    pub operator_chosen: bool,
+    /// The verification's tolerance and where it came from.
+    pub tolerance: String,
+    /// The largest grid the refinement could use, and why.
+    pub max_nodes: usize,
+    /// Where `max_nodes` came from.
+    pub max_nodes_source: String,
+    /// Every discretization solved, in order; the last one trusted is the reported one.
+    pub grids: Vec<RefinedGrid>,
+    /// Why the refinement stopped, in words.
+    pub result: String,
+    /// Seconds spent predicting errors (the time-stepping references of the proxy).
+    pub prediction_s: f64,
+}
+
+/// One discretization a refinement solved.
+#[derive(Debug, Clone, Serialize)]
+pub struct RefinedGrid {
+    /// Grid nodes N.
+    pub nodes: usize,
+    /// The operator.
+    pub operator: String,
+    /// The initial-velocity condition.
+    pub initial_velocity: InitialVelocity,
+    /// The predicted error relative to the tolerance (max over coordinates of error /
+    /// tolerance), when a prediction was made.
+    pub predicted: Option<f64>,
+    /// The verification's error relative to the tolerance, when it could be measured.
+    pub measured: Option<f64>,
+    /// The verification's max |q − q_reference|.
+    pub max_error: Option<f64>,
+    /// How it ended: `verified`, `not verified`, `not converged`, `unverified`.
+    pub verdict: String,
+    /// Wall time of its solve, fallback ladder included, seconds.
+    pub wall_s: f64,
 }
 
 /// How a run covered the scene's span.

@@ -90,6 +90,7 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
         warnings,
         attempts: Vec::new(),
         remedy: None,
+        refinement: None,
         history: run.history,
         trajectory: run.trajectory,
     }

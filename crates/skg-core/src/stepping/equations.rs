@@ -47,6 +47,19 @@ pub fn min_spacing(times: &[f64]) -> Option<f64> {
 /// `(q0, v0)` at the absolute time `times[0]` and sample `(q, v, λ)` at `times`
 /// (increasing).
 pub fn integrate_model(model: &Model, q0: &[f64], v0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<(States, OdeStats), OdeError> {
+    let (states, stats) = integrate_states(model, q0, v0, times, opts)?;
+    Ok((split_states(model, &states, times, &mut model.workspace())?, stats))
+}
+
+/// [`integrate_model`] without the multipliers: the integrator's states `(q, v)` at
+/// `times`, one vector of `2d` numbers each.
+pub fn integrate_states(
+    model: &Model,
+    q0: &[f64],
+    v0: &[f64],
+    times: &[f64],
+    opts: &OdeOptions,
+) -> Result<(Vec<Vec<f64>>, OdeStats), OdeError> {
     let y0: Vec<f64> = q0.iter().chain(v0).copied().collect();
     let d = model.layout.d;
     let regularized_walls = model.wall_model == WallModel::Gaussian && !model.walls.is_empty();
@@ -66,8 +79,7 @@ pub fn integrate_model(model: &Model, q0: &[f64], v0: &[f64], times: &[f64], opt
         ok
     };
     let sol = ode::integrate_checked(rhs(model, &mut model.workspace()), &y0, times, opts, accept)?;
-    let states = split_states(model, &sol.states, times, &mut model.workspace())?;
-    Ok((states, sol.stats))
+    Ok((sol.states, sol.stats))
 }
 
 /// Fraction of `|h| + σ` by which one step may change a wall's gap `h`.

@@ -299,6 +299,12 @@ class Solution(Trajectory):
         return self.summary["attempts"]
 
     @property
+    def refinement(self) -> Optional[Dict[str, Any]]:
+        """With ``refine=True`` or ``operator="auto"``, every grid solved and why the
+        refinement stopped (``summary["refinement"]``, see docs/output.md); else ``None``."""
+        return self.summary.get("refinement")
+
+    @property
     def warnings(self) -> List[str]:
         """The solve's warnings (also issued as :class:`SolveWarning` by :func:`solve`)."""
         return self.summary["warnings"]
@@ -397,6 +403,9 @@ def solve(
     verify_tol: Optional[float] = None,
     no_verify: bool = False,
     no_fallback: bool = False,
+    refine: bool = False,
+    max_nodes: Optional[int] = None,
+    time_limit: Optional[float] = None,
 ) -> Solution:
     """Solve a scene file (or a :class:`Scene`, or a mapping that makes one) as
     ``skg-solve SCENE`` does; without ``out``, no file is written.
@@ -409,13 +418,17 @@ def solve(
 
     The keyword arguments are the command line's options: ``nodes`` (``--nodes``),
     ``set`` (``--set``, a mapping such as ``{"sigma": 1/200, "V0": "2*g"}``: numbers, or
-    expressions as strings or SymPy expressions), ``operator`` (``"SBP121"``, ``"SBP242"``, ``"SBP363"``,
-    ``"SBP484"``, or the dissipative ``"SBP121-AD"`` … ``"SBP484-AD"``), ``formulation``
+    expressions as strings or SymPy expressions), ``operator`` (``"SBP121"``, ``"SBP242"``,
+    ``"SBP363"``, ``"SBP484"``, the dissipative ``"SBP121-AD"`` … ``"SBP484-AD"``, or
+    ``"auto"``: the one predicted to meet the tolerance at the least cost), ``formulation``
     (``"reduced"``, ``"full"``), ``initial_velocity``
     (``"strong"``, ``"natural"``), ``hessian`` (``"zero"``, ``"exact"``), ``max_iter``,
     ``backend`` (``"ipopt"``, ``"newton"``), ``window`` and ``overlap`` (seconds;
     ``window=0`` turns the scene's windows off), ``verify_tol``, ``no_verify``,
-    ``no_fallback``.
+    ``no_fallback``, ``refine`` (``--refine``: solve again on finer, predicted grids
+    until the verification passes at the tolerance; the grids tried are in
+    ``summary["refinement"]``), ``max_nodes`` (``--max-nodes``, the refinement's
+    budget) and ``time_limit`` (``--time-limit``, seconds for the whole solve).
 
     Every solve is verified against time stepping and may use the fallback ladder, as on
     the command line. A solve that does not converge or verify is returned, not raised:
@@ -439,6 +452,9 @@ def solve(
         verify_tol=verify_tol,
         no_verify=no_verify,
         no_fallback=no_fallback,
+        refine=refine,
+        max_nodes=max_nodes,
+        time_limit=time_limit,
     )
     sol = Solution(native)
     for w in sol.warnings:

@@ -1,0 +1,341 @@
+//! The discretization error of an operator on a grid, predicted before solving.
+//!
+//! Choosing the cheapest discretization that meets a tolerance needs, for every
+//! operator and initial-velocity condition and every grid, an estimate of the error the
+//! solve would make. Solving each candidate to find out would cost more than the solve
+//! itself; this module predicts it from the time-stepping reference alone.
+//!
+//! **The proxy.** The reference gives the motion `q(t)` with its velocity and its
+//! acceleration `a(t) = q̈` (the model's index-reduced equations at the reference
+//! state). Apply the candidate discretization to the kinematic problem `q̈ = a(t)`, one
+//! coordinate at a time, with `a` known: the interior rows of the action's equations,
+//! `D_b (D_a q) = a` (`D_a` the operator of the velocities, `D_b` its summation-by-parts
+//! partner in the equations: both `D` for a centred operator), with the candidate's
+//! initial conditions (strong: `q[1] = q₀`, `(D_a q)[1] = v₀`; natural:
+//! `q[1] = q₀` and the first row's momentum balance `−H₁₁ (D_b D_a q)[1] − (D_a q)[1] =
+//! −H₁₁ a[1] − v₀`), the last row absorbed as in the action (docs/mathematics.md §5).
+//! Its solution differs from the reference by the operator's own error for *this*
+//! motion: the interior truncation error, the boundary closures (with the cancellation
+//! that makes them one order better than their rows), the initial condition's offset,
+//! and contacts too short for the grid, where `a` is large. What the proxy leaves out is
+//! the dynamics' feedback (forces that depend on the state, constraints, damping): its
+//! ratio to the true error depends on the scene, and is calibrated by the solves made
+//! ([`refine`](super::refine)).
+//!
+//! Measured on the rolling disk (closed form), N = 33 … 1025, the four centred operators
+//! with both initial-velocity conditions: the true error over the proxy stays within
+//! 0.16 … 2.6 over all 48 grids, and for one operator and condition within a factor 1.6
+//! from N = 65 on; the proxy's order is the observed order (docs/solver.md#refinement).
+//!
+//! The cost is one time-stepping reference per grid (sampled with accelerations at its
+//! nodes) and, per candidate, one banded LU of the grid's size ([`band`](super::band)) with one
+//! right-hand side per coordinate: a fraction of one solve's.
+
+use std::collections::HashMap;
+
+use super::band::solve_banded;
+use super::error::SolveError;
+use crate::discrete::trajectory::{NodeSeries, Trajectory};
+use crate::model::Model;
+use crate::sbp::{OperatorKind, SbpOperator};
+use crate::scene::{InitialVelocity, Scene};
+use crate::stepping::equations::{integrate_states, min_spacing, step_budget};
+use crate::stepping::ode::{OdeOptions, OdeStats};
+use crate::stepping::verify::{self, REFERENCE_ATOL, REFERENCE_RTOL};
+
+/// The constant of the rounding error's estimate ([`Predictor::roundoff_ratio`]),
+/// bounded by measurement: the rolling disk (max |q| = 31) on SBP484 with the natural
+/// condition has a total error of 4.8e-10 at N = 1025 (the bound's 3.6e-10 there is
+/// below it), 1.5e-8 at 513.
+pub const ROUNDOFF: f64 = 0.05;
+
+/// A proxy whose solve's own rounding error exceeds this fraction of it says nothing
+/// of the operator's error: it is extrapolated from coarser grids instead. (The
+/// dissipative operators' proxy systems are ill-conditioned: on the damped oscillator
+/// SBP484-AD's proxy at N = 513 is 3.6× the tolerance 1e-8, of which its rounding 2.3×,
+/// and grows with N beyond; the solves verify at N = 800 with 0.1×, the extrapolation
+/// from N = 129 and 257 predicts 0.1×.)
+pub const NOISY: f64 = 0.1;
+
+/// A discretization a solve can be made with: the operator and the condition that
+/// imposes the initial velocity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Candidate {
+    /// The SBP operator.
+    pub operator: OperatorKind,
+    /// How the initial velocity is imposed.
+    pub initial_velocity: InitialVelocity,
+}
+
+impl Candidate {
+    /// Every candidate a choice considers: each operator, centred and dissipative, with
+    /// the strong condition, and with the natural one except where it leaves the
+    /// odd-even mode free (`SBP121`: the knife edge converges to a wrong trajectory,
+    /// docs/mathematics.md §5; `SBP121-AD` damps it).
+    pub fn all() -> Vec<Candidate> {
+        let mut all = Vec::new();
+        for operator in OperatorKind::ALL {
+            all.push(Candidate { operator, initial_velocity: InitialVelocity::Strong });
+            if operator != OperatorKind::Sbp121 {
+                all.push(Candidate { operator, initial_velocity: InitialVelocity::Natural });
+            }
+        }
+        all
+    }
+
+    /// `"SBP242 (natural)"`.
+    pub fn describe(&self) -> String {
+        format!("{} ({})", self.operator.name(), self.initial_velocity)
+    }
+}
+
+/// The finest grid the reference is sampled on at once: every grid of `(FINE − 1)/2^j + 1`
+/// nodes is a subgrid of it, sampled without integrating again (one integration costs
+/// as much as all its samples).
+pub const FINE_NODES: usize = (1 << 12) + 1;
+
+/// The reference sampled on one grid: states and accelerations at its nodes.
+struct Samples {
+    q: NodeSeries,
+    v: NodeSeries,
+    a: NodeSeries,
+}
+
+/// Predicted errors of the candidates on grids of a scene, from its time-stepping
+/// reference (see the module docs). Samples and predictions are cached per grid.
+pub struct Predictor<'a> {
+    scene: &'a Scene,
+    model: &'a Model,
+    /// The verification's tolerance of each coordinate.
+    tolerances: Vec<f64>,
+    /// Where the tolerances came from (the verification's words).
+    pub tolerance_source: String,
+    samples: HashMap<usize, Samples>,
+    /// The reference's states on the grid of [`FINE_NODES`] nodes.
+    fine: Option<(NodeSeries, NodeSeries)>,
+    /// The reference's relative tolerance ([`verify::reference_rtol`]).
+    rtol: f64,
+    proxies: HashMap<(Candidate, usize), f64>,
+    /// The time stepping done for the predictions.
+    pub steps: OdeStats,
+}
+
+impl<'a> Predictor<'a> {
+    /// A predictor for `scene`, whose tolerances are those the verification applies,
+    /// found from the reference on the scene's own grid.
+    pub fn new(scene: &'a Scene, model: &'a Model) -> Result<Predictor<'a>, SolveError> {
+        let mut p = Predictor {
+            scene,
+            model,
+            tolerances: Vec::new(),
+            tolerance_source: String::new(),
+            samples: HashMap::new(),
+            fine: None,
+            rtol: REFERENCE_RTOL,
+            proxies: HashMap::new(),
+            steps: OdeStats::default(),
+        };
+        let (mut q, mut v) = p.integrate(FINE_NODES, REFERENCE_RTOL)?;
+        let (tolerances, source) = verify::tolerances(scene, &q);
+        let rtol = verify::reference_rtol(&tolerances, &q);
+        if rtol < REFERENCE_RTOL {
+            (q, v) = p.integrate(FINE_NODES, rtol)?;
+        }
+        p.rtol = rtol;
+        p.fine = Some((q, v));
+        p.tolerances = tolerances;
+        p.tolerance_source = source;
+        Ok(p)
+    }
+
+    /// The verification's tolerance of each coordinate.
+    pub fn tolerances(&self) -> &[f64] {
+        &self.tolerances
+    }
+
+    /// The rounding error of a solve on `nodes` nodes relative to the tightest
+    /// tolerance: [`ROUNDOFF`] `· ε (N − 1)² max |q|`, the conditioning of a
+    /// second-order operator on the grid times the motion's size. No grid is predicted
+    /// below it: beyond some N, refining makes the error worse.
+    pub fn roundoff_ratio(&self, nodes: usize) -> f64 {
+        let size = self.fine.as_ref().map_or(1.0, |(q, _)| q.iter().flatten().fold(1.0_f64, |m, x| m.max(x.abs())));
+        let tightest = self.tolerances.iter().copied().fold(f64::INFINITY, f64::min);
+        ROUNDOFF * f64::EPSILON * ((nodes - 1) as f64).powi(2) * size / tightest
+    }
+
+    /// The reference on the grid of `nodes` nodes as a trajectory with its physical
+    /// columns (for the contacts' resolution).
+    pub fn reference(&mut self, nodes: usize) -> Result<Trajectory, SolveError> {
+        self.sample(nodes)?;
+        let s = &self.samples[&nodes];
+        let states = crate::discrete::trajectory::States { q: s.q.clone(), v: s.v.clone(), lambda: vec![Vec::new(); s.q.len()] };
+        Ok(Trajectory::with_physical_columns(self.model, &times(self.scene, nodes), states))
+    }
+
+    /// The reference's states on the grid of `nodes` nodes, integrated anew. With walls
+    /// its steps are at most the scene's own node spacing, as the verification's.
+    fn integrate(&mut self, nodes: usize, rtol: f64) -> Result<(NodeSeries, NodeSeries), SolveError> {
+        let t = times(self.scene, nodes);
+        let opts = OdeOptions {
+            rtol,
+            atol: rtol * (REFERENCE_ATOL / REFERENCE_RTOL),
+            max_step: if self.model.walls.is_empty() { None } else { min_spacing(&times(self.scene, self.scene.nodes)) },
+            max_steps: step_budget(nodes.max(self.scene.nodes)),
+            ..OdeOptions::default()
+        };
+        let (states, steps) = integrate_states(self.model, &self.scene.initial_q, &self.scene.initial_v, &t, &opts)
+            .map_err(|e| SolveError::Prediction(format!("time stepping of the scene failed: {e}")))?;
+        self.steps.add(&steps);
+        let d = self.scene.coordinates.len();
+        Ok(states.into_iter().map(|y| (y[..d].to_vec(), y[d..].to_vec())).unzip())
+    }
+
+    /// Sample the reference with its accelerations on the grid of `nodes` nodes, once:
+    /// from the fine grid when it is a subgrid of it, else integrated anew.
+    fn sample(&mut self, nodes: usize) -> Result<(), SolveError> {
+        if self.samples.contains_key(&nodes) {
+            return Ok(());
+        }
+        let (q, v) = match &self.fine {
+            Some((fq, fv)) if nested(nodes) => {
+                let stride = (FINE_NODES - 1) / (nodes - 1);
+                (fq.iter().step_by(stride).cloned().collect(), fv.iter().step_by(stride).cloned().collect())
+            }
+            _ => self.integrate(nodes, self.rtol)?,
+        };
+        let t = times(self.scene, nodes);
+        let mut ws = self.model.workspace();
+        let a = t
+            .iter()
+            .zip(q.iter().zip(&v))
+            .map(|(&tk, (q, v))| self.model.accelerations(tk, q, v, &mut ws).map(|(a, _)| a))
+            .collect::<Result<NodeSeries, _>>()
+            .map_err(|e| SolveError::Prediction(format!("the accelerations along the reference: {e}")))?;
+        self.samples.insert(nodes, Samples { q, v, a });
+        Ok(())
+    }
+
+    /// [`ratio`](Self::ratio) on a subgrid of the fine grid; between two of them,
+    /// interpolated in log-log (the proxy decreases as a power of N between them), so
+    /// that predicting for any N costs no new time stepping.
+    pub fn ratio_between(&mut self, c: Candidate, nodes: usize) -> Result<f64, SolveError> {
+        if nested(nodes) || nodes > FINE_NODES {
+            return self.ratio(c, nodes);
+        }
+        let mut hi = FINE_NODES;
+        while (hi - 1) / 2 + 1 >= nodes && hi > 3 {
+            hi = (hi - 1) / 2 + 1;
+        }
+        let lo = (hi - 1) / 2 + 1;
+        if lo < c.operator.min_nodes() {
+            return self.ratio(c, nodes);
+        }
+        let (r_lo, r_hi) = (self.ratio(c, lo)?, self.ratio(c, hi)?);
+        if !(r_lo.is_finite() && r_hi.is_finite() && r_lo > 0.0 && r_hi > 0.0) {
+            return self.ratio(c, nodes);
+        }
+        let s = ((nodes - 1) as f64 / (lo - 1) as f64).ln() / 2f64.ln();
+        Ok((r_lo.ln() + s * (r_hi.ln() - r_lo.ln())).exp())
+    }
+
+    /// The proxy's error of `c` on the grid of `nodes` nodes, relative to the
+    /// tolerance: max over coordinates of error / tolerance (∞ where the operator does
+    /// not fit the grid or the proxy cannot be solved).
+    pub fn ratio(&mut self, c: Candidate, nodes: usize) -> Result<f64, SolveError> {
+        if let Some(&r) = self.proxies.get(&(c, nodes)) {
+            return Ok(r);
+        }
+        let ratio = if nodes < c.operator.min_nodes() {
+            f64::INFINITY
+        } else {
+            self.sample(nodes)?;
+            let (errors, floors) = proxy_errors(self.scene, &self.samples[&nodes], c, nodes);
+            let relative = |e: &[f64]| e.iter().zip(&self.tolerances).map(|(e, tol)| e / tol).fold(0.0, f64::max);
+            let (raw, floor) = (relative(&errors), relative(&floors));
+            if floor > NOISY * raw {
+                self.beyond_the_floor(c, nodes)?.unwrap_or(raw)
+            } else {
+                raw
+            }
+        };
+        let ratio = if ratio.is_nan() { f64::INFINITY } else { ratio };
+        self.proxies.insert((c, nodes), ratio);
+        Ok(ratio)
+    }
+
+    /// The proxy's error of `c` on a subgrid of the fine grid whose own proxy is lost in
+    /// the rounding of its solve: extrapolated from the two coarser subgrids with the
+    /// order between them (`None` where they do not give one).
+    fn beyond_the_floor(&mut self, c: Candidate, nodes: usize) -> Result<Option<f64>, SolveError> {
+        let half = |n: usize| (n - 1) / 2 + 1;
+        let (m, m2) = (half(nodes), half(half(nodes)));
+        if !nested(nodes) || m2 < c.operator.min_nodes().max(3) {
+            return Ok(None);
+        }
+        let (r1, r2) = (self.ratio(c, m)?, self.ratio(c, m2)?);
+        let order = (r2 / r1).ln() / 2f64.ln();
+        Ok((order.is_finite() && order > 0.0).then(|| r1 * 2f64.powf(-order)))
+    }
+}
+
+/// Whether the grid of `nodes` nodes is a subgrid of the fine one.
+fn nested(nodes: usize) -> bool {
+    (2..=FINE_NODES).contains(&nodes) && (FINE_NODES - 1).is_multiple_of(nodes - 1)
+}
+
+/// The node times of a grid of `nodes` nodes over the scene's span.
+fn times(scene: &Scene, nodes: usize) -> Vec<f64> {
+    let dt = (scene.t_end - scene.t_start) / (nodes as f64 - 1.0);
+    (0..nodes).map(|k| scene.t_start + k as f64 * dt).collect()
+}
+
+/// The proxy's error max_k |q_h − q| of each coordinate (see the module docs), and the
+/// rounding error of its solve; infinite when its system is singular.
+fn proxy_errors(scene: &Scene, s: &Samples, c: Candidate, n: usize) -> (Vec<f64>, Vec<f64>) {
+    let d = s.q.first().map_or(0, Vec::len);
+    let dt = (scene.t_end - scene.t_start) / (n as f64 - 1.0);
+    let singular = || (vec![f64::INFINITY; d], vec![f64::INFINITY; d]);
+    let Ok(op) = SbpOperator::new(c.operator, n, dt) else { return singular() };
+    let da: Vec<Vec<(usize, f64)>> = (0..n).map(|i| op.row(i)).collect();
+    // The equations' operator D_b: the partner D− of a dissipative operator, D itself
+    // for a centred one.
+    let partner = op.partner();
+    let db: Vec<Vec<(usize, f64)>> = (0..n).map(|i| partner.row(i)).collect();
+    let h0 = op.norm()[0];
+    let second_row = |i: usize| db[i].iter().flat_map(|&(j, b)| da[j].iter().map(move |&(k, a)| (k, b * a)));
+    // The rows in an order that keeps the system banded: the initial position, the
+    // initial-velocity condition (the action's last row), then the interior equations.
+    let natural = c.initial_velocity == InitialVelocity::Natural;
+    let mut entries: Vec<(usize, usize, f64)> = vec![(0, 0, 1.0)];
+    if natural {
+        entries.extend(second_row(0).map(|(k, v)| (1, k, -h0 * v)));
+    }
+    entries.extend(da[0].iter().map(|&(k, v)| (1, k, if natural { -v } else { v })));
+    for i in 1..n - 1 {
+        entries.extend(second_row(i).map(|(k, v)| (i + 1, k, v)));
+    }
+    // The unknown is the motion less its initial straight line, q0 + v0·(t − t0), which
+    // every operator differentiates exactly: the rounding errors of the proxy then scale
+    // with what remains (the disk's θ grows by 31 rad, 5 of them curved).
+    let line = |i: usize, k: usize| s.q[0][i] + s.v[0][i] * k as f64 * dt;
+    // Columns 0..d: the proxies. Columns d..2d: the same system with the right-hand
+    // side it gives the sampled motion itself, whose solution is that motion up to the
+    // rounding of the solve (the proxy's floor).
+    let mut rhs = vec![0.0; 2 * n * d];
+    for i in 0..d {
+        let b = &mut rhs[i * n..(i + 1) * n];
+        b[1] = if natural { -h0 * s.a[0][i] } else { 0.0 };
+        for k in 1..n - 1 {
+            b[k + 1] = s.a[k][i];
+        }
+        let exact = &mut rhs[(d + i) * n..(d + i + 1) * n];
+        for &(r, col, v) in &entries {
+            exact[r] += v * (s.q[col][i] - line(i, col));
+        }
+    }
+    if !solve_banded(n, &entries, &mut rhs, 2 * d) {
+        return singular();
+    }
+    let deviation = |col: usize, i: usize| (0..n).map(|k| (rhs[col * n + k] - (s.q[k][i] - line(i, k))).abs()).fold(0.0, f64::max);
+    ((0..d).map(|i| deviation(i, i)).collect(), (0..d).map(|i| deviation(d + i, i)).collect())
+}

@@ -1,0 +1,535 @@
+//! The entry point of a solve, [`solve_scene`], and solving to the accuracy asked for:
+//! the grid refined, and the operator chosen, until the verification passes.
+//!
+//! Without `--refine` and with a named operator, a solve is the scene's own solve and
+//! the fallback ladder ([`ladder`]). Otherwise:
+//!
+//! * **`--operator auto`** (or a refinement with no operator named): among the
+//!   candidates ([`Candidate::all`]: `SBP121` … `SBP484`, each with the strong and, above
+//!   `SBP121`, the natural initial-velocity condition) the one predicted to meet the
+//!   tolerance at the least cost ([`cost`](super::cost): measured time per node of each
+//!   operator and backend). Without `--refine` on the scene's grid; if none is predicted
+//!   to meet it there, the one predicted most accurate.
+//! * **`--refine`**: the scene's own solve with the fallback ladder, on the scene's grid
+//!   (with the chosen operator when it chooses one); while the result is not verified,
+//!   or did not converge, a solve on the next discretization: the one of least cost
+//!   predicted to meet the tolerance, on a grid no coarser than the last. Each solve
+//!   after the first starts from the most accurate converged solution so far,
+//!   interpolated (cubic Hermite), and climbs only the rung that changes its initial
+//!   guess (the wall-width continuation).
+//!
+//! **The prediction.** The error of candidate `c` on `N` nodes is predicted as
+//! `G_c · P_c(N)`: `P_c(N)` the proxy of [`predict`](super::predict) (the discretization
+//! applied to the reference's own kinematics, relative to the tolerance), `G_c` its
+//! calibration: the measured error over the proxy of the last solve with `c`, else the
+//! largest calibration measured so far, else 1. The next grid aims at [`AIM`] of the
+//! tolerance, never below the nodes a wall's contacts need ([`RESOLVED_STEPS`] grid steps
+//! per contact, from the reference), and grows at least by [`MIN_GROWTH`] once a grid
+//! failed with the same candidate (by 2 when it did not converge). So the proxy carries
+//! the order observed on the grids the scene actually needs (contacts included), and the
+//! solves made carry the scene's dynamics. When the reference cannot be computed, no
+//! prediction is made and each grid doubles.
+//!
+//! The refinement stops at a verified solve, at the budget (`--max-nodes`; by default
+//! the largest grid the memory estimate allows, at most [`MAX_NODES_DEFAULT`]) or at the
+//! time limit. Every discretization solved is listed in `summary.json` (`refinement`);
+//! the reported solution is the verified one, else the most accurate converged one.
+
+use std::time::Instant;
+
+use super::cost::relative_cost;
+use super::error::SolveError;
+use super::ladder::{self, hermite, linear, Rungs};
+use super::outcome::{Outcome, RefinedGrid, Refinement, Work};
+use super::piece::{grid, Guess};
+use super::predict::{Candidate, Predictor, FINE_NODES};
+use crate::discrete::contact::{self, RESOLVED_STEPS};
+use crate::memory;
+use crate::model::Model;
+use crate::sbp::OperatorKind;
+use crate::scene::Scene;
+use crate::stepping::verify::VerifyStatus;
+
+/// The fraction of the tolerance the next grid aims at.
+pub const AIM: f64 = 0.5;
+/// The least growth of the grid after a failure with the same candidate.
+pub const MIN_GROWTH: f64 = 1.25;
+/// The budget of a refinement when neither `--max-nodes` nor the memory sets a lower one.
+pub const MAX_NODES_DEFAULT: usize = 1 << 20;
+/// From this grid on, the proxy's order between two grids is trusted to extrapolate how
+/// many nodes the aim needs (coarser grids can be before the asymptotic range).
+const EXTRAPOLATE_FROM: usize = 257;
+/// A first grid predicted at more than this many times the tolerance is not solved: it
+/// cannot pass, and the refinement starts on the grid predicted to.
+const HOPELESS: f64 = 16.0;
+/// The proxy is computed on grids up to the reference's fine grid; beyond, its error is
+/// extrapolated with the order it shows between the two largest of them.
+const PROXY_MAX_NODES: usize = FINE_NODES;
+
+/// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
+/// verified against time stepping of the same scene, the fallback ladder when it fails
+/// to converge or to verify, and the refinement or the operator choice when asked for
+/// (see the module docs).
+///
+/// Refused before anything is allocated if its memory estimate exceeds the available
+/// memory ([`memory`]).
+pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    solve_scene_with_progress(scene, &mut |_| {})
+}
+
+/// [`solve_scene`], telling `progress` what each attempt is about to do ("2. coarse to
+/// fine (…)", "grid 2: SBP484 (natural) on 513 nodes"), for a progress display.
+pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
+    let deadline = scene.solver.time_limit.map(|s| Instant::now() + std::time::Duration::from_secs_f64(s));
+    if !scene.verify.refine && !scene.choose_operator {
+        memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
+        let model = Model::build(scene)?;
+        return ladder::climb(scene, &model, &Guess::TimeStepping, Rungs::All, deadline, progress);
+    }
+    let model = Model::build(scene)?;
+    Refiner::new(scene, &model, deadline)?.run(progress)
+}
+
+/// The state of a refinement.
+struct Refiner<'a> {
+    scene: &'a Scene,
+    model: &'a Model,
+    deadline: Option<Instant>,
+    /// The predictor, unless its reference could not be computed (then: why not).
+    predictor: Result<Predictor<'a>, String>,
+    candidates: Vec<Candidate>,
+    /// The measured error over the proxy of the last solve with each candidate.
+    calibration: Vec<(Candidate, f64)>,
+    /// The least nodes each candidate may be solved on next (after a failure with it).
+    floor: Vec<(Candidate, usize)>,
+    /// The nodes the walls' contacts need.
+    wall_nodes: usize,
+    max_nodes: usize,
+    max_nodes_source: String,
+    grids: Vec<RefinedGrid>,
+    /// The most accurate converged outcome so far and its error relative to the
+    /// tolerance, and the first trusted one.
+    best: Option<(Outcome, f64)>,
+    /// The outcome of the first grid (reported when nothing converged).
+    first: Option<Outcome>,
+    prediction_s: f64,
+    /// The work of every grid solved.
+    work: Work,
+}
+
+impl<'a> Refiner<'a> {
+    fn new(scene: &'a Scene, model: &'a Model, deadline: Option<Instant>) -> Result<Refiner<'a>, SolveError> {
+        let t = Instant::now();
+        let predictor = Predictor::new(scene, model).map_err(|e| e.to_string());
+        let candidates: Vec<Candidate> = if scene.choose_operator {
+            Candidate::all().into_iter().filter(|c| scene.choose_initial_velocity || c.initial_velocity == scene.initial_velocity).collect()
+        } else {
+            vec![Candidate { operator: scene.operator, initial_velocity: scene.initial_velocity }]
+        };
+        let (max_nodes, max_nodes_source) = budget(scene);
+        let mut r = Refiner {
+            scene,
+            model,
+            deadline,
+            predictor,
+            candidates,
+            calibration: Vec::new(),
+            floor: Vec::new(),
+            wall_nodes: 0,
+            max_nodes,
+            max_nodes_source,
+            grids: Vec::new(),
+            best: None,
+            first: None,
+            prediction_s: 0.0,
+            work: Work::default(),
+        };
+        r.wall_nodes = r.nodes_for_contacts();
+        r.prediction_s = t.elapsed().as_secs_f64();
+        Ok(r)
+    }
+
+    /// The nodes at which the reference's contacts take [`RESOLVED_STEPS`] grid steps
+    /// each (0 without walls or without a reference).
+    fn nodes_for_contacts(&mut self) -> usize {
+        let nodes = self.scene.nodes;
+        let Ok(p) = self.predictor.as_mut() else { return 0 };
+        let Ok(reference) = p.reference(nodes) else { return 0 };
+        let resolution = contact::resolution(self.model, &reference);
+        let fewest = resolution.values().map(|r| r.steps).fold(f64::INFINITY, f64::min);
+        if !fewest.is_finite() || fewest >= RESOLVED_STEPS {
+            return 0;
+        }
+        ((nodes - 1) as f64 * RESOLVED_STEPS / fewest).ceil() as usize + 1
+    }
+
+    /// The calibration of `c`: its last measured one; else the largest measured in its
+    /// family (centred or dissipative: a centred operator's odd-even mode on a
+    /// contracting scene says nothing of a dissipative one's error), at least 1; else 1.
+    fn calibration_of(&self, c: Candidate) -> f64 {
+        match self.calibration.iter().rev().find(|(k, _)| *k == c) {
+            Some(&(_, g)) => g,
+            None => self
+                .calibration
+                .iter()
+                .filter(|(k, _)| k.operator.is_dissipative() == c.operator.is_dissipative())
+                .map(|&(_, g)| g)
+                .fold(1.0, f64::max),
+        }
+    }
+
+    fn floor_of(&self, c: Candidate) -> usize {
+        let own = self.floor.iter().rev().find(|(k, _)| *k == c).map_or(0, |&(_, n)| n);
+        own.max(self.scene.nodes).max(self.wall_nodes).max(c.operator.min_nodes())
+    }
+
+    /// The predicted error of `c` on `nodes` nodes relative to the tolerance, calibrated.
+    fn predicted(&mut self, c: Candidate, nodes: usize) -> Option<f64> {
+        let g = self.calibration_of(c);
+        let t = Instant::now();
+        let r = match self.predictor.as_mut() {
+            Ok(p) => proxy_ratio(p, c, nodes).ok(),
+            Err(_) => None,
+        };
+        self.prediction_s += t.elapsed().as_secs_f64();
+        r.map(|r| g * r)
+    }
+
+    /// The least nodes ≥ `from` at which `c` is predicted to meet [`AIM`] of the
+    /// tolerance, and the prediction there (`None`: not within the budget, or not for
+    /// less than `cost_cap`, the cost of a candidate already found).
+    fn nodes_to_meet(&mut self, c: Candidate, from: usize, cost_cap: f64) -> Option<(usize, f64)> {
+        let from = from.min(self.max_nodes);
+        let backend = self.scene.solver.backend;
+        let too_dear = |n: f64| relative_cost(c.operator, backend, 1) * n >= cost_cap;
+        let at_from = self.predicted(c, from)?;
+        if at_from <= AIM {
+            return Some((from, at_from));
+        }
+        // Up the grids of 2^j + 1 nodes (on which the proxy is computed; between them it
+        // is interpolated) until the aim is met, then interpolate in log-log between the
+        // last two.
+        let (mut lo, mut r_lo) = (from, at_from);
+        loop {
+            let p = (lo - 1).next_power_of_two();
+            let hi = if p + 1 > lo { p + 1 } else { 2 * p + 1 }.min(self.max_nodes);
+            if hi <= lo || too_dear(lo as f64) {
+                return None;
+            }
+            let r_hi = self.predicted(c, hi)?;
+            if r_hi <= AIM {
+                let slope = (r_lo / r_hi).ln() / ((hi - 1) as f64 / (lo - 1) as f64).ln();
+                let n = if slope.is_finite() && slope > 0.0 {
+                    ((lo - 1) as f64 * (r_lo / AIM).powf(1.0 / slope)).ceil() as usize + 1
+                } else {
+                    hi
+                };
+                let n = n.clamp(lo + 1, hi);
+                return Some((n, self.predicted(c, n)?));
+            }
+            if r_hi.partial_cmp(&r_lo) != Some(std::cmp::Ordering::Less) {
+                // The proxy stopped improving (round-off): the aim is out of reach.
+                return None;
+            }
+            // Past the first grids, the order between the last two tells whether the aim
+            // is within the budget at all: no need to compute the proxy up to it.
+            let order = (r_lo / r_hi).ln() / ((hi - 1) as f64 / (lo - 1) as f64).ln();
+            if hi >= EXTRAPOLATE_FROM && order > 0.0 {
+                let needed = (hi - 1) as f64 * (r_hi / AIM).powf(1.0 / order);
+                if needed > 2.0 * self.max_nodes as f64 || too_dear(needed / 2.0) {
+                    return None;
+                }
+            }
+            (lo, r_lo) = (hi, r_hi);
+        }
+    }
+
+    /// The next discretization: the candidate and grid of least predicted cost that
+    /// meet the aim, or, without predictions, the next grid of the one candidate.
+    fn next(&mut self) -> Option<(Candidate, usize, Option<f64>)> {
+        if self.predictor.is_err() {
+            let c = *self.candidates.first()?;
+            let n = self.floor_of(c);
+            return (n <= self.max_nodes).then_some((c, n, None));
+        }
+        let backend = self.scene.solver.backend;
+        let mut best: Option<(f64, Candidate, usize, f64)> = None;
+        // The highest orders first: they usually need the fewest nodes, and the cost of
+        // the best found so far bounds the search of the others.
+        let mut candidates = self.candidates.clone();
+        candidates.sort_by_key(|c| std::cmp::Reverse(c.operator.interior_order()));
+        for c in candidates {
+            let from = self.floor_of(c);
+            if from > self.max_nodes {
+                continue;
+            }
+            let cap = best.as_ref().map_or(f64::INFINITY, |b| b.0);
+            if let Some((n, r)) = self.nodes_to_meet(c, from, cap) {
+                let cost = relative_cost(c.operator, backend, n);
+                if best.as_ref().is_none_or(|b| cost < b.0) {
+                    best = Some((cost, c, n, r));
+                }
+            }
+        }
+        best.map(|(_, c, n, r)| (c, n, Some(r)))
+    }
+
+    /// The first discretization: the scene's own, with the chosen candidate when it
+    /// chooses one (the cheapest predicted to meet the aim on the scene's grid, else the
+    /// most accurate there).
+    fn first_choice(&mut self) -> (Candidate, usize, Option<f64>) {
+        let nodes = self.scene.nodes;
+        let own = Candidate { operator: self.scene.operator, initial_velocity: self.scene.initial_velocity };
+        if !self.scene.choose_operator {
+            let p = self.predicted(own, nodes);
+            return (own, nodes, p);
+        }
+        let backend = self.scene.solver.backend;
+        let mut scored: Vec<(Candidate, f64, f64)> = Vec::new();
+        for c in self.candidates.clone() {
+            if let Some(r) = self.predicted(c, nodes) {
+                scored.push((c, r, relative_cost(c.operator, backend, nodes)));
+            }
+        }
+        let meeting = scored.iter().filter(|s| s.1 <= AIM).min_by(|a, b| a.2.total_cmp(&b.2));
+        let chosen = meeting.or_else(|| scored.iter().min_by(|a, b| a.1.total_cmp(&b.1)));
+        match chosen {
+            Some(&(c, r, _)) => (c, nodes, Some(r)),
+            None => (*self.candidates.first().unwrap_or(&own), nodes, None),
+        }
+    }
+
+    fn run(mut self, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
+        // The scene's grid first, unless it is predicted hopeless (or, when the operator
+        // is chosen, to miss the aim: the next grid's candidate may differ).
+        let first = self.first_choice();
+        let skip_first = self.scene.verify.refine && first.2.is_some_and(|r| r > HOPELESS || (self.scene.choose_operator && r > AIM));
+        let (mut c, mut nodes, mut predicted) = if skip_first { self.next().unwrap_or(first) } else { first };
+        let result = loop {
+            let number = self.grids.len() + 1;
+            let what = format!("{} on {nodes} nodes", c.describe());
+            // A grid beyond the memory ends the refinement, unless it is the first.
+            let sized = Scene { nodes, operator: c.operator, ..self.scene.clone() };
+            if let Err(e) = memory::check(&sized, "the solve", nodes, memory::solve_bytes(&sized)) {
+                if self.grids.is_empty() {
+                    return Err(e.into());
+                }
+                break format!("stopped before grid {number} ({what}): {e}");
+            }
+            progress(&format!("grid {number}: {what}"));
+            let outcome = self.solve_on(c, nodes, predicted, &mut |step: &str| progress(&format!("grid {number} ({what}), {step}")))?;
+            let trusted = outcome.trusted();
+            self.record(c, nodes, predicted, &outcome);
+            if trusted {
+                break format!("verified on grid {number}: {what}");
+            }
+            if !self.scene.verify.refine {
+                break format!("the operator was chosen for the scene's grid of {nodes} nodes; --refine would refine it");
+            }
+            if self.deadline.is_some_and(|d| Instant::now() >= d) {
+                break format!("stopped at the time limit after {}", counted_grids(self.grids.len()));
+            }
+            let Some(next) = self.next() else {
+                break self.out_of_budget();
+            };
+            (c, nodes, predicted) = next;
+        };
+        Ok(self.finish(result))
+    }
+
+    /// Solve `c` on `nodes` nodes: the first grid with every rung of the ladder, later
+    /// ones from the best solution so far.
+    fn solve_on(
+        &mut self,
+        c: Candidate,
+        nodes: usize,
+        predicted: Option<f64>,
+        progress: &mut dyn FnMut(&str),
+    ) -> Result<Outcome, SolveError> {
+        let scene = Scene { nodes, operator: c.operator, initial_velocity: c.initial_velocity, ..self.scene.clone() };
+        // The ladder's other rungs repair the scene's own discretization; a grid the
+        // refinement chose that fails gets a better one instead (and a refinement of the
+        // scene's own that is predicted to fail, too).
+        let own = !self.scene.choose_operator && nodes == self.scene.nodes;
+        let rungs = if self.grids.is_empty() && own && (!self.scene.verify.refine || predicted.is_none_or(|r| r <= 1.0)) {
+            Rungs::All
+        } else {
+            Rungs::GuessOnly
+        };
+        let outcome = match &self.best {
+            None => ladder::climb(&scene, self.model, &Guess::TimeStepping, rungs, self.deadline, progress)?,
+            Some((best, _)) => {
+                let (times, _) = grid(&scene);
+                let tr = &best.trajectory;
+                let guess = Guess::States {
+                    q: hermite(tr, &times),
+                    lambda: linear(&tr.t, &tr.lambda, &times),
+                    description: format!(
+                        "the solve with {} on {} nodes, interpolated onto the grid (cubic Hermite)",
+                        best.settings.operator, best.settings.nodes
+                    ),
+                };
+                ladder::climb(&scene, self.model, &guess, Rungs::GuessOnly, self.deadline, progress)?
+            }
+        };
+        Ok(outcome)
+    }
+
+    /// Record a solve: its line in the refinement, the calibration of its candidate, the
+    /// floor of its next grid, and the best outcome.
+    fn record(&mut self, c: Candidate, nodes: usize, predicted: Option<f64>, outcome: &Outcome) {
+        let v = &outcome.verification;
+        let measured = (outcome.converged() && v.max_error.is_some())
+            .then(|| v.errors.values().zip(v.tolerances.values()).map(|(e, t)| e / t).fold(0.0, f64::max));
+        let verdict = if !outcome.converged() {
+            "not converged"
+        } else {
+            match v.status {
+                VerifyStatus::Passed => "verified",
+                VerifyStatus::Skipped => "not verified (verification off)",
+                VerifyStatus::Unverified => "unverified",
+                VerifyStatus::Failed => "not verified",
+            }
+        };
+        let wall_s = outcome.attempts.iter().map(|a| a.wall_s).sum::<f64>();
+        self.grids.push(RefinedGrid {
+            nodes,
+            operator: c.operator.name().to_string(),
+            initial_velocity: c.initial_velocity,
+            predicted,
+            measured,
+            max_error: v.max_error,
+            verdict: verdict.to_string(),
+            wall_s,
+        });
+        let proxy = match (measured, self.predictor.as_mut()) {
+            (Some(_), Ok(p)) => proxy_ratio(p, c, nodes).ok(),
+            _ => None,
+        };
+        if let (Some(m), Some(proxy)) = (measured, proxy) {
+            if proxy > 0.0 && proxy.is_finite() && m > 0.0 {
+                self.calibration.push((c, m / proxy));
+            }
+        }
+        self.work.add(&outcome.work);
+        let growth = if outcome.converged() { MIN_GROWTH } else { 2.0 };
+        self.floor.push((c, ((nodes - 1) as f64 * growth).ceil() as usize + 1));
+        if self.first.is_none() {
+            self.first = Some(outcome.clone());
+        }
+        if let Some(m) = measured {
+            if self.best.as_ref().is_none_or(|(o, b)| outcome.trusted() && !o.trusted() || m < *b) {
+                self.best = Some((outcome.clone(), m));
+            }
+        }
+    }
+
+    /// Why the refinement stopped without a verified solve at the budget.
+    fn out_of_budget(&mut self) -> String {
+        let budget = format!("the budget of {} nodes ({})", self.max_nodes, self.max_nodes_source);
+        match &self.predictor {
+            Err(why) => format!("no finer grid within {budget}; the error could not be predicted ({why})"),
+            Ok(_) => {
+                let c = self.candidates.first().copied();
+                let beyond = c.and_then(|c| {
+                    let n = self.max_nodes;
+                    self.predicted(c, n).map(|r| (c, r))
+                });
+                match beyond {
+                    Some((c, r)) if r.is_finite() => format!(
+                        "no discretization is predicted to meet the tolerance within {budget}: {} there is predicted at {:.1}× \
+                         the tolerance; raise --max-nodes, choose a higher-order operator, or loosen the tolerance",
+                        c.describe(),
+                        r
+                    ),
+                    _ => format!(
+                        "no discretization is predicted to meet the tolerance within {budget}: the predicted error stops \
+                         decreasing (round-off or the reference's own accuracy); loosen the tolerance"
+                    ),
+                }
+            }
+        }
+    }
+
+    /// The reported outcome: the verified one, else the most accurate converged one,
+    /// else the first grid's; with the refinement's record.
+    fn finish(self, result: String) -> Outcome {
+        let tolerance = match &self.predictor {
+            Ok(p) => p.tolerance_source.clone(),
+            Err(_) => "the verification's (no prediction)".to_string(),
+        };
+        let mut outcome = match (self.best, self.first) {
+            (Some((o, _)), _) => o,
+            (None, Some(o)) => o,
+            (None, None) => unreachable!("a refinement solves at least one grid"),
+        };
+        // The reported grid's own time stays in its timings; the other grids' go with
+        // the attempts that were not reported.
+        let all_s: f64 = self.grids.iter().map(|g| g.wall_s).sum();
+        let own_s: f64 = outcome.attempts.iter().map(|a| a.wall_s).sum();
+        outcome.timings.other_attempts_s += (all_s - own_s).max(0.0) + self.prediction_s;
+        outcome.work = self.work;
+        if !outcome.trusted() {
+            outcome.remedy = Some(format!("{result}; {}", outcome.remedy.take().unwrap_or_default()));
+        }
+        outcome.refinement = Some(Refinement {
+            refine: self.scene.verify.refine,
+            operator_chosen: self.scene.choose_operator,
+            tolerance,
+            max_nodes: self.max_nodes,
+            max_nodes_source: self.max_nodes_source,
+            grids: self.grids,
+            result,
+            prediction_s: self.prediction_s,
+        });
+        outcome
+    }
+}
+
+fn counted_grids(n: usize) -> String {
+    super::outcome::counted(n, "grid")
+}
+
+/// The proxy's ratio of `c` on `nodes` nodes, extrapolated beyond [`PROXY_MAX_NODES`]
+/// with the order between the two largest grids computed.
+fn proxy_ratio(p: &mut Predictor, c: Candidate, nodes: usize) -> Result<f64, SolveError> {
+    let floor = p.roundoff_ratio(nodes);
+    if nodes <= PROXY_MAX_NODES {
+        return Ok(p.ratio_between(c, nodes)?.max(floor));
+    }
+    let (hi, lo) = (PROXY_MAX_NODES, (PROXY_MAX_NODES - 1) / 2 + 1);
+    let (r_hi, r_lo) = (p.ratio(c, hi)?, p.ratio(c, lo)?);
+    let order = (r_lo / r_hi).ln() / 2f64.ln();
+    if !(order.is_finite() && order > 0.0) {
+        return Ok(r_hi.max(floor));
+    }
+    Ok((r_hi * ((hi - 1) as f64 / (nodes - 1) as f64).powf(order)).max(floor))
+}
+
+/// The largest grid a refinement may use and why: `--max-nodes`, else the largest the
+/// memory estimate allows, at most [`MAX_NODES_DEFAULT`].
+fn budget(scene: &Scene) -> (usize, String) {
+    if let Some(n) = scene.verify.max_nodes {
+        return (n, "--max-nodes or [verify] max_nodes".to_string());
+    }
+    // The largest estimate among the operators the refinement may use.
+    let operators: Vec<OperatorKind> = if scene.choose_operator { OperatorKind::ALL.to_vec() } else { vec![scene.operator] };
+    let fits = |n: usize| {
+        let need =
+            operators.iter().map(|&operator| memory::solve_bytes(&Scene { nodes: n, operator, ..scene.clone() })).fold(0.0, f64::max);
+        memory::available_bytes().is_none_or(|avail| need <= avail)
+    };
+    if fits(MAX_NODES_DEFAULT) {
+        return (MAX_NODES_DEFAULT, format!("the default, 2^{}", MAX_NODES_DEFAULT.trailing_zeros()));
+    }
+    let (mut lo, mut hi) = (scene.nodes.min(MAX_NODES_DEFAULT), MAX_NODES_DEFAULT);
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if fits(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (lo, "the largest grid the available memory allows".to_string())
+}
