@@ -6,6 +6,10 @@
 #   gcc, libc6-dev       the linker Rust uses
 #   python3-venv, python3-dev, python3-pip
 #                        the Python package's tests (ci/python-env.sh makes .venv)
+#   libopenblas0-serial  an optimized BLAS for MUMPS's dense fronts (Debian's alternatives
+#                        make it the system's libblas.so.3): Ipopt's factorizations of
+#                        many-body scenes are 2–3× faster than with the reference BLAS
+#                        (docs/benchmarks.md#many-body-scenes)
 # and, when no cargo is found, installs a Rust toolchain with rustup (minimal profile)
 # into ~/.cargo (callers then `source ~/.cargo/env`). When `cargo fmt` or `cargo clippy`
 # is missing (rustup's minimal profile has neither) and rustup is present, adds the
@@ -16,7 +20,7 @@
 # only when not root.
 set -euo pipefail
 
-packages=(coinor-libipopt-dev libclang-dev pkg-config gcc libc6-dev python3-venv python3-dev python3-pip)
+packages=(coinor-libipopt-dev libclang-dev pkg-config gcc libc6-dev python3-venv python3-dev python3-pip libopenblas0-serial)
 need_rust=false
 if ! command -v cargo >/dev/null 2>&1 && [[ ! -x "$HOME/.cargo/bin/cargo" ]]; then
     need_rust=true

@@ -70,6 +70,13 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
             newton.max_residual
         ));
     }
+    warnings.extend(super::cost::factorization_note(
+        run.backend.requested,
+        timings.solver_s,
+        timings.solver_internal_s,
+        sizes.variables,
+        sizes.nodes,
+    ));
     if let Some(loss) = &diagnostics.kinetic_loss {
         verification.fail(loss.to_string());
         warnings.push(loss.to_string());
