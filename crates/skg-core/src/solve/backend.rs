@@ -486,14 +486,16 @@ impl<P: Problem> Problem for StopWhenSolved<'_, P> {
 
 /// MUMPS's options for a scene's KKT matrices: scaling off and the AMF ordering, and,
 /// for a scene with position constraints, QAMD (6) with MUMPS's permutation and scaling
-/// option 6 instead. Measured on Debian's MUMPS, release build, no verification: a
-/// chain of 8 rods (Cartesian coordinates, N = 1024) 10.7 s → 1.33 s, of 16 rods
-/// 27.2 s → 10.4 s, the pendulum at N = 4096 0.47 s → 0.10 s; without position
-/// constraints the change is not a gain (the knife edge at N = 4096 0.13 s → 0.50 s).
-/// Each is deterministic (SCOTCH, MUMPS's automatic choice, was not).
+/// option 6 and its scaling 7 instead. Measured on Debian's MUMPS, release build, no
+/// verification, CPU seconds: a chain of 8 rods (Cartesian coordinates) at N = 1024
+/// 10.7 s → 0.7 s, at N = 4096 over 150 s → 2.3 s (41 s without the scaling), a chain
+/// of 16 rods at N = 1024 27 s → 3.3 s, the pendulum at N = 8192 over 5 minutes
+/// → 0.2 s (11.7 s without the scaling); without position constraints QAMD is not a
+/// gain (the knife edge at N = 4096 0.13 s → 0.50 s). Each is deterministic (SCOTCH,
+/// MUMPS's automatic choice, was not).
 pub fn mumps_options(scene: &Scene) -> Vec<(&'static str, i32)> {
     if scene.constraints.iter().any(|c| c.kind == ConstraintKind::Position) {
-        vec![("mumps_scaling", 0), ("mumps_pivot_order", 6), ("mumps_permuting_scaling", 6)]
+        vec![("mumps_scaling", 7), ("mumps_pivot_order", 6), ("mumps_permuting_scaling", 6)]
     } else {
         vec![("mumps_scaling", 0), ("mumps_pivot_order", 2)]
     }
