@@ -96,3 +96,52 @@ fn two_contradictory_rods_name_the_one_the_initial_position_violates() {
     let at = format!("s.toml:{}:", line_of(&text, "4*l^2"));
     assert!(e.starts_with(&at) && e.contains("the initial position violates position constraint `rod2`"), "{e}");
 }
+
+/// The error of parsing `text` (as `s.toml`).
+fn parse_error(text: &str) -> String {
+    match SceneFile::parse(text, "s.toml") {
+        Ok(_) => panic!("parsed:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// A value of the wrong type names the key, what was expected and the value as written,
+/// at its line and column, instead of serde's "data did not match any variant of
+/// untagged enum NumOrExpr" or "invalid type: …, expected f64".
+#[test]
+fn values_of_the_wrong_type_name_the_key_the_expected_type_and_the_value() {
+    let oscillator = |extra: &str| variant("damped_oscillator", &[("nodes = 512", &format!("nodes = 512\n{extra}"))]);
+    let tumbler = |from: &str, to: &str| variant("tumbler", &[(from, to)]);
+    let number = "must be a number or an expression in quotes, got";
+    let cases = [
+        (tumbler("tol = 1e-4", "tol = true"), "tol = true", 7, format!("verify.tol {number} true")),
+        (tumbler("tol = 1e-4", "tol = [1, 2]"), "tol = [1", 7, format!("verify.tol {number} [1, 2]")),
+        (oscillator("window = true"), "window = true", 10, format!("time.window {number} true")),
+        (oscillator("window = 2\noverlap = {a = 1}"), "overlap = {", 11, format!("time.overlap {number} {{a = 1}}")),
+        (tumbler("initial = -0.5", "initial = false"), "initial = false", 11, format!("coordinates.initial {number} false")),
+        (tumbler("V0 = 10", "V0 = 1979-05-27"), "V0 = 1979", 6, format!("parameters.V0 {number} 1979-05-27")),
+        (tumbler("strength = \"V0/2\"", "strength = [1]"), "strength = [1]", 12, format!("walls.strength {number} [1]")),
+        (
+            tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver.ipopt]\nmu_init = true"),
+            "mu_init = true",
+            11,
+            "solver.ipopt.mu_init must be an integer, a number or a string in quotes (the type of the Ipopt option), got true".into(),
+        ),
+        (tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\ntol = \"1e-8\""), "tol = \"1e-8\"", 7, "solver.tol must be a number, got \"1e-8\"".into()),
+        (tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\nmax_iter = -3"), "max_iter = -3", 12, "solver.max_iter must be a whole number from 0 to 4294967295, got -3".into()),
+        (tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\nfallback = \"no\""), "fallback = \"no\"", 12, "solver.fallback must be true or false, got \"no\"".into()),
+        (tumbler("nodes = 256", "nodes = \"256\""), "nodes = \"256\"", 9, "time.nodes must be a whole number, got \"256\"".into()),
+        (tumbler("nodes = 256", "nodes = 256.5"), "nodes = 256.5", 9, "time.nodes must be a whole number, got 256.5".into()),
+        (
+            tumbler("nodes = 256", "nodes = 99999999999999999999999"),
+            "nodes = 9999",
+            9,
+            "time.nodes must be a whole number from −9223372036854775808 to 9223372036854775807, got 99999999999999999999999".into(),
+        ),
+        (tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\nhessian = 3"), "hessian = 3", 11, "solver.hessian must be a string in quotes, got 3".into()),
+    ];
+    for (text, needle, col, message) in cases {
+        let e = parse_error(&text);
+        assert_eq!(e, format!("s.toml:{}:{col}: {message}", line_of(&text, needle)), "{needle}");
+    }
+}
