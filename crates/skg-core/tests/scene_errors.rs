@@ -145,3 +145,22 @@ fn values_of_the_wrong_type_name_the_key_the_expected_type_and_the_value() {
         assert_eq!(e, format!("s.toml:{}:{col}: {message}", line_of(&text, needle)), "{needle}");
     }
 }
+
+/// The names of settings are case-insensitive in a scene file, as on the command line
+/// and in a sweep's grid (before the fix `backend = "Newton"` was refused in a scene
+/// file and accepted in a sweep).
+#[test]
+fn setting_names_are_case_insensitive_in_a_scene_file() {
+    use skg_core::scene::{Backend, Formulation, HessianMode, InitialVelocity};
+    let text = variant(
+        "tumbler",
+        &[("operator = \"SBP424\"", "operator = \"sbp424\"\nformulation = \"Full\"\ninitial_velocity = \"NATURAL\"")],
+    ) + "\n[solver]\nbackend = \"Newton\"\nhessian = \"Zero\"\n";
+    let scene = SceneFile::parse(&text, "s.toml").unwrap().resolve(&Overrides::default()).unwrap();
+    assert_eq!(scene.solver.backend, Backend::Newton);
+    assert_eq!(scene.formulation, Formulation::Full);
+    assert_eq!(scene.initial_velocity, InitialVelocity::Natural);
+    assert_eq!(scene.solver.hessian, HessianMode::Zero);
+    let e = parse_error(&text.replace("\"Newton\"", "\"newtonian\""));
+    assert!(e.contains("unknown backend `newtonian` (expected `ipopt` or `newton`)"), "{e}");
+}

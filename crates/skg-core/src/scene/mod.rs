@@ -69,6 +69,7 @@ pub use overrides::Overrides;
 pub use parameters::eval_constant;
 pub use resolved::{Constraint, ConstraintKind, Scene, SolverSettings, VerifySettings, Wall, Windows};
 pub use settings::{
-    Backend, Formulation, HessianMode, InitialVelocity, ParseBackendError, ParseFormulationError, ParseInitialVelocityError,
+    Backend, Formulation, HessianMode, InitialVelocity, ParseBackendError, ParseFormulationError, ParseHessianModeError,
+    ParseInitialVelocityError,
 };
 pub use time::{TimeResolutionError, MAX_NODES};
