@@ -164,3 +164,71 @@ fn setting_names_are_case_insensitive_in_a_scene_file() {
     let e = parse_error(&text.replace("\"Newton\"", "\"newtonian\""));
     assert!(e.contains("unknown backend `newtonian` (expected `ipopt` or `newton`)"), "{e}");
 }
+
+/// The error of resolving `text` (as `s.toml`) with `ov`.
+fn resolve_error(text: &str, ov: &Overrides) -> String {
+    match SceneFile::parse(text, "s.toml").unwrap().resolve(ov) {
+        Ok(_) => panic!("resolved:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Windows that do not fit the grid are refused when the scene is read, at the key's
+/// line and column (before the fix: at solve time, with the file alone), and huge or
+/// tiny numbers are printed in exponent form (before: a window of 1e-300 s printed 300
+/// digits).
+#[test]
+fn windows_that_do_not_fit_are_refused_at_their_line_with_readable_numbers() {
+    // The damped oscillator: 10 s on 512 nodes, Δt = 10/511 s.
+    let oscillator = |extra: &str| variant("damped_oscillator", &[("nodes = 512", &format!("nodes = 512\n{extra}"))]);
+    let no = Overrides::default();
+    for (extra, needle, key, expect) in [
+        ("window = 1e-300", "window = 1e-300", "window", "a window of 1e-300 s has 1 nodes"),
+        ("window = 0.05", "window = 0.05", "window", "a window of 0.05 s has 4 nodes"),
+        ("window = 2\noverlap = 1e300", "overlap = 1e300", "overlap", "shorter than the window (2 s), got 1e300"),
+        ("window = 2\noverlap = 1.999", "overlap = 1.999", "overlap", "an overlap of 1.999 s leaves nothing to keep of a 2 s window"),
+        ("window = -1e300", "window = -1e300", "window", "time.window must be a positive number of seconds, got -1e300"),
+    ] {
+        let text = oscillator(extra);
+        let e = resolve_error(&text, &no);
+        let at = format!("s.toml:{}:{}: ", line_of(&text, needle), key.len() + 4);
+        assert!(e.starts_with(&at) && e.contains(expect), "{extra}: {e}");
+        assert!(e.len() < 400, "{extra}: {e}");
+    }
+    // From the command line: the option and its value.
+    let text = std::fs::read_to_string(common::scenario("damped_oscillator")).unwrap();
+    let e = resolve_error(&text, &Overrides { window: Some(1e-300), ..Overrides::default() });
+    assert!(e.starts_with("--window 1e-300: a window of 1e-300 s has 1 nodes"), "{e}");
+}
+
+/// An overlap without a window does nothing: it is refused (before the fix it was
+/// accepted without a word); `--window 0`, which turns the scene's windows off, keeps
+/// its overlap quiet.
+#[test]
+fn an_overlap_without_a_window_is_refused() {
+    let text = variant("damped_oscillator", &[("nodes = 512", "nodes = 512\noverlap = 0.5")]);
+    let e = resolve_error(&text, &Overrides::default());
+    let at = format!("s.toml:{}:11: ", line_of(&text, "overlap = 0.5"));
+    assert!(e.starts_with(&at) && e.contains("without a window"), "{e}");
+    let plain = std::fs::read_to_string(common::scenario("damped_oscillator")).unwrap();
+    let e = resolve_error(&plain, &Overrides { overlap: Some(0.5), ..Overrides::default() });
+    assert!(e.starts_with("--overlap 0.5: ") && e.contains("without a window"), "{e}");
+    let windowed = variant("damped_oscillator", &[("nodes = 512", "nodes = 512\nwindow = 2\noverlap = 0.5")]);
+    let off = Overrides { window: Some(0.0), ..Overrides::default() };
+    let scene = SceneFile::parse(&windowed, "s.toml").unwrap().resolve(&off).unwrap();
+    assert!(scene.windows.is_none() && scene.notes.is_empty());
+}
+
+/// A window not shorter than the span is one global solve, and the scene says so in a
+/// note (before the fix: not a word).
+#[test]
+fn a_window_longer_than_the_span_is_one_solve_with_a_note() {
+    let text = variant("damped_oscillator", &[("nodes = 512", "nodes = 512\nwindow = 30")]);
+    let scene = SceneFile::parse(&text, "s.toml").unwrap().resolve(&Overrides::default()).unwrap();
+    assert_eq!(scene.windows, None);
+    assert_eq!(scene.notes.len(), 1, "{:?}", scene.notes);
+    assert!(scene.notes[0].contains("time.window = 30 s is not shorter than the time span (10 s)"), "{:?}", scene.notes);
+    let text = variant("damped_oscillator", &[("nodes = 512", "nodes = 512\nwindow = 2.5")]);
+    let scene = SceneFile::parse(&text, "s.toml").unwrap().resolve(&Overrides::default()).unwrap();
+    assert!(scene.windows.is_some() && scene.notes.is_empty());
+}

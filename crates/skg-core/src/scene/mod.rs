@@ -58,7 +58,7 @@ mod time;
 #[cfg(test)]
 mod tests;
 
-pub use error::SceneError;
+pub use error::{readable_number, SceneError};
 pub use file::{
     ConstraintSpec, CoordinateSpec, DiscretizationSpec, IpoptValue, NumOrExpr, SceneFile, SceneMeta, SolverSpec, TimeSpec, VerifySpec,
     WallSpec,

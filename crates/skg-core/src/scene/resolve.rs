@@ -29,7 +29,7 @@ impl SceneFile {
         let formulation = ov.formulation.or(self.discretization.formulation).unwrap_or_default();
         let initial_velocity = ov.initial_velocity.or(self.discretization.initial_velocity).unwrap_or_default();
         let solver = self.resolve_solver(ov, formulation)?;
-        let windows = self.resolve_windows(ov, &params, grid.t_end - grid.t_start)?;
+        let (windows, window_note) = self.resolve_windows(ov, &params, &grid)?;
         let verify = self.resolve_verify(ov, &params)?;
         // A refinement chooses the operator too unless one is named.
         let choose_operator = grid.auto_operator || (verify.refine && !grid.operator_named);
@@ -53,6 +53,7 @@ impl SceneFile {
             solver,
             windows,
             verify,
+            notes: window_note.into_iter().collect(),
             file: self,
         })
     }
