@@ -232,3 +232,21 @@ fn a_window_longer_than_the_span_is_one_solve_with_a_note() {
     let scene = SceneFile::parse(&text, "s.toml").unwrap().resolve(&Overrides::default()).unwrap();
     assert!(scene.windows.is_some() && scene.notes.is_empty());
 }
+
+/// A linear solver Ipopt cannot load is an input error at the key that names it, with
+/// the hint that Debian's Ipopt has only MUMPS, in `[solver]` and in `[solver.ipopt]`
+/// (before the fix the latter gave a generic Invalid_Option for the whole file).
+#[test]
+fn a_linear_solver_ipopt_cannot_load_is_refused_at_its_line_with_the_mumps_hint() {
+    for (table, key) in [("[solver]", "[solver] linear_solver"), ("[solver.ipopt]", "[solver.ipopt] linear_solver")] {
+        let text = std::fs::read_to_string(common::scenario("tumbler")).unwrap() + &format!("\n{table}\nlinear_solver = \"ma57\"\n");
+        let mut scene = SceneFile::parse(&text, "s.toml").unwrap().resolve(&Overrides::default()).unwrap();
+        scene.solver.print_level = 0;
+        let e = match skg_core::solve::solve_scene(&scene) {
+            Ok(o) => panic!("{table}: solved: {}", o.status),
+            Err(e) => e.to_string(),
+        };
+        let at = format!("s.toml:{}:17: ", line_of(&text, "linear_solver = \"ma57\""));
+        assert!(e.starts_with(&at) && e.contains(&format!("{key} = \"ma57\"")) && e.contains("only MUMPS"), "{table}: {e}");
+    }
+}
