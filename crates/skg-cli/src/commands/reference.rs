@@ -10,7 +10,7 @@ use skg_core::check::Table;
 use skg_core::output;
 use skg_core::scene::Overrides;
 use skg_core::solve;
-use skg_core::stepping::reference::{self, ReferenceOptions};
+use skg_core::stepping::reference::{self, ReferenceError, ReferenceOptions};
 
 use super::load;
 
@@ -66,7 +66,12 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         anyhow::bail!("--atol must be a number ≥ 0, got {atol}");
     }
     let opts = ReferenceOptions { rtol: args.rtol, atol };
-    let r = if args.hard_walls { reference::hard_wall(&scene, &times, &opts)? } else { reference::regularized(&scene, &times, &opts)? };
+    let r = if args.hard_walls { reference::hard_wall(&scene, &times, &opts) } else { reference::regularized(&scene, &times, &opts) };
+    // A scene error names its file and line already; any other names the scene file here.
+    let r = r.map_err(|e| match e {
+        ReferenceError::Scene(e) => anyhow::Error::from(e),
+        other => anyhow::anyhow!("{}: {other}", args.scenario.display()),
+    })?;
     let out = args.output.unwrap_or_else(|| {
         let stem = args.scenario.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem).join(if args.hard_walls { "reference.hard.csv" } else { "reference.regularized.csv" })
