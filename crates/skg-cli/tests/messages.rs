@@ -5,6 +5,7 @@
 mod common;
 
 use std::path::Path;
+use std::process::Command;
 
 /// Run the binary in `dir`; (exit code, everything it printed). Never a panic.
 fn run(args: &[&str], dir: &Path) -> (Option<i32>, String) {
@@ -36,4 +37,32 @@ fn the_hard_wall_reference_names_the_file_and_the_moving_wall() {
     let (code, t) = run(&["reference", pendulum.to_str().unwrap(), "--hard-walls", "-o", "r.csv", "-q"], dir.path());
     assert_eq!(code, Some(1), "{t}");
     assert!(t.contains("pendulum.toml: hard-wall reference: scene `pendulum` has no walls"), "{t}");
+}
+
+/// Run the binary with a file-size limit of `kib` KiB and SIGXFSZ ignored, so that a
+/// write beyond it fails with EFBIG, as a full disk fails with ENOSPC.
+fn run_with_file_limit(args: &[&str], dir: &Path, kib: u32) -> (Option<i32>, String) {
+    let script = format!("trap '' XFSZ; ulimit -f {kib}; exec \"$0\" \"$@\"");
+    let o = Command::new("sh").arg("-c").arg(script).arg(env!("CARGO_BIN_EXE_skg-solve")).args(args).current_dir(dir).output().unwrap();
+    (o.status.code(), common::text(&o))
+}
+
+/// A picture that cannot be written (the disk is full, the file too large) says so in
+/// the system's words, naming the file (before the fix: `backend error: Drawing backend
+/// error: GifEncodingError(Io(Os { code: 27, kind: FileTooLarge, … }))`).
+#[test]
+fn a_picture_that_cannot_be_written_says_why_in_words() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = solved_tumbler(dir.path(), "tumbler");
+    let out = out.to_str().unwrap();
+    for (args, file) in [
+        (vec!["animate", out, "-o", "a.gif", "-q", "--frames", "40"], "a.gif"),
+        (vec!["animate", out, "-o", "a.png", "-q", "--size", "2000x2000"], "a.png"),
+        (vec!["plot", "path", out, "-o", "p"], "p."),
+    ] {
+        let (code, t) = run_with_file_limit(&args, dir.path(), 40);
+        assert_eq!(code, Some(1), "{args:?}: {t}");
+        assert!(t.contains(&format!("error: drawing {file}")) && t.contains("File too large (os error 27)"), "{args:?}: {t}");
+        assert!(!t.contains("Os {") && !t.contains("Error("), "{args:?}: {t}");
+    }
 }

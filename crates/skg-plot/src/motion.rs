@@ -554,7 +554,7 @@ enum Shot {
     Frame { t: f64, compact: bool },
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot: Shot) -> Result<(), DrawError> {
+fn draw<DB: DrawingBackend<ErrorType: 'static>>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot: Shot) -> Result<(), DrawError> {
     root.fill(&WHITE)?;
     let compact = matches!(shot, Shot::Frame { compact: true, .. });
     let title_size = if compact { 14 } else { 18 };
@@ -721,7 +721,7 @@ pub fn path_png(motion: &Motion, view: &View, size: (u32, u32), file: &Path) -> 
     finish(&tmp, file, drawn)
 }
 
-fn draw_path<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>) -> Result<(), DrawError> {
+fn draw_path<DB: DrawingBackend<ErrorType: 'static>>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>) -> Result<(), DrawError> {
     draw(root, s, Shot::Path)
 }
 
@@ -793,7 +793,7 @@ pub fn animate(motion: &Motion, view: &View, frames: &Frames, path: &Path, on_fr
     let drawn = match Format::of(path)? {
         Format::Gif => (|| {
             let delay = (1000.0 / frames.fps).round().max(10.0) as u32;
-            let root = BitMapBackend::gif(&tmp, frames.size, delay).map_err(|e| DrawError::Plotters(e.to_string()))?.into_drawing_area();
+            let root = BitMapBackend::gif(&tmp, frames.size, delay).map_err(|e| DrawError::Plotters(crate::backend_error_text(&e)))?.into_drawing_area();
             for &t in &times {
                 draw(&root, &s, Shot::Frame { t, compact: false })?;
                 root.present()?;
