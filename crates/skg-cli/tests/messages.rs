@@ -66,3 +66,60 @@ fn a_picture_that_cannot_be_written_says_why_in_words() {
         assert!(!t.contains("Os {") && !t.contains("Error("), "{args:?}: {t}");
     }
 }
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Two shards of a four-point free-fall sweep, in `dir/sh_1` and `dir/sh_2`.
+fn two_shards(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf, std::path::PathBuf) {
+    let sweep = common::sweep_file(dir, &common::scenario("free_fall"), "[[grid]]\nnodes = [16, 17, 18, 19]\n");
+    let shard = |k: usize| {
+        let out = dir.join(format!("sh_{k}"));
+        let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "--shard", &format!("{k}/2"), "-q"], dir);
+        assert_eq!(code, Some(0), "{t}");
+        out
+    };
+    let (one, two) = (shard(1), shard(2));
+    (sweep, one, two)
+}
+
+/// A shard whose last line was cut by a kill: merge leaves the torn row out and says
+/// which point is missing and that running the shard again completes it (before: a
+/// bare CSV error about field counts).
+#[test]
+fn merging_a_shard_with_a_cut_last_line_names_the_missing_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sweep, one, two) = two_shards(dir.path());
+    let results = two.join("results.csv");
+    let text = std::fs::read_to_string(&results).unwrap();
+    std::fs::write(&results, &text[..text.len() - 30]).unwrap();
+    let merged = dir.path().join("merged");
+    let (code, t) = run(&["merge", "-o", s(&merged), s(&one), s(&two)], dir.path());
+    assert_ne!(code, Some(0), "{t}");
+    assert!(t.contains("missing:") && t.contains("Run the missing shards"), "{t}");
+    assert!(!t.contains("CSV error") && !merged.exists(), "{t}");
+    // Rerunning the shard repairs it; the merge then succeeds.
+    let (code, t) = run(&["sweep", s(&sweep), "-o", s(&two), "--shard", "2/2", "-q"], dir.path());
+    assert_eq!(code, Some(0), "{t}");
+    let (code, t) = run(&["merge", "-o", s(&merged), s(&one), s(&two)], dir.path());
+    assert_eq!(code, Some(0), "{t}");
+}
+
+/// `merge -o sh_1 sh_1 sh_2` would replace shard 1's own results.csv and sweep.json with
+/// the merge: refused, and shard 1 is left as it was (before the fix: overwritten).
+#[test]
+fn merging_into_one_of_the_inputs_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, one, two) = two_shards(dir.path());
+    let before = (std::fs::read(one.join("results.csv")).unwrap(), std::fs::read(one.join("sweep.json")).unwrap());
+    for output in [s(&one).to_string(), format!("{}/.", s(&one)), format!("{}/../sh_1", s(&two))] {
+        let (code, t) = run(&["merge", "-o", &output, s(&one), s(&two)], dir.path());
+        assert_eq!(code, Some(1), "{output}: {t}");
+        assert!(t.contains("is also an input of the merge"), "{output}: {t}");
+    }
+    let (code, t) = run(&["merge", "-o", "sh_2", "sh_1", "sh_2/results.csv"], dir.path());
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("is also an input of the merge"), "{t}");
+    assert_eq!((std::fs::read(one.join("results.csv")).unwrap(), std::fs::read(one.join("sweep.json")).unwrap()), before);
+}

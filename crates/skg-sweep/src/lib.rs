@@ -78,7 +78,7 @@ mod status;
 pub mod workers;
 
 pub use results::{
-    csv_line, header_names, results_columns, results_row, Column, Provenance, Results, SchemaError, EXPR_SUFFIX, LEADING_COLUMNS,
+    csv_line, header_names, results_columns, results_row, Column, Provenance, Results, SchemaError, CUT_LINE, EXPR_SUFFIX, LEADING_COLUMNS,
     PROVENANCE_COLUMNS, RESULT_COLUMNS,
 };
 pub use status::{PointStatus, UnknownStatus};
@@ -1713,7 +1713,25 @@ fn collect_rows(inputs: &[PathBuf], output_dir: &Path) -> Result<Merged, SweepEr
     let mut ids = HashSet::new();
     let mut shards = BTreeSet::new();
     let mut report = MergeReport::default();
+    // The output may not be one of the inputs: its sweep.json and results.csv would be
+    // replaced by the merge, and the shard's own files lost.
+    let output_id = std::fs::canonicalize(output_dir).ok();
     for input in inputs {
+        let dir = if input.is_dir() { input.clone() } else { input.parent().map(Path::to_path_buf).unwrap_or_default() };
+        if output_id.is_some() && std::fs::canonicalize(&dir).ok() == output_id {
+            return Err(SweepError::Results {
+                path: output_dir.to_path_buf(),
+                message: format!(
+                    "is also an input of the merge ({}): merging into it would replace that shard's results.csv and \
+                     sweep.json; merge into a new directory",
+                    input.display()
+                ),
+            });
+        }
+    }
+    for input in inputs {
+        // A shard's torn last line (its run killed mid-write) is left out: that point is
+        // missing from the merge, and the shard's rerun computes it.
         let res = Results::read_whole_rows(input)?;
         let path = res.path.clone();
         let info = SweepInfo::read(path.parent().unwrap_or(Path::new(".")))?;
