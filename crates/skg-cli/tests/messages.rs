@@ -123,3 +123,22 @@ fn merging_into_one_of_the_inputs_is_refused() {
     assert!(t.contains("is also an input of the merge"), "{t}");
     assert_eq!((std::fs::read(one.join("results.csv")).unwrap(), std::fs::read(one.join("sweep.json")).unwrap()), before);
 }
+
+/// The row of a point whose worker was killed (here by the sweep's timeout) still says
+/// the point's node count, operator and formulation (before the fix: blank, unless the
+/// point's grid named them).
+#[test]
+fn the_row_of_a_timed_out_point_names_its_nodes_operator_and_formulation() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = common::sweep_file(dir.path(), &common::scenario("tumbler"), "timeout = 0.001\n[[grid]]\nsigma = [\"1/80\", \"1/90\"]\n");
+    let out = dir.path().join("out");
+    let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "-q"], dir.path());
+    assert_eq!(code, Some(0), "{t}");
+    let r = skg_sweep::Results::read(&out).unwrap();
+    let col = |name: &str| r.column_index(name).unwrap();
+    assert_eq!(r.rows.len(), 2);
+    for row in &r.rows {
+        assert_eq!(row[col("status")], "timeout", "{row:?}");
+        assert_eq!((row[col("nodes")].as_str(), row[col("operator")].as_str(), row[col("formulation")].as_str()), ("256", "SBP242", "reduced"));
+    }
+}

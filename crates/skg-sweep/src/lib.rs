@@ -1588,6 +1588,8 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
         refine: file.sweep.refine,
     };
     let mut pool = workers::Pool::new(&opts.worker_exe, &work, opts.jobs, file.sweep.timeout.as_ref().map(|t| *t.get_ref()));
+    // For the rows of points whose worker crashed or timed out (see fill_point_settings).
+    let base = SceneFile::load(&scene_path).ok();
     loop {
         if let Some(signal) = stop_signal() {
             // Every row written is whole; the points in flight are lost with their workers.
@@ -1603,7 +1605,8 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
             }
         }
         std::thread::sleep(Duration::from_millis(5));
-        for (point, rec) in pool.finished()? {
+        for (point, mut rec) in pool.finished()? {
+            fill_point_settings(&mut rec, &point, base.as_ref());
             let line = csv_line(&results_row(&columns, &point, &rec, artifact_tol, &provenance));
             results::append(&mut results, &results_path, &line)?;
             report.ran += 1;
@@ -1771,6 +1774,21 @@ fn collect_rows(inputs: &[PathBuf], output_dir: &Path) -> Result<Merged, SweepEr
     rows.sort_by_key(|r| r[idx].parse::<usize>().unwrap_or(usize::MAX));
     report.rows = rows.len();
     Ok(Merged { first, info, rows, shards, report })
+}
+
+/// The node count, operator and formulation of a point whose record lacks them (its
+/// worker crashed or timed out before it said), from its scene resolved here as the
+/// expansion resolved it, so that no row leaves these columns blank.
+fn fill_point_settings(rec: &mut Record, point: &Point, base: Option<&SceneFile>) {
+    if rec.nodes.is_some() && rec.operator.is_some() && rec.formulation.is_some() {
+        return;
+    }
+    let Some(scene) = base.and_then(|b| b.clone().resolve(&point.overrides().ok()?).ok()) else { return };
+    rec.nodes.get_or_insert(scene.nodes);
+    if point.method == Method::Skg {
+        rec.operator.get_or_insert_with(|| scene.operator.name().to_string());
+        rec.formulation.get_or_insert_with(|| scene.formulation.to_string());
+    }
 }
 
 /// At most this many missing points are listed in a message.
