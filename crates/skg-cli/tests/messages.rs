@@ -144,3 +144,32 @@ fn the_row_of_a_timed_out_point_names_its_nodes_operator_and_formulation() {
         assert_eq!((row[col("operator")].as_str(), row[col("formulation")].as_str()), ("SBP242", "reduced"), "{row:?}");
     }
 }
+
+/// An animation or strip beyond its bounds is refused at once, before the solution is
+/// read, with the bound (before the fix: --frames 1000000 ran for hours, its file
+/// growing by megabytes a second; --strip 100000 panicked on an overflowing width).
+#[test]
+fn animations_and_strips_beyond_their_bounds_are_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = solved_tumbler(dir.path(), "tumbler");
+    let out = out.to_str().unwrap();
+    for (args, expect) in [
+        (vec!["--frames", "1000000"], "1000000 frames are more than the 10000 an animation may have"),
+        (vec!["--frames", "10000", "--size", "4096x4096"], "more than the 4000000000 an animation may have"),
+        (vec!["--frames", "0"], "at least 1"),
+        (vec!["-o", "s.png", "--strip", "100000"], "a strip of 100000 frames is more than the 100"),
+        (vec!["-o", "s.png", "--strip", "50", "--size", "4096x4096"], "more than the 100000000 a strip may have"),
+    ] {
+        let mut all = vec!["animate", out, "-q"];
+        if !args.contains(&"-o") {
+            all.extend(["-o", "a.gif"]);
+        }
+        all.extend(&args);
+        let started = std::time::Instant::now();
+        let (code, t) = run(&all, dir.path());
+        assert_eq!(code, Some(2), "{args:?}: {t}");
+        assert!(t.contains(expect), "{args:?}: {t}");
+        assert!(started.elapsed().as_secs() < 10, "{args:?} took {:?}", started.elapsed());
+    }
+    assert!(!dir.path().join("a.gif").exists() && !dir.path().join("s.png").exists());
+}

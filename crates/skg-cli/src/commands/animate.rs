@@ -5,13 +5,13 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use skg_plot::motion::{self, Aspect, Format, Frames, Motion, View};
 
-use super::ArgError;
+use super::{ArgError, UsageError};
 
 /// What `plot path` and `animate` draw: a solution, its scene and the two axes.
 #[derive(Args)]
@@ -76,7 +76,8 @@ pub struct AnimateArgs {
     /// FILE.png (a strip of --strip frames side by side).
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
-    /// Number of frames, evenly spaced in time from the first node to the last.
+    /// Number of frames, evenly spaced in time from the first node to the last (at most
+    /// 10000, and at most 4·10⁹ pixels in all frames together).
     #[arg(long, default_value_t = 100, value_name = "N")]
     pub frames: usize,
     /// Frames per second (a GIF's frame delay is rounded to 10 ms).
@@ -85,7 +86,7 @@ pub struct AnimateArgs {
     /// Frame size in pixels, WIDTHxHEIGHT (a strip: each panel's).
     #[arg(long, default_value = "640x520", value_parser = parse_size, value_name = "WxH")]
     pub size: (u32, u32),
-    /// Frames in a .png strip.
+    /// Frames in a .png strip (at most 100, and at most 10⁸ pixels in the strip).
     #[arg(long, default_value_t = 5, value_name = "K")]
     pub strip: usize,
     /// No progress bar, no summary line.
@@ -105,12 +106,19 @@ fn parse_size(s: &str) -> Result<(u32, u32), ArgError> {
 
 pub fn run(args: AnimateArgs) -> Result<ExitCode> {
     let format = Format::of(&args.output)?;
+    // The size of what is asked for, checked before anything is read or drawn: a usage
+    // error (exit status 2), as clap's own.
     if args.frames == 0 || args.strip == 0 {
-        bail!("--frames and --strip must be at least 1");
+        return Err(UsageError("--frames and --strip must be at least 1".into()).into());
     }
     if !(args.fps > 0.0 && args.fps.is_finite()) {
-        bail!("--fps must be a positive number, got {}", args.fps);
+        return Err(UsageError(format!("--fps must be a positive number, got {}", args.fps)).into());
     }
+    let size = match format {
+        Format::Png => motion::check_strip(args.strip, args.size),
+        _ => Frames { count: args.frames, fps: args.fps, size: args.size }.check(),
+    };
+    size.map_err(|e| UsageError(format!("{e} (--frames, --strip, --size)")))?;
     let (m, view) = args.motion.load()?;
     let written = if format == Format::Png {
         motion::strip(&m, &view, args.strip, args.size, &args.output)?
