@@ -173,3 +173,27 @@ fn animations_and_strips_beyond_their_bounds_are_refused_at_once() {
     }
     assert!(!dir.path().join("a.gif").exists() && !dir.path().join("s.png").exists());
 }
+
+/// More `--label`s than inputs: the extra ones would label nothing, so the command is
+/// refused as a usage error (before the fix: ignored without a word).
+#[test]
+fn more_labels_than_inputs_is_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = solved_tumbler(dir.path(), "tumbler");
+    let (code, t) = run(&["plot", "trajectory", s(&out), "--label", "a", "--label", "b", "-o", "p"], dir.path());
+    assert_eq!(code, Some(2), "{t}");
+    assert!(t.contains("2 --label given for 1 input(s)") && t.contains("\"b\""), "{t}");
+    assert!(!dir.path().join("p.svg").exists());
+    let (code, t) = run(&["plot", "trajectory", s(&out), "--label", "a", "-o", "p"], dir.path());
+    assert_eq!(code, Some(0), "{t}");
+}
+
+/// `bench --repeat 0` ran once; it is now a usage error.
+#[test]
+fn bench_with_zero_repetitions_is_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scenario("free_fall");
+    let (code, t) = run(&["bench", s(&scene), "--nodes", "64", "--repeat", "0"], dir.path());
+    assert_eq!(code, Some(2), "{t}");
+    assert!(t.contains("--repeat") && t.contains("0"), "{t}");
+}
