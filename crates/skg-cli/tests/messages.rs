@@ -197,3 +197,55 @@ fn bench_with_zero_repetitions_is_a_usage_error() {
     assert_eq!(code, Some(2), "{t}");
     assert!(t.contains("--repeat") && t.contains("0"), "{t}");
 }
+
+/// The readers of a solution (check, plot path, plot trajectory, animate) keep the
+/// pairing rule: a summary.json that does not list trajectory.csv, or lists a
+/// reference.csv that is gone, is refused with a message naming both files (before the
+/// fix both were read); a trajectory with no summary at all is read, with a warning that
+/// it cannot be checked against a run.
+#[test]
+fn readers_refuse_what_the_pairing_rule_refuses_and_warn_about_a_lone_trajectory() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = common::root().join("references/tumbler.csv");
+    let readers = |out: &Path| -> Vec<Vec<String>> {
+        let sol = s(&out.join("trajectory.csv")).to_string();
+        let scene = s(&common::scenario("tumbler")).to_string();
+        [
+            vec!["check", &sol, s(&reference), "--json", "c.json", "-q"],
+            vec!["plot", "trajectory", &sol, "-o", "pt"],
+            vec!["plot", "path", &sol, "-o", "pp", "--scene", &scene],
+            vec!["animate", &sol, "-o", "a.gif", "--frames", "3", "-q", "--scene", &scene],
+        ]
+        .into_iter()
+        .map(|a| a.into_iter().map(String::from).collect())
+        .collect()
+    };
+    let run_all = |sol: &Path| -> Vec<(Option<i32>, String)> {
+        readers(sol).iter().map(|a| run(&a.iter().map(String::as_str).collect::<Vec<_>>(), dir.path())).collect()
+    };
+    // A summary that does not list trajectory.csv.
+    let out = solved_tumbler(dir.path(), "unlisted");
+    let summary = out.join("summary.json");
+    let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    json["files"].as_object_mut().unwrap().remove("trajectory.csv");
+    std::fs::write(&summary, json.to_string()).unwrap();
+    for (code, t) in run_all(&out) {
+        assert_eq!(code, Some(1), "{t}");
+        assert!(t.contains(&format!("{}: the {} beside it does not list trajectory.csv", s(&out.join("trajectory.csv")), s(&summary))), "{t}");
+    }
+    // A reference.csv listed in the summary but deleted.
+    let out = solved_tumbler(dir.path(), "deleted");
+    std::fs::remove_file(out.join("reference.csv")).unwrap();
+    for (code, t) in run_all(&out) {
+        assert_eq!(code, Some(1), "{t}");
+        assert!(t.contains(&format!("lists {}, which is missing", s(&out.join("reference.csv")))) && t.contains("summary.json"), "{t}");
+    }
+    // A trajectory with no summary: read, with a warning.
+    let out = solved_tumbler(dir.path(), "lone");
+    std::fs::remove_file(out.join("summary.json")).unwrap();
+    std::fs::remove_file(out.join("reference.csv")).unwrap();
+    for (code, t) in run_all(&out) {
+        assert_eq!(code, Some(0), "{t}");
+        assert!(t.contains("warning: ") && t.contains("has no summary.json beside it") && t.contains("cannot be checked against"), "{t}");
+    }
+}

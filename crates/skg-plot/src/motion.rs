@@ -64,6 +64,9 @@ pub struct Motion {
     pub reference: Option<Table>,
     /// Things the user should know (a scene file changed since the solve), one line each.
     pub notes: Vec<String>,
+    /// What the user should be warned about: a solution that cannot be checked against
+    /// the run that wrote it (no summary.json lists it), one line each.
+    pub warnings: Vec<String>,
 }
 
 impl Motion {
@@ -83,7 +86,7 @@ impl Motion {
             return Err(data_err("the trajectory has fewer than two nodes"));
         }
         let model = Model::build(&scene)?;
-        Ok(Motion { label, scene, model, solution, reference, notes: Vec::new() })
+        Ok(Motion { label, scene, model, solution, reference, notes: Vec::new(), warnings: Vec::new() })
     }
 
     /// Load a solve's output directory (or its trajectory CSV, with summary.json and
@@ -96,7 +99,7 @@ impl Motion {
         } else {
             (input.parent().map(Path::to_path_buf).unwrap_or_default(), input.to_path_buf())
         };
-        let solution = Table::read(&file)?;
+        let (solution, pairing) = Table::read_paired(&file)?;
         let summary_path = dir.join(SUMMARY_FILE);
         let summary: Option<serde_json::Value> = if summary_path.is_file() {
             let text = std::fs::read_to_string(&summary_path).map_err(|source| PlotError::Io { path: summary_path.clone(), source })?;
@@ -156,6 +159,7 @@ impl Motion {
             .map_or_else(|| file.display().to_string(), |n| n.to_string_lossy().into_owned());
         let mut m = Motion::new(label, resolved, solution, reference)?;
         m.notes = notes;
+        m.warnings.extend(pairing.warning(&file));
         Ok(m)
     }
 

@@ -45,9 +45,13 @@ pub struct MotionArgs {
 }
 
 impl MotionArgs {
-    /// The solution with its scene, and the view; prints notes (a changed scene file) on stderr.
+    /// The solution with its scene, and the view; prints warnings (a solution no summary
+    /// vouches for) and notes (a changed scene file) on stderr.
     pub fn load(&self) -> Result<(Motion, View)> {
         let m = Motion::load(&self.solution, self.scene.as_deref(), self.reference.as_deref())?;
+        for w in &m.warnings {
+            eprintln!("warning: {w}");
+        }
         for n in &m.notes {
             eprintln!("note: {n}");
         }

@@ -64,7 +64,10 @@ struct CheckReport<'a> {
 }
 
 pub fn run(args: CheckArgs) -> Result<ExitCode> {
-    let solution = Table::read(&args.solution)?;
+    let (solution, pairing) = Table::read_paired(&args.solution)?;
+    if let Some(w) = pairing.warning(&args.solution) {
+        eprintln!("warning: {w}");
+    }
     let reference = Table::read(&args.reference)?;
     let opts = CheckOptions { skip_last: args.skip_last, columns: args.columns.clone() };
     let mut per_column = Vec::new();

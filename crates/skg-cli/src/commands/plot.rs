@@ -161,7 +161,10 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
                     continue;
                 }
                 let file = if p.is_dir() { p.join("trajectory.csv") } else { p.clone() };
-                let t = Table::read(&file)?;
+                let (t, pairing) = Table::read_paired(&file)?;
+                if let Some(w) = pairing.warning(&file) {
+                    eprintln!("warning: {w}");
+                }
                 let name = label.get(k).cloned().unwrap_or_else(|| {
                     let base = if p.is_dir() { p.as_path() } else { p.parent().unwrap_or(p) };
                     base.file_name().map_or(file.display().to_string(), |n| n.to_string_lossy().into_owned())
