@@ -249,3 +249,23 @@ fn readers_refuse_what_the_pairing_rule_refuses_and_warn_about_a_lone_trajectory
         assert!(t.contains("warning: ") && t.contains("has no summary.json beside it") && t.contains("cannot be checked against"), "{t}");
     }
 }
+
+/// A sweep of 10⁶ points is refused at once, counted from its grid (before the fix,
+/// after every point's scene had been resolved: 30 s and more).
+#[test]
+fn a_sweep_of_a_million_points_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let values = |n: usize, from: f64| (0..n).map(|k| format!("{}", from + k as f64 / n as f64)).collect::<Vec<_>>().join(", ");
+    let body = format!("[[grid]]\nnodes = [16, 17, 18, 19, 20, 21, 22, 23, 24, 25]\ng = [{}]\nm = [{}]\n", values(1000, 9.0), values(100, 1.0));
+    let sweep = common::sweep_file(dir.path(), &common::scenario("free_fall"), &body);
+    let started = std::time::Instant::now();
+    let (code, t) = run(&["sweep", s(&sweep), "-o", "out"], dir.path());
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("1000000 points as listed") && t.contains("--yes"), "{t}");
+    assert!(started.elapsed().as_secs_f64() < 5.0, "took {:?}", started.elapsed());
+    // A shard is counted as the shard: 10⁶/300 points need no confirmation, 10⁶/50 do.
+    let (code, t) = run(&["sweep", s(&sweep), "-o", "out", "--shard", "7/50"], dir.path());
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("20000 points in shard 7/50 of 1000000 as listed"), "{t}");
+    assert!(!dir.path().join("out").exists());
+}

@@ -75,7 +75,13 @@ pub fn available_bytes() -> Option<f64> {
 /// Refuse `what` (e.g. "the solve") of `scene` on `nodes` nodes when its estimate
 /// `bytes` exceeds the available memory; the error stands at the scene's `time.nodes`.
 pub fn check(scene: &Scene, what: &str, nodes: usize, bytes: f64) -> Result<(), SceneError> {
-    match available_bytes() {
+    check_against(scene, what, nodes, bytes, available_bytes())
+}
+
+/// [`check`] against a given limit (`None`: nothing is refused), for a caller that
+/// checks many scenes against one reading of the available memory (a sweep's points).
+pub fn check_against(scene: &Scene, what: &str, nodes: usize, bytes: f64, limit: Option<f64>) -> Result<(), SceneError> {
+    match limit {
         Some(limit) if bytes > limit => Err(SceneError::Invalid {
             location: nodes_location(scene),
             message: format!(

@@ -843,6 +843,15 @@ impl SweepFile {
         self.sweep.artifact_tol.as_ref().map_or(skg_core::tune::DEFAULT_ARTIFACT_TOL, |t| *t.get_ref())
     }
 
+    /// The number of points the file lists, counted without expanding anything: the
+    /// product of each grid's axis lengths, the explicit points and the peer ladder's
+    /// tolerances (identical points given twice count twice). `None` beyond `usize`.
+    pub fn listed_points(&self) -> Option<usize> {
+        let mut grid_points = self.grid.iter().map(|g| g.get_ref().values().map(|v| v.values().len()).try_fold(1usize, usize::checked_mul));
+        let peer = self.peer.as_ref().map_or(0, |p| p.get_ref().tolerances.len());
+        grid_points.try_fold(self.points.len().checked_add(peer)?, |sum, n| n.and_then(|n| sum.checked_add(n)))
+    }
+
     /// Expand the grids, explicit points and peer ladder, and check every point against
     /// the base scene (parameter names, values, node counts) before anything runs.
     pub fn expand(&self) -> Result<Expanded, SweepError> {
@@ -889,8 +898,7 @@ impl SweepFile {
                 )))
             }
         };
-        let mut grid_points = self.grid.iter().map(|g| g.get_ref().values().map(|v| v.values().len()).try_fold(1usize, usize::checked_mul));
-        let listed = grid_points.try_fold(self.points.len(), |sum, n| n.and_then(|n| sum.checked_add(n)));
+        let listed = self.listed_points();
         if listed.is_none_or(|n| n > MAX_POINTS) {
             return Err(SweepError::Invalid {
                 location: self.origin.whole(),
@@ -964,6 +972,9 @@ impl SweepFile {
         let mut costs = Vec::new();
         let mut structures = Vec::new();
         let mut seen = HashSet::new();
+        // The available memory, read once for all points (not once per point).
+        let limit = skg_core::memory::available_bytes();
+        use skg_core::memory;
         let mut duplicates = 0;
         for (values, method, loc) in raw {
             let mut p = Point { index: points.len(), values, evaluated: Vec::new(), method };
@@ -972,9 +983,9 @@ impl SweepFile {
             let scene_of_point = |e| SweepError::scene(loc.clone(), SceneOf::Point(p.canonical()), e);
             let scene = base.clone().resolve(&ov).map_err(scene_of_point)?;
             let memory = match p.method {
-                Method::Skg => skg_core::memory::check(&scene, "the solve", scene.nodes, skg_core::memory::solve_bytes(&scene)),
+                Method::Skg => memory::check_against(&scene, "the solve", scene.nodes, memory::solve_bytes(&scene), limit),
                 Method::Ode { .. } => {
-                    skg_core::memory::check(&scene, "the reference", scene.nodes, skg_core::memory::reference_bytes(&scene, scene.nodes))
+                    memory::check_against(&scene, "the reference", scene.nodes, memory::reference_bytes(&scene, scene.nodes), limit)
                 }
             };
             memory.map_err(scene_of_point)?;
@@ -1102,6 +1113,21 @@ pub struct Plan {
 /// Expand a sweep and say what a run with `opts` will do. More than [`CONFIRM_ABOVE`]
 /// points are refused ([`SweepError::Unconfirmed`]) unless `confirmed`.
 pub fn plan(file: &SweepFile, opts: &SweepOptions, confirmed: bool) -> Result<Plan, SweepError> {
+    // Count first: a sweep too large to start unconfirmed is refused at once, not after
+    // every point's scene was resolved and its memory checked (30 s for 10⁶ points).
+    if let (false, Some(listed)) = (confirmed, file.listed_points()) {
+        let mine = opts.shard.map_or(listed, |s| listed / s.n + usize::from(s.k - 1 < listed % s.n));
+        if mine > CONFIRM_ABOVE && listed <= MAX_POINTS {
+            let text = format!(
+                "{}: {mine} points{} as listed (not yet checked), roughly at least {} with {} worker(s)",
+                file.name(),
+                opts.shard.map_or(String::new(), |s| format!(" in shard {}/{} of {listed}", s.k, s.n)),
+                duration_text(SECONDS_PER_POINT * mine as f64 / opts.jobs.max(1) as f64),
+                opts.jobs.max(1)
+            );
+            return Err(SweepError::Unconfirmed { plan: text });
+        }
+    }
     let expanded = file.expand()?;
     let mine: Vec<&Point> = expanded.points.iter().filter(|p| opts.shard.is_none_or(|s| s.contains(p.index))).collect();
     let estimate_s = estimated_wall_s(&expanded, &mine, opts.jobs);
