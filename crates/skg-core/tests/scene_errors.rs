@@ -250,3 +250,20 @@ fn a_linear_solver_ipopt_cannot_load_is_refused_at_its_line_with_the_mumps_hint(
         assert!(e.starts_with(&at) && e.contains(&format!("{key} = \"ma57\"")) && e.contains("only MUMPS"), "{table}: {e}");
     }
 }
+
+/// Numbers in messages are printed in exponent form when huge or tiny (before the fix a
+/// strength of -1e300 printed 301 digits), as the neighbours of the window's message.
+#[test]
+fn huge_numbers_in_messages_are_printed_in_exponent_form() {
+    let tumbler = |from: &str, to: &str| variant("tumbler", &[(from, to)]);
+    for (text, expect) in [
+        (tumbler("strength = \"V0/2\"", "strength = -1e300"), "strength must be ≥ 0, got -1e300"),
+        (tumbler("width = \"sigma\"", "width = -1e300"), "width σ must be > 0, got -1e300"),
+        (tumbler("tol = 1e-4", "tol = -1e300"), "the verification tolerance must be a positive number, got -1e300"),
+        (tumbler("tol = 1e-4", "tol = 1e-4\n[solver]\ntol = -1e300"), "solver.tol must be a positive number, got -1e300"),
+        (tumbler("initial = -0.5", "initial = -1e300"), "(x = -1e300, y = -0.75"),
+    ] {
+        let e = refusal(&text);
+        assert!(e.contains(expect) && e.len() < 300, "{e}");
+    }
+}

@@ -116,7 +116,7 @@ pub fn run(args: AnimateArgs) -> Result<ExitCode> {
         return Err(UsageError("--frames and --strip must be at least 1".into()).into());
     }
     if !(args.fps > 0.0 && args.fps.is_finite()) {
-        return Err(UsageError(format!("--fps must be a positive number, got {}", args.fps)).into());
+        return Err(UsageError(format!("--fps must be a positive number, got {}", skg_core::scene::readable_number(args.fps))).into());
     }
     let size = match format {
         Format::Png => motion::check_strip(args.strip, args.size),

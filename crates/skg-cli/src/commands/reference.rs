@@ -8,7 +8,7 @@ use clap::Args;
 
 use skg_core::check::Table;
 use skg_core::output;
-use skg_core::scene::Overrides;
+use skg_core::scene::{readable_number, Overrides};
 use skg_core::solve;
 use skg_core::stepping::reference::{self, ReferenceError, ReferenceOptions};
 
@@ -59,11 +59,11 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         None => solve::grid(&scene).0,
     };
     if !(args.rtol > 0.0 && args.rtol.is_finite()) {
-        anyhow::bail!("--rtol must be a positive number, got {}", args.rtol);
+        anyhow::bail!("--rtol must be a positive number, got {}", readable_number(args.rtol));
     }
     let atol = args.atol.unwrap_or(args.rtol);
     if !(atol >= 0.0 && atol.is_finite()) {
-        anyhow::bail!("--atol must be a number ≥ 0, got {atol}");
+        anyhow::bail!("--atol must be a number ≥ 0, got {}", readable_number(atol));
     }
     let opts = ReferenceOptions { rtol: args.rtol, atol };
     let r = if args.hard_walls { reference::hard_wall(&scene, &times, &opts) } else { reference::regularized(&scene, &times, &opts) };

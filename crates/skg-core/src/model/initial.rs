@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, DVector};
 use toml::Spanned;
 
 use super::{Model, WallModel};
-use crate::scene::{ConstraintKind, Location, Scene, SceneError};
+use crate::scene::{readable_number, ConstraintKind, Location, Scene, SceneError};
 
 impl Model {
     /// Checks on the initial state at the start time, in this order: a positive-definite
@@ -24,8 +24,8 @@ impl Model {
         let (q0, v0) = (&scene.initial_q, &scene.initial_v);
         let file = &scene.file;
         if let Some((what, location)) = self.non_finite_expression(scene, scene.t_start, q0, v0) {
-            let state = scene.coordinates.iter().zip(q0).map(|(c, x)| format!("{c} = {x}"));
-            let state = state.chain(scene.coordinates.iter().zip(v0).map(|(c, x)| format!("{c}_dot = {x}")));
+            let state = scene.coordinates.iter().zip(q0).map(|(c, x)| format!("{c} = {}", readable_number(*x)));
+            let state = state.chain(scene.coordinates.iter().zip(v0).map(|(c, x)| format!("{c}_dot = {}", readable_number(*x))));
             return Err(SceneError::Invalid {
                 location,
                 message: format!(

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use indexmap::IndexMap;
 use skg_expr::Graph;
 
-use super::error::SceneError;
+use super::error::{readable_number, SceneError};
 use super::file::{ConstraintSpec, SceneFile};
 use super::names::{check_identifier, ExpressionNames, RESERVED, TIME, VELOCITY_SUFFIX};
 use super::overrides::Overrides;
@@ -164,11 +164,11 @@ impl SceneFile {
             }
             let strength = self.eval_value(&w.strength, &format!("walls.{name}.strength"), params)?;
             if strength < 0.0 {
-                return Err(self.invalid(&w.strength, format!("wall `{name}`: strength must be ≥ 0, got {strength}")));
+                return Err(self.invalid(&w.strength, format!("wall `{name}`: strength must be ≥ 0, got {}", readable_number(strength))));
             }
             let width = self.eval_value(&w.width, &format!("walls.{name}.width"), params)?;
             if width <= 0.0 {
-                return Err(self.invalid(&w.width, format!("wall `{name}`: width σ must be > 0, got {width}")));
+                return Err(self.invalid(&w.width, format!("wall `{name}`: width σ must be > 0, got {}", readable_number(width))));
             }
             let friction = match &w.friction {
                 Some(v) => self.eval_value(v, &format!("walls.{name}.friction"), params)?,
@@ -176,13 +176,13 @@ impl SceneFile {
             };
             if friction < 0.0 {
                 let v = w.friction.as_ref().expect("friction present when negative");
-                return Err(self.invalid(v, format!("wall `{name}`: friction μ must be ≥ 0, got {friction}")));
+                return Err(self.invalid(v, format!("wall `{name}`: friction μ must be ≥ 0, got {}", readable_number(friction))));
             }
             let friction_velocity = match &w.friction_velocity {
                 Some(v) => {
                     let e = self.eval_value(v, &format!("walls.{name}.friction_velocity"), params)?;
                     if e <= 0.0 {
-                        return Err(self.invalid(v, format!("wall `{name}`: friction_velocity must be > 0, got {e}")));
+                        return Err(self.invalid(v, format!("wall `{name}`: friction_velocity must be > 0, got {}", readable_number(e))));
                     }
                     e
                 }
