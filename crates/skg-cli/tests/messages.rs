@@ -174,6 +174,28 @@ fn animations_and_strips_beyond_their_bounds_are_refused_at_once() {
     assert!(!dir.path().join("a.gif").exists() && !dir.path().join("s.png").exists());
 }
 
+/// An option the output's format does not use is refused, not ignored (before the fix
+/// `--strip 10` with a .gif, or `--frames 50` with a .png strip, did nothing).
+#[test]
+fn animate_options_the_format_does_not_use_are_usage_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = solved_tumbler(dir.path(), "tumbler");
+    for (args, expect) in [
+        (vec!["-o", "a.gif", "--strip", "10"], "--strip applies to a .png strip"),
+        (vec!["-o", "a.mp4", "--strip", "10"], "--strip applies to a .png strip"),
+        (vec!["-o", "s.png", "--frames", "50"], "--frames and --fps apply to a .gif or .mp4"),
+        (vec!["-o", "s.png", "--fps", "10"], "--frames and --fps apply to a .gif or .mp4"),
+    ] {
+        let mut all = vec!["animate", s(&out), "-q"];
+        all.extend(&args);
+        let (code, t) = run(&all, dir.path());
+        assert_eq!(code, Some(2), "{args:?}: {t}");
+        assert!(t.contains(expect), "{args:?}: {t}");
+    }
+    let (code, t) = run(&["animate", s(&out), "-q", "-o", "s.png", "--strip", "3", "--size", "100x100"], dir.path());
+    assert_eq!(code, Some(0), "{t}");
+}
+
 /// More `--label`s than inputs: the extra ones would label nothing, so the command is
 /// refused as a usage error (before the fix: ignored without a word).
 #[test]
