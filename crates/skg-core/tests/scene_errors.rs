@@ -217,6 +217,9 @@ fn an_overlap_without_a_window_is_refused() {
     let off = Overrides { window: Some(0.0), ..Overrides::default() };
     let scene = SceneFile::parse(&windowed, "s.toml").unwrap().resolve(&off).unwrap();
     assert!(scene.windows.is_none() && scene.notes.is_empty());
+    // --overlap with --window 0 is an overlap without a window.
+    let e = resolve_error(&windowed, &Overrides { window: Some(0.0), overlap: Some(0.5), ..Overrides::default() });
+    assert!(e.starts_with("--overlap 0.5: ") && e.contains("without a window"), "{e}");
 }
 
 /// A window not shorter than the span is one global solve, and the scene says so in a

@@ -168,7 +168,10 @@ impl SceneFile {
         };
         let turned_off = ov.window == Some(0.0);
         let Some(length) = length.filter(|_| !turned_off) else {
-            if let (Some(o), false) = (overlap, turned_off) {
+            // An overlap of the file's own windows is moot once --window 0 turns them off;
+            // one given on the command line with them is not.
+            let moot = turned_off && ov.overlap.is_none();
+            if let (Some(o), false) = (overlap, moot) {
                 return Err(here(
                     &self.time.overlap,
                     ov.overlap,
