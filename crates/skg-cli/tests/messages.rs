@@ -253,7 +253,10 @@ fn readers_refuse_what_the_pairing_rule_refuses_and_warn_about_a_lone_trajectory
     std::fs::write(&summary, json.to_string()).unwrap();
     for (code, t) in run_all(&out) {
         assert_eq!(code, Some(1), "{t}");
-        assert!(t.contains(&format!("{}: the {} beside it does not list trajectory.csv", s(&out.join("trajectory.csv")), s(&summary))), "{t}");
+        assert!(
+            t.contains(&format!("{}: the {} beside it does not list trajectory.csv", s(&out.join("trajectory.csv")), s(&summary))),
+            "{t}"
+        );
     }
     // A reference.csv listed in the summary but deleted.
     let out = solved_tumbler(dir.path(), "deleted");
@@ -278,7 +281,8 @@ fn readers_refuse_what_the_pairing_rule_refuses_and_warn_about_a_lone_trajectory
 fn a_sweep_of_a_million_points_is_refused_at_once() {
     let dir = tempfile::tempdir().unwrap();
     let values = |n: usize, from: f64| (0..n).map(|k| format!("{}", from + k as f64 / n as f64)).collect::<Vec<_>>().join(", ");
-    let body = format!("[[grid]]\nnodes = [16, 17, 18, 19, 20, 21, 22, 23, 24, 25]\ng = [{}]\nm = [{}]\n", values(1000, 9.0), values(100, 1.0));
+    let body =
+        format!("[[grid]]\nnodes = [16, 17, 18, 19, 20, 21, 22, 23, 24, 25]\ng = [{}]\nm = [{}]\n", values(1000, 9.0), values(100, 1.0));
     let sweep = common::sweep_file(dir.path(), &common::scenario("free_fall"), &body);
     let started = std::time::Instant::now();
     let (code, t) = run(&["sweep", s(&sweep), "-o", "out"], dir.path());

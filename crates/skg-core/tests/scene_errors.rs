@@ -83,7 +83,8 @@ fn a_constraint_scaled_by_a_huge_or_tiny_factor_is_not_called_redundant() {
         panic!("two scaled rods: {e}");
     }
     // A truly redundant pair stays redundant at any scale.
-    let e = refusal(&pendulum("1e300*(x^2 + y^2 - l^2)", "\n\n[[constraints]]\nname = \"rod2\"\nexpression = \"1e-300*(x^2 + y^2 - l^2)\""));
+    let e =
+        refusal(&pendulum("1e300*(x^2 + y^2 - l^2)", "\n\n[[constraints]]\nname = \"rod2\"\nexpression = \"1e-300*(x^2 + y^2 - l^2)\""));
     assert!(e.contains("constraint `rod2` is redundant") && e.contains("combination of those of `rod`"), "{e}");
 }
 
@@ -127,9 +128,24 @@ fn values_of_the_wrong_type_name_the_key_the_expected_type_and_the_value() {
             11,
             "solver.ipopt.mu_init must be an integer, a number or a string in quotes (the type of the Ipopt option), got true".into(),
         ),
-        (tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\ntol = \"1e-8\""), "tol = \"1e-8\"", 7, "solver.tol must be a number, got \"1e-8\"".into()),
-        (tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\nmax_iter = -3"), "max_iter = -3", 12, "solver.max_iter must be a whole number from 0 to 4294967295, got -3".into()),
-        (tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\nfallback = \"no\""), "fallback = \"no\"", 12, "solver.fallback must be true or false, got \"no\"".into()),
+        (
+            tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\ntol = \"1e-8\""),
+            "tol = \"1e-8\"",
+            7,
+            "solver.tol must be a number, got \"1e-8\"".into(),
+        ),
+        (
+            tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\nmax_iter = -3"),
+            "max_iter = -3",
+            12,
+            "solver.max_iter must be a whole number from 0 to 4294967295, got -3".into(),
+        ),
+        (
+            tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\nfallback = \"no\""),
+            "fallback = \"no\"",
+            12,
+            "solver.fallback must be true or false, got \"no\"".into(),
+        ),
         (tumbler("nodes = 256", "nodes = \"256\""), "nodes = \"256\"", 9, "time.nodes must be a whole number, got \"256\"".into()),
         (tumbler("nodes = 256", "nodes = 256.5"), "nodes = 256.5", 9, "time.nodes must be a whole number, got 256.5".into()),
         (
@@ -138,7 +154,12 @@ fn values_of_the_wrong_type_name_the_key_the_expected_type_and_the_value() {
             9,
             "time.nodes must be a whole number from −9223372036854775808 to 9223372036854775807, got 99999999999999999999999".into(),
         ),
-        (tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\nhessian = 3"), "hessian = 3", 11, "solver.hessian must be a string in quotes, got 3".into()),
+        (
+            tumbler("tol = 1e-4", "tol = 1e-4\n\n[solver]\nhessian = 3"),
+            "hessian = 3",
+            11,
+            "solver.hessian must be a string in quotes, got 3".into(),
+        ),
     ];
     for (text, needle, col, message) in cases {
         let e = parse_error(&text);
@@ -152,10 +173,9 @@ fn values_of_the_wrong_type_name_the_key_the_expected_type_and_the_value() {
 #[test]
 fn setting_names_are_case_insensitive_in_a_scene_file() {
     use skg_core::scene::{Backend, Formulation, HessianMode, InitialVelocity};
-    let text = variant(
-        "tumbler",
-        &[("operator = \"SBP424\"", "operator = \"sbp424\"\nformulation = \"Full\"\ninitial_velocity = \"NATURAL\"")],
-    ) + "\n[solver]\nbackend = \"Newton\"\nhessian = \"Zero\"\n";
+    let text =
+        variant("tumbler", &[("operator = \"SBP424\"", "operator = \"sbp424\"\nformulation = \"Full\"\ninitial_velocity = \"NATURAL\"")])
+            + "\n[solver]\nbackend = \"Newton\"\nhessian = \"Zero\"\n";
     let scene = SceneFile::parse(&text, "s.toml").unwrap().resolve(&Overrides::default()).unwrap();
     assert_eq!(scene.solver.backend, Backend::Newton);
     assert_eq!(scene.formulation, Formulation::Full);

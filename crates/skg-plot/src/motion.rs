@@ -858,7 +858,9 @@ pub fn animate(motion: &Motion, view: &View, frames: &Frames, path: &Path, on_fr
     let drawn = match Format::of(path)? {
         Format::Gif => (|| {
             let delay = (1000.0 / frames.fps).round().max(10.0) as u32;
-            let root = BitMapBackend::gif(&tmp, frames.size, delay).map_err(|e| DrawError::Plotters(crate::backend_error_text(&e)))?.into_drawing_area();
+            let root = BitMapBackend::gif(&tmp, frames.size, delay)
+                .map_err(|e| DrawError::Plotters(crate::backend_error_text(&e)))?
+                .into_drawing_area();
             for &t in &times {
                 draw(&root, &s, Shot::Frame { t, compact: false })?;
                 root.present()?;

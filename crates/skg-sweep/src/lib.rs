@@ -99,8 +99,7 @@ use skg_core::sbp::{OperatorKind, ParseOperatorKindError};
 use skg_core::scene::provenance;
 use skg_core::scene::{
     parse_toml, read_toml, readable_number, Backend, Formulation, HessianMode, InitialVelocity, Location, Origin, Overrides,
-    ParseBackendError,
-    ParseFormulationError, ParseInitialVelocityError, Scene, SceneError, SceneFile, TomlError,
+    ParseBackendError, ParseFormulationError, ParseInitialVelocityError, Scene, SceneError, SceneFile, TomlError,
 };
 
 /// Errors of a sweep file, a results file or the sweep driver.
@@ -861,12 +860,16 @@ impl SweepFile {
             .map_err(|e| SweepError::scene(self.origin.locate_in(&self.sweep.scene, None), SceneOf::Base, e))?;
         if let Some(tol) = &self.sweep.artifact_tol {
             if !(*tol.get_ref() > 0.0 && tol.get_ref().is_finite()) {
-                return Err(self.invalid(tol, format!("sweep.artifact_tol must be a positive number, got {}", readable_number(*tol.get_ref()))));
+                return Err(
+                    self.invalid(tol, format!("sweep.artifact_tol must be a positive number, got {}", readable_number(*tol.get_ref())))
+                );
             }
         }
         if let Some(t) = &self.sweep.timeout {
             if !(*t.get_ref() > 0.0 && t.get_ref().is_finite()) {
-                return Err(self.invalid(t, format!("sweep.timeout must be a positive number of seconds, got {}", readable_number(*t.get_ref()))));
+                return Err(
+                    self.invalid(t, format!("sweep.timeout must be a positive number of seconds, got {}", readable_number(*t.get_ref())))
+                );
             }
         }
         let mut reference_hash = None;

@@ -118,7 +118,9 @@ pub fn run(args: AnimateArgs) -> Result<ExitCode> {
     let usage = |m: String| -> anyhow::Error { UsageError(m).into() };
     match (format, args.strip, args.frames.or(args.fps.map(|_| 0))) {
         (Format::Png, _, Some(_)) => return Err(usage("--frames and --fps apply to a .gif or .mp4; a .png strip takes --strip".into())),
-        (Format::Gif | Format::Mp4, Some(_), _) => return Err(usage("--strip applies to a .png strip; a .gif or .mp4 takes --frames".into())),
+        (Format::Gif | Format::Mp4, Some(_), _) => {
+            return Err(usage("--strip applies to a .png strip; a .gif or .mp4 takes --frames".into()))
+        }
         _ => {}
     }
     let (frames, fps, strip) = (args.frames.unwrap_or(100), args.fps.unwrap_or(25.0), args.strip.unwrap_or(5));

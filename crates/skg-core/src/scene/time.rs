@@ -101,7 +101,8 @@ impl SceneFile {
         let t_start = self.eval_value(&self.time.start, "time.start", params)?;
         let t_end = self.eval_value(&self.time.end, "time.end", params)?;
         if t_end <= t_start {
-            let message = format!("the time span must be positive: end ({}) ≤ start ({})", readable_number(t_end), readable_number(t_start));
+            let message =
+                format!("the time span must be positive: end ({}) ≤ start ({})", readable_number(t_end), readable_number(t_start));
             return Err(self.invalid(&self.time.end, message));
         }
         let auto = |s: &Spanned<String>| s.get_ref().trim().eq_ignore_ascii_case("auto");
@@ -162,9 +163,7 @@ impl SceneFile {
         // The value's origin: the scene file's line, or the command line.
         let here = |key: &Option<Spanned<NumOrExpr>>, from_cli: Option<f64>, option: &str, message: String| match (key, from_cli) {
             (Some(v), None) => self.invalid(v, message),
-            (_, given) => {
-                SceneError::Setting { setting: format!("{option} {}", given.map_or("?".into(), readable_number)), message }
-            }
+            (_, given) => SceneError::Setting { setting: format!("{option} {}", given.map_or("?".into(), readable_number)), message },
         };
         let turned_off = ov.window == Some(0.0);
         let Some(length) = length.filter(|_| !turned_off) else {
