@@ -272,6 +272,8 @@ fn exercise(text: &str) -> Stage {
 struct Report {
     failures: Vec<(usize, String)>,
     stages: std::collections::BTreeMap<Stage, usize>,
+    /// The most CPU time one mutant used, in ms, and its number.
+    slowest: (u64, usize),
 }
 
 /// CPU time (user + system) of this process in milliseconds, from `/proc/self/stat`
@@ -312,6 +314,7 @@ fn fuzz(count: usize, seed: u64) -> Report {
     let started = Instant::now();
     let mut failures = Vec::new();
     let mut stages = std::collections::BTreeMap::new();
+    let mut slowest = (0, 0);
     for k in 0..count {
         let base = &seeds[rng.below(seeds.len())];
         let mut text = base.clone();
@@ -331,13 +334,30 @@ fn fuzz(count: usize, seed: u64) -> Report {
             }
         }
         current.0.store(u64::MAX, Ordering::SeqCst);
+        let used = cpu_ms().saturating_sub(current.1.load(Ordering::SeqCst));
+        if used > slowest.0 {
+            slowest = (used, k);
+        }
         let _ = std::fs::remove_file(dump.join(format!("hang-{k}.toml")));
         if (k + 1) % 10_000 == 0 {
-            eprintln!("{} mutants, {} failures, {:.0} s", k + 1, failures.len(), started.elapsed().as_secs_f64());
+            let secs = started.elapsed().as_secs_f64();
+            eprintln!(
+                "{} mutants, {} failures, {secs:.0} s; stages {stages:?}; slowest {} ms (mutant {})",
+                k + 1,
+                failures.len(),
+                slowest.0,
+                slowest.1
+            );
         }
     }
-    eprintln!("{count} mutants of seed {seed}: {} failures in {:.1} s; stages {stages:?}", failures.len(), started.elapsed().as_secs_f64());
-    Report { failures, stages }
+    eprintln!(
+        "{count} mutants of seed {seed}: {} failures in {:.1} s; stages {stages:?}; slowest mutant {} ({:.1} s of CPU time)",
+        failures.len(),
+        started.elapsed().as_secs_f64(),
+        slowest.1,
+        slowest.0 as f64 / 1e3
+    );
+    Report { failures, stages, slowest }
 }
 
 #[test]
@@ -358,6 +378,7 @@ fn mutation_fuzz_long_run() {
     let env = |name: &str, default: u64| std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default);
     let r = fuzz(env("SKG_FUZZ_MUTANTS", 100_000) as usize, env("SKG_FUZZ_SEED", 1));
     assert!(r.failures.is_empty(), "{:#?}", r.failures);
+    assert!(r.slowest.0 < TIME_LIMIT.as_millis() as u64, "mutant {} used {} ms", r.slowest.1, r.slowest.0);
 }
 
 #[test]
