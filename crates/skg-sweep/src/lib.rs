@@ -726,7 +726,9 @@ impl SweepFile {
             }
             Err(TomlError::Io { path, error }) => Err(SweepError::Read { path, source: error }),
             Err(TomlError::Parse { location, mut message }) => {
-                if message.contains("expected a sequence") {
+                // A table where an array of tables belongs (`[grid]` for `[[grid]]`):
+                // the reader's type error, in serde's or the scene reader's words.
+                if message.contains("expected a sequence") || message.contains("must be an array") {
                     message.push_str(" (write each grid as `[[grid]]` and each explicit point as `[[points]]`)");
                 }
                 Err(SweepError::Invalid { location, message })

@@ -171,6 +171,7 @@ fn type_error_text(message: &str, text: &str, span: std::ops::Range<usize>) -> O
         "u64" | "usize" => "a whole number ≥ 0",
         "a boolean" => "true or false",
         "a string" => "a string in quotes",
+        "a sequence" => "an array",
         other => other,
     };
     // The value as written: the span, or for a number too large the whole token (the
@@ -181,9 +182,14 @@ fn type_error_text(message: &str, text: &str, span: std::ops::Range<usize>) -> O
     } else {
         text.get(span.clone()).unwrap_or("").trim()
     };
+    // A table written where a value belongs spans lines: its first line stands for it.
+    let value = match value.split_once('\n') {
+        Some((first, _)) => format!("{} …", first.trim_end()),
+        None => value.to_string(),
+    };
     let value = match value.char_indices().nth(60) {
         Some((cut, _)) => format!("{}…", &value[..cut]),
-        None => value.to_string(),
+        None => value,
     };
     let subject = key_at(text, start).unwrap_or_else(|| "this value".to_string());
     Some(if too_large {
