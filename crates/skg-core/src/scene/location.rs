@@ -145,7 +145,7 @@ pub(super) fn parse_origin<T: serde::de::DeserializeOwned>(origin: Origin) -> Re
         Err(e) => {
             let location = e.span().map_or_else(|| origin.whole(), |span| origin.locate(span.start));
             let message = e.message().trim_end();
-            let message = e.span().and_then(|span| type_error_text(message, text, span)).unwrap_or_else(|| message.to_string());
+            let message = e.span().and_then(|span| type_error_text(message, &origin.text, span)).unwrap_or_else(|| message.to_string());
             Err(TomlError::Parse { location, message })
         }
     }
