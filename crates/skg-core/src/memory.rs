@@ -4,10 +4,10 @@
 //!
 //! The estimates are fits to the measured peak resident memory of whole solves
 //! (verification and files included; release build, Debian's Ipopt 3.11.9 with MUMPS
-//! 5.5, QAMD ordering for position constraints): the shipped scenes at N from 4096 to
-//! 10⁶, chains of 8 to 32 links in Cartesian coordinates (24 to 96 unknowns per node),
-//! the operators and formulations, solves in windows. docs/benchmarks.md#memory lists
-//! the measurements and the ratios. A solve needs
+//! 5.5, QAMD ordering and scaling 7 for position constraints): the shipped scenes at N
+//! from 4096 to 10⁶, chains of 8 to 32 links in Cartesian coordinates (24 to 96
+//! unknowns per node), the operators and formulations, solves in windows.
+//! docs/benchmarks.md#memory lists the measurements and the ratios. A solve needs
 //!
 //! * a base of [`BASE_BYTES`] (the process, the tapes, Ipopt and MUMPS workspaces);
 //! * what it keeps of the whole span, [`TRAJECTORY_BYTES_PER_CELL`] per node and CSV
@@ -25,19 +25,18 @@
 //!   at N = 4096, 18 kB at 65536, with the process's other memory).
 //!
 //! Every measurement lies between a third of the estimate and the estimate (a test
-//! checks the measurements written down in crates/skg-core/tests/memory.rs), but one
-//! scene: the pendulum on Ipopt beyond N = 4096, whose factorization fills far more
-//! than linearly (docs/benchmarks.md#memory). The estimate is of the backend the scene
-//! chooses: a Newton solve that fails and hands its system over to Ipopt needs Ipopt's
-//! memory, up to 2.7 times Newton's (the knife edge). The fallback ladder's attempts
-//! keep their trajectories, so a ladder that runs several needs more than its first
-//! solve; the estimate is of that first solve. A reference needs half the base and, per
-//! sample, [`REFERENCE_BYTES_PER_SAMPLE`], [`REFERENCE_BYTES_PER_CELL`] per CSV column
-//! and [`REFERENCE_BYTES_PER_PAIR`] per pair of coordinates (measured: 0.75 kB per
-//! sample for the free fall, 104 kB for a chain of 32 links). The limit is the memory
-//! the kernel reports as available (`MemAvailable` in `/proc/meminfo`); where that
-//! cannot be read, nothing is refused. Reading one line of `/proc/meminfo` needs no
-//! crate (`sysinfo` would bring a large dependency for it).
+//! checks the measurements written down in crates/skg-core/tests/memory.rs). The
+//! estimate is of the backend the scene chooses: a Newton solve that fails and hands
+//! its system over to Ipopt needs Ipopt's memory, up to 2.7 times Newton's (the knife
+//! edge). The fallback ladder's attempts keep their trajectories, so a ladder that runs
+//! several needs more than its first solve; the estimate is of that first solve. A
+//! reference needs half the base and, per sample, [`REFERENCE_BYTES_PER_SAMPLE`],
+//! [`REFERENCE_BYTES_PER_CELL`] per CSV column and [`REFERENCE_BYTES_PER_PAIR`] per
+//! pair of coordinates (measured: 0.75 kB per sample for the free fall, 104 kB for a
+//! chain of 32 links). The limit is the memory the kernel reports as available
+//! (`MemAvailable` in `/proc/meminfo`); where that cannot be read, nothing is refused.
+//! Reading one line of `/proc/meminfo` needs no crate (`sysinfo` would bring a large
+//! dependency for it).
 //!
 //! **Place in the flow.** Right after the scene: it uses only [`sbp`](crate::sbp) and
 //! [`scene`](crate::scene) (an estimate needs the resolved scene, nothing built from

@@ -5,15 +5,15 @@
 //! Before the fix, the oscillator over 2000 s in windows of 2 s (N = 10⁶) was refused
 //! on Ipopt as 43.7 GB for the 1.04 GB it needs, the free fall at N = 5·10⁵ was
 //! estimated at 15 times its peak, and a chain of 32 links at N = 1024 on Ipopt at
-//! 18.9 GB for the 1.24 GB it needs. The pendulum on Ipopt beyond N = 4096 is left
-//! out: its factorization fills far more than linearly (docs/benchmarks.md#memory).
+//! 18.9 GB for the 1.15 GB it needs.
 //!
-//! Provenance of the measurements: peak resident memory ("Maximum resident set size"
-//! of `/usr/bin/time -v`, KiB × 1024 / 10⁶ = MB) of
-//! `nice -n 10 skg-solve SCENE --nodes N --backend B [--operator OP | --formulation full]
-//! --no-fallback -o DIR --quiet` (the whole solve: guess, solve, verification, files),
-//! and of `skg-solve reference SCENE --nodes N -o FILE -q`; release build of branch
-//! `reliability` on main 7b3063e, Debian's Ipopt 3.11.9 with MUMPS 5.5 (sequential);
+//! Provenance of the measurements: peak resident memory ("Maximum resident set size" of
+//! `/usr/bin/time -v`, KiB × 1024 / 10⁶ = MB) of `nice -n 10 skg-solve SCENE --nodes N
+//! --backend B [--operator OP | --formulation full] --no-fallback -o DIR --quiet` (the
+//! whole solve: guess, solve, verification, files), and of `skg-solve reference SCENE
+//! --nodes N -o FILE -q`; release build of branch `reliability` on main 50a40e6 (Ipopt on
+//! scenes with position constraints) and 7b3063e (the rest: 50a40e6 changed only MUMPS's
+//! settings for position constraints), Debian's Ipopt 3.11.9 with MUMPS 5.5 (sequential);
 //! 2026-11-26, a 2-core AMD EPYC virtual machine with 24 GB, shared with other builds.
 
 mod common;
@@ -97,27 +97,30 @@ fn measurements() -> Vec<Measured> {
         m(s("tumbler"), "tumbler", 16384, N, "SBP242", r, 57.0),
         m(s("tumbler"), "tumbler", 65536, I, "SBP242", r, 278.8),
         m(s("tumbler"), "tumbler", 65536, N, "SBP242", r, 191.0),
-        m(s("rolling_disk"), "disk", 4096, I, "SBP242", r, 81.6),
+        m(s("rolling_disk"), "disk", 4096, I, "SBP242", r, 81.5),
         m(s("rolling_disk"), "disk", 4096, N, "SBP242", r, 42.7),
-        m(s("rolling_disk"), "disk", 16384, I, "SBP242", r, 278.3),
+        m(s("rolling_disk"), "disk", 16384, I, "SBP242", r, 278.4),
         m(s("rolling_disk"), "disk", 16384, N, "SBP242", r, 134.3),
-        m(s("rolling_disk"), "disk", 65536, I, "SBP242", r, 1174.6),
+        m(s("rolling_disk"), "disk", 65536, I, "SBP242", r, 1174.3),
         m(s("rolling_disk"), "disk", 65536, N, "SBP242", r, 488.4),
-        m(s("rolling_disk"), "disk-SBP121", 4096, I, "SBP121", r, 59.7),
-        m(s("rolling_disk"), "disk-SBP121-AD", 4096, I, "SBP121-AD", r, 84.7),
+        m(s("rolling_disk"), "disk-SBP121", 4096, I, "SBP121", r, 60.0),
+        m(s("rolling_disk"), "disk-SBP121-AD", 4096, I, "SBP121-AD", r, 84.8),
         m(s("rolling_disk"), "disk-full", 4096, I, "SBP242", f, 229.2),
         m(s("rolling_disk"), "disk-full", 4096, N, "SBP242", f, 128.3),
-        m(s("rolling_disk"), "disk-SBP242-AD", 4096, I, "SBP242-AD", r, 107.0),
+        m(s("rolling_disk"), "disk-SBP242-AD", 4096, I, "SBP242-AD", r, 106.6),
         m(s("rolling_disk"), "disk-SBP363", 4096, I, "SBP363", r, 102.1),
         m(s("rolling_disk"), "disk-SBP363-AD", 4096, I, "SBP363-AD", r, 139.3),
-        m(s("rolling_disk"), "disk-SBP484", 4096, I, "SBP484", r, 129.2),
-        m(s("rolling_disk"), "disk-SBP484-AD", 4096, I, "SBP484-AD", r, 171.2),
-        m(s("knife_edge"), "knife", 8192, I, "SBP242", r, 102.1),
+        m(s("rolling_disk"), "disk-SBP484", 4096, I, "SBP484", r, 129.3),
+        m(s("rolling_disk"), "disk-SBP484-AD", 4096, I, "SBP484-AD", r, 170.7),
+        m(s("knife_edge"), "knife", 8192, I, "SBP242", r, 102.0),
         m(s("knife_edge"), "knife", 8192, N, "SBP242", r, 53.4),
-        m(s("knife_edge"), "knife", 32768, I, "SBP242", r, 475.9),
+        m(s("knife_edge"), "knife", 32768, I, "SBP242", r, 476.2),
         m(s("knife_edge"), "knife", 32768, N, "SBP242", r, 175.6),
-        m(s("pendulum"), "pendulum", 4096, I, "SBP242", r, 41.7),
+        m(s("pendulum"), "pendulum", 4096, I, "SBP242", r, 40.5),
+        m(s("pendulum"), "pendulum", 8192, I, "SBP242", r, 64.2),
+        m(s("pendulum"), "pendulum", 16384, I, "SBP242", r, 111.1),
         m(s("pendulum"), "pendulum", 16384, N, "SBP242", r, 71.0),
+        m(s("pendulum"), "pendulum", 65536, I, "SBP242", r, 395.8),
         m(s("pendulum"), "pendulum", 65536, N, "SBP242", r, 251.6),
         m(s("free_fall"), "freefall", 65536, I, "SBP242", r, 131.6),
         m(s("free_fall"), "freefall", 65536, N, "SBP242", r, 120.9),
@@ -131,19 +134,19 @@ fn measurements() -> Vec<Measured> {
         m(oscillator_2000.clone(), "osc2000", 1000000, N, "SBP242", r, 1036.9),
         m(s("drum_long"), "drumlong", 20481, I, "SBP242", r, 40.8),
         m(s("drum_long"), "drumlong", 20481, N, "SBP242", r, 37.3),
-        m(disk_200.clone(), "disk200", 51201, I, "SBP242", r, 110.3),
+        m(disk_200.clone(), "disk200", 51201, I, "SBP242", r, 110.2),
         m(disk_200.clone(), "disk200", 51201, N, "SBP242", r, 104.4),
-        m(chain(8), "chain8", 512, I, "SBP242", r, 80.8),
+        m(chain(8), "chain8", 512, I, "SBP242", r, 79.4),
         m(chain(8), "chain8", 512, N, "SBP242", r, 44.6),
-        m(chain(8), "chain8", 1024, I, "SBP242", r, 134.9),
+        m(chain(8), "chain8", 1024, I, "SBP242", r, 133.5),
         m(chain(8), "chain8", 1024, N, "SBP242", r, 76.2),
-        m(chain(16), "chain16", 512, I, "SBP242", r, 198.2),
+        m(chain(16), "chain16", 512, I, "SBP242", r, 188.7),
         m(chain(16), "chain16", 512, N, "SBP242", r, 198.5),
-        m(chain(16), "chain16", 1024, I, "SBP242", r, 427.7),
+        m(chain(16), "chain16", 1024, I, "SBP242", r, 394.3),
         m(chain(16), "chain16", 1024, N, "SBP242", r, 387.2),
-        m(chain(32), "chain32", 512, I, "SBP242", r, 642.5),
+        m(chain(32), "chain32", 512, I, "SBP242", r, 581.2),
         m(chain(32), "chain32", 512, N, "SBP242", r, 469.1),
-        m(chain(32), "chain32", 1024, I, "SBP242", r, 1242.8),
+        m(chain(32), "chain32", 1024, I, "SBP242", r, 1150.4),
         m(chain(32), "chain32", 1024, N, "SBP242", r, 922.4),
     ]
 }
