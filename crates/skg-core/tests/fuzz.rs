@@ -13,8 +13,9 @@
 //! a machine busy with other work does not turn a slow mutant into a false hang).
 //! Errors are the expected outcome of most mutants.
 //!
-//! The suite runs [`SUITE_MUTANTS`] mutants. The longer run (10⁵ mutants, about half an
-//! hour on 2 cores) is the ignored test, with the count and seed from the environment:
+//! The suite runs [`SUITE_MUTANTS`] mutants. The longer run (10⁵ mutants, 20 to 50 minutes
+//! on the shared 2-core machine, by its load) is the ignored test, with the count and seed
+//! from the environment:
 //!
 //! ```sh
 //! SKG_FUZZ_MUTANTS=100000 SKG_FUZZ_SEED=1 cargo test -p skg-core --test fuzz -- --ignored --nocapture
