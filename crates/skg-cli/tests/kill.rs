@@ -71,19 +71,20 @@ fn temporaries(dir: &Path) -> Vec<PathBuf> {
     found
 }
 
-#[test]
-fn a_solve_killed_at_random_moments_keeps_its_files_paired_and_its_log_whole() {
+/// Kill the solve of the scene `text` (written as `dir/name`, with an Ipopt log) 12 times
+/// at moments drawn from `seed` over the duration of an uninterrupted run; after every
+/// kill and at the end the files are paired and the log whole.
+fn kill_a_solve(name: &str, text: &str, seed: u64) {
     let dir = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(common::scenario("tumbler")).unwrap().replace("nodes = 256", "nodes = 1024")
-        + "\n[solver]\nlog_file = \"ipopt.log\"\n";
-    let scene = dir.path().join("tumbler.toml");
+    let text = text.to_string() + "\n[solver]\nlog_file = \"ipopt.log\"\n";
+    let scene = dir.path().join(name);
     std::fs::write(&scene, text).unwrap();
     let out = dir.path().join("out");
     let args = [scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"];
     // The faster of two runs: the first may pay for a cold start.
     let full = complete(&args).min(complete(&args));
     let log_is_whole = || std::fs::read_to_string(out.join("ipopt.log")).unwrap().contains("\nEXIT: ");
-    let mut rng = Rng(0x5eed_0014);
+    let mut rng = Rng(seed);
     let mut killed_running = 0;
     for _ in 0..12 {
         let delay = full.mul_f64(rng.uniform());
@@ -91,12 +92,31 @@ fn a_solve_killed_at_random_moments_keeps_its_files_paired_and_its_log_whole() {
         assert_paired(&out);
         assert!(log_is_whole(), "a kill leaves the previous complete log");
     }
-    eprintln!("{killed_running} of 12 kills hit a running solve");
-    assert!(killed_running >= 6, "only {killed_running} of 12 kills hit a running solve");
+    eprintln!("{name}: {killed_running} of 12 kills hit a running solve");
+    assert!(killed_running >= 6, "{name}: only {killed_running} of 12 kills hit a running solve");
     complete(&args);
     assert_paired(&out);
     assert!(log_is_whole());
     assert_eq!(temporaries(&out), Vec::<PathBuf>::new(), "the rerun removes the killed runs' temporary files");
+}
+
+#[test]
+fn a_solve_killed_at_random_moments_keeps_its_files_paired_and_its_log_whole() {
+    let text = std::fs::read_to_string(common::scenario("tumbler")).unwrap().replace("nodes = 256", "nodes = 1024");
+    kill_a_solve("tumbler.toml", &text, 0x5eed_0014);
+}
+
+/// The same for a solve in windows (the keys `window` and `overlap`): every window
+/// writes into the staged log, and the files are written once, at the end.
+#[test]
+fn a_windowed_solve_killed_at_random_moments_keeps_its_files_paired_and_its_log_whole() {
+    let text = std::fs::read_to_string(common::scenario("drum_long"))
+        .unwrap()
+        .replace("end = 20", "end = 4")
+        .replace("nodes = 20481", "nodes = 4097")
+        .replace("window = 1", "window = 1\noverlap = 0.3");
+    assert!(text.contains("overlap = 0.3") && text.contains("end = 4"));
+    kill_a_solve("drum_windows.toml", &text, 0x5eed_0021);
 }
 
 /// Ids of the complete lines of `results.csv` (a kill may leave a partial last line).

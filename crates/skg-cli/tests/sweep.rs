@@ -26,7 +26,7 @@ fn bad_sweep_files_are_clear_errors() {
         ("[[grid]]\noperator = [\"SBP999\"]\n", &["SBP999"]),
         ("[[grid]]\nnodes = [1]\n", &["nodes"]),
         ("[[grid]]\nsigma = [\"1/\"]\n", &["sigma"]),
-        ("[grid]\nnodes = [64]\n", &["[[grid]]"]),
+        ("[grid]\nnodes = [64]\n", &["[[grid]]", "must be an array, got [grid] …"]),
         ("", &["no points"]),
         ("[peer]\ntolerances = [2.0]\n", &["tolerances", "sweep.toml:4:1"]),
         ("timeout = -1\n[[grid]]\nnodes = [64]\n", &["sweep.toml:3:11", "timeout"]),

@@ -92,9 +92,16 @@ impl Table {
     /// Read a table; errors name the file and line. A file that the `summary.json`
     /// beside it lists must be the one it lists (the pairing rule of [`crate::output`]).
     pub fn read(path: &Path) -> Result<Table, CheckError> {
+        Ok(Table::read_paired(path)?.0)
+    }
+
+    /// Read a table as [`Table::read`] does, with how it stands to the `summary.json`
+    /// beside it: a reader of a run's solution warns when it is not
+    /// [`Pairing::Listed`](crate::output::Pairing) ([`Pairing::warning`](crate::output::Pairing::warning)).
+    pub fn read_paired(path: &Path) -> Result<(Table, crate::output::Pairing), CheckError> {
         let text = std::fs::read_to_string(path).map_err(|source| CheckError::Io { path: path.to_path_buf(), source })?;
-        crate::output::verify_pairing(path, text.as_bytes())?;
-        Table::parse(&text, &path.display().to_string())
+        let pairing = crate::output::verify_pairing(path, text.as_bytes())?;
+        Ok((Table::parse(&text, &path.display().to_string())?, pairing))
     }
 
     /// Parse the text of a table (`origin` names it in errors).

@@ -36,7 +36,7 @@ use std::path::PathBuf;
 
 use crate::discrete::contact;
 use crate::discrete::trajectory::Trajectory;
-use crate::scene::{NumOrExpr, Overrides, Scene, SceneFile};
+use crate::scene::{readable_number, NumOrExpr, Overrides, Scene, SceneFile};
 use crate::solve::{self, SolveStatus};
 
 /// Default tolerance on the relative energy artifact.
@@ -172,10 +172,10 @@ pub enum TuneError {
     #[error("walls use several width parameters ({}): pass --param", .0.join(", "))]
     SeveralWidthParameters(Vec<String>),
     /// The tolerance on the artifact is not positive.
-    #[error("the tolerance must be positive, got {0}")]
+    #[error("the tolerance must be positive, got {}", readable_number(*.0))]
     BadTolerance(f64),
     /// A bracket end or the bracket's relative width is not a positive number.
-    #[error("{name} must be a positive number, got {value}")]
+    #[error("{name} must be a positive number, got {}", readable_number(*value))]
     BadSearchOption {
         /// The option (`lo`, `hi`, `rel`).
         name: &'static str,
@@ -196,7 +196,7 @@ pub enum TuneError {
     #[error("the scene {0}, so its energy is not conserved between contacts and the energy artifact cannot choose the wall width")]
     NotConservative(&'static str),
     /// The starting value of the parameter is not positive.
-    #[error("`{param}` must be positive to be tuned, got {value}")]
+    #[error("`{param}` must be positive to be tuned, got {}", readable_number(*value))]
     NotPositive {
         /// The parameter.
         param: String,

@@ -113,9 +113,26 @@ pub enum DrawError {
     },
 }
 
-impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for DrawError {
+impl<E: std::error::Error + Send + Sync + 'static> From<DrawingAreaErrorKind<E>> for DrawError {
     fn from(e: DrawingAreaErrorKind<E>) -> DrawError {
-        DrawError::Plotters(e.to_string())
+        DrawError::Plotters(match &e {
+            DrawingAreaErrorKind::BackendError(plotters_backend::DrawingErrorKind::DrawingError(inner)) => backend_error_text(inner),
+            _ => e.to_string(),
+        })
+    }
+}
+
+/// The message of a drawing backend's error: what the system said (`No space left on
+/// device (os error 28)`), not the Debug text plotters' bitmap backend displays
+/// (`GifEncodingError(Io(Os { code: 28, … }))`).
+pub(crate) fn backend_error_text(e: &(dyn std::error::Error + 'static)) -> String {
+    use plotters_bitmap::BitMapBackendError as B;
+    match e.downcast_ref::<B>() {
+        Some(B::IOError(io)) => io.to_string(),
+        Some(B::GifEncodingError(g)) => g.to_string(),
+        Some(B::ImageError(i)) => i.to_string(),
+        Some(B::InvalidBuffer) => "the picture's pixel buffer has the wrong size".to_string(),
+        None => e.to_string(),
     }
 }
 
@@ -185,7 +202,7 @@ pub mod motion;
 
 /// Draw a chart's legend: the series' labels in a framed, nearly opaque white box at
 /// `position`, in `size`-pixel type.
-fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+fn draw_legend<'a, DB: DrawingBackend<ErrorType: 'static> + 'a, CT: plotters::coord::CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
     position: SeriesLabelPosition,
     size: u32,
@@ -269,7 +286,7 @@ struct Line {
     dashed: bool,
 }
 
-fn draw_loglog<DB: DrawingBackend>(
+fn draw_loglog<DB: DrawingBackend<ErrorType: 'static>>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     xdesc: &str,
@@ -539,7 +556,7 @@ fn coordinates(t: &Table) -> Vec<String> {
     t.columns.iter().filter(|c| *c != "t" && t.index(&format!("{c}{}", skg_core::scene::VELOCITY_SUFFIX)).is_some()).cloned().collect()
 }
 
-fn draw_trajectory<DB: DrawingBackend>(
+fn draw_trajectory<DB: DrawingBackend<ErrorType: 'static>>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     solutions: &[(String, Table)],
@@ -687,7 +704,7 @@ impl Cell {
     }
 }
 
-fn draw_stability<DB: DrawingBackend>(
+fn draw_stability<DB: DrawingBackend<ErrorType: 'static>>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     xaxis: &str,

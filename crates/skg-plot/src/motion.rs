@@ -64,6 +64,9 @@ pub struct Motion {
     pub reference: Option<Table>,
     /// Things the user should know (a scene file changed since the solve), one line each.
     pub notes: Vec<String>,
+    /// What the user should be warned about: a solution that cannot be checked against
+    /// the run that wrote it (no summary.json lists it), one line each.
+    pub warnings: Vec<String>,
 }
 
 impl Motion {
@@ -83,7 +86,7 @@ impl Motion {
             return Err(data_err("the trajectory has fewer than two nodes"));
         }
         let model = Model::build(&scene)?;
-        Ok(Motion { label, scene, model, solution, reference, notes: Vec::new() })
+        Ok(Motion { label, scene, model, solution, reference, notes: Vec::new(), warnings: Vec::new() })
     }
 
     /// Load a solve's output directory (or its trajectory CSV, with summary.json and
@@ -96,7 +99,7 @@ impl Motion {
         } else {
             (input.parent().map(Path::to_path_buf).unwrap_or_default(), input.to_path_buf())
         };
-        let solution = Table::read(&file)?;
+        let (solution, pairing) = Table::read_paired(&file)?;
         let summary_path = dir.join(SUMMARY_FILE);
         let summary: Option<serde_json::Value> = if summary_path.is_file() {
             let text = std::fs::read_to_string(&summary_path).map_err(|source| PlotError::Io { path: summary_path.clone(), source })?;
@@ -156,6 +159,7 @@ impl Motion {
             .map_or_else(|| file.display().to_string(), |n| n.to_string_lossy().into_owned());
         let mut m = Motion::new(label, resolved, solution, reference)?;
         m.notes = notes;
+        m.warnings.extend(pairing.warning(&file));
         Ok(m)
     }
 
@@ -554,7 +558,7 @@ enum Shot {
     Frame { t: f64, compact: bool },
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot: Shot) -> Result<(), DrawError> {
+fn draw<DB: DrawingBackend<ErrorType: 'static>>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>, shot: Shot) -> Result<(), DrawError> {
     root.fill(&WHITE)?;
     let compact = matches!(shot, Shot::Frame { compact: true, .. });
     let title_size = if compact { 14 } else { 18 };
@@ -721,7 +725,7 @@ pub fn path_png(motion: &Motion, view: &View, size: (u32, u32), file: &Path) -> 
     finish(&tmp, file, drawn)
 }
 
-fn draw_path<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>) -> Result<(), DrawError> {
+fn draw_path<DB: DrawingBackend<ErrorType: 'static>>(root: &DrawingArea<DB, Shift>, s: &Scenery<'_>) -> Result<(), DrawError> {
     draw(root, s, Shot::Path)
 }
 
@@ -759,6 +763,69 @@ pub struct Frames {
     pub size: (u32, u32),
 }
 
+/// The most frames an animation may have: 400 s of film at 25 frames per second, about
+/// four minutes of drawing at the default size (a frame takes about 20 ms).
+pub const MAX_FRAMES: usize = 10_000;
+
+/// The most pixels the frames of an animation may have together (frames × width ×
+/// height): what is drawn and encoded, and a bound on the file (a GIF stores at most
+/// about a byte per pixel; 10 000 frames of the default 640×520 are 3.3·10⁹).
+pub const MAX_ANIMATION_PIXELS: u64 = 4_000_000_000;
+
+/// The most frames a strip may have.
+pub const MAX_STRIP_FRAMES: usize = 100;
+
+/// The most pixels a strip's picture may have (held in memory at 3 bytes each while it
+/// is drawn: 300 MB).
+pub const MAX_STRIP_PIXELS: u64 = 100_000_000;
+
+impl Frames {
+    /// Refuse an animation larger than [`MAX_FRAMES`] frames or [`MAX_ANIMATION_PIXELS`]
+    /// pixels, or without a positive frame count and rate, before anything is drawn (an
+    /// animation of 10⁶ frames ran for hours, its file growing by megabytes a second).
+    pub fn check(&self) -> Result<(), PlotError> {
+        if self.count == 0 || !(self.fps > 0.0 && self.fps.is_finite()) {
+            return Err(data_err("the number of frames and the frame rate must be positive"));
+        }
+        if self.count > MAX_FRAMES {
+            return Err(data_err(format!(
+                "{} frames are more than the {MAX_FRAMES} an animation may have: use fewer frames (the film then runs \
+                 faster through the motion, or set a lower frame rate)",
+                self.count
+            )));
+        }
+        let pixels = self.count as u64 * self.size.0 as u64 * self.size.1 as u64;
+        if pixels > MAX_ANIMATION_PIXELS {
+            return Err(data_err(format!(
+                "{} frames of {}×{} are {pixels} pixels, more than the {MAX_ANIMATION_PIXELS} an animation may have \
+                 (they bound its drawing time and its file): use fewer frames or a smaller size",
+                self.count, self.size.0, self.size.1
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Refuse a strip of more than [`MAX_STRIP_FRAMES`] frames or [`MAX_STRIP_PIXELS`]
+/// pixels, or of none, before anything is drawn.
+pub fn check_strip(count: usize, panel: (u32, u32)) -> Result<(), PlotError> {
+    if count == 0 {
+        return Err(data_err("a strip needs at least one frame"));
+    }
+    if count > MAX_STRIP_FRAMES {
+        return Err(data_err(format!("a strip of {count} frames is more than the {MAX_STRIP_FRAMES} a strip may have")));
+    }
+    let pixels = count as u64 * panel.0 as u64 * panel.1 as u64;
+    if pixels > MAX_STRIP_PIXELS {
+        return Err(data_err(format!(
+            "a strip of {count} frames of {}×{} is {pixels} pixels, more than the {MAX_STRIP_PIXELS} a strip may have \
+             (the picture is held in memory while it is drawn): use fewer frames or a smaller size",
+            panel.0, panel.1
+        )));
+    }
+    Ok(())
+}
+
 fn frame_times(motion: &Motion, count: usize) -> Vec<f64> {
     let t = motion.solution.times();
     let (t0, t1) = (t[0], t[t.len() - 1]);
@@ -784,16 +851,16 @@ fn finish(tmp: &Path, path: &Path, drawn: Result<(), DrawError>) -> Result<PathB
 /// file is written to a temporary file beside it, then renamed.
 pub fn animate(motion: &Motion, view: &View, frames: &Frames, path: &Path, on_frame: &mut dyn FnMut()) -> Result<PathBuf, PlotError> {
     register_fonts();
-    if frames.count == 0 || !(frames.fps > 0.0 && frames.fps.is_finite()) {
-        return Err(data_err("the number of frames and the frame rate must be positive"));
-    }
+    frames.check()?;
     let s = Scenery::new(motion, view.clone())?;
     let times = frame_times(motion, frames.count);
     let tmp = output::temporary_beside(path)?;
     let drawn = match Format::of(path)? {
         Format::Gif => (|| {
             let delay = (1000.0 / frames.fps).round().max(10.0) as u32;
-            let root = BitMapBackend::gif(&tmp, frames.size, delay).map_err(|e| DrawError::Plotters(e.to_string()))?.into_drawing_area();
+            let root = BitMapBackend::gif(&tmp, frames.size, delay)
+                .map_err(|e| DrawError::Plotters(crate::backend_error_text(&e)))?
+                .into_drawing_area();
             for &t in &times {
                 draw(&root, &s, Shot::Frame { t, compact: false })?;
                 root.present()?;
@@ -860,9 +927,7 @@ fn mp4(s: &Scenery<'_>, times: &[f64], frames: &Frames, tmp: &Path, on_frame: &m
 /// spaced in time (the first at the start, the last at the end).
 pub fn strip(motion: &Motion, view: &View, count: usize, panel: (u32, u32), path: &Path) -> Result<PathBuf, PlotError> {
     register_fonts();
-    if count == 0 {
-        return Err(data_err("a strip needs at least one frame"));
-    }
+    check_strip(count, panel)?;
     let s = Scenery::new(motion, View { title: String::new(), ..view.clone() })?;
     let times = frame_times(motion, count);
     let tmp = output::temporary_beside(path)?;

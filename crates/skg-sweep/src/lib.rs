@@ -78,7 +78,7 @@ mod status;
 pub mod workers;
 
 pub use results::{
-    csv_line, header_names, results_columns, results_row, Column, Provenance, Results, SchemaError, EXPR_SUFFIX, LEADING_COLUMNS,
+    csv_line, header_names, results_columns, results_row, Column, Provenance, Results, SchemaError, CUT_LINE, EXPR_SUFFIX, LEADING_COLUMNS,
     PROVENANCE_COLUMNS, RESULT_COLUMNS,
 };
 pub use status::{PointStatus, UnknownStatus};
@@ -98,8 +98,8 @@ use skg_core::output;
 use skg_core::sbp::{OperatorKind, ParseOperatorKindError};
 use skg_core::scene::provenance;
 use skg_core::scene::{
-    parse_toml, read_toml, Backend, Formulation, HessianMode, InitialVelocity, Location, Origin, Overrides, ParseBackendError,
-    ParseFormulationError, ParseInitialVelocityError, Scene, SceneError, SceneFile, TomlError,
+    parse_toml, read_toml, readable_number, Backend, Formulation, HessianMode, InitialVelocity, Location, Origin, Overrides,
+    ParseBackendError, ParseFormulationError, ParseInitialVelocityError, Scene, SceneError, SceneFile, TomlError,
 };
 
 /// Errors of a sweep file, a results file or the sweep driver.
@@ -726,7 +726,9 @@ impl SweepFile {
             }
             Err(TomlError::Io { path, error }) => Err(SweepError::Read { path, source: error }),
             Err(TomlError::Parse { location, mut message }) => {
-                if message.contains("expected a sequence") {
+                // A table where an array of tables belongs (`[grid]` for `[[grid]]`):
+                // the reader's type error, in serde's or the scene reader's words.
+                if message.contains("expected a sequence") || message.contains("must be an array") {
                     message.push_str(" (write each grid as `[[grid]]` and each explicit point as `[[points]]`)");
                 }
                 Err(SweepError::Invalid { location, message })
@@ -843,6 +845,15 @@ impl SweepFile {
         self.sweep.artifact_tol.as_ref().map_or(skg_core::tune::DEFAULT_ARTIFACT_TOL, |t| *t.get_ref())
     }
 
+    /// The number of points the file lists, counted without expanding anything: the
+    /// product of each grid's axis lengths, the explicit points and the peer ladder's
+    /// tolerances (identical points given twice count twice). `None` beyond `usize`.
+    pub fn listed_points(&self) -> Option<usize> {
+        let mut grid_points = self.grid.iter().map(|g| g.get_ref().values().map(|v| v.values().len()).try_fold(1usize, usize::checked_mul));
+        let peer = self.peer.as_ref().map_or(0, |p| p.get_ref().tolerances.len());
+        grid_points.try_fold(self.points.len().checked_add(peer)?, |sum, n| n.and_then(|n| sum.checked_add(n)))
+    }
+
     /// Expand the grids, explicit points and peer ladder, and check every point against
     /// the base scene (parameter names, values, node counts) before anything runs.
     pub fn expand(&self) -> Result<Expanded, SweepError> {
@@ -851,12 +862,16 @@ impl SweepFile {
             .map_err(|e| SweepError::scene(self.origin.locate_in(&self.sweep.scene, None), SceneOf::Base, e))?;
         if let Some(tol) = &self.sweep.artifact_tol {
             if !(*tol.get_ref() > 0.0 && tol.get_ref().is_finite()) {
-                return Err(self.invalid(tol, format!("sweep.artifact_tol must be a positive number, got {}", tol.get_ref())));
+                return Err(
+                    self.invalid(tol, format!("sweep.artifact_tol must be a positive number, got {}", readable_number(*tol.get_ref())))
+                );
             }
         }
         if let Some(t) = &self.sweep.timeout {
             if !(*t.get_ref() > 0.0 && t.get_ref().is_finite()) {
-                return Err(self.invalid(t, format!("sweep.timeout must be a positive number of seconds, got {}", t.get_ref())));
+                return Err(
+                    self.invalid(t, format!("sweep.timeout must be a positive number of seconds, got {}", readable_number(*t.get_ref())))
+                );
             }
         }
         let mut reference_hash = None;
@@ -889,8 +904,7 @@ impl SweepFile {
                 )))
             }
         };
-        let mut grid_points = self.grid.iter().map(|g| g.get_ref().values().map(|v| v.values().len()).try_fold(1usize, usize::checked_mul));
-        let listed = grid_points.try_fold(self.points.len(), |sum, n| n.and_then(|n| sum.checked_add(n)));
+        let listed = self.listed_points();
         if listed.is_none_or(|n| n > MAX_POINTS) {
             return Err(SweepError::Invalid {
                 location: self.origin.whole(),
@@ -964,6 +978,9 @@ impl SweepFile {
         let mut costs = Vec::new();
         let mut structures = Vec::new();
         let mut seen = HashSet::new();
+        // The available memory, read once for all points (not once per point).
+        let limit = skg_core::memory::available_bytes();
+        use skg_core::memory;
         let mut duplicates = 0;
         for (values, method, loc) in raw {
             let mut p = Point { index: points.len(), values, evaluated: Vec::new(), method };
@@ -972,9 +989,9 @@ impl SweepFile {
             let scene_of_point = |e| SweepError::scene(loc.clone(), SceneOf::Point(p.canonical()), e);
             let scene = base.clone().resolve(&ov).map_err(scene_of_point)?;
             let memory = match p.method {
-                Method::Skg => skg_core::memory::check(&scene, "the solve", scene.nodes, skg_core::memory::solve_bytes(&scene)),
+                Method::Skg => memory::check_against(&scene, "the solve", scene.nodes, memory::solve_bytes(&scene), limit),
                 Method::Ode { .. } => {
-                    skg_core::memory::check(&scene, "the reference", scene.nodes, skg_core::memory::reference_bytes(&scene, scene.nodes))
+                    memory::check_against(&scene, "the reference", scene.nodes, memory::reference_bytes(&scene, scene.nodes), limit)
                 }
             };
             memory.map_err(scene_of_point)?;
@@ -1102,6 +1119,21 @@ pub struct Plan {
 /// Expand a sweep and say what a run with `opts` will do. More than [`CONFIRM_ABOVE`]
 /// points are refused ([`SweepError::Unconfirmed`]) unless `confirmed`.
 pub fn plan(file: &SweepFile, opts: &SweepOptions, confirmed: bool) -> Result<Plan, SweepError> {
+    // Count first: a sweep too large to start unconfirmed is refused at once, not after
+    // every point's scene was resolved and its memory checked (30 s for 10⁶ points).
+    if let (false, Some(listed)) = (confirmed, file.listed_points()) {
+        let mine = opts.shard.map_or(listed, |s| listed / s.n + usize::from(s.k - 1 < listed % s.n));
+        if mine > CONFIRM_ABOVE && listed <= MAX_POINTS {
+            let text = format!(
+                "{}: {mine} points{} as listed (not yet checked), roughly at least {} with {} worker(s)",
+                file.name(),
+                opts.shard.map_or(String::new(), |s| format!(" in shard {}/{} of {listed}", s.k, s.n)),
+                duration_text(SECONDS_PER_POINT * mine as f64 / opts.jobs.max(1) as f64),
+                opts.jobs.max(1)
+            );
+            return Err(SweepError::Unconfirmed { plan: text });
+        }
+    }
     let expanded = file.expand()?;
     let mine: Vec<&Point> = expanded.points.iter().filter(|p| opts.shard.is_none_or(|s| s.contains(p.index))).collect();
     let estimate_s = estimated_wall_s(&expanded, &mine, opts.jobs);
@@ -1588,6 +1620,8 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
         refine: file.sweep.refine,
     };
     let mut pool = workers::Pool::new(&opts.worker_exe, &work, opts.jobs, file.sweep.timeout.as_ref().map(|t| *t.get_ref()));
+    // For the rows of points whose worker crashed or timed out (see fill_point_settings).
+    let base = SceneFile::load(&scene_path).ok();
     loop {
         if let Some(signal) = stop_signal() {
             // Every row written is whole; the points in flight are lost with their workers.
@@ -1603,7 +1637,8 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
             }
         }
         std::thread::sleep(Duration::from_millis(5));
-        for (point, rec) in pool.finished()? {
+        for (point, mut rec) in pool.finished()? {
+            fill_point_settings(&mut rec, &point, base.as_ref());
             let line = csv_line(&results_row(&columns, &point, &rec, artifact_tol, &provenance));
             results::append(&mut results, &results_path, &line)?;
             report.ran += 1;
@@ -1713,7 +1748,25 @@ fn collect_rows(inputs: &[PathBuf], output_dir: &Path) -> Result<Merged, SweepEr
     let mut ids = HashSet::new();
     let mut shards = BTreeSet::new();
     let mut report = MergeReport::default();
+    // The output may not be one of the inputs: its sweep.json and results.csv would be
+    // replaced by the merge, and the shard's own files lost.
+    let output_id = std::fs::canonicalize(output_dir).ok();
     for input in inputs {
+        let dir = if input.is_dir() { input.clone() } else { input.parent().map(Path::to_path_buf).unwrap_or_default() };
+        if output_id.is_some() && std::fs::canonicalize(&dir).ok() == output_id {
+            return Err(SweepError::Results {
+                path: output_dir.to_path_buf(),
+                message: format!(
+                    "is also an input of the merge ({}): merging into it would replace that shard's results.csv and \
+                     sweep.json; merge into a new directory",
+                    input.display()
+                ),
+            });
+        }
+    }
+    for input in inputs {
+        // A shard's torn last line (its run killed mid-write) is left out: that point is
+        // missing from the merge, and the shard's rerun computes it.
         let res = Results::read_whole_rows(input)?;
         let path = res.path.clone();
         let info = SweepInfo::read(path.parent().unwrap_or(Path::new(".")))?;
@@ -1753,6 +1806,21 @@ fn collect_rows(inputs: &[PathBuf], output_dir: &Path) -> Result<Merged, SweepEr
     rows.sort_by_key(|r| r[idx].parse::<usize>().unwrap_or(usize::MAX));
     report.rows = rows.len();
     Ok(Merged { first, info, rows, shards, report })
+}
+
+/// The node count, operator and formulation of a point whose record lacks them (its
+/// worker crashed or timed out before it said), from its scene resolved here as the
+/// expansion resolved it, so that no row leaves these columns blank.
+fn fill_point_settings(rec: &mut Record, point: &Point, base: Option<&SceneFile>) {
+    if rec.nodes.is_some() && rec.operator.is_some() && rec.formulation.is_some() {
+        return;
+    }
+    let Some(scene) = base.and_then(|b| b.clone().resolve(&point.overrides().ok()?).ok()) else { return };
+    rec.nodes.get_or_insert(scene.nodes);
+    if point.method == Method::Skg {
+        rec.operator.get_or_insert_with(|| scene.operator.name().to_string());
+        rec.formulation.get_or_insert_with(|| scene.formulation.to_string());
+    }
 }
 
 /// At most this many missing points are listed in a message.

@@ -276,6 +276,11 @@ impl Results {
     /// Parse the text of a results file; `path` labels error messages.
     pub fn parse(text: &str, path: &Path) -> Result<Results, SweepError> {
         let bad = |m: String| SweepError::Results { path: path.to_path_buf(), message: m };
+        // Every line the driver writes ends in a newline: a last line without one was
+        // cut by a kill in the middle of the write.
+        if !text.is_empty() && !text.ends_with('\n') {
+            return Err(bad(CUT_LINE.to_string()));
+        }
         let mut r = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text.as_bytes());
         let header: Vec<String> = r.headers().map_err(|e| bad(e.to_string()))?.iter().map(str::to_string).collect();
         let file = Location::file(path.display().to_string());
@@ -373,6 +378,11 @@ fn check_schema_version(cell: &str) -> Result<(), SchemaError> {
         Err(SchemaError::OtherVersion { found: cell.to_string() })
     }
 }
+
+/// Why a results file whose last line has no newline is refused, and the remedy.
+pub const CUT_LINE: &str = "its last line is cut off (the run that wrote it was killed in the middle of writing a row): \
+     run the same sweep command again, which repairs the file (a resumed run cuts the partial line and computes that \
+     point again)";
 
 /// Open `results.csv` for appending, recovering from an interrupted run: a trailing
 /// partial line is cut off; the header must match and every row must come from the

@@ -5,13 +5,13 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use skg_plot::motion::{self, Aspect, Format, Frames, Motion, View};
 
-use super::ArgError;
+use super::{ArgError, UsageError};
 
 /// What `plot path` and `animate` draw: a solution, its scene and the two axes.
 #[derive(Args)]
@@ -45,9 +45,13 @@ pub struct MotionArgs {
 }
 
 impl MotionArgs {
-    /// The solution with its scene, and the view; prints notes (a changed scene file) on stderr.
+    /// The solution with its scene, and the view; prints warnings (a solution no summary
+    /// vouches for) and notes (a changed scene file) on stderr.
     pub fn load(&self) -> Result<(Motion, View)> {
         let m = Motion::load(&self.solution, self.scene.as_deref(), self.reference.as_deref())?;
+        for w in &m.warnings {
+            eprintln!("warning: {w}");
+        }
         for n in &m.notes {
             eprintln!("note: {n}");
         }
@@ -76,18 +80,22 @@ pub struct AnimateArgs {
     /// FILE.png (a strip of --strip frames side by side).
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
-    /// Number of frames, evenly spaced in time from the first node to the last.
-    #[arg(long, default_value_t = 100, value_name = "N")]
-    pub frames: usize,
-    /// Frames per second (a GIF's frame delay is rounded to 10 ms).
-    #[arg(long, default_value_t = 25.0, value_name = "FPS")]
-    pub fps: f64,
+    /// Number of frames of a .gif or .mp4, evenly spaced in time from the first node to
+    /// the last (at most 10000, and at most 4·10⁹ pixels in all frames together)
+    /// [default: 100].
+    #[arg(long, value_name = "N")]
+    pub frames: Option<usize>,
+    /// Frames per second of a .gif or .mp4 (a GIF's frame delay is rounded to 10 ms)
+    /// [default: 25].
+    #[arg(long, value_name = "FPS")]
+    pub fps: Option<f64>,
     /// Frame size in pixels, WIDTHxHEIGHT (a strip: each panel's).
     #[arg(long, default_value = "640x520", value_parser = parse_size, value_name = "WxH")]
     pub size: (u32, u32),
-    /// Frames in a .png strip.
-    #[arg(long, default_value_t = 5, value_name = "K")]
-    pub strip: usize,
+    /// Frames in a .png strip (at most 100, and at most 10⁸ pixels in the strip)
+    /// [default: 5].
+    #[arg(long, value_name = "K")]
+    pub strip: Option<usize>,
     /// No progress bar, no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -105,24 +113,40 @@ fn parse_size(s: &str) -> Result<(u32, u32), ArgError> {
 
 pub fn run(args: AnimateArgs) -> Result<ExitCode> {
     let format = Format::of(&args.output)?;
-    if args.frames == 0 || args.strip == 0 {
-        bail!("--frames and --strip must be at least 1");
+    // What is asked for, checked before anything is read or drawn: a usage error (exit
+    // status 2), as clap's own. An option the format does not use is refused, not ignored.
+    let usage = |m: String| -> anyhow::Error { UsageError(m).into() };
+    match (format, args.strip, args.frames.or(args.fps.map(|_| 0))) {
+        (Format::Png, _, Some(_)) => return Err(usage("--frames and --fps apply to a .gif or .mp4; a .png strip takes --strip".into())),
+        (Format::Gif | Format::Mp4, Some(_), _) => {
+            return Err(usage("--strip applies to a .png strip; a .gif or .mp4 takes --frames".into()))
+        }
+        _ => {}
     }
-    if !(args.fps > 0.0 && args.fps.is_finite()) {
-        bail!("--fps must be a positive number, got {}", args.fps);
+    let (frames, fps, strip) = (args.frames.unwrap_or(100), args.fps.unwrap_or(25.0), args.strip.unwrap_or(5));
+    if frames == 0 || strip == 0 {
+        return Err(usage("--frames and --strip must be at least 1".into()));
     }
+    if !(fps > 0.0 && fps.is_finite()) {
+        return Err(usage(format!("--fps must be a positive number, got {}", skg_core::scene::readable_number(fps))));
+    }
+    let size = match format {
+        Format::Png => motion::check_strip(strip, args.size),
+        _ => Frames { count: frames, fps, size: args.size }.check(),
+    };
+    size.map_err(|e| usage(format!("{e} (--frames, --strip, --size)")))?;
     let (m, view) = args.motion.load()?;
     let written = if format == Format::Png {
-        motion::strip(&m, &view, args.strip, args.size, &args.output)?
+        motion::strip(&m, &view, strip, args.size, &args.output)?
     } else {
-        let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(args.frames as u64) };
+        let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(frames as u64) };
         bar.set_style(
             ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {elapsed} (ETA {eta})")
                 .expect("valid template")
                 .progress_chars("=> "),
         );
         bar.set_message(format!("animating {}", m.label));
-        let frames = Frames { count: args.frames, fps: args.fps, size: args.size };
+        let frames = Frames { count: frames, fps, size: args.size };
         let written = motion::animate(&m, &view, &frames, &args.output, &mut || bar.inc(1));
         bar.finish_and_clear();
         written?

@@ -21,9 +21,9 @@ pub struct BenchArgs {
     /// Comma-separated node counts.
     #[arg(long, value_delimiter = ',', default_value = "256,512,1024,2048,4096,8192,16384")]
     pub nodes: Vec<usize>,
-    /// Repetitions per node count (the fastest is reported).
-    #[arg(long, default_value_t = 3)]
-    pub repeat: usize,
+    /// Repetitions per node count (the fastest is reported; at least 1).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub repeat: u32,
     /// Also write the rows as CSV to this file (for `skg-solve plot scaling`).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
@@ -128,7 +128,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     if let Some(dir) = args.csv.as_deref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let bar = indicatif::ProgressBar::new((args.nodes.len() * args.repeat) as u64);
+    let bar = indicatif::ProgressBar::new(args.nodes.len() as u64 * u64::from(args.repeat));
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} solves, {elapsed} elapsed, ETA {eta} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
@@ -138,7 +138,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         let ov = args.scene.overrides(Some(n))?;
         let scene = load(&args.scenario, &ov)?;
         let mut best: Option<Row> = None;
-        for _ in 0..args.repeat.max(1) {
+        for _ in 0..args.repeat {
             bar.set_message(format!("N={n}"));
             let peak = PeakMemory::reset();
             let start = Instant::now();

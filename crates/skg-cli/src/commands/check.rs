@@ -8,6 +8,7 @@ use clap::Args;
 
 use skg_core::check::{self, CheckOptions, Table, Tolerances};
 use skg_core::output;
+use skg_core::scene::readable_number;
 
 use super::EXIT_TOLERANCE_EXCEEDED;
 
@@ -48,7 +49,7 @@ fn tolerance(option: &str, value: f64) -> Result<f64> {
     if value >= 0.0 && !value.is_nan() {
         Ok(value)
     } else {
-        anyhow::bail!("{option}: a tolerance must be a number ≥ 0, got {value}")
+        anyhow::bail!("{option}: a tolerance must be a number ≥ 0, got {}", readable_number(value))
     }
 }
 
@@ -64,7 +65,10 @@ struct CheckReport<'a> {
 }
 
 pub fn run(args: CheckArgs) -> Result<ExitCode> {
-    let solution = Table::read(&args.solution)?;
+    let (solution, pairing) = Table::read_paired(&args.solution)?;
+    if let Some(w) = pairing.warning(&args.solution) {
+        eprintln!("warning: {w}");
+    }
     let reference = Table::read(&args.reference)?;
     let opts = CheckOptions { skip_last: args.skip_last, columns: args.columns.clone() };
     let mut per_column = Vec::new();

@@ -158,6 +158,12 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
     Ok(SceneFile::load(path)?.resolve(ov)?)
 }
 
+/// A command-line usage error found after parsing, by a command (options that do not fit
+/// together, a count beyond its bound): exit status 2, as clap's own usage errors.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);
+
 /// A command-line value that clap refuses (a usage error, exit status 2); clap prints
 /// it after the option's name and value.
 #[derive(Debug, thiserror::Error)]

@@ -143,6 +143,7 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
             plot::motion::path(&m, &view, &output)?
         }
         PlotKind::Scaling { inputs, label, output: out, title } => {
+            check_labels(&label, &inputs)?;
             let mut benchmarks = Vec::new();
             for (k, p) in inputs.iter().enumerate() {
                 let (backend, points) = read_bench_csv(p)?;
@@ -152,6 +153,7 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
             plot::scaling(&benchmarks, &title, &out)?
         }
         PlotKind::Trajectory { inputs, reference, label, output: out, title } => {
+            check_labels(&label, &inputs)?;
             let mut sols = Vec::new();
             for (k, p) in inputs.iter().enumerate() {
                 if p.is_dir() && p.join("results.csv").is_file() {
@@ -159,7 +161,10 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
                     continue;
                 }
                 let file = if p.is_dir() { p.join("trajectory.csv") } else { p.clone() };
-                let t = Table::read(&file)?;
+                let (t, pairing) = Table::read_paired(&file)?;
+                if let Some(w) = pairing.warning(&file) {
+                    eprintln!("warning: {w}");
+                }
                 let name = label.get(k).cloned().unwrap_or_else(|| {
                     let base = if p.is_dir() { p.as_path() } else { p.parent().unwrap_or(p) };
                     base.file_name().map_or(file.display().to_string(), |n| n.to_string_lossy().into_owned())
@@ -175,6 +180,20 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
         println!("wrote {}", w.display());
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// One `--label` per input at most: an extra one would label nothing (a usage error).
+fn check_labels(labels: &[String], inputs: &[PathBuf]) -> Result<()> {
+    if labels.len() > inputs.len() {
+        let message = format!(
+            "{} --label given for {} input(s): each labels one input, in order (the extra: {})",
+            labels.len(),
+            inputs.len(),
+            labels[inputs.len()..].iter().map(|l| format!("{l:?}")).collect::<Vec<_>>().join(", ")
+        );
+        return Err(super::UsageError(message).into());
+    }
+    Ok(())
 }
 
 /// The backend and the points (N, total seconds) of a `bench --csv` file.

@@ -8,9 +8,9 @@ use clap::Args;
 
 use skg_core::check::Table;
 use skg_core::output;
-use skg_core::scene::Overrides;
+use skg_core::scene::{readable_number, Overrides};
 use skg_core::solve;
-use skg_core::stepping::reference::{self, ReferenceOptions};
+use skg_core::stepping::reference::{self, ReferenceError, ReferenceOptions};
 
 use super::load;
 
@@ -59,14 +59,19 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         None => solve::grid(&scene).0,
     };
     if !(args.rtol > 0.0 && args.rtol.is_finite()) {
-        anyhow::bail!("--rtol must be a positive number, got {}", args.rtol);
+        anyhow::bail!("--rtol must be a positive number, got {}", readable_number(args.rtol));
     }
     let atol = args.atol.unwrap_or(args.rtol);
     if !(atol >= 0.0 && atol.is_finite()) {
-        anyhow::bail!("--atol must be a number ≥ 0, got {atol}");
+        anyhow::bail!("--atol must be a number ≥ 0, got {}", readable_number(atol));
     }
     let opts = ReferenceOptions { rtol: args.rtol, atol };
-    let r = if args.hard_walls { reference::hard_wall(&scene, &times, &opts)? } else { reference::regularized(&scene, &times, &opts)? };
+    let r = if args.hard_walls { reference::hard_wall(&scene, &times, &opts) } else { reference::regularized(&scene, &times, &opts) };
+    // A scene error names its file and line already; any other names the scene file here.
+    let r = r.map_err(|e| match e {
+        ReferenceError::Scene(e) => anyhow::Error::from(e),
+        other => anyhow::anyhow!("{}: {other}", args.scenario.display()),
+    })?;
     let out = args.output.unwrap_or_else(|| {
         let stem = args.scenario.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem).join(if args.hard_walls { "reference.hard.csv" } else { "reference.regularized.csv" })

@@ -64,6 +64,9 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
     ov.max_nodes = args.max_nodes.map(|n| n as usize);
     ov.time_limit = args.time_limit;
     let mut scene = load(&path, &ov)?;
+    for n in &scene.notes {
+        eprintln!("note: {}: {n}", path.display());
+    }
     let dir = args.output.unwrap_or_else(|| {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)

@@ -105,11 +105,19 @@ impl Expressions {
     fn parse_wall(p: &mut ExpressionParser, spec: &WallSpec, wall: &Wall) -> Result<WallExprs, SceneError> {
         let lay = p.layout;
         let h = p.parse(&spec.h, &format!("walls.{}.h", wall.name))?;
-        if p.graph.variables(h).iter().any(|&k| (lay.d..2 * lay.d).contains(&k)) {
-            return Err(SceneError::Invalid {
-                location: p.scene.file.origin.locate_in(&spec.h, None),
-                message: format!("wall `{}`: h may depend on the coordinates and `t` only, not on velocities", wall.name),
-            });
+        let vars = p.graph.variables(h);
+        let refuse = |message: String| SceneError::Invalid { location: p.scene.file.origin.locate_in(&spec.h, None), message };
+        if vars.iter().any(|&k| (lay.d..2 * lay.d).contains(&k)) {
+            return Err(refuse(format!("wall `{}`: h may depend on the coordinates and `t` only, not on velocities", wall.name)));
+        }
+        // As a constraint that depends on nothing constrains nothing: such a wall pushes
+        // on nothing (∇h = 0), and a body would pass to its forbidden side unopposed.
+        if !vars.iter().any(|&k| k < lay.d) {
+            return Err(refuse(format!(
+                "wall `{}`: h depends on no coordinate (only on `t` or the parameters), so it exerts no force and the motion \
+                 could end on its forbidden side h > 0: a wall's h must depend on the coordinates",
+                wall.name
+            )));
         }
         let grad = (0..lay.d).map(|i| p.graph.diff(h, lay.q(i))).collect();
         let friction_direction = match &spec.friction_direction {

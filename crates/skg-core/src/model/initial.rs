@@ -7,13 +7,16 @@ use nalgebra::{DMatrix, DVector};
 use toml::Spanned;
 
 use super::{Model, WallModel};
-use crate::scene::{ConstraintKind, Location, Scene, SceneError};
+use crate::scene::{readable_number, ConstraintKind, Location, Scene, SceneError};
 
 impl Model {
-    /// Checks on the initial state at the start time: a positive-definite kinetic matrix
-    /// (masses and inertias), independent velocity constraints (∂g/∂q̇ of full row rank),
-    /// initial positions on every position constraint, initial velocities that satisfy
-    /// every constraint, and an initial position on the allowed side of every wall.
+    /// Checks on the initial state at the start time, in this order: a positive-definite
+    /// kinetic matrix (masses and inertias), no constraint with a zero gradient ∂g/∂q̇,
+    /// initial positions on every position constraint (before the rank, so that two
+    /// contradictory constraints are reported as the one the position violates),
+    /// independent constraints (∂g/∂q̇ of full row rank, each row scaled to its largest
+    /// entry so that a constraint's scale does not matter), initial velocities that
+    /// satisfy every constraint, and an initial position on the allowed side of every wall.
     // `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     pub(super) fn validate_initial_state(&self, scene: &Scene) -> Result<(), SceneError> {
@@ -21,8 +24,8 @@ impl Model {
         let (q0, v0) = (&scene.initial_q, &scene.initial_v);
         let file = &scene.file;
         if let Some((what, location)) = self.non_finite_expression(scene, scene.t_start, q0, v0) {
-            let state = scene.coordinates.iter().zip(q0).map(|(c, x)| format!("{c} = {x}"));
-            let state = state.chain(scene.coordinates.iter().zip(v0).map(|(c, x)| format!("{c}_dot = {x}")));
+            let state = scene.coordinates.iter().zip(q0).map(|(c, x)| format!("{c} = {}", readable_number(*x)));
+            let state = state.chain(scene.coordinates.iter().zip(v0).map(|(c, x)| format!("{c}_dot = {}", readable_number(*x))));
             return Err(SceneError::Invalid {
                 location,
                 message: format!(
@@ -42,6 +45,45 @@ impl Model {
                 ),
             });
         }
+        let constraint_error = |a: usize, message: String| SceneError::Invalid {
+            location: file.origin.locate_in(&file.constraints[a].expression, None),
+            message,
+        };
+        // A constraint whose gradient vanishes at the initial state fixes no direction
+        // there (its multiplier is not determined), whatever the other constraints are.
+        if let Some(a) = (0..ph.gv.nrows()).find(|&a| !(scaled_norm(ph.gv.row(a).iter()) > 0.0)) {
+            let name = &self.constraints[a].name;
+            let what = match self.constraints[a].kind {
+                ConstraintKind::Velocity => format!("constraint `{name}`: its gradient ∂g/∂q̇ is zero"),
+                ConstraintKind::Position => format!("position constraint `{name}`: its gradient ∇h is zero"),
+            };
+            return Err(constraint_error(
+                a,
+                format!(
+                    "{what} at the initial state, so it fixes no direction there and its multiplier is not determined \
+                     (a constraint written as a square, like (x^2 + y^2 - l^2)^2 or x_dot^2 + y_dot^2, has a zero \
+                     gradient wherever it holds: write the expression whose zero is meant, not its square)"
+                ),
+            ));
+        }
+        let qmax = q0.iter().fold(1.0_f64, |m, q| m.max(q.abs()));
+        let positions = self.constraints.iter().enumerate().filter(|(_, c)| c.kind == ConstraintKind::Position).map(|(a, _)| a);
+        for (a, &h) in positions.zip(&ph.drift) {
+            let name = &self.constraints[a].name;
+            // G's row of a position constraint is ∇h; h changes by about |∇h| δq when q moves by δq.
+            let grad = scaled_norm(ph.gv.row(a).iter());
+            let tol = POSITION_TOLERANCE * grad * qmax;
+            if !(h.abs() <= tol) {
+                return Err(constraint_error(
+                    a,
+                    format!(
+                        "the initial position violates position constraint `{name}`: h(q₀, t₀) = {h:.6e} \
+                         (tolerance {tol:.1e} = {POSITION_TOLERANCE:e} · |∇h| · max(1, max|q₀|)); \
+                         choose initial coordinates on it"
+                    ),
+                ));
+            }
+        }
         if let Some(a) = self.dependent_constraint(&ph.gv) {
             return Err(SceneError::Invalid {
                 location: file.origin.locate_in(&file.constraints[a].expression, None),
@@ -54,34 +96,6 @@ impl Model {
                     self.constraints.len()
                 ),
             });
-        }
-        let qmax = q0.iter().fold(1.0_f64, |m, q| m.max(q.abs()));
-        let constraint_error = |a: usize, message: String| SceneError::Invalid {
-            location: file.origin.locate_in(&file.constraints[a].expression, None),
-            message,
-        };
-        let positions = self.constraints.iter().enumerate().filter(|(_, c)| c.kind == ConstraintKind::Position).map(|(a, _)| a);
-        for (a, &h) in positions.zip(&ph.drift) {
-            let name = &self.constraints[a].name;
-            // G's row of a position constraint is ∇h; h changes by about |∇h| δq when q moves by δq.
-            let grad = ph.gv.row(a).norm();
-            if !(grad > 0.0) {
-                return Err(constraint_error(
-                    a,
-                    format!("position constraint `{name}`: ∇h = {grad:e} at the initial position: it fixes no direction there"),
-                ));
-            }
-            let tol = POSITION_TOLERANCE * grad * qmax;
-            if !(h.abs() <= tol) {
-                return Err(constraint_error(
-                    a,
-                    format!(
-                        "the initial position violates position constraint `{name}`: h(q₀, t₀) = {h:.6e} \
-                         (tolerance {tol:.1e} = {POSITION_TOLERANCE:e} · |∇h| · max(1, max|q₀|)); \
-                         choose initial coordinates on it"
-                    ),
-                ));
-            }
         }
         let vmax = v0.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
         let tol = 1e-9 * vmax * vmax;
@@ -133,7 +147,11 @@ impl Model {
     fn dependent_constraint(&self, gv: &DMatrix<f64>) -> Option<usize> {
         let mut basis: Vec<DVector<f64>> = Vec::new();
         for a in 0..gv.nrows() {
+            // Each row scaled to a largest entry of 1: the test is the same for a
+            // constraint multiplied by any factor (1e300 or 1e-300 included).
             let row: DVector<f64> = gv.row(a).transpose();
+            let largest = row.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            let row = row / largest;
             let mut rest = row.clone();
             for b in &basis {
                 rest -= b * b.dot(&rest);
@@ -181,6 +199,17 @@ impl Model {
             None => (format!("∂L/∂{name} or a wall's force on `{name}`"), at(&file.scene.lagrangian)),
         })
     }
+}
+
+/// The Euclidean norm of `xs` computed after scaling by the largest magnitude, so that it
+/// neither overflows nor underflows for entries near the ends of the double range (0 for
+/// a zero vector, NaN if an entry is NaN).
+fn scaled_norm<'a>(xs: impl Iterator<Item = &'a f64> + Clone) -> f64 {
+    let largest = xs.clone().fold(0.0_f64, |m, x| if x.is_nan() || m.is_nan() { f64::NAN } else { m.max(x.abs()) });
+    if largest == 0.0 || !largest.is_finite() {
+        return largest;
+    }
+    largest * xs.map(|x| (x / largest).powi(2)).sum::<f64>().sqrt()
 }
 
 /// The smallest eigenvalue of the symmetric part of a square matrix (NaN if it has a NaN).

@@ -12,8 +12,12 @@
 //! `summary.json` describes exactly the files beside it that it lists; a data file
 //! without a summary is the remains of an interrupted run. Every reader of a data file
 //! ([`verify_pairing`], which the readers of trajectories call) checks it against the
-//! summary beside it and refuses a file that does not belong to it. A third file of the
-//! same run (a reference beside the trajectory) joins the rule by being listed too.
+//! summary beside it and refuses a file that does not belong to it: a `trajectory.csv`
+//! or `reference.csv` the summary does not list, a file whose bytes are not the listed
+//! ones, and any file of a run whose summary lists a file that is missing. A third file
+//! of the same run (a reference beside the trajectory) joins the rule by being listed
+//! too. A CSV with no summary beside it is read as it is ([`Pairing::NoSummary`]); the
+//! command line warns that it cannot be checked against a run.
 //!
 //! **Temporary files** are named `.skg-tmp-<pid>-…`; every atomic write first removes
 //! those of processes that no longer run in its directory, so the remains of a killed
@@ -45,7 +49,7 @@ use std::path::{Path, PathBuf};
 
 pub use atomic::{remove_stale_temporaries, temporary_beside, write_atomic, write_csv, write_json};
 pub use lock::OutputDir;
-pub use pairing::{verify_pairing, DataFile};
+pub use pairing::{verify_pairing, DataFile, Pairing};
 pub use solution::{solve_into, solve_into_with_progress, summary_json, write_outcome, write_reference, SolveIntoError, Written};
 
 /// Why an output file could not be written.

@@ -74,3 +74,14 @@ impl From<TomlError> for SceneError {
         }
     }
 }
+
+/// A number as a message shows it: as written for magnitudes from 1e-4 to 1e7 (`0.25`,
+/// `2000`), in exponent form beyond (`1e300`, `1e-300`), so that a message never prints
+/// a 300-digit number. Infinities and NaN as `inf`, `-inf`, `NaN`.
+pub fn readable_number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e7).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}

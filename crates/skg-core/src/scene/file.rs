@@ -17,13 +17,41 @@ use super::location::{parse_origin, parse_toml, read_toml, Location, Origin};
 use super::settings::{Backend, Formulation, HessianMode, InitialVelocity};
 
 /// A number or an expression of the scene's parameters, e.g. `0.5` or `"pi/6"`.
-#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+/// (Deserialized by hand rather than as an untagged enum, so that a value of another
+/// type is refused with what was expected instead of serde's "did not match any
+/// variant".)
+#[derive(Debug, Clone, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum NumOrExpr {
     /// A number.
     Num(f64),
     /// An expression of the parameters and `pi`.
     Expr(String),
+}
+
+impl<'de> Deserialize<'de> for NumOrExpr {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = NumOrExpr;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number or an expression in quotes")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<NumOrExpr, E> {
+                Ok(NumOrExpr::Num(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<NumOrExpr, E> {
+                Ok(NumOrExpr::Num(v as f64))
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<NumOrExpr, E> {
+                Ok(NumOrExpr::Num(v))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<NumOrExpr, E> {
+                Ok(NumOrExpr::Expr(v.to_string()))
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
 }
 
 impl fmt::Display for NumOrExpr {
@@ -175,8 +203,8 @@ pub struct SolverSpec {
 }
 
 /// The value of a pass-through Ipopt option: integer, number or string, as Ipopt's
-/// option has that type.
-#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+/// option has that type. An integer outside Ipopt's `int` range is a number.
+#[derive(Debug, Clone, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum IpoptValue {
     /// An integer option.
@@ -185,6 +213,31 @@ pub enum IpoptValue {
     Num(f64),
     /// A string option.
     Str(String),
+}
+
+impl<'de> Deserialize<'de> for IpoptValue {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = IpoptValue;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("an integer, a number or a string in quotes (the type of the Ipopt option)")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<IpoptValue, E> {
+                Ok(i32::try_from(v).map_or(IpoptValue::Num(v as f64), IpoptValue::Int))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<IpoptValue, E> {
+                Ok(i32::try_from(v).map_or(IpoptValue::Num(v as f64), IpoptValue::Int))
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<IpoptValue, E> {
+                Ok(IpoptValue::Num(v))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<IpoptValue, E> {
+                Ok(IpoptValue::Str(v.to_string()))
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
 }
 
 /// The TOML document as written.

@@ -144,7 +144,79 @@ pub(super) fn parse_origin<T: serde::de::DeserializeOwned>(origin: Origin) -> Re
         Ok(value) => Ok((value, origin)),
         Err(e) => {
             let location = e.span().map_or_else(|| origin.whole(), |span| origin.locate(span.start));
-            Err(TomlError::Parse { location, message: e.message().trim_end().to_string() })
+            let message = e.message().trim_end();
+            let message = e.span().and_then(|span| type_error_text(message, &origin.text, span)).unwrap_or_else(|| message.to_string());
+            Err(TomlError::Parse { location, message })
         }
     }
+}
+
+/// A value of the wrong type, out of its type's range or too large, said in the file's
+/// terms: `time.window must be a number or an expression in quotes, got true` instead of
+/// serde's `invalid type: boolean `true`, expected …` (which names neither the key nor
+/// the value as written). `None` for the other errors of the TOML reader.
+fn type_error_text(message: &str, text: &str, span: std::ops::Range<usize>) -> Option<String> {
+    let too_large = message.starts_with("number too large to fit") || message.starts_with("number too small to fit");
+    let expected = if let Some(rest) = message.strip_prefix("invalid type: ").or_else(|| message.strip_prefix("invalid value: ")) {
+        rest.split_once(", expected ")?.1
+    } else if too_large {
+        "i64"
+    } else {
+        return None;
+    };
+    let expected = match expected {
+        "f64" | "f32" => "a number",
+        "i64" | "i32" => "a whole number",
+        "u32" => "a whole number from 0 to 4294967295",
+        "u64" | "usize" => "a whole number ≥ 0",
+        "a boolean" => "true or false",
+        "a string" => "a string in quotes",
+        "a sequence" => "an array",
+        other => other,
+    };
+    // The value as written: the span, or for a number too large the whole token (the
+    // reader's span covers its first digit only).
+    let start = span.start.min(text.len());
+    let value = if too_large {
+        text[start..].split(|c: char| c.is_whitespace() || matches!(c, ',' | ']' | '}' | '#')).next().unwrap_or("")
+    } else {
+        text.get(span.clone()).unwrap_or("").trim()
+    };
+    // A table written where a value belongs spans lines: its first line stands for it.
+    let value = match value.split_once('\n') {
+        Some((first, _)) => format!("{} …", first.trim_end()),
+        None => value.to_string(),
+    };
+    let value = match value.char_indices().nth(60) {
+        Some((cut, _)) => format!("{}…", &value[..cut]),
+        None => value,
+    };
+    let subject = key_at(text, start).unwrap_or_else(|| "this value".to_string());
+    Some(if too_large {
+        format!("{subject} must be {expected} from −9223372036854775808 to 9223372036854775807, got {value}")
+    } else {
+        format!("{subject} must be {expected}, got {value}")
+    })
+}
+
+/// The dotted key whose value starts at byte `offset` (`time.window`, `solver.ipopt.tol`,
+/// `coordinates.initial`), read from the text: the key before the `=` on the value's
+/// line, after the name of the last table header above it. `None` when the value is not
+/// the whole right-hand side of a `key = value` line (an element of an array, say).
+fn key_at(text: &str, offset: usize) -> Option<String> {
+    let offset = offset.min(text.len());
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let key = text[line_start..offset].trim_end().strip_suffix('=')?.trim();
+    if key.is_empty() || key.contains(['[', '{', ',']) {
+        return None;
+    }
+    let key = key.replace(['"', '\''], "");
+    let table = text[..line_start].lines().rev().map(str::trim).find(|l| l.starts_with('[')).map(|header| {
+        let header = header.split('#').next().unwrap_or("").trim();
+        header.trim_start_matches('[').trim_end_matches(']').trim().replace(['"', '\''], "")
+    });
+    Some(match table {
+        Some(t) if !t.is_empty() => format!("{t}.{key}"),
+        _ => key,
+    })
 }

@@ -58,7 +58,7 @@ mod time;
 #[cfg(test)]
 mod tests;
 
-pub use error::SceneError;
+pub use error::{readable_number, SceneError};
 pub use file::{
     ConstraintSpec, CoordinateSpec, DiscretizationSpec, IpoptValue, NumOrExpr, SceneFile, SceneMeta, SolverSpec, TimeSpec, VerifySpec,
     WallSpec,
@@ -69,6 +69,7 @@ pub use overrides::Overrides;
 pub use parameters::eval_constant;
 pub use resolved::{Constraint, ConstraintKind, Scene, SolverSettings, VerifySettings, Wall, Windows};
 pub use settings::{
-    Backend, Formulation, HessianMode, InitialVelocity, ParseBackendError, ParseFormulationError, ParseInitialVelocityError,
+    Backend, Formulation, HessianMode, InitialVelocity, ParseBackendError, ParseFormulationError, ParseHessianModeError,
+    ParseInitialVelocityError,
 };
 pub use time::{TimeResolutionError, MAX_NODES};

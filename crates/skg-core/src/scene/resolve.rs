@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use indexmap::IndexMap;
 use skg_expr::Graph;
 
-use super::error::SceneError;
+use super::error::{readable_number, SceneError};
 use super::file::{ConstraintSpec, SceneFile};
 use super::names::{check_identifier, ExpressionNames, RESERVED, TIME, VELOCITY_SUFFIX};
 use super::overrides::Overrides;
@@ -29,7 +29,7 @@ impl SceneFile {
         let formulation = ov.formulation.or(self.discretization.formulation).unwrap_or_default();
         let initial_velocity = ov.initial_velocity.or(self.discretization.initial_velocity).unwrap_or_default();
         let solver = self.resolve_solver(ov, formulation)?;
-        let windows = self.resolve_windows(ov, &params, grid.t_end - grid.t_start)?;
+        let (windows, window_note) = self.resolve_windows(ov, &params, &grid)?;
         let verify = self.resolve_verify(ov, &params)?;
         // A refinement chooses the operator too unless one is named.
         let choose_operator = grid.auto_operator || (verify.refine && !grid.operator_named);
@@ -53,6 +53,7 @@ impl SceneFile {
             solver,
             windows,
             verify,
+            notes: window_note.into_iter().collect(),
             file: self,
         })
     }
@@ -163,11 +164,11 @@ impl SceneFile {
             }
             let strength = self.eval_value(&w.strength, &format!("walls.{name}.strength"), params)?;
             if strength < 0.0 {
-                return Err(self.invalid(&w.strength, format!("wall `{name}`: strength must be ≥ 0, got {strength}")));
+                return Err(self.invalid(&w.strength, format!("wall `{name}`: strength must be ≥ 0, got {}", readable_number(strength))));
             }
             let width = self.eval_value(&w.width, &format!("walls.{name}.width"), params)?;
             if width <= 0.0 {
-                return Err(self.invalid(&w.width, format!("wall `{name}`: width σ must be > 0, got {width}")));
+                return Err(self.invalid(&w.width, format!("wall `{name}`: width σ must be > 0, got {}", readable_number(width))));
             }
             let friction = match &w.friction {
                 Some(v) => self.eval_value(v, &format!("walls.{name}.friction"), params)?,
@@ -175,13 +176,13 @@ impl SceneFile {
             };
             if friction < 0.0 {
                 let v = w.friction.as_ref().expect("friction present when negative");
-                return Err(self.invalid(v, format!("wall `{name}`: friction μ must be ≥ 0, got {friction}")));
+                return Err(self.invalid(v, format!("wall `{name}`: friction μ must be ≥ 0, got {}", readable_number(friction))));
             }
             let friction_velocity = match &w.friction_velocity {
                 Some(v) => {
                     let e = self.eval_value(v, &format!("walls.{name}.friction_velocity"), params)?;
                     if e <= 0.0 {
-                        return Err(self.invalid(v, format!("wall `{name}`: friction_velocity must be > 0, got {e}")));
+                        return Err(self.invalid(v, format!("wall `{name}`: friction_velocity must be > 0, got {}", readable_number(e))));
                     }
                     e
                 }

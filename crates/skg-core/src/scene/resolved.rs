@@ -151,6 +151,10 @@ pub struct Scene {
     pub windows: Option<Windows>,
     /// How the solve is verified.
     pub verify: VerifySettings,
+    /// What the user should know about how the scene was read, though nothing is wrong
+    /// (a window not shorter than the span, which makes the solve one piece); the
+    /// command line prints them as notes.
+    pub notes: Vec<String>,
 }
 
 impl Scene {

@@ -1,13 +1,29 @@
 //! The settings a scene file (or the command line) chooses by name: the formulation,
 //! the initial velocity condition, the Hessian given to Ipopt and the backend. Each
-//! parses case-insensitively from its name and displays as it.
+//! parses case-insensitively from its name, in a scene file as on the command line and
+//! in a sweep's grid (`backend = "Newton"` is `newton` everywhere), and displays as it.
 
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
+/// Deserialize a setting from its name with its `FromStr` (case-insensitive), so that a
+/// scene file accepts what the command line and a sweep's grid accept.
+macro_rules! deserialize_by_name {
+    ($($t:ty),*) => {$(
+        impl<'de> Deserialize<'de> for $t {
+            fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+                let name = String::deserialize(deserializer)?;
+                name.parse().map_err(serde::de::Error::custom)
+            }
+        }
+    )*};
+}
+
+deserialize_by_name!(Formulation, InitialVelocity, HessianMode, Backend);
+
 /// How the discrete action is posed to Ipopt (docs/mathematics.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Formulation {
     /// Only the equations ∂S/∂(q-, λ-) = 0 in the unknowns (q+, λ+): half the size.
@@ -49,7 +65,7 @@ impl fmt::Display for Formulation {
 
 /// How the initial velocity enters the discrete action (docs/mathematics.md §5). The
 /// initial position is imposed the same way by both (`q+[1] = q_i`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum InitialVelocity {
     /// `(D q+)[1] = q̇_i` through a multiplier, with `q-[1] = 0`: the velocity of the
@@ -98,7 +114,7 @@ impl fmt::Display for InitialVelocity {
 
 /// What Ipopt is given as the Hessian of its Lagrangian. For the square systems
 /// solved here the Newton step does not depend on it (docs/mathematics.md, docs/solver.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum HessianMode {
     /// No Hessian entries (nele_hess = 0): the step is the plain Newton step.
@@ -109,8 +125,29 @@ pub enum HessianMode {
     Exact,
 }
 
+/// Error of parsing a [`HessianMode`] from a string.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown hessian `{input}` (expected `zero` or `exact`)")]
+pub struct ParseHessianModeError {
+    /// The rejected input.
+    pub input: String,
+}
+
+impl std::str::FromStr for HessianMode {
+    type Err = ParseHessianModeError;
+
+    /// Case-insensitive: `zero` or `exact`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_lowercase().as_str() {
+            "zero" => Ok(HessianMode::Zero),
+            "exact" => Ok(HessianMode::Exact),
+            _ => Err(ParseHessianModeError { input: s.to_string() }),
+        }
+    }
+}
+
 /// Which solver finds the root of the square system (docs/solver.md#choosing-the-backend).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Backend {
     /// Ipopt with MUMPS on the KKT system (the default).

@@ -6,7 +6,7 @@ use std::path::{Component, Path, PathBuf};
 use indexmap::IndexMap;
 use toml::Spanned;
 
-use super::error::SceneError;
+use super::error::{readable_number, SceneError};
 use super::file::{IpoptValue, SceneFile};
 use super::overrides::Overrides;
 use super::resolved::{SolverSettings, VerifySettings};
@@ -21,7 +21,7 @@ impl SceneFile {
         let tol = s.tol.as_ref().map_or(1e-11, |t| *t.get_ref());
         if !(tol > 0.0 && tol.is_finite()) {
             let t = s.tol.as_ref().expect("the default is positive");
-            return Err(self.invalid(t, format!("solver.tol must be a positive number, got {tol}")));
+            return Err(self.invalid(t, format!("solver.tol must be a positive number, got {}", readable_number(tol))));
         }
         let hessian = ov.hessian.or(s.hessian.as_ref().map(|h| *h.get_ref())).unwrap_or_default();
         if hessian == HessianMode::Exact && formulation == Formulation::Full {
@@ -108,10 +108,10 @@ impl SceneFile {
         };
         if let Some(t) = tol {
             if t.is_nan() || t <= 0.0 {
-                let message = format!("the verification tolerance must be a positive number, got {t}");
+                let message = format!("the verification tolerance must be a positive number, got {}", readable_number(t));
                 return Err(match (&self.verify.tol, ov.verify_tol) {
                     (Some(v), None) => self.invalid(v, message),
-                    _ => SceneError::Setting { setting: format!("--verify-tol {t}"), message },
+                    _ => SceneError::Setting { setting: format!("--verify-tol {}", readable_number(t)), message },
                 });
             }
         }

@@ -4,7 +4,7 @@
 use indexmap::IndexMap;
 use toml::Spanned;
 
-use super::error::SceneError;
+use super::error::{readable_number, SceneError};
 use super::file::{NumOrExpr, SceneFile};
 use super::overrides::Overrides;
 use super::resolved::Windows;
@@ -101,7 +101,9 @@ impl SceneFile {
         let t_start = self.eval_value(&self.time.start, "time.start", params)?;
         let t_end = self.eval_value(&self.time.end, "time.end", params)?;
         if t_end <= t_start {
-            return Err(self.invalid(&self.time.end, format!("the time span must be positive: end ({t_end}) ≤ start ({t_start})")));
+            let message =
+                format!("the time span must be positive: end ({}) ≤ start ({})", readable_number(t_end), readable_number(t_start));
+            return Err(self.invalid(&self.time.end, message));
         }
         let auto = |s: &Spanned<String>| s.get_ref().trim().eq_ignore_ascii_case("auto");
         let (operator, auto_operator) = match (&ov.operator, ov.auto_operator, &self.discretization.operator) {
@@ -136,9 +138,19 @@ impl SceneFile {
     }
 
     /// `[time] window` and `overlap`, with the command line's overrides (a window of 0
-    /// from the command line turns windows off). A window as long as the span or longer
-    /// is one global solve.
-    pub(super) fn resolve_windows(&self, ov: &Overrides, params: &IndexMap<String, f64>, span: f64) -> Result<Option<Windows>, SceneError> {
+    /// from the command line turns windows off), and a note when the window is ignored.
+    /// An overlap without a window is refused (it would do nothing); windows that do not
+    /// fit the grid are refused here, at their line, by the same arithmetic as the solve's
+    /// windows (`solve::window::WindowGrid`): a window of `round(length/Δt) + 1` nodes
+    /// needs the operator's minimum, and the `round(overlap/Δt)` nodes dropped must leave
+    /// one to keep. A window as long as the span or longer is one global solve, with a note
+    /// that says so.
+    pub(super) fn resolve_windows(
+        &self,
+        ov: &Overrides,
+        params: &IndexMap<String, f64>,
+        grid: &Grid,
+    ) -> Result<(Option<Windows>, Option<String>), SceneError> {
         let from_file = |v: &Option<Spanned<NumOrExpr>>, key: &str| v.as_ref().map(|v| self.eval_value(v, key, params)).transpose();
         let length = match ov.window {
             Some(w) => Some(w),
@@ -151,17 +163,33 @@ impl SceneFile {
         // The value's origin: the scene file's line, or the command line.
         let here = |key: &Option<Spanned<NumOrExpr>>, from_cli: Option<f64>, option: &str, message: String| match (key, from_cli) {
             (Some(v), None) => self.invalid(v, message),
-            (_, given) => SceneError::Setting { setting: format!("{option} {}", given.map_or("?".into(), |g| g.to_string())), message },
+            (_, given) => SceneError::Setting { setting: format!("{option} {}", given.map_or("?".into(), readable_number)), message },
         };
-        let Some(length) = length.filter(|&w| w != 0.0 || ov.window.is_none()) else {
-            return Ok(None);
+        let turned_off = ov.window == Some(0.0);
+        let Some(length) = length.filter(|_| !turned_off) else {
+            // An overlap of the file's own windows is moot once --window 0 turns them off;
+            // one given on the command line with them is not.
+            let moot = turned_off && ov.overlap.is_none();
+            if let (Some(o), false) = (overlap, moot) {
+                return Err(here(
+                    &self.time.overlap,
+                    ov.overlap,
+                    "--overlap",
+                    format!(
+                        "time.overlap = {} s is given without a window: it applies only to a solve in windows; \
+                         set [time] window (or --window), or remove the overlap",
+                        readable_number(o)
+                    ),
+                ));
+            }
+            return Ok((None, None));
         };
         if !(length > 0.0 && length.is_finite()) {
             return Err(here(
                 &self.time.window,
                 ov.window,
                 "--window",
-                format!("time.window must be a positive number of seconds, got {length}"),
+                format!("time.window must be a positive number of seconds, got {}", readable_number(length)),
             ));
         }
         let overlap = overlap.unwrap_or(length / 4.0);
@@ -170,9 +198,55 @@ impl SceneFile {
                 &self.time.overlap,
                 ov.overlap,
                 "--overlap",
-                format!("time.overlap must be ≥ 0 and shorter than the window ({length} s), got {overlap}"),
+                format!(
+                    "time.overlap must be ≥ 0 and shorter than the window ({} s), got {}",
+                    readable_number(length),
+                    readable_number(overlap)
+                ),
             ));
         }
-        Ok((length < span).then_some(Windows { length, overlap }))
+        let span = grid.t_end - grid.t_start;
+        if length >= span {
+            let note = format!(
+                "time.window = {} s is not shorter than the time span ({} s): the scene is solved in one piece, without windows",
+                readable_number(length),
+                readable_number(span)
+            );
+            return Ok((None, Some(note)));
+        }
+        let dt = span / (grid.nodes as f64 - 1.0);
+        let nodes = (length / dt).round() + 1.0;
+        let min = grid.operator.min_nodes();
+        if nodes < min as f64 {
+            return Err(here(
+                &self.time.window,
+                ov.window,
+                "--window",
+                format!(
+                    "a window of {} s has {} nodes at the scene's spacing Δt = {} s; {} needs at least {min}: \
+                     use a window of at least {} s, or more nodes",
+                    readable_number(length),
+                    nodes,
+                    readable_number(dt),
+                    grid.operator.name(),
+                    readable_number((min - 1) as f64 * dt)
+                ),
+            ));
+        }
+        if (overlap / dt).round() + 1.0 >= nodes {
+            return Err(here(
+                &self.time.overlap,
+                ov.overlap,
+                "--overlap",
+                format!(
+                    "an overlap of {} s leaves nothing to keep of a {} s window at the scene's spacing Δt = {} s: \
+                     use a shorter overlap",
+                    readable_number(overlap),
+                    readable_number(length),
+                    readable_number(dt)
+                ),
+            ));
+        }
+        Ok((Some(Windows { length, overlap }), None))
     }
 }

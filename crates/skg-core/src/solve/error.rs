@@ -3,7 +3,7 @@
 
 use super::backend::BackendError;
 use crate::sbp::{OperatorKind, SbpError};
-use crate::scene::SceneError;
+use crate::scene::{readable_number, SceneError};
 
 /// Why a solve could not be attempted or completed (a non-converged run is not an
 /// error: it is an [`Outcome`](super::Outcome) whose [`SolveStatus`](super::SolveStatus)
@@ -39,7 +39,11 @@ pub enum SolveError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum WindowError {
     /// A window has fewer nodes than the operator needs.
-    #[error("a window of {length} s has {nodes} nodes at the scene's spacing Δt = {dt:.6e} s; {operator} needs at least {min}")]
+    #[error(
+        "a window of {} s has {nodes} nodes at the scene's spacing Δt = {} s; {operator} needs at least {min}",
+        readable_number(*length),
+        readable_number(*dt)
+    )]
     TooFewNodes {
         /// The window's length, seconds.
         length: f64,
@@ -53,7 +57,7 @@ pub enum WindowError {
         min: usize,
     },
     /// The overlap leaves no node of a window to keep.
-    #[error("an overlap of {overlap} s leaves nothing to keep of a {length} s window")]
+    #[error("an overlap of {} s leaves nothing to keep of a {} s window", readable_number(*overlap), readable_number(*length))]
     NothingKept {
         /// The overlap, seconds.
         overlap: f64,

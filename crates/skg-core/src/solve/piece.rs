@@ -22,7 +22,7 @@ use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::discrete::Action;
 use crate::model::{Model, Physical};
 use crate::sbp::SbpOperator;
-use crate::scene::{Formulation, Scene, SceneError};
+use crate::scene::{Formulation, IpoptValue, Scene, SceneError};
 use crate::stepping::equations::{integrate_model, min_spacing, step_budget};
 use crate::stepping::ode::{OdeOptions, OdeStats};
 use skg_ipopt as ipopt;
@@ -229,13 +229,24 @@ fn rejected_option(scene: &Scene, e: SolveError) -> SolveError {
 }
 
 /// Ipopt's `Invalid_Option` at the start of a solve (an option value it accepted but
-/// cannot use, e.g. a linear solver whose library it cannot load), as an input error.
+/// cannot use, e.g. a linear solver whose library it cannot load), as an input error at
+/// the `linear_solver` Ipopt was given: `[solver.ipopt]`'s, which is passed last and so
+/// wins, else `[solver]`'s.
 fn unusable_option(scene: &Scene) -> SolveError {
-    let (location, message) = match &scene.solver.linear_solver {
-        Some(solver) => (
-            scene.file.solver_option_location("linear_solver"),
+    let file = &scene.file.solver;
+    let passed = match (scene.solver.ipopt.get("linear_solver"), file.ipopt.get("linear_solver")) {
+        (Some(IpoptValue::Str(name)), Some(spanned)) => Some(("[solver.ipopt] linear_solver", name.clone(), spanned.span())),
+        _ => None,
+    };
+    let named = passed.or_else(|| {
+        let spanned = file.linear_solver.as_ref()?;
+        Some(("[solver] linear_solver", spanned.get_ref().clone(), spanned.span()))
+    });
+    let (location, message) = match named {
+        Some((key, solver, span)) => (
+            scene.file.origin.locate(span.start),
             format!(
-                "Ipopt cannot use linear_solver = \"{solver}\" (Invalid_Option: its library could not be loaded); Debian's \
+                "Ipopt cannot use {key} = \"{solver}\" (Invalid_Option: its library could not be loaded); Debian's \
                  Ipopt has only MUMPS: use linear_solver = \"mumps\" or remove the key"
             ),
         ),

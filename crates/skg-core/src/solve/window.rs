@@ -195,7 +195,7 @@ mod tests {
     fn windows_too_short_for_the_operator_or_the_overlap_are_refused() {
         let s = scene(1001, 10.0);
         let e = WindowGrid::new(&s, Windows { length: 0.05, overlap: 0.0 }).unwrap_err();
-        assert_eq!(e.to_string(), "a window of 0.05 s has 6 nodes at the scene's spacing Δt = 1.000000e-2 s; SBP242 needs at least 8");
+        assert_eq!(e.to_string(), "a window of 0.05 s has 6 nodes at the scene's spacing Δt = 0.01 s; SBP242 needs at least 8");
         let e = WindowGrid::new(&s, Windows { length: 1.0, overlap: 0.995 }).unwrap_err();
         assert_eq!(e.to_string(), "an overlap of 0.995 s leaves nothing to keep of a 1 s window");
     }

@@ -49,7 +49,7 @@ use std::fmt;
 
 use crate::discrete::trajectory::Trajectory;
 use crate::model::{Model, Workspace, ON_WALL_TOLERANCE};
-use crate::scene::{ConstraintKind, Scene, SceneError};
+use crate::scene::{ConstraintKind, Location, Scene, SceneError};
 use crate::stepping::equations::{integrate_model, min_spacing, rhs, split_states};
 use crate::stepping::ode::{self, EventHit, OdeOptions, OdeSolution, OdeStats, RhsError};
 
@@ -500,17 +500,26 @@ const MAX_IMPACTS: usize = 10_000;
 /// The hard-wall reference of `scene` sampled at `times` (see the module documentation).
 pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Result<Reference, ReferenceError> {
     check_times(scene, times)?;
+    // What the hard-wall reference does not model is a property of the scene file: the
+    // error names the file and the place that makes it so (the wall's h, the first
+    // constraint), like any other error of the scene.
+    let file = &scene.file;
+    let unsupported = |location: Location, e: HardWallError| -> ReferenceError {
+        SceneError::Invalid { location, message: format!("hard-wall reference: {e}") }.into()
+    };
     if scene.walls.is_empty() {
-        return Err(HardWallError::NoWalls { scene: scene.name.clone() }.into());
+        return Err(unsupported(file.origin.whole(), HardWallError::NoWalls { scene: scene.name.clone() }));
     }
-    if !scene.constraints.is_empty() {
-        return Err(HardWallError::WallsWithConstraints { scene: scene.name.clone() }.into());
+    if let Some(c) = file.constraints.first() {
+        let at = file.origin.locate_in(&c.expression, None);
+        return Err(unsupported(at, HardWallError::WallsWithConstraints { scene: scene.name.clone() }));
     }
     // No wall force: the motion between impacts is the scene's without its walls. Building
     // the model checks that the start is not beyond a wall.
     let model = Model::with_hard_walls(scene)?;
     if let Some(j) = (0..model.walls.len()).find(|&j| model.wall_moves(j)) {
-        return Err(HardWallError::MovingWall { wall: model.walls[j].name.clone() }.into());
+        let at = file.origin.locate_in(&file.walls[j].h, None);
+        return Err(unsupported(at, HardWallError::MovingWall { wall: model.walls[j].name.clone() }));
     }
     let d = scene.coordinates.len();
     let ode_opts = opts.ode(times);
