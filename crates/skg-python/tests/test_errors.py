@@ -61,8 +61,11 @@ def test_missing_file_and_bad_override(cli_error, scene, tmp_path):
 
 
 def test_hard_wall_reference_refuses_a_moving_wall(cli_error, scene, tmp_path):
-    with pytest.raises(skg.IntegrationError) as e:
+    # A scene the hard-wall reference cannot model: a SceneError at the wall's line,
+    # with the command line's message.
+    with pytest.raises(skg.SceneError) as e:
         skg.reference(scene("vibrating_plate"), hard_walls=True)
+    assert "vibrating_plate.toml:" in str(e.value) and "wall `plate` moves" in str(e.value)
     message, status = cli_error("reference", scene("vibrating_plate"), "--hard-walls", "-o", tmp_path / "r.csv")
     assert status == 1 and str(e.value) == message
 
