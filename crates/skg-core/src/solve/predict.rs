@@ -234,8 +234,7 @@ impl<'a> Predictor<'a> {
         if !(r_lo.is_finite() && r_hi.is_finite() && r_lo > 0.0 && r_hi > 0.0) {
             return self.ratio(c, nodes);
         }
-        let s = ((nodes - 1) as f64 / (lo - 1) as f64).ln() / 2f64.ln();
-        Ok((r_lo.ln() + s * (r_hi.ln() - r_lo.ln())).exp())
+        Ok(along_power_law(lo, r_lo, observed_order(lo, r_lo, hi, r_hi), nodes))
     }
 
     /// The proxy's error of `c` on the grid of `nodes` nodes, relative to the
@@ -273,9 +272,20 @@ impl<'a> Predictor<'a> {
             return Ok(None);
         }
         let (r1, r2) = (self.ratio(c, m)?, self.ratio(c, m2)?);
-        let order = (r2 / r1).ln() / 2f64.ln();
-        Ok((order.is_finite() && order > 0.0).then(|| r1 * 2f64.powf(-order)))
+        let order = observed_order(m2, r2, m, r1);
+        Ok((order.is_finite() && order > 0.0).then(|| along_power_law(m, r1, order, nodes)))
     }
+}
+
+/// The order `p` of a proxy that falls as `(N − 1)^(−p)` from `r_lo` on `lo` nodes to
+/// `r_hi` on `hi` nodes (not finite, or not positive, where it does not fall).
+pub fn observed_order(lo: usize, r_lo: f64, hi: usize, r_hi: f64) -> f64 {
+    (r_lo / r_hi).ln() / ((hi - 1) as f64 / (lo - 1) as f64).ln()
+}
+
+/// The power law of order `order` through `r` on `from` nodes, on `nodes` nodes.
+pub fn along_power_law(from: usize, r: f64, order: f64, nodes: usize) -> f64 {
+    r * ((from - 1) as f64 / (nodes - 1) as f64).powf(order)
 }
 
 /// Whether the grid of `nodes` nodes is a subgrid of the fine one.

@@ -42,7 +42,7 @@ use super::error::SolveError;
 use super::ladder::{self, hermite, linear, Rungs};
 use super::outcome::{Outcome, RefinedGrid, Refinement, Work};
 use super::piece::{grid, Guess};
-use super::predict::{Candidate, Predictor, FINE_NODES};
+use super::predict::{along_power_law, observed_order, Candidate, Predictor, FINE_NODES};
 use crate::discrete::contact::{self, RESOLVED_STEPS};
 use crate::memory;
 use crate::model::Model;
@@ -218,7 +218,7 @@ impl<'a> Refiner<'a> {
             }
             let r_hi = self.predicted(c, hi)?;
             if r_hi <= AIM {
-                let slope = (r_lo / r_hi).ln() / ((hi - 1) as f64 / (lo - 1) as f64).ln();
+                let slope = observed_order(lo, r_lo, hi, r_hi);
                 let n = if slope.is_finite() && slope > 0.0 {
                     ((lo - 1) as f64 * (r_lo / AIM).powf(1.0 / slope)).ceil() as usize + 1
                 } else {
@@ -233,7 +233,7 @@ impl<'a> Refiner<'a> {
             }
             // Past the first grids, the order between the last two tells whether the aim
             // is within the budget at all: no need to compute the proxy up to it.
-            let order = (r_lo / r_hi).ln() / ((hi - 1) as f64 / (lo - 1) as f64).ln();
+            let order = observed_order(lo, r_lo, hi, r_hi);
             if hi >= EXTRAPOLATE_FROM && order > 0.0 {
                 let needed = (hi - 1) as f64 * (r_hi / AIM).powf(1.0 / order);
                 if needed > 2.0 * self.max_nodes as f64 || too_dear(needed / 2.0) {
@@ -499,11 +499,11 @@ fn proxy_ratio(p: &mut Predictor, c: Candidate, nodes: usize) -> Result<f64, Sol
     }
     let (hi, lo) = (PROXY_MAX_NODES, (PROXY_MAX_NODES - 1) / 2 + 1);
     let (r_hi, r_lo) = (p.ratio(c, hi)?, p.ratio(c, lo)?);
-    let order = (r_lo / r_hi).ln() / 2f64.ln();
+    let order = observed_order(lo, r_lo, hi, r_hi);
     if !(order.is_finite() && order > 0.0) {
         return Ok(r_hi.max(floor));
     }
-    Ok((r_hi * ((hi - 1) as f64 / (nodes - 1) as f64).powf(order)).max(floor))
+    Ok(along_power_law(hi, r_hi, order, nodes).max(floor))
 }
 
 /// The largest grid a refinement may use and why: `--max-nodes`, else the largest the
