@@ -196,23 +196,33 @@ impl<'a> Predictor<'a> {
         if self.samples.contains_key(&nodes) {
             return Ok(());
         }
-        let (q, v) = match &self.fine {
-            Some((fq, fv)) if nested(nodes) => {
-                let stride = (FINE_NODES - 1) / (nodes - 1);
-                (fq.iter().step_by(stride).cloned().collect(), fv.iter().step_by(stride).cloned().collect())
-            }
-            _ => self.integrate(nodes, self.rtol)?,
+        let samples = if nested(nodes) && nodes < FINE_NODES && self.fine.is_some() {
+            // Every subgrid strides through the fine grid's samples, accelerations too.
+            self.sample(FINE_NODES)?;
+            let fine = &self.samples[&FINE_NODES];
+            let stride = (FINE_NODES - 1) / (nodes - 1);
+            let every = |s: &NodeSeries| s.iter().step_by(stride).cloned().collect();
+            Samples { q: every(&fine.q), v: every(&fine.v), a: every(&fine.a) }
+        } else {
+            let (q, v) = match &self.fine {
+                Some((fq, fv)) if nodes == FINE_NODES => (fq.clone(), fv.clone()),
+                _ => self.integrate(nodes, self.rtol)?,
+            };
+            let a = self.accelerations(&times(self.scene, nodes), &q, &v)?;
+            Samples { q, v, a }
         };
-        let t = times(self.scene, nodes);
+        self.samples.insert(nodes, samples);
+        Ok(())
+    }
+
+    /// The model's accelerations at the states `q`, `v` at the times `t`.
+    fn accelerations(&self, t: &[f64], q: &NodeSeries, v: &NodeSeries) -> Result<NodeSeries, SolveError> {
         let mut ws = self.model.workspace();
-        let a = t
-            .iter()
-            .zip(q.iter().zip(&v))
+        t.iter()
+            .zip(q.iter().zip(v))
             .map(|(&tk, (q, v))| self.model.accelerations(tk, q, v, &mut ws).map(|(a, _)| a))
             .collect::<Result<NodeSeries, _>>()
-            .map_err(|e| SolveError::Prediction(format!("the accelerations along the reference: {e}")))?;
-        self.samples.insert(nodes, Samples { q, v, a });
-        Ok(())
+            .map_err(|e| SolveError::Prediction(format!("the accelerations along the reference: {e}")))
     }
 
     /// [`ratio`](Self::ratio) on a subgrid of the fine grid; between two of them,
@@ -299,6 +309,21 @@ fn times(scene: &Scene, nodes: usize) -> Vec<f64> {
     (0..nodes).map(|k| scene.t_start + k as f64 * dt).collect()
 }
 
+/// Row `b` of a product `D_b D_a` given the rows of `D_a`: each column once (an
+/// interior row of `SBP484`'s product has 17 columns, where the products of the two
+/// stencils' entries are 81).
+fn product_row(b: &[(usize, f64)], da: &[Vec<(usize, f64)>]) -> Vec<(usize, f64)> {
+    let columns = || b.iter().flat_map(|&(j, _)| da[j].iter().map(|&(k, _)| k));
+    let (Some(first), Some(last)) = (columns().min(), columns().max()) else { return Vec::new() };
+    let mut dense = vec![0.0; last - first + 1];
+    for &(j, bj) in b {
+        for &(k, a) in &da[j] {
+            dense[k - first] += bj * a;
+        }
+    }
+    dense.into_iter().enumerate().filter(|&(_, v)| v != 0.0).map(|(k, v)| (first + k, v)).collect()
+}
+
 /// The proxy's error max_k |q_h − q| of each coordinate (see the module docs), and the
 /// rounding error of its solve; infinite when its system is singular.
 fn proxy_errors(scene: &Scene, s: &Samples, c: Candidate, n: usize) -> (Vec<f64>, Vec<f64>) {
@@ -312,17 +337,17 @@ fn proxy_errors(scene: &Scene, s: &Samples, c: Candidate, n: usize) -> (Vec<f64>
     let partner = op.partner();
     let db: Vec<Vec<(usize, f64)>> = (0..n).map(|i| partner.row(i)).collect();
     let h0 = op.norm()[0];
-    let second_row = |i: usize| db[i].iter().flat_map(|&(j, b)| da[j].iter().map(move |&(k, a)| (k, b * a)));
+    let second_row = |i: usize| product_row(&db[i], &da);
     // The rows in an order that keeps the system banded: the initial position, the
     // initial-velocity condition (the action's last row), then the interior equations.
     let natural = c.initial_velocity == InitialVelocity::Natural;
     let mut entries: Vec<(usize, usize, f64)> = vec![(0, 0, 1.0)];
     if natural {
-        entries.extend(second_row(0).map(|(k, v)| (1, k, -h0 * v)));
+        entries.extend(second_row(0).into_iter().map(|(k, v)| (1, k, -h0 * v)));
     }
     entries.extend(da[0].iter().map(|&(k, v)| (1, k, if natural { -v } else { v })));
     for i in 1..n - 1 {
-        entries.extend(second_row(i).map(|(k, v)| (i + 1, k, v)));
+        entries.extend(second_row(i).into_iter().map(|(k, v)| (i + 1, k, v)));
     }
     // The unknown is the motion less its initial straight line, q0 + v0·(t − t0), which
     // every operator differentiates exactly: the rounding errors of the proxy then scale
