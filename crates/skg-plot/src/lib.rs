@@ -28,6 +28,7 @@ use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use skg_core::check::Table;
 use skg_core::convergence::fit_order;
@@ -315,12 +316,17 @@ fn draw_loglog<DB: DrawingBackend<ErrorType: 'static>>(
         .draw()?;
     for l in lines {
         if !l.tags.is_empty() {
-            chart.draw_series(
-                l.points
-                    .iter()
-                    .zip(&l.tags)
-                    .map(|(&p, t)| Text::new(t.clone(), p, ("sans-serif", 10).into_font().color(&l.color.mix(0.9)))),
-            )?;
+            // A tag in the right fifth of the chart is written to the left of its point,
+            // so that it stays inside the plotting area.
+            let right_side = |x: f64| (x / x0).ln() / (x1 / x0).ln() > 0.8;
+            chart.draw_series(l.points.iter().zip(&l.tags).map(|(&p, t)| {
+                let font = ("sans-serif", 10).into_font().color(&l.color.mix(0.9));
+                if right_side(p.0) {
+                    Text::new(format!("{} ", t.trim_start()), p, font.pos(Pos::new(HPos::Right, VPos::Top)))
+                } else {
+                    Text::new(t.clone(), p, font)
+                }
+            }))?;
         }
         let c = l.color;
         let style = ShapeStyle::from(&c).stroke_width(2);
@@ -338,8 +344,31 @@ fn draw_loglog<DB: DrawingBackend<ErrorType: 'static>>(
             chart.draw_series(l.points.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
         }
     }
-    draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
+    draw_legend(&mut chart, emptiest_corner(lines, (x0, x1), (y0, y1)), 13)?;
     Ok(())
+}
+
+/// The corner of a log-log chart with the fewest points near it (the upper right when
+/// several are as empty): where the legend hides the least.
+fn emptiest_corner(lines: &[Line], (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> SeriesLabelPosition {
+    let fraction = |v: f64, lo: f64, hi: f64| (v / lo).ln() / (hi / lo).ln();
+    let near = |right: bool, upper: bool| {
+        let points = lines.iter().flat_map(|l| l.points.iter());
+        points
+            .filter(|p| {
+                let (fx, fy) = (fraction(p.0, x0, x1), fraction(p.1, y0, y1));
+                (if right { fx > 0.5 } else { fx < 0.5 }) && (if upper { fy > 0.7 } else { fy < 0.3 })
+            })
+            .count()
+    };
+    let corners = [
+        (SeriesLabelPosition::UpperRight, near(true, true)),
+        (SeriesLabelPosition::UpperLeft, near(false, true)),
+        (SeriesLabelPosition::LowerRight, near(true, false)),
+        (SeriesLabelPosition::LowerLeft, near(false, false)),
+    ];
+    let least = corners.iter().map(|c| c.1).min().unwrap_or(0);
+    corners.into_iter().find(|c| c.1 == least).map_or(SeriesLabelPosition::UpperRight, |c| c.0)
 }
 
 /// Group the converged SKG rows by "operator formulation", by the initial velocity
@@ -838,6 +867,21 @@ pub fn stability(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_legend_goes_where_the_points_are_not() {
+        let line = |points: Vec<(f64, f64)>| Line { label: String::new(), tags: Vec::new(), points, color: BLACK, dashed: false };
+        let (xr, yr) = ((1e-3, 1e3), (1e-3, 1e3));
+        // A tolerance chart: from the lower left to the upper right.
+        let diagonal = line((0..7).map(|k| (10f64.powi(k - 3), 10f64.powi(k - 3))).collect());
+        assert!(matches!(emptiest_corner(&[diagonal], xr, yr), SeriesLabelPosition::UpperLeft));
+        // A time chart falling to the right, with a flat line along the bottom.
+        let falling = line(vec![(1e-2, 5e2), (1e0, 1e2), (1e2, 1e1)]);
+        let flat = line(vec![(1e-2, 2e-3), (1e0, 2e-3), (1e2, 2e-3)]);
+        assert!(matches!(emptiest_corner(&[falling, flat], xr, yr), SeriesLabelPosition::UpperRight));
+        // Nothing anywhere: the upper right.
+        assert!(matches!(emptiest_corner(&[], xr, yr), SeriesLabelPosition::UpperRight));
+    }
 
     /// A solution without an `energy` column: the energy panel has nothing to draw, and
     /// the error names the chart's file and says what is missing, with no file left behind.
