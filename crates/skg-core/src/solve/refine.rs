@@ -22,7 +22,8 @@
 //! `G_c · P_c(N)`: `P_c(N)` the proxy of [`predict`](super::predict) (the discretization
 //! applied to the reference's own kinematics, relative to the tolerance), `G_c` its
 //! calibration: the measured error over the proxy of the last solve with `c`, else the
-//! largest calibration measured so far, else 1. The next grid aims at [`AIM`] of the
+//! largest measured with its family of operators or, within limits, the other
+//! ([`calibration`]), else 1. The next grid aims at [`AIM`] of the
 //! tolerance, never below the nodes a wall's contacts need ([`MIN_STEPS`] grid steps
 //! per contact, from the reference), and grows at least by [`MIN_GROWTH`] once a grid
 //! failed with the same candidate (by 2 when it did not converge). So the proxy carries
@@ -63,10 +64,11 @@ const EXTRAPOLATE_FROM: usize = 257;
 /// cannot pass, and the refinement starts on the grid predicted to.
 const HOPELESS: f64 = 16.0;
 /// A calibration measured with a centred operator is carried to the dissipative ones
-/// only up to this: beyond, it is the centred operators' odd-even mode (measured on first grids, where nothing is calibrated yet: the disk, the tumbler
-/// and the damped oscillator at tolerances 1e-3 … 1e-8 are off by 0.8 … 6 on both
-/// families; `SBP121` on the strongly contracting test scene by 15.7, `SBP242` and
-/// `SBP484` there by 0.3 and 0.04).
+/// only up to this: beyond, it is the centred operators' odd-even mode. (Measured on
+/// first grids, where nothing is calibrated yet: the disk, the tumbler and the damped
+/// oscillator at tolerances 1e-3 … 1e-8 are off by 0.8 … 6 on both families; on the
+/// strongly contracting test scene `SBP121` is off by 15.7, `SBP242` and `SBP484` by 0.3
+/// and 0.04.)
 const CROSS_FAMILY: f64 = 10.0;
 /// The proxy is computed on grids up to the reference's fine grid; beyond, its error is
 /// extrapolated with the order it shows between the two largest of them.
