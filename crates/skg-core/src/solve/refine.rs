@@ -23,7 +23,7 @@
 //! applied to the reference's own kinematics, relative to the tolerance), `G_c` its
 //! calibration: the measured error over the proxy of the last solve with `c`, else the
 //! largest measured with its family of operators or, within limits, the other
-//! ([`calibration`]), else 1. The next grid aims at [`AIM`] of the
+//! (`calibration`), else 1. The next grid aims at [`AIM`] of the
 //! tolerance, never below the nodes a wall's contacts need ([`MIN_STEPS`] grid steps
 //! per contact, from the reference), and grows at least by [`MIN_GROWTH`] once a grid
 //! failed with the same candidate (by 2 when it did not converge). So the proxy carries
