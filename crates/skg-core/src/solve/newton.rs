@@ -509,8 +509,12 @@ fn chord_may_finish(contraction: f64, residual: f64, target: f64) -> bool {
 /// The compressed-column pattern of `structure` (rows sorted within each column,
 /// duplicates merged) and the position of each structure entry in it.
 fn compressed_columns(n: usize, structure: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>, Vec<usize>) {
-    let mut order: Vec<usize> = (0..structure.len()).collect();
-    order.sort_unstable_by_key(|&e| (structure[e].1, structure[e].0));
+    // The entries in (column, row) order: a stable counting sort by row, then one by
+    // column (linear in the entries; a comparison sort of the 736 400 entries of a
+    // chain of 16 rods at N = 1024 took 0.03 s).
+    let all: Vec<usize> = (0..structure.len()).collect();
+    let by_row = counting_sort(n, &all, |e| structure[e].0 as usize);
+    let order = counting_sort(n, &by_row, |e| structure[e].1 as usize);
     let mut col_ptr = vec![0u32; n + 1];
     let mut row_idx = Vec::with_capacity(structure.len());
     let mut slot = vec![0usize; structure.len()];
@@ -528,6 +532,24 @@ fn compressed_columns(n: usize, structure: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>
         col_ptr[c + 1] += col_ptr[c];
     }
     (col_ptr, row_idx, slot)
+}
+
+/// `items` stably sorted by `key` (values below `n`).
+fn counting_sort(n: usize, items: &[usize], key: impl Fn(usize) -> usize) -> Vec<usize> {
+    let mut start = vec![0usize; n + 1];
+    for &e in items {
+        start[key(e) + 1] += 1;
+    }
+    for k in 0..n {
+        start[k + 1] += start[k];
+    }
+    let mut sorted = vec![0usize; items.len()];
+    for &e in items {
+        let k = key(e);
+        sorted[start[k]] = e;
+        start[k] += 1;
+    }
+    sorted
 }
 
 /// `F(x)` into `f`, counting and timing the call; non-finite values are an error.
