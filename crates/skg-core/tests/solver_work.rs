@@ -208,13 +208,16 @@ fn the_work_counts_what_the_solve_did() {
     assert_eq!(o.attempts.len(), 1);
     assert_eq!(o.attempts[0].work, w);
 
-    // Newton: one residual at the start and one per line-search trial (its iteration
-    // table's `ls_trials`), one Jacobian per step; no verification, no verification steps.
+    // Newton: one residual at the start and one per trial (its iteration table's
+    // `ls_trials`), one Jacobian per step but for the chord steps (here the last of the
+    // three steps); no verification, no verification steps.
     let ov = Overrides { backend: Some(Backend::Newton), no_verify: true, ..Overrides::default() };
     let o = solve::solve_scene(&common::load("rolling_disk", &ov)).unwrap();
     let w = o.work;
     let trials: usize = o.history.iter().map(|s| s.ls_trials as usize).sum();
-    assert_eq!((w.newton_iterations, w.ipopt_iterations, w.jacobian_evaluations), (o.iterations, 0, o.iterations), "{w:?}");
+    let chords = o.backend.newton.as_ref().unwrap().stats.chord_steps;
+    assert_eq!((o.iterations, chords), (3, 1), "{:?}", o.history);
+    assert_eq!((w.newton_iterations, w.ipopt_iterations, w.jacobian_evaluations), (o.iterations, 0, o.iterations - chords), "{w:?}");
     assert_eq!(w.residual_evaluations, 1 + trials, "{w:?}");
     assert!(w.guess_steps.accepted > 0 && w.guess_steps.rhs_evals > w.guess_steps.accepted, "{w:?}");
     assert_eq!(w.verification_steps, Default::default(), "{w:?}");

@@ -236,7 +236,7 @@ impl SquareSolver {
             formulation: scene.formulation,
             settings: Settings {
                 backend: scene.solver.backend,
-                newton: NewtonOptions { tol: scene.solver.tol, max_iter: scene.solver.max_iter },
+                newton: NewtonOptions { tol: scene.solver.tol, max_iter: scene.solver.max_iter, chord: true },
                 ipopt: ipopt_options(scene),
             },
             jac: action.plan(jac_block),
