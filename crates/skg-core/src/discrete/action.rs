@@ -33,7 +33,6 @@
 //! (or [`Action::set_initial_state`], [`Action::set_start_time`]) re-targets it without
 //! rebuilding the model or the plans.
 
-
 use crate::model::{LocalKind, Model, PairTape, Workspace};
 use crate::sbp::SbpOperator;
 use crate::scene::InitialVelocity;
