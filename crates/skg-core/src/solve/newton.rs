@@ -649,6 +649,28 @@ mod tests {
         }
     }
 
+    /// `F(x) = atan(x)`: one unknown, root 0; Newton's full step overshoots from |x| ≳ 1.39.
+    struct Atan(Vec<(u32, u32)>);
+    impl Problem for Atan {
+        fn num_variables(&self) -> usize {
+            1
+        }
+        fn num_constraints(&self) -> usize {
+            1
+        }
+        fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+            c[0] = x[0].atan();
+            Ok(())
+        }
+        fn jacobian_structure(&self) -> &[(u32, u32)] {
+            &self.0
+        }
+        fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
+            v[0] = 1.0 / (1.0 + x[0] * x[0]);
+            Ok(())
+        }
+    }
+
     fn circle() -> Circle {
         Circle { jac: vec![(0, 0), (0, 1), (1, 0), (1, 1), (0, 0)] }
     }
@@ -722,26 +744,6 @@ mod tests {
     /// `ls_trials`.
     #[test]
     fn a_chord_step_that_does_not_contract_is_replaced_by_a_newton_step() {
-        struct Atan(Vec<(u32, u32)>);
-        impl Problem for Atan {
-            fn num_variables(&self) -> usize {
-                1
-            }
-            fn num_constraints(&self) -> usize {
-                1
-            }
-            fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-                c[0] = x[0].atan();
-                Ok(())
-            }
-            fn jacobian_structure(&self) -> &[(u32, u32)] {
-                &self.0
-            }
-            fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
-                v[0] = 1.0 / (1.0 + x[0] * x[0]);
-                Ok(())
-            }
-        }
         let mut p = Atan(vec![(0, 0)]);
         let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
         let full = solver.solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: false }).unwrap();
@@ -762,26 +764,6 @@ mod tests {
     /// diverges; the line search must damp it and converge to 0.
     #[test]
     fn line_search_rescues_a_diverging_newton_iteration() {
-        struct Atan(Vec<(u32, u32)>);
-        impl Problem for Atan {
-            fn num_variables(&self) -> usize {
-                1
-            }
-            fn num_constraints(&self) -> usize {
-                1
-            }
-            fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-                c[0] = x[0].atan();
-                Ok(())
-            }
-            fn jacobian_structure(&self) -> &[(u32, u32)] {
-                &self.0
-            }
-            fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
-                v[0] = 1.0 / (1.0 + x[0] * x[0]);
-                Ok(())
-            }
-        }
         let mut p = Atan(vec![(0, 0)]);
         let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
         let sol = solver.solve(&mut p, &[3.0], &NewtonOptions { tol: 1e-12, max_iter: 50, chord: true }).unwrap();
