@@ -236,7 +236,12 @@ impl SquareSolver {
             formulation: scene.formulation,
             settings: Settings {
                 backend: scene.solver.backend,
-                newton: NewtonOptions { tol: scene.solver.tol, max_iter: scene.solver.max_iter, chord: true },
+                newton: NewtonOptions {
+                    tol: scene.solver.tol,
+                    max_iter: scene.solver.max_iter,
+                    chord: true,
+                    single_precision: single_precision_pays(scene, action),
+                },
                 ipopt: ipopt_options(scene),
             },
             jac: action.plan(jac_block),
@@ -275,6 +280,40 @@ impl SquareSolver {
         }
     }
 }
+
+/// Whether Newton factors the Jacobian in single precision first and refines in double
+/// (docs/solver.md#mixed-precision): for systems of at least
+/// [`SINGLE_PRECISION_MIN_UNKNOWNS`] unknowns with at least
+/// [`SINGLE_PRECISION_MIN_PER_NODE`] per node.
+fn single_precision_pays(scene: &Scene, action: &Action) -> bool {
+    let lay = &action.layout;
+    let unknowns = match scene.formulation {
+        Formulation::Reduced => lay.n_p,
+        Formulation::Full => lay.len(),
+    };
+    unknowns >= SINGLE_PRECISION_MIN_UNKNOWNS && unknowns >= SINGLE_PRECISION_MIN_PER_NODE * lay.nodes
+}
+
+/// Below this many unknowns a factorization costs too little for its precision to
+/// matter (a chain of 3 rods at N = 1024, 9 unknowns per node: 0.018 s in single
+/// precision against 0.014 s in double).
+const SINGLE_PRECISION_MIN_UNKNOWNS: usize = 10_000;
+
+/// Unknowns per node from which single precision pays: where the sparse LU works on
+/// dense blocks (faer's supernodal LU; a chain of 8 rods has 24 unknowns per node),
+/// single precision halves the bytes moved and doubles the numbers per SIMD
+/// instruction. Measured (numeric LU, first factorization, single against double
+/// precision): chains of 8, 16 and 32 rods 0.041/0.063, 0.17/0.24 and 0.30/0.37 s. The
+/// band-like systems of a few unknowns per node are factored column by column (faer's
+/// simplicial LU), where single precision gains little or loses, and refines worse.
+/// Measured with single precision allowed there: the rolling disk at N = 16384 (6 per
+/// node) factored in 0.057 s against 0.067 s in double precision, and the whole solve
+/// took 0.62 s against 0.60 s (more refinement solves); the tumbler at N = 65536 (2 per
+/// node) factored in 0.066 s against 0.044 s, and a refinement with its Jacobian
+/// diverged after the first correction; the knife edge at N = 32768 (4 per node) did
+/// not refine and was factored again in double precision (0.157 s of factorizations
+/// against 0.081 s).
+const SINGLE_PRECISION_MIN_PER_NODE: usize = 24;
 
 impl SquareSolver {
     /// Whether every equation of `action`'s system at `z` (the whole unknown vector) is
