@@ -220,6 +220,9 @@ pub struct SquareSolver {
     jac: MatrixPlan,
     hess: Option<MatrixPlan>,
     lu: Option<SystemSolver>,
+    /// Seconds of the analysis in `lu` made by [`SquareSolver::analyse`] and not yet
+    /// reported by a solve.
+    unreported_analysis_s: Option<f64>,
 }
 
 impl SquareSolver {
@@ -247,6 +250,7 @@ impl SquareSolver {
             jac: action.plan(jac_block),
             hess: exact_hessian.then(|| action.plan(Block::ReducedHessian)),
             lu: if scene.solver.backend == Backend::Newton { KEPT_ANALYSIS.take() } else { None },
+            unreported_analysis_s: None,
         }
     }
 
@@ -260,6 +264,35 @@ impl SquareSolver {
         self.hess.as_ref()
     }
 
+    /// Whether a Newton solve of `action`'s system would make a new LU analysis (the
+    /// backend is Newton and the solver holds none of this structure).
+    pub fn needs_analysis(&self, action: &Action) -> bool {
+        let n = match self.formulation {
+            Formulation::Reduced => action.layout.n_p,
+            Formulation::Full => action.layout.len(),
+        };
+        self.settings.backend == Backend::Newton && !self.lu.as_ref().is_some_and(|lu| lu.fits(n, &self.jac.structure))
+    }
+
+    /// Make the Newton backend's LU analysis of `action`'s system now, if
+    /// [`SquareSolver::needs_analysis`]: it needs only the structure, so that a caller
+    /// can run it beside the initial guess. The next [`SquareSolver::solve`] uses it and
+    /// reports it as made for that solve.
+    pub fn analyse(&mut self, action: &Action) -> Result<(), BackendError> {
+        if !self.needs_analysis(action) {
+            return Ok(());
+        }
+        let n = match self.formulation {
+            Formulation::Reduced => action.layout.n_p,
+            Formulation::Full => action.layout.len(),
+        };
+        self.lu = None;
+        let analysed = SystemSolver::new(n, &self.jac.structure)?;
+        self.unreported_analysis_s = Some(analysed.analysis_seconds());
+        self.lu = Some(analysed);
+        Ok(())
+    }
+
     /// Solve the system of `action` (the model and grid this solver was built for) from
     /// the whole unknown vector `z0` with the configured backend.
     pub fn solve(&mut self, action: &Action, z0: &[f64]) -> Result<SystemSolution, BackendError> {
@@ -267,7 +300,7 @@ impl SquareSolver {
         match self.formulation {
             Formulation::Reduced => {
                 let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac: &self.jac, hess: self.hess.as_ref() };
-                let mut solution = solve_problem(&self.settings, &mut self.lu, &mut p, &z0[..n_p])?;
+                let mut solution = solve_problem(&self.settings, &mut self.lu, self.unreported_analysis_s.take(), &mut p, &z0[..n_p])?;
                 let mut z = vec![0.0; action.layout.len()];
                 z[..n_p].copy_from_slice(&solution.z);
                 solution.z = z;
@@ -275,7 +308,7 @@ impl SquareSolver {
             }
             Formulation::Full => {
                 let mut p = Full { action, ws: action.model.workspace(), jac: &self.jac };
-                solve_problem(&self.settings, &mut self.lu, &mut p, z0)
+                solve_problem(&self.settings, &mut self.lu, self.unreported_analysis_s.take(), &mut p, z0)
             }
         }
     }
@@ -371,15 +404,17 @@ pub fn discard_kept_analysis() {
 fn solve_problem<P: Problem>(
     settings: &Settings,
     lu: &mut Option<SystemSolver>,
+    unreported_analysis_s: Option<f64>,
     problem: &mut P,
     x0: &[f64],
 ) -> Result<SystemSolution, BackendError> {
     let mut report = BackendReport { requested: settings.backend, newton: None, handed_over_to_ipopt: false, ipopt: None };
     let (mut total_s, mut evaluation_s) = (0.0, 0.0);
     if settings.backend == Backend::Newton {
-        let mut analysis_s = 0.0;
-        let reusable = lu.as_ref().is_some_and(|lu| lu.fits(x0.len(), problem.jacobian_structure()));
-        if !reusable {
+        let fits = lu.as_ref().is_some_and(|lu| lu.fits(x0.len(), problem.jacobian_structure()));
+        let reusable = fits && unreported_analysis_s.is_none();
+        let mut analysis_s = if fits { unreported_analysis_s.unwrap_or(0.0) } else { 0.0 };
+        if !fits {
             // Free an analysis of another structure before making the new one.
             *lu = None;
             let analysed = SystemSolver::new(x0.len(), problem.jacobian_structure())?;

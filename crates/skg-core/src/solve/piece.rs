@@ -102,9 +102,21 @@ pub struct Piece {
 pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, times: &[f64], guess: &Guess) -> Result<Piece, SolveError> {
     let t_guess = Instant::now();
     let mut warnings = Vec::new();
-    let (z0, guess_desc, ts_q, guess_steps) = initial_guess(action, times, guess, &mut warnings);
+    // The Newton backend's LU analysis needs only the structure: it runs beside the
+    // guess, on a second thread (its time is the solver's, `analysis_s`).
+    let (made, guess_s, analysed) = std::thread::scope(|s| {
+        let analysing = solver.needs_analysis(action).then(|| s.spawn(|| solver.analyse(action)));
+        let made = initial_guess(action, times, guess, &mut warnings);
+        let guess_s = t_guess.elapsed().as_secs_f64();
+        (made, guess_s, analysing.map(|a| a.join().expect("the LU analysis panicked")))
+    });
+    let (z0, guess_desc, ts_q, guess_steps) = made;
+    let t_check = Instant::now();
     check_initial_guess(scene, action, times, &z0, &guess_desc, &warnings)?;
-    let initial_guess_s = t_guess.elapsed().as_secs_f64();
+    let initial_guess_s = guess_s + t_check.elapsed().as_secs_f64();
+    if let Some(analysed) = analysed {
+        analysed.map_err(|e| rejected_option(scene, e.into()))?;
+    }
 
     let solution = solver.solve(action, &z0).map_err(|e| rejected_option(scene, e.into()))?;
     if solution.status == SolverStatus::Ipopt(ipopt::Status::InvalidOption) {
