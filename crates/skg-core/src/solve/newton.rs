@@ -330,7 +330,14 @@ impl SystemSolver {
         if let Some(&(r, c)) = structure.iter().find(|&&(r, c)| r as usize >= n || c as usize >= n) {
             return Err(NewtonError::Structure(format!("entry ({r}, {c}) outside the {n} × {n} matrix")));
         }
+        if structure.len() > u32::MAX as usize {
+            return Err(NewtonError::Structure(format!("{} entries, more than 2³² − 1", structure.len())));
+        }
+        let tcc = Instant::now();
         let (col_ptr, row_idx, slot) = compressed_columns(n, structure);
+        if std::env::var_os("SKG_T").is_some() {
+            eprintln!("cc {:.4}", tcc.elapsed().as_secs_f64());
+        }
         let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
         let symbolic = factorize_symbolic_lu(pattern, lu_params()).map_err(|e| NewtonError::Analysis(format!("{e:?}")))?;
         let factor_req = symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
@@ -727,47 +734,41 @@ fn chord_may_finish(contraction: f64, residual: f64, target: f64) -> bool {
 /// The compressed-column pattern of `structure` (rows sorted within each column,
 /// duplicates merged) and the position of each structure entry in it.
 fn compressed_columns(n: usize, structure: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>, Vec<usize>) {
-    // The entries in (column, row) order: a stable counting sort by row, then one by
-    // column (linear in the entries; a comparison sort of the 736 400 entries of a
-    // chain of 16 rods at N = 1024 took 0.03 s).
-    let all: Vec<usize> = (0..structure.len()).collect();
-    let by_row = counting_sort(n, &all, |e| structure[e].0 as usize);
-    let order = counting_sort(n, &by_row, |e| structure[e].1 as usize);
+    // The entries bucketed by column (a counting sort), then each column's few entries
+    // sorted by row. Linear in the entries but for the short sorts; two counting sorts
+    // (by row, then by column) took 0.02 s on the 736 400 entries of a chain of 16 rods
+    // at N = 1024, a comparison sort of all entries 0.03 s.
+    let mut start = vec![0usize; n + 1];
+    for &(_, c) in structure {
+        start[c as usize + 1] += 1;
+    }
+    for c in 0..n {
+        start[c + 1] += start[c];
+    }
+    // (row, entry) in column order.
+    let mut bucketed = vec![(0u32, 0u32); structure.len()];
+    let mut next = start.clone();
+    for (e, &(r, c)) in structure.iter().enumerate() {
+        bucketed[next[c as usize]] = (r, e as u32);
+        next[c as usize] += 1;
+    }
     let mut col_ptr = vec![0u32; n + 1];
     let mut row_idx = Vec::with_capacity(structure.len());
     let mut slot = vec![0usize; structure.len()];
-    let mut last = None;
-    for &e in &order {
-        let (r, c) = structure[e];
-        if last != Some((r, c)) {
-            row_idx.push(r);
-            col_ptr[c as usize + 1] += 1;
-            last = Some((r, c));
-        }
-        slot[e] = row_idx.len() - 1;
-    }
     for c in 0..n {
-        col_ptr[c + 1] += col_ptr[c];
+        let column = &mut bucketed[start[c]..start[c + 1]];
+        column.sort_unstable();
+        let mut last = None;
+        for &(r, e) in column.iter() {
+            if last != Some(r) {
+                row_idx.push(r);
+                last = Some(r);
+            }
+            slot[e as usize] = row_idx.len() - 1;
+        }
+        col_ptr[c + 1] = row_idx.len() as u32;
     }
     (col_ptr, row_idx, slot)
-}
-
-/// `items` stably sorted by `key` (values below `n`).
-fn counting_sort(n: usize, items: &[usize], key: impl Fn(usize) -> usize) -> Vec<usize> {
-    let mut start = vec![0usize; n + 1];
-    for &e in items {
-        start[key(e) + 1] += 1;
-    }
-    for k in 0..n {
-        start[k + 1] += start[k];
-    }
-    let mut sorted = vec![0usize; items.len()];
-    for &e in items {
-        let k = key(e);
-        sorted[start[k]] = e;
-        start[k] += 1;
-    }
-    sorted
 }
 
 /// `F(x)` into `f`, counting and timing the call; non-finite values are an error.
@@ -910,8 +911,10 @@ mod tests {
         let mut solver = SystemSolver::new(2, &p.jac.clone()).unwrap();
         let r = 2f64.sqrt();
         for x0 in [[1.0, 0.5], [3.0, 2.0]] {
-            let full = solver.solve(&mut p, &x0, &NewtonOptions { tol: 1e-10, max_iter: 20, chord: false, single_precision: false }).unwrap();
-            let chord = solver.solve(&mut p, &x0, &NewtonOptions { tol: 1e-10, max_iter: 20, chord: true, single_precision: false }).unwrap();
+            let full =
+                solver.solve(&mut p, &x0, &NewtonOptions { tol: 1e-10, max_iter: 20, chord: false, single_precision: false }).unwrap();
+            let chord =
+                solver.solve(&mut p, &x0, &NewtonOptions { tol: 1e-10, max_iter: 20, chord: true, single_precision: false }).unwrap();
             for sol in [&full, &chord] {
                 assert_eq!(sol.status, NewtonStatus::Converged);
                 assert!(sol.max_residual <= 1e-10);
@@ -947,8 +950,10 @@ mod tests {
     fn a_chord_step_that_does_not_contract_is_replaced_by_a_newton_step() {
         let mut p = Atan(vec![(0, 0)]);
         let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
-        let full = solver.solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: false, single_precision: false }).unwrap();
-        let chord = solver.solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: true, single_precision: false }).unwrap();
+        let full =
+            solver.solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: false, single_precision: false }).unwrap();
+        let chord =
+            solver.solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: true, single_precision: false }).unwrap();
         assert_eq!((full.status, chord.status), (NewtonStatus::Converged, NewtonStatus::Converged));
         assert_eq!((chord.stats.chord_steps, chord.stats.chord_rejections), (0, 1));
         assert_eq!(chord.iterations, 2);
@@ -1001,7 +1006,8 @@ mod tests {
         }
         let mut p = Singular(vec![(0, 0), (1, 0)]);
         let mut solver = SystemSolver::new(2, &p.0.clone()).unwrap();
-        let sol = solver.solve(&mut p, &[0.0, 0.0], &NewtonOptions { tol: 1e-12, max_iter: 10, chord: true, single_precision: false }).unwrap();
+        let sol =
+            solver.solve(&mut p, &[0.0, 0.0], &NewtonOptions { tol: 1e-12, max_iter: 10, chord: true, single_precision: false }).unwrap();
         assert_eq!(sol.status, NewtonStatus::SingularJacobian);
         assert!(!sol.status.is_success());
         assert_eq!(sol.status.name(), "Newton_Singular_Jacobian");
