@@ -65,7 +65,7 @@
 //! residual in double precision, so the answer is that of a double-precision solve
 //! (coordinates within 10⁻¹³ on the chain of 16 rods; the multipliers, which the
 //! residual determines less well, within 2·10⁻⁷). Each refinement step contracts `r` by
-//! about `κ(A) · 2⁻²⁴`; when one contracts by less than [`REFINEMENT_CONTRACTION`] (single
+//! about `κ(A) · 2⁻²⁴`; when one contracts by less than one half (single
 //! precision no longer resolves the matrix), or an entry is beyond single precision's
 //! range, the matrix is factored again in double precision, and the structure stays in
 //! double precision for the rest of this solver's life. This is the scheme of LAPACK's
@@ -662,7 +662,7 @@ impl SystemSolver {
                 }
             }
             let now = max_abs(&r);
-            if !(now <= REFINEMENT_CONTRACTION * last) {
+            if now.is_nan() || now > REFINEMENT_CONTRACTION * last {
                 break;
             }
             last = now;
