@@ -10,9 +10,10 @@
 //! (a COLAMD fill-reducing column order and the elimination structure) with faer's
 //! sparse LU. Every Newton iteration then does one numeric LU (threshold partial
 //! pivoting by rows, on the stored analysis and into the stored buffers; in single
-//! precision where asked, see "Mixed precision" below) and one pair of triangular solves
-//! (or a few, to refine a single-precision solution). The same value serves any number of solves of systems with
-//! the same structure: successive iterations, successive time windows, sweep points.
+//! precision where asked, see "Mixed precision" below) and one pair of triangular
+//! solves (or a few, to refine a single-precision solution). The same value serves any
+//! number of solves of systems with the same structure: successive iterations,
+//! successive time windows, sweep points.
 //! faer was chosen over SuiteSparse's KLU/UMFPACK by measurement (docs/benchmarks.md):
 //! it is fast enough on these matrices and needs no system library or FFI.
 //!
@@ -65,15 +66,15 @@
 //! residual in double precision, so the answer is that of a double-precision solve
 //! (coordinates within 10⁻¹³ on the chain of 16 rods; the multipliers, which the
 //! residual determines less well, within 2·10⁻⁷). Each refinement step contracts `r` by
-//! about `κ(A) · 2⁻²⁴`; when one contracts by less than one half (single
-//! precision no longer resolves the matrix), or an entry is beyond single precision's
+//! about `κ(A) · 2⁻²⁴`; when one contracts by less than one half (single precision no
+//! longer resolves the matrix), or an entry is beyond single precision's
 //! range, the matrix is factored again in double precision, and the structure stays in
 //! double precision for the rest of this solver's life. This is the scheme of LAPACK's
 //! `DSGESV` (Langou et al., *Exploiting the performance of 32 bit floating point
 //! arithmetic in obtaining 64 bit accuracy*, 2006), with a stopping test suited to a
 //! Newton step. A single-precision LU moves half the bytes and fits twice the numbers in
 //! a SIMD register: on the chain of 16 rods at N = 1024 it takes 0.17 s against 0.24 s,
-//! and the process's peak memory falls from 266 to 173 MB. The backend asks for it where
+//! and the process's peak memory falls from 273 to 182 MB. The backend asks for it where
 //! that pays (`backend::single_precision_pays`).
 
 use std::fmt;
@@ -333,11 +334,7 @@ impl SystemSolver {
         if structure.len() > u32::MAX as usize {
             return Err(NewtonError::Structure(format!("{} entries, more than 2³² − 1", structure.len())));
         }
-        let tcc = Instant::now();
         let (col_ptr, row_idx, slot) = compressed_columns(n, structure);
-        if std::env::var_os("SKG_T").is_some() {
-            eprintln!("cc {:.4}", tcc.elapsed().as_secs_f64());
-        }
         let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
         let symbolic = factorize_symbolic_lu(pattern, lu_params()).map_err(|e| NewtonError::Analysis(format!("{e:?}")))?;
         let factor_req = symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
@@ -625,8 +622,9 @@ impl SystemSolver {
 
     /// Iterative refinement with the single-precision factorization `M ≈ A`:
     /// `x ← x + M⁻¹ r`, `r = b − A x` in double precision, from `x = 0`, until
-    /// `max |r| ≤ target` after at least one solve; each correction is solved for `r / max |r|`, which keeps the
-    /// right-hand side within single precision's range. Fails (`false`, `rhs` unchanged)
+    /// `max |r| ≤ target` after at least one solve; each correction is solved for
+    /// `r / max |r|`, which keeps the right-hand side within single precision's range.
+    /// Fails (`false`, `rhs` unchanged)
     /// when a step does not reduce `max |r|` by [`REFINEMENT_CONTRACTION`] or after
     /// [`MAX_REFINEMENT_SOLVES`] solves; on success `rhs` holds `x`.
     fn refine(&mut self, values: &[f64], rhs: &mut [f64], target: f64, stats: &mut NewtonStats) -> bool {
