@@ -267,10 +267,7 @@ impl SquareSolver {
     /// Whether a Newton solve of `action`'s system would make a new LU analysis (the
     /// backend is Newton and the solver holds none of this structure).
     pub fn needs_analysis(&self, action: &Action) -> bool {
-        let n = match self.formulation {
-            Formulation::Reduced => action.layout.n_p,
-            Formulation::Full => action.layout.len(),
-        };
+        let n = unknowns(self.formulation, action);
         self.settings.backend == Backend::Newton && !self.lu.as_ref().is_some_and(|lu| lu.fits(n, &self.jac.structure))
     }
 
@@ -282,12 +279,8 @@ impl SquareSolver {
         if !self.needs_analysis(action) {
             return Ok(());
         }
-        let n = match self.formulation {
-            Formulation::Reduced => action.layout.n_p,
-            Formulation::Full => action.layout.len(),
-        };
         self.lu = None;
-        let analysed = SystemSolver::new(n, &self.jac.structure)?;
+        let analysed = SystemSolver::new(unknowns(self.formulation, action), &self.jac.structure)?;
         self.unreported_analysis_s = Some(analysed.analysis_seconds());
         self.lu = Some(analysed);
         Ok(())
@@ -319,12 +312,16 @@ impl SquareSolver {
 /// [`SINGLE_PRECISION_MIN_UNKNOWNS`] unknowns with at least
 /// [`SINGLE_PRECISION_MIN_PER_NODE`] per node.
 fn single_precision_pays(scene: &Scene, action: &Action) -> bool {
-    let lay = &action.layout;
-    let unknowns = match scene.formulation {
-        Formulation::Reduced => lay.n_p,
-        Formulation::Full => lay.len(),
-    };
-    unknowns >= SINGLE_PRECISION_MIN_UNKNOWNS && unknowns >= SINGLE_PRECISION_MIN_PER_NODE * lay.nodes
+    let n = unknowns(scene.formulation, action);
+    n >= SINGLE_PRECISION_MIN_UNKNOWNS && n >= SINGLE_PRECISION_MIN_PER_NODE * action.layout.nodes
+}
+
+/// The unknowns of `action`'s square system in `formulation`.
+fn unknowns(formulation: Formulation, action: &Action) -> usize {
+    match formulation {
+        Formulation::Reduced => action.layout.n_p,
+        Formulation::Full => action.layout.len(),
+    }
 }
 
 /// Below this many unknowns a factorization costs too little for its precision to
