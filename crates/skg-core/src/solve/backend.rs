@@ -289,11 +289,16 @@ impl SquareSolver {
     /// Solve the system of `action` (the model and grid this solver was built for) from
     /// the whole unknown vector `z0` with the configured backend.
     pub fn solve(&mut self, action: &Action, z0: &[f64]) -> Result<SystemSolution, BackendError> {
+        // Newton's analysis, unless one of this structure is in hand (made beside the
+        // guess, or kept from an earlier solve).
+        self.analyse(action)?;
+        let analysis_s = self.unreported_analysis_s.take();
+        let lu = self.lu.as_mut();
         let n_p = action.layout.n_p;
         match self.formulation {
             Formulation::Reduced => {
                 let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac: &self.jac, hess: self.hess.as_ref() };
-                let mut solution = solve_problem(&self.settings, &mut self.lu, self.unreported_analysis_s.take(), &mut p, &z0[..n_p])?;
+                let mut solution = solve_problem(&self.settings, lu, analysis_s, &mut p, &z0[..n_p])?;
                 let mut z = vec![0.0; action.layout.len()];
                 z[..n_p].copy_from_slice(&solution.z);
                 solution.z = z;
@@ -301,7 +306,7 @@ impl SquareSolver {
             }
             Formulation::Full => {
                 let mut p = Full { action, ws: action.model.workspace(), jac: &self.jac };
-                solve_problem(&self.settings, &mut self.lu, self.unreported_analysis_s.take(), &mut p, z0)
+                solve_problem(&self.settings, lu, analysis_s, &mut p, z0)
             }
         }
     }
@@ -395,30 +400,21 @@ pub fn discard_kept_analysis() {
     KEPT_ANALYSIS.take();
 }
 
-/// Solve one adapter's system from `x0` (the adapter's unknowns): Newton first if
-/// asked for (reusing the analysis in `lu` when its structure fits, else replacing it),
-/// Ipopt when Newton was not asked for or failed.
+/// Solve one adapter's system from `x0` (the adapter's unknowns): Newton first with
+/// `lu`, the analysis of its structure (present exactly when the backend is Newton;
+/// `analysis_s` the seconds it took when it was made for this solve, `None` when it was
+/// reused), Ipopt when Newton was not asked for or failed.
 fn solve_problem<P: Problem>(
     settings: &Settings,
-    lu: &mut Option<SystemSolver>,
-    unreported_analysis_s: Option<f64>,
+    lu: Option<&mut SystemSolver>,
+    analysis_s: Option<f64>,
     problem: &mut P,
     x0: &[f64],
 ) -> Result<SystemSolution, BackendError> {
     let mut report = BackendReport { requested: settings.backend, newton: None, handed_over_to_ipopt: false, ipopt: None };
     let (mut total_s, mut evaluation_s) = (0.0, 0.0);
-    if settings.backend == Backend::Newton {
-        let fits = lu.as_ref().is_some_and(|lu| lu.fits(x0.len(), problem.jacobian_structure()));
-        let reusable = fits && unreported_analysis_s.is_none();
-        let mut analysis_s = if fits { unreported_analysis_s.unwrap_or(0.0) } else { 0.0 };
-        if !fits {
-            // Free an analysis of another structure before making the new one.
-            *lu = None;
-            let analysed = SystemSolver::new(x0.len(), problem.jacobian_structure())?;
-            analysis_s = analysed.analysis_seconds();
-            *lu = Some(analysed);
-        }
-        let lu = lu.as_mut().expect("set above");
+    if let Some(lu) = lu {
+        let (reusable, analysis_s) = (analysis_s.is_none(), analysis_s.unwrap_or(0.0));
         let sol = lu.solve(problem, x0, &settings.newton)?;
         total_s += analysis_s + sol.total_s;
         evaluation_s += sol.stats.evaluation_s;
