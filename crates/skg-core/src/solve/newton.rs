@@ -849,6 +849,35 @@ mod tests {
         }
     }
 
+    /// `F(x) = A x − b` with the constant `A` given by its entries (`structure`, `values`).
+    struct Linear {
+        structure: Vec<(u32, u32)>,
+        values: Vec<f64>,
+        b: Vec<f64>,
+    }
+    impl Problem for Linear {
+        fn num_variables(&self) -> usize {
+            self.b.len()
+        }
+        fn num_constraints(&self) -> usize {
+            self.b.len()
+        }
+        fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+            c.iter_mut().zip(&self.b).for_each(|(ci, bi)| *ci = -bi);
+            for (&(i, j), a) in self.structure.iter().zip(&self.values) {
+                c[i as usize] += a * x[j as usize];
+            }
+            Ok(())
+        }
+        fn jacobian_structure(&self) -> &[(u32, u32)] {
+            &self.structure
+        }
+        fn jacobian_values(&mut self, _x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
+            v.copy_from_slice(&self.values);
+            Ok(())
+        }
+    }
+
     /// `F(x) = atan(x)`: one unknown, root 0; Newton's full step overshoots from |x| ≳ 1.39.
     struct Atan(Vec<(u32, u32)>);
     impl Problem for Atan {
@@ -980,30 +1009,9 @@ mod tests {
 
     #[test]
     fn failures_are_statuses_and_misuse_is_an_error() {
-        // A structurally singular Jacobian (column 1 empty).
-        struct Singular(Vec<(u32, u32)>);
-        impl Problem for Singular {
-            fn num_variables(&self) -> usize {
-                2
-            }
-            fn num_constraints(&self) -> usize {
-                2
-            }
-            fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-                c[0] = x[0] - 1.0;
-                c[1] = x[0] + 1.0;
-                Ok(())
-            }
-            fn jacobian_structure(&self) -> &[(u32, u32)] {
-                &self.0
-            }
-            fn jacobian_values(&mut self, _x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
-                v.fill(1.0);
-                Ok(())
-            }
-        }
-        let mut p = Singular(vec![(0, 0), (1, 0)]);
-        let mut solver = SystemSolver::new(2, &p.0.clone()).unwrap();
+        // A structurally singular Jacobian (column 1 empty): x0 − 1 = 0, x0 + 1 = 0.
+        let mut p = Linear { structure: vec![(0, 0), (1, 0)], values: vec![1.0, 1.0], b: vec![1.0, -1.0] };
+        let mut solver = SystemSolver::new(2, &p.structure.clone()).unwrap();
         let sol =
             solver.solve(&mut p, &[0.0, 0.0], &NewtonOptions { tol: 1e-12, max_iter: 10, chord: true, single_precision: false }).unwrap();
         assert_eq!(sol.status, NewtonStatus::SingularJacobian);
@@ -1165,29 +1173,9 @@ mod tests {
     /// again in double precision and later steps stay in double precision.
     #[test]
     fn a_matrix_single_precision_cannot_resolve_falls_back_to_double() {
-        struct NearlySingular(Vec<(u32, u32)>);
-        impl Problem for NearlySingular {
-            fn num_variables(&self) -> usize {
-                2
-            }
-            fn num_constraints(&self) -> usize {
-                2
-            }
-            fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-                c[0] = x[0] + x[1] - 2.0;
-                c[1] = x[0] + (1.0 + 1e-9) * x[1] - (2.0 + 1e-9);
-                Ok(())
-            }
-            fn jacobian_structure(&self) -> &[(u32, u32)] {
-                &self.0
-            }
-            fn jacobian_values(&mut self, _x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
-                v.copy_from_slice(&[1.0, 1.0, 1.0, 1.0 + 1e-9]);
-                Ok(())
-            }
-        }
-        let mut p = NearlySingular(vec![(0, 0), (0, 1), (1, 0), (1, 1)]);
-        let mut solver = SystemSolver::new(2, &p.0.clone()).unwrap();
+        let mut p =
+            Linear { structure: vec![(0, 0), (0, 1), (1, 0), (1, 1)], values: vec![1.0, 1.0, 1.0, 1.0 + 1e-9], b: vec![2.0, 2.0 + 1e-9] };
+        let mut solver = SystemSolver::new(2, &p.structure.clone()).unwrap();
         let opts = NewtonOptions { tol: 1e-14, max_iter: 10, chord: true, single_precision: true };
         for _ in 0..2 {
             let sol = solver.solve(&mut p, &[0.0, 0.0], &opts).unwrap();
