@@ -624,9 +624,9 @@ impl SystemSolver {
     /// `x ← x + M⁻¹ r`, `r = b − A x` in double precision, from `x = 0`, until
     /// `max |r| ≤ target` after at least one solve; each correction is solved for
     /// `r / max |r|`, which keeps the right-hand side within single precision's range.
-    /// Fails (`false`, `rhs` unchanged)
-    /// when a step does not reduce `max |r|` by [`REFINEMENT_CONTRACTION`] or after
-    /// [`MAX_REFINEMENT_SOLVES`] solves; on success `rhs` holds `x`.
+    /// Fails (`false`, `rhs` unchanged) when a step does not reduce `max |r|` by
+    /// [`REFINEMENT_CONTRACTION`], after [`MAX_REFINEMENT_SOLVES`] solves, or when `x` is
+    /// not finite; on success `rhs` holds `x`.
     fn refine(&mut self, values: &[f64], rhs: &mut [f64], target: f64, stats: &mut NewtonStats) -> bool {
         let t = Instant::now();
         let n = self.n;
@@ -667,10 +667,12 @@ impl SystemSolver {
             converged = now <= target;
         }
         stats.triangular_solve_s += t.elapsed().as_secs_f64();
-        if converged && x.iter().all(|v| v.is_finite()) {
+        // A solution with a non-finite entry fails too (`max_abs` can miss a NaN of `r`).
+        let solved = converged && x.iter().all(|v| v.is_finite());
+        if solved {
             rhs.copy_from_slice(&x);
         }
-        converged
+        solved
     }
 }
 
