@@ -99,13 +99,38 @@ fn energy_drift_vanishes_at_the_operators_order() {
 
 /// Twenty revolutions on SBP484 (scenarios/rolling_disk_long.toml, windows of two
 /// revolutions): θ reaches 630 rad and SBP484's closure coefficients reach 130/Δt, so the
-/// rounding error of the equations is about 1.3e-8, above the absolute 1e-8 that a
-/// residual must otherwise meet. Both backends stop at the round-off level; the solve
-/// counts as converged because every equation is within its own round-off level, and
-/// its trajectory matches the closed form. (Before the equation-by-equation test it was
-/// reported as not converged, exit 3, on every rung of the fallback ladder.)
+/// rounding error of the equations is about 1e-8, the absolute residual a solve must
+/// otherwise meet. Where the residual lands against 1e-8 depends on the processor and its
+/// BLAS kernels (9.8e-9 with Ipopt on an AMD EPYC under OpenBLAS's Zen kernels, above
+/// 1e-8 on others), so this test asserts what a user relies on: the solve converges, by
+/// either path, is trusted and matches the closed form. The round-off path itself is
+/// tested deterministically by [`a_heavy_disk_converges_at_the_round_off_level_of_its_equations`].
+/// (Before the equation-by-equation test this scene was reported as not converged,
+/// exit 3, on every rung of the fallback ladder.)
 #[test]
-fn sbp484_over_twenty_revolutions_converges_at_the_round_off_level() {
+fn sbp484_over_twenty_revolutions_converges_and_matches_the_closed_form() {
+    use skg_core::scene::Backend;
+    for backend in [Backend::Ipopt, Backend::Newton] {
+        let ov = Overrides { backend: Some(backend), ..common::grid(5121, "SBP484") };
+        let o = common::solve("rolling_disk_long", &ov);
+        assert!(o.status.is_converged(), "{backend}: {}", o.status);
+        assert!(o.trusted(), "{backend}: {}", o.verification.reason);
+        // The end nodes of the last window only are excluded (the others were discarded).
+        let err = common::max_error(&o, &[0, 1, 2, 3], 2, common::rolling_disk_exact);
+        assert!(err < 2e-5, "{backend}: max error {err:e} against the closed form (measured 7.4e-6)");
+    }
+}
+
+/// The round-off path, on a system whose residual cannot reach the absolute 1e-8: the
+/// paper's disk with its mass and moments of inertia scaled by 1e10 moves exactly as
+/// the paper's (every term of its Lagrangian scales alike), but the terms of its
+/// equations are 1e10 times larger, and so is their rounding error. Measured: both
+/// backends stop at a residual of 2.4e-4 … 2.5e-4 (on an AMD EPYC, OpenBLAS Zen
+/// kernels), four orders of magnitude above 1e-8; a machine would have to round 10⁴
+/// times better to land below it. The solve counts as converged only through the
+/// equation-by-equation round-off test, and its trajectory is the paper's.
+#[test]
+fn a_heavy_disk_converges_at_the_round_off_level_of_its_equations() {
     use skg_core::scene::Backend;
     use skg_core::solve::backend::SolverStatus;
     use skg_core::solve::newton::NewtonStatus;
@@ -113,13 +138,15 @@ fn sbp484_over_twenty_revolutions_converges_at_the_round_off_level() {
         (Backend::Ipopt, SolverStatus::IpoptConvergedToRoundOff),
         (Backend::Newton, SolverStatus::Newton(NewtonStatus::ConvergedToRoundOff)),
     ] {
-        let ov = Overrides { backend: Some(backend), ..common::grid(5121, "SBP484") };
-        let o = common::solve("rolling_disk_long", &ov);
+        let set = [("M", "1e10"), ("IS", "5e9"), ("ID", "2.5e9")].map(|(k, v)| (k.to_string(), v.to_string())).to_vec();
+        let o = common::solve("rolling_disk", &Overrides { backend: Some(backend), set, ..Overrides::default() });
         assert_eq!(o.status.solver(), status, "{backend}");
-        assert!(o.diagnostics.max_residual > skg_core::solve::CONVERGED_RESIDUAL, "{backend}: residual {:e}", o.diagnostics.max_residual);
+        assert!(o.status.is_converged(), "{backend}: {}", o.status);
+        let residual = o.diagnostics.max_residual;
+        assert!(residual > 1e2 * skg_core::solve::CONVERGED_RESIDUAL, "{backend}: residual {residual:e}");
         assert!(o.trusted(), "{backend}: {}", o.verification.reason);
-        // The end nodes of the last window only are excluded (the others were discarded).
-        let err = common::max_error(&o, &[0, 1, 2, 3], 2, common::rolling_disk_exact);
-        assert!(err < 2e-5, "{backend}: max error {err:e} against the closed form (measured 7.4e-6)");
+        // The paper's grid: the same error as the unit disk (independent implementation: 0.0152).
+        let err = common::max_error(&o, &[0, 1, 2], 2, common::rolling_disk_exact);
+        assert!((err - 0.0152).abs() < 0.0152 * 0.05, "{backend}: max error {err}");
     }
 }
