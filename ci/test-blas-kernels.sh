@@ -76,7 +76,8 @@ if ! command -v cargo >/dev/null 2>&1 && [[ -f "$HOME/.cargo/env" ]]; then
     source "$HOME/.cargo/env"
 fi
 bash ci/python-env.sh || exit 1
-cargo build --workspace --tests || exit 1
+cargo test --workspace --no-run "${cargo_args[@]}" || exit 1
+cargo build -p skg-cli || exit 1
 env VIRTUAL_ENV="$PWD/.venv" PYO3_CONFIG_FILE="$PWD/crates/skg-python/pyo3-config.txt" \
     .venv/bin/maturin develop -m crates/skg-python/Cargo.toml >target/maturin-develop.log 2>&1 || {
     cat target/maturin-develop.log >&2

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Set up (installs Ipopt, libclang and pkg-config when missing, and rustfmt and clippy
 # when rustup can add them) and check the workspace. This is exactly what CI runs
-# (.ci/run), in this order, stopping at the first failure:
+# (.ci/run), in this order, stopping at the first failure, except that the Python tests
+# run even when a Rust test failed (the script then exits non-zero after them, so that
+# every failure is seen at once):
 #   cargo fmt --all --check                                formatting
 #   bash ci/check-links.sh                                 the docs' links, anchors and quoted paths
 #   cargo clippy --workspace --all-targets -- -D warnings  lints, tests included
@@ -35,7 +37,8 @@ step cargo clippy --workspace --all-targets -- -D warnings
 step env RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 step cargo build --workspace --examples
 step cargo run --quiet -p skg-core --example oscillator
-step env SKG_REQUIRE_SLURM=1 cargo test --workspace --no-fail-fast "$@"
+rust_tests=0
+step env SKG_REQUIRE_SLURM=1 cargo test --workspace --no-fail-fast "$@" || rust_tests=$?
 
 # The Python package: .venv with maturin, numpy, pytest and pandas (ci/python-env.sh),
 # the extension built by maturin in the dev profile, and its tests, which compare with
@@ -54,4 +57,12 @@ if grep -q '^ *Compiling skg-core ' "$maturin_log"; then
     echo "warning: maturin compiled skg-core again instead of reusing the workspace's build (see crates/skg-python/Cargo.toml):" \
         "$(sed -n 's/^ *Compiling \([^ ]*\) .*/\1/p' "$maturin_log" | tr '\n' ' ')" >&2
 fi
-step env SKG_SOLVE="$PWD/target/debug/skg-solve" .venv/bin/python -m pytest -q crates/skg-python/tests
+python_tests=0
+step env SKG_SOLVE="$PWD/target/debug/skg-solve" .venv/bin/python -m pytest -q crates/skg-python/tests || python_tests=$?
+failed=()
+((rust_tests == 0)) || failed+=("the Rust tests (cargo test, whose output is above the Python tests')")
+((python_tests == 0)) || failed+=("the Python tests (pytest)")
+if ((${#failed[@]} > 0)); then
+    printf 'test.sh: failed: %s\n' "${failed[@]}" >&2
+    exit 1
+fi

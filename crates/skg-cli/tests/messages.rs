@@ -169,7 +169,9 @@ fn animations_and_strips_beyond_their_bounds_are_refused_at_once() {
         let (code, t) = run(&all, dir.path());
         assert_eq!(code, Some(2), "{args:?}: {t}");
         assert!(t.contains(expect), "{args:?}: {t}");
-        assert!(started.elapsed().as_secs() < 10, "{args:?} took {:?}", started.elapsed());
+        // A watchdog, not a timing: each refusal takes well under a second; producing the
+        // frames first would take minutes to hours.
+        assert!(started.elapsed().as_secs() < 60, "{args:?} took {:?}", started.elapsed());
     }
     assert!(!dir.path().join("a.gif").exists() && !dir.path().join("s.png").exists());
 }
@@ -288,7 +290,9 @@ fn a_sweep_of_a_million_points_is_refused_at_once() {
     let (code, t) = run(&["sweep", s(&sweep), "-o", "out"], dir.path());
     assert_eq!(code, Some(1), "{t}");
     assert!(t.contains("1000000 points as listed") && t.contains("--yes"), "{t}");
-    assert!(started.elapsed().as_secs_f64() < 5.0, "took {:?}", started.elapsed());
+    // A watchdog, not a timing: the refusal takes well under a second; planning the
+    // million points first would take minutes.
+    assert!(started.elapsed().as_secs_f64() < 60.0, "took {:?}", started.elapsed());
     // A shard is counted as the shard: 10⁶/300 points need no confirmation, 10⁶/50 do.
     let (code, t) = run(&["sweep", s(&sweep), "-o", "out", "--shard", "7/50"], dir.path());
     assert_eq!(code, Some(1), "{t}");

@@ -36,9 +36,14 @@ fn regenerated_references_match_the_checked_in_files() {
         assert_eq!(unversioned(&fresh), unversioned(&old), "{file}: provenance changed; run ci/regenerate-references.sh");
         assert_eq!(fresh.columns, old.columns);
         assert_eq!(fresh.rows.len(), old.rows.len());
+        // Within 1e-9, not to the last bit: the files were made on another machine, and
+        // another libm (glibc picks FMA variants of sin and cos by processor) can move
+        // one of the integrator's step-size decisions, which moves the numbers by about
+        // the integration's own error (rtol 1e-12 per step). A change of the equations,
+        // the method or its tolerance moves them by far more.
         for (a, b) in fresh.rows.iter().zip(&old.rows) {
             for (x, y) in a.iter().zip(b) {
-                assert!((x - y).abs() <= 1e-12 * x.abs().max(1.0), "{file}: {x} vs {y}; run ci/regenerate-references.sh");
+                assert!((x - y).abs() <= 1e-9 * x.abs().max(1.0), "{file}: {x} vs {y}; run ci/regenerate-references.sh");
             }
         }
     }

@@ -515,15 +515,16 @@ fn a_killed_worker_costs_only_its_point() {
 #[test]
 fn a_timeout_kills_only_the_late_point() {
     let dir = tempfile::tempdir().unwrap();
-    // The small points take well under 0.2 s in a test build; the large one several
-    // seconds (its guess and verification alone; Ipopt's own solve is about 1 s since it
-    // stops at the round-off level), so a 1 s limit separates them.
-    let p = sweep_file(dir.path(), "tumbler", "timeout = 1\n[[grid]]\nnodes = [128, 160, 192]\n[[points]]\nnodes = 65536\n");
+    // The small points take well under 0.2 s in a test build; the large one well over
+    // 20 s (at 65536 nodes it took several seconds, its guess and verification alone),
+    // so a 2 s limit separates them by a factor of ten either way, on a loaded machine
+    // as on a fast one.
+    let p = sweep_file(dir.path(), "tumbler", "timeout = 2\n[[grid]]\nnodes = [128, 160, 192]\n[[points]]\nnodes = 262144\n");
     let r = run_sweep(&p, &dir.path().join("out"), &["-j", "1"]);
     let rows = by_nodes(&r, "converged");
     assert_eq!(
         rows.iter().map(|&(n, s, _)| (n, s)).collect::<Vec<_>>(),
-        [(128, "solved"), (160, "solved"), (192, "solved"), (65536, "timeout")]
+        [(128, "solved"), (160, "solved"), (192, "solved"), (262144, "timeout")]
     );
     assert_eq!(rows[3].2, "false");
 }

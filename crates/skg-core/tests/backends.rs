@@ -24,11 +24,13 @@ fn newton_and_ipopt_agree_on_every_shipped_scene() {
             let ipopt = common::solve(name, &with_backend(Backend::Ipopt, formulation));
             let newton = common::solve(name, &with_backend(Backend::Newton, formulation));
             let ctx = format!("{name} ({formulation})");
-            // Newton converged by itself, with the same number of steps as Ipopt's
-            // (both take full Newton steps from the same guess).
+            // Newton converged by itself, in about Ipopt's number of steps (both take full
+            // Newton steps from the same guess; whether the last one lands below the
+            // tolerance or one more is needed is decided by rounding, which differs
+            // between processors and BLAS kernels).
             assert_eq!(newton.status.solver(), SolverStatus::Newton(NewtonStatus::Converged), "{ctx}");
             assert!(!newton.backend.handed_over_to_ipopt, "{ctx}");
-            assert_eq!(newton.iterations, ipopt.iterations, "{ctx}: iterations");
+            assert!(newton.iterations.abs_diff(ipopt.iterations) <= 1, "{ctx}: iterations {} and {}", newton.iterations, ipopt.iterations);
             assert_eq!(newton.history.len(), newton.iterations + 1, "{ctx}");
             let (a, b) = (&newton.trajectory, &ipopt.trajectory);
             for (what, x, y) in [("q", &a.q, &b.q), ("v", &a.v, &b.v), ("λ", &a.lambda, &b.lambda)] {
@@ -42,11 +44,13 @@ fn newton_and_ipopt_agree_on_every_shipped_scene() {
             assert_eq!(json["settings"]["backend"], "newton", "{ctx}");
             assert_eq!(json["backend"]["requested"], "newton", "{ctx}");
             // One factorization per step, but for chord steps (the last step, where one
-            // more step at the last rate converges, reuses the last factorization).
+            // more step at the last rate converges, reuses the last factorization; a
+            // second where the first lands between the tolerance and the round-off level,
+            // newton.rs's module documentation).
             let counts = &json["backend"]["newton"];
             let (jacobians, chords) = (counts["jacobian_evaluations"].as_u64().unwrap(), counts["chord_steps"].as_u64().unwrap());
             assert_eq!(jacobians + chords, newton.iterations as u64, "{ctx}");
-            assert!(chords <= 1, "{ctx}: {chords} chord steps");
+            assert!(chords <= 2, "{ctx}: {chords} chord steps");
             let ipopt_json = serde_json::to_value(&ipopt).unwrap();
             assert!(ipopt_json["backend"]["newton"].is_null() && ipopt_json["backend"]["requested"] == "ipopt", "{ctx}");
         }

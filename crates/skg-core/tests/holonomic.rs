@@ -68,8 +68,11 @@ fn pendulum_with_a_rod_constraint_follows_the_angle_equation() {
     let fine_error = position_error(&fine.trajectory.t, &fine.trajectory.q, 2);
     assert!(fine_error < coarse / 6.0, "N = 512: {fine_error:e} (N = 256: {coarse:e})");
     check_drift(&o, 5e-5);
-    // The enforced constraint is the time derivative 2(x ẋ + y ẏ), to round-off inside.
-    assert!(o.diagnostics.max_constraint_interior < 1e-10, "{}", o.diagnostics.max_constraint_interior);
+    // The enforced constraint is the time derivative 2(x ẋ + y ẏ), to the solver's
+    // tolerance inside: its equation is the constraint times the node's quadrature weight,
+    // solved to 1e-11, so |ġ| ≤ 1e-11 / (43/48 Δt) = 9.5e-10 wherever the last step lands
+    // (measured far below: quadratic convergence overshoots the tolerance).
+    assert!(o.diagnostics.max_constraint_interior < 2e-9, "{}", o.diagnostics.max_constraint_interior);
     // The multiplier is the tension over 2l (interior nodes, last two excluded); measured
     // 2.4e-3 against values from 2.6 to 9.4.
     let exact = angle(&tr.t);

@@ -55,10 +55,13 @@ fn the_natural_condition_solves_every_shipped_scene_alike_with_both_backends_and
         assert_eq!(full.sizes.variables, 2 * ipopt.sizes.variables, "{name}");
         let scene = common::load(name, &Overrides::default());
         let dq0 = max_diff(&ipopt.trajectory.q[..1], std::slice::from_ref(&scene.initial_q));
-        assert!(dq0 < 1e-13, "{name}: initial position off by {dq0:e}");
+        // Its equation q(t₀) − q₀ = 0 is solved to 1e-11 (measured about 1e-15).
+        assert!(dq0 < 1e-11, "{name}: initial position off by {dq0:e}");
         if let Some(g0) = ipopt.trajectory.g.first().filter(|g| !g.is_empty()) {
             let g0 = g0.iter().fold(0.0_f64, |m, g| m.max(g.abs()));
-            assert!(g0 < 1e-9, "{name}: constraints at node 1: {g0:e}");
+            // Its equation is g times the first node's quadrature weight (17/48 Δt on
+            // SBP242: 0.0042 on the pendulum), solved to 1e-11: |g| ≤ 2.4e-9.
+            assert!(g0 < 1e-8, "{name}: constraints at node 1: {g0:e}");
         }
         let json = serde_json::to_value(&ipopt).unwrap();
         assert_eq!(json["settings"]["initial_velocity"], "natural", "{name}");

@@ -23,7 +23,9 @@ fn paper_grid_matches_closed_form_and_constraints_hold() {
     // φ = t exactly solves φ'' = 0 with φ(0)=0, φ'(0)=1: exact to round-off on SBP242.
     assert!(common::max_error(&o, &[3], 0, common::rolling_disk_exact) < 1e-10);
     let d = &o.diagnostics;
-    assert!(d.max_constraint_interior < 1e-10, "g at interior nodes {:e}", d.max_constraint_interior);
+    // A constraint's equation is g times the node's quadrature weight, solved to 1e-11:
+    // |g| ≤ 1e-11 / (43/48 Δt) = 1.1e-10 wherever the last step lands (measured 5.8e-13).
+    assert!(d.max_constraint_interior < 2e-10, "g at interior nodes {:e}", d.max_constraint_interior);
     assert!(o.iterations <= 8, "{} Ipopt iterations", o.iterations);
     // Energy (kinetic − M g x sin α) is conserved to the discretization error: compare
     // with the position error scale (energy ~ 25 J, positions ~ 10 m).

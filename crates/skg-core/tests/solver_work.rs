@@ -11,14 +11,28 @@
 //! test profile (measured; the longest, `drum_long` on its 20481 nodes, 1.0 s with Ipopt
 //! and 0.65 s with Newton), so none is replaced by a cheaper variant.
 //!
-//! **Exact counts.** The solver's counts (iterations, evaluations, systems, attempts)
-//! must not exceed the snapshot at all: for one build they are the same from run to run
-//! (Newton is sequential, Ipopt uses MUMPS's deterministic AMF ordering). The
-//! time-stepping counts (accepted and rejected steps, right-hand-side evaluations) may
-//! exceed it by [`STEPS_SLACK`] of their value, rounded down (none below 100): each of
-//! their hundreds of step-size decisions compares a floating-point error estimate with 1,
-//! so another machine (another libm, other vector kernels) can move a few of them, while
-//! a change of the method or its tolerances moves many.
+//! **What may differ between machines, and the slack it gets.** The counts are the
+//! same from run to run on one machine with one BLAS (Newton is sequential, Ipopt uses
+//! MUMPS's deterministic AMF ordering), but not between machines: MUMPS does its dense
+//! work in BLAS, whose kernels OpenBLAS picks by processor (or the reference BLAS);
+//! faer's LU picks its vector kernels by processor too; glibc's `sin`, `cos`, `exp`
+//! pick FMA variants where the processor has them. So the last bits of every iterate
+//! differ, and so may a decision taken on a rounding-level number:
+//!
+//! - whether the last step of a solve lands below the tolerance or one more is needed,
+//!   and whether a chord step is taken: per system solved, the iterations and the
+//!   Jacobian and Hessian evaluations may exceed the snapshot by one (one step more, or
+//!   a Newton step where a chord step was), the residual evaluations by two (that step's
+//!   and a line-search trial's);
+//! - a step-size decision of the time stepping (an error estimate compared with 1):
+//!   the accepted and rejected steps may exceed the snapshot by [`STEPS_SLACK`] of their
+//!   value or two steps, whichever is more, and the right-hand-side evaluations by
+//!   `STEPS_SLACK` or two steps' worth ([`RHS_PER_STEP`] each).
+//!
+//! The ladder's attempts and the systems solved are exact: they follow from whether a
+//! solve converges and verifies, which on the shipped scenes is decided by margins of
+//! orders of magnitude, never by rounding. A change of the method or of its tolerances
+//! moves many steps or iterations at once and still fails here.
 //!
 //! **Fewer counts** pass, and the test prints them (`--nocapture`) so that the snapshot
 //! can be tightened.
@@ -42,6 +56,14 @@ use skg_core::solve::{self, Outcome, Work};
 
 /// Relative slack of the time-stepping counts (see the module documentation).
 const STEPS_SLACK: f64 = 0.01;
+
+/// Extra residual evaluations allowed per system solved (see the module documentation):
+/// one more step's and a line-search trial's. Iterations and Jacobian and Hessian
+/// evaluations get one per system.
+const RESIDUALS_PER_SYSTEM: usize = 2;
+
+/// Right-hand-side evaluations of one DOP853 step (12 stages, the first reused).
+const RHS_PER_STEP: usize = 12;
 
 /// The counts of one scene's solve on one backend, by name, in the snapshot's order.
 fn counts(o: &Outcome) -> Vec<(&'static str, usize)> {
@@ -72,17 +94,16 @@ fn counts(o: &Outcome) -> Vec<(&'static str, usize)> {
     ]
 }
 
-/// Whether a count is a time-stepping count (allowed [`STEPS_SLACK`]).
-fn is_time_stepping(name: &str) -> bool {
-    name.starts_with("guess_") || name.starts_with("verification_")
-}
-
-/// The largest value of a count the snapshot's `expected` allows.
-fn allowed(name: &str, expected: usize) -> usize {
-    if is_time_stepping(name) {
-        expected + (STEPS_SLACK * expected as f64).floor() as usize
-    } else {
-        expected
+/// The largest value of a count the snapshot's `expected` allows, for a solve of
+/// `systems` systems (see the module documentation).
+fn allowed(name: &str, expected: usize, systems: usize) -> usize {
+    let relative = (STEPS_SLACK * expected as f64).floor() as usize;
+    match name {
+        "attempts" | "systems" => expected,
+        _ if name.ends_with("_rhs_evaluations") => expected + relative.max(2 * RHS_PER_STEP),
+        _ if name.ends_with("_steps") => expected + relative.max(2),
+        "residual_evaluations" => expected + RESIDUALS_PER_SYSTEM * systems,
+        _ => expected + systems,
     }
 }
 
@@ -152,10 +173,11 @@ fn the_solver_does_no_more_work_than_the_snapshot_says() {
     };
     let (mut more, mut fewer) = (Vec::new(), Vec::new());
     for (key, counts) in &measured {
+        let systems = expected(key, "systems").unwrap_or(0);
         for &(name, value) in counts {
             match expected(key, name) {
                 None => more.push(format!("{key}: {name} = {value} is not in the snapshot")),
-                Some(e) if value > allowed(name, e) => more.push(format!("{key}: {name} = {value}, the snapshot says {e}")),
+                Some(e) if value > allowed(name, e, systems) => more.push(format!("{key}: {name} = {value}, the snapshot says {e}")),
                 Some(e) if value < e => fewer.push(format!("{key}: {name} = {value}, the snapshot says {e}")),
                 Some(_) => {}
             }
@@ -216,7 +238,10 @@ fn the_work_counts_what_the_solve_did() {
     let w = o.work;
     let trials: usize = o.history.iter().map(|s| s.ls_trials as usize).sum();
     let chords = o.backend.newton.as_ref().unwrap().stats.chord_steps;
-    assert_eq!((o.iterations, chords), (3, 1), "{:?}", o.history);
+    // Measured: 3 steps, the last a chord step. Whether the last step lands below the
+    // tolerance, and whether it may be a chord step, are decided on rounding-level
+    // numbers (module documentation): one step more or less, and no chord, are allowed.
+    assert!((2..=4).contains(&o.iterations) && chords <= 1, "{:?}", o.history);
     assert_eq!((w.newton_iterations, w.ipopt_iterations, w.jacobian_evaluations), (o.iterations, 0, o.iterations - chords), "{w:?}");
     assert_eq!(w.residual_evaluations, 1 + trials, "{w:?}");
     assert!(w.guess_steps.accepted > 0 && w.guess_steps.rhs_evals > w.guess_steps.accepted, "{w:?}");

@@ -307,11 +307,13 @@ fn the_final_state_is_verified() {
 }
 
 /// A span whose own solve and improved guesses do not converge is not solved again over
-/// a longer span (the frictionless incline on SBP121 at N = 64, whose plain solve hits the
-/// iteration limit): the ladder goes on to windows.
+/// a longer span: the ladder goes on to windows. The frictionless incline on SBP121 at
+/// N = 64 with an iteration limit of 2, which no solve of the whole span meets: its plain
+/// solve needs dozens (and without the limit whether it converges at all depends on
+/// rounding: the path through the spurious critical points of a wall is long).
 #[test]
 fn a_span_that_does_not_converge_is_not_lengthened() {
-    let ov = Overrides { operator: Some("SBP121".parse().unwrap()), ..Default::default() };
+    let ov = Overrides { operator: Some("SBP121".parse().unwrap()), max_iter: Some(2), ..Default::default() };
     let o = solve::solve_scene(&common::load("incline_frictionless", &ov)).unwrap();
     let methods: Vec<&str> = o.attempts.iter().map(|a| a.method.as_str()).collect();
     assert!(!o.attempts[0].converged, "{methods:?}");
