@@ -36,11 +36,11 @@
 
 use std::time::Instant;
 
-use super::error::SolveError;
-use super::outcome::{Attempt, Method, Outcome, Work};
-use super::piece::{grid, Guess};
-use super::run::{solve_global, Run};
-use super::window::{self, WindowGrid};
+use super::run::error::SolveError;
+use super::run::outcome::{Attempt, Method, Outcome, Work};
+use super::run::piece::{grid, Guess};
+use super::run::global::{solve_global, Run};
+use super::run::window::{self, WindowGrid};
 use crate::discrete::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
@@ -171,7 +171,7 @@ impl Ladder<'_> {
                 self.stopped = Some(format!(
                     "the fallback ladder stopped after {} in {elapsed:.1} s: it may take {LADDER_COST_FACTOR}× the scene's own \
                      solve ({:.2} s) or {LADDER_FLOOR_S} s, whichever is longer",
-                    super::outcome::counted(self.tried.len(), "attempt"),
+                    super::run::outcome::counted(self.tried.len(), "attempt"),
                     first.wall_s
                 ));
             }
@@ -188,7 +188,7 @@ impl Ladder<'_> {
         self.announce(description);
         let start = Instant::now();
         let run = run()?;
-        let mut outcome = super::run::outcome(self.scene, self.model, run);
+        let mut outcome = super::run::global::outcome(self.scene, self.model, run);
         outcome.work.add(&std::mem::take(&mut self.preliminary));
         let go_on = !ends_the_ladder(&outcome);
         self.tried.push(Tried { description: description.to_string(), outcome, wall_s: start.elapsed().as_secs_f64() });

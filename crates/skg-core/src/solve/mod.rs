@@ -26,24 +26,19 @@
 //!
 //! [`Problem`]: skg_ipopt::Problem
 
-pub mod backend;
-pub mod band;
-pub mod cost;
-mod error;
+pub mod choice;
 pub mod ladder;
-pub mod newton;
-mod outcome;
-mod piece;
-pub mod predict;
-pub mod refine;
-mod run;
-mod status;
-pub mod window;
+pub mod linalg;
+pub mod run;
 
-pub use backend::SquareSolver;
-pub use error::{SolveError, WindowError};
-pub use outcome::{Attempt, Diagnostics, KineticLoss, Method, Outcome, RefinedGrid, Refinement, Settings, Sizes, Timings, Work};
-pub use piece::{build_action, build_action_on, grid, solve_piece, Guess, Piece};
-pub use refine::{solve_scene, solve_scene_with_progress};
-pub use run::{energy_drift_skip, outcome, sizes, solve_global, Run};
-pub use status::{SolveStatus, CONVERGED_RESIDUAL};
+pub use choice::{cost, predict, refine};
+pub use linalg::{band, newton};
+pub use run::{backend, window};
+
+pub use choice::refine::{solve_scene, solve_scene_with_progress};
+pub use run::backend::SquareSolver;
+pub use run::error::{SolveError, WindowError};
+pub use run::global::{energy_drift_skip, outcome, sizes, solve_global, Run};
+pub use run::outcome::{Attempt, Diagnostics, KineticLoss, Method, Outcome, RefinedGrid, Refinement, Settings, Sizes, Timings, Work};
+pub use run::piece::{build_action, build_action_on, grid, solve_piece, Guess, Piece};
+pub use run::status::{SolveStatus, CONVERGED_RESIDUAL};

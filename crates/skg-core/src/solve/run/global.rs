@@ -70,7 +70,7 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
             newton.max_residual
         ));
     }
-    warnings.extend(super::cost::factorization_note(
+    warnings.extend(crate::solve::choice::cost::factorization_note(
         run.backend.requested,
         timings.solver_s,
         timings.solver_internal_s,

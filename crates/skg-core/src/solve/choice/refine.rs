@@ -39,10 +39,10 @@
 use std::time::Instant;
 
 use super::cost::relative_cost;
-use super::error::SolveError;
-use super::ladder::{self, hermite, linear, Rungs};
-use super::outcome::{Outcome, RefinedGrid, Refinement, Work};
-use super::piece::{grid, Guess};
+use crate::solve::run::error::SolveError;
+use crate::solve::ladder::{self, hermite, linear, Rungs};
+use crate::solve::run::outcome::{Outcome, RefinedGrid, Refinement, Work};
+use crate::solve::run::piece::{grid, Guess};
 use super::predict::{along_power_law, observed_order, Candidate, Predictor, FINE_NODES};
 use crate::discrete::contact::{self, MIN_STEPS};
 use crate::memory;
@@ -525,7 +525,7 @@ fn calibration(measured: &[(Candidate, f64)], c: Candidate) -> f64 {
 }
 
 fn counted_grids(n: usize) -> String {
-    super::outcome::counted(n, "grid")
+    crate::solve::run::outcome::counted(n, "grid")
 }
 
 /// The proxy's ratio of `c` on `nodes` nodes, extrapolated beyond [`PROXY_MAX_NODES`]

@@ -45,7 +45,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use super::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
+use crate::solve::linalg::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
 use crate::discrete::action::{Action, Block, MatrixPlan};
 use crate::model::Workspace;
 use crate::scene::{Backend, ConstraintKind, Formulation, HessianMode, IpoptValue, Scene};

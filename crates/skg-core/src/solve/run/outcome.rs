@@ -432,7 +432,7 @@ impl fmt::Display for Method {
 }
 
 /// `n` and the noun, plural unless `n` is 1: "1 window", "3 windows".
-pub(super) fn counted(n: usize, noun: &str) -> String {
+pub(crate) fn counted(n: usize, noun: &str) -> String {
     if n == 1 {
         format!("1 {noun}")
     } else {

@@ -29,7 +29,7 @@ use super::backend::{BackendReport, SquareSolver};
 use super::error::{SolveError, WindowError};
 use super::outcome::{Method, Timings, Work};
 use super::piece::{build_action_on, grid, solve_piece, Guess, Piece};
-use super::run::{sizes, Run};
+use super::global::{sizes, Run};
 use crate::discrete::contact;
 use crate::discrete::trajectory::Trajectory;
 use crate::scene::{Scene, Windows};

@@ -33,8 +33,8 @@
 
 use std::collections::HashMap;
 
-use super::band::solve_banded;
-use super::error::SolveError;
+use crate::solve::linalg::band::solve_banded;
+use crate::solve::run::error::SolveError;
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
 use crate::sbp::{OperatorKind, SbpOperator};

@@ -1,0 +1,4 @@
+//! The linear algebra of the square system (placeholder docs).
+
+pub mod band;
+pub mod newton;
