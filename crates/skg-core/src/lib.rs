@@ -102,6 +102,7 @@ pub use discrete::Trajectory;
 pub use model::Model;
 pub use scene::{Overrides, Scene, SceneError, SceneFile};
 pub use skg_expr as expr;
+#[cfg(feature = "ipopt")]
 pub use skg_ipopt as ipopt;
 pub use solve::{solve_scene, Outcome, SolveError};
 

@@ -1,3 +1,4 @@
+#![cfg(feature = "ipopt")]
 //! The two backends solve the same square system: Newton's method with a sparse LU
 //! must find Ipopt's root (docs/solver.md#the-newton-backend), report its own statuses
 //! in the same fields, reuse its symbolic analysis, and hand over to Ipopt when it fails.

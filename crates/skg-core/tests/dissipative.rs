@@ -14,7 +14,7 @@ mod common;
 
 use skg_core::convergence::fit_order;
 use skg_core::scene::{Backend, InitialVelocity, Overrides};
-use skg_core::solve::{self, Method, Outcome};
+use skg_core::solve::{self, Outcome};
 
 /// Overrides for one global solve (no fallback ladder) on `nodes` with `operator`, the
 /// initial velocity condition `iv` and `backend`.
@@ -43,6 +43,7 @@ fn rk4(f: impl Fn(f64, &[f64]) -> Vec<f64>, t0: f64, y0: &[f64], times: &[f64], 
     out
 }
 
+#[cfg(feature = "ipopt")]
 /// max over every node of |q_i − truth_i| per coordinate (every node, as the verification).
 fn errors_per_coordinate(o: &Outcome, truth: &[Vec<f64>]) -> Vec<f64> {
     let d = o.trajectory.q[0].len();
@@ -107,6 +108,7 @@ fn solve_any(scene: &str, ov: &Overrides) -> Outcome {
     solve::solve_scene(&s).unwrap()
 }
 
+#[cfg(feature = "ipopt")]
 /// One global solve of a contracting scene: it converges in one piece and verifies, each
 /// coordinate is within its verification tolerance of the truth, and the verification's
 /// error is the true error (within 10 %). Returns the largest true error.
@@ -114,7 +116,7 @@ fn assert_verified_globally(scene: &str, nodes: usize, operator: &str, iv: Initi
     let ctx = format!("{scene} N = {nodes} {operator} {iv:?} {backend:?}");
     let o = solve_any(scene, &global(nodes, operator, iv, backend));
     assert!(o.trusted(), "{ctx}: {} / {}", o.status, o.verification.reason);
-    assert!(matches!(o.method, Method::Global), "{ctx}: {}", o.method);
+    assert!(matches!(o.method, solve::Method::Global), "{ctx}: {}", o.method);
     assert_eq!(o.attempts.len(), 1, "{ctx}");
     let errors = errors_per_coordinate(&o, &truth(scene, &o.trajectory.t));
     let v = &o.verification;
@@ -135,6 +137,7 @@ fn assert_verified_globally(scene: &str, nodes: usize, operator: &str, iv: Initi
 /// leaves 4.6e-2 off in one global solve, verifies in one global solve on SBP242-AD with
 /// either initial velocity condition and either backend (the closed form: 1.40e-5 strong,
 /// 5.35e-6 natural), and on the other dissipative operators of order ≥ 4.
+#[cfg(feature = "ipopt")]
 #[test]
 fn the_damped_oscillator_verifies_in_one_global_solve() {
     for backend in [Backend::Newton, Backend::Ipopt] {
@@ -156,6 +159,7 @@ fn the_damped_oscillator_verifies_in_one_global_solve() {
 /// 20 s), refused by every centred operator at N ≤ 1024 (SBP484: 7.0e-4), verifies in one
 /// global solve at N ≤ 1024 with the natural initial velocity on SBP484-AD (from 724),
 /// SBP363-AD (861) and SBP242-AD (1024), and with the strong one on SBP484-AD at 1024.
+#[cfg(feature = "ipopt")]
 #[test]
 fn the_strongly_contracting_scene_verifies_in_one_global_solve_at_1024_nodes_or_fewer() {
     let natural = InitialVelocity::Natural;
@@ -181,6 +185,7 @@ fn the_strongly_contracting_scene_verifies_in_one_global_solve_at_1024_nodes_or_
 /// damps at 6.8e3 /s). SBP242 needs the ladder's windows at N = 512 and 1024 (one global
 /// solve is 2.1e-3 and 2.9e-4 off); SBP242-AD and SBP363-AD verify in one global solve
 /// from N = 128 on, within 3.3e-7 of the truth at N = 1024.
+#[cfg(feature = "ipopt")]
 #[test]
 fn a_block_sliding_to_rest_on_an_incline_verifies_in_one_global_solve() {
     for nodes in [256, 512, 1024] {

@@ -6,7 +6,9 @@
 mod common;
 
 use skg_core::convergence::fit_order;
-use skg_core::scene::{Backend, Formulation, InitialVelocity, Overrides};
+#[cfg(feature = "ipopt")]
+use skg_core::scene::{Backend, Formulation};
+use skg_core::scene::{InitialVelocity, Overrides};
 
 fn natural(ov: Overrides) -> Overrides {
     Overrides { initial_velocity: Some(InitialVelocity::Natural), ..ov }
@@ -16,6 +18,7 @@ fn strong(ov: Overrides) -> Overrides {
     Overrides { initial_velocity: Some(InitialVelocity::Strong), ..ov }
 }
 
+#[cfg(feature = "ipopt")]
 fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
     a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
 }
@@ -36,6 +39,7 @@ fn knife_edge_error(n: usize, op: &str, ov: fn(Overrides) -> Overrides) -> f64 {
 /// both backends and both formulations solve to the same trajectory, which verifies
 /// against time stepping; node 1 keeps the initial position (to round-off) and, now that its
 /// rows are imposed, its constraints.
+#[cfg(feature = "ipopt")]
 #[test]
 fn the_natural_condition_solves_every_shipped_scene_alike_with_both_backends_and_formulations() {
     for name in common::SHIPPED {

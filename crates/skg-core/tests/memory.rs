@@ -1,3 +1,4 @@
+#![cfg(feature = "ipopt")]
 //! The memory estimate bounds the measured peak memory of a solve from above, by at
 //! most a factor 3 (issue 21 item 3, issue 23 item 5): the measurements of
 //! docs/benchmarks.md#memory across scene sizes, both backends, the operators and

@@ -259,6 +259,7 @@ fn a_window_longer_than_the_span_is_one_solve_with_a_note() {
 /// A linear solver Ipopt cannot load is an input error at the key that names it, with
 /// the hint that Debian's Ipopt has only MUMPS, in `[solver]` and in `[solver.ipopt]`
 /// (before the fix the latter gave a generic Invalid_Option for the whole file).
+#[cfg(feature = "ipopt")]
 #[test]
 fn a_linear_solver_ipopt_cannot_load_is_refused_at_its_line_with_the_mumps_hint() {
     for (table, key) in [("[solver]", "[solver] linear_solver"), ("[solver.ipopt]", "[solver.ipopt] linear_solver")] {

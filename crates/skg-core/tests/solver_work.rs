@@ -1,3 +1,4 @@
+#![cfg(feature = "ipopt")]
 //! Snapshot of the solver's work: for every shipped scene (`scenarios/*.toml`) on both
 //! backends, the counts of what its whole solve did ([`Outcome::work`], a [`Work`]:
 //! systems solved, Newton and Ipopt iterations, residual, Jacobian and Hessian

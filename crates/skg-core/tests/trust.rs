@@ -10,7 +10,9 @@ mod common;
 
 use skg_core::check::{self, CheckOptions, Table};
 use skg_core::discrete::trajectory::{trajectory_header, trajectory_rows};
-use skg_core::scene::{Backend, Overrides, Scene};
+#[cfg(feature = "ipopt")]
+use skg_core::scene::Backend;
+use skg_core::scene::{Overrides, Scene};
 use skg_core::solve::{self, Method, Outcome};
 use skg_core::stepping::reference::{self, ReferenceOptions};
 use skg_core::stepping::verify::VerifyStatus;
@@ -198,6 +200,7 @@ fn the_remedy_after_a_failed_ladder_names_only_untried_steps_that_apply() {
 /// (two nonholonomic constraints, Euler angles). Its centre circles at 2/7 of the
 /// turntable's rate (closed form in crates/skg-core/tests/scenes/turntable_ball.toml);
 /// both backends verify and follow the closed form over one whole circle.
+#[cfg(feature = "ipopt")]
 #[test]
 fn a_ball_on_a_turntable_circles_at_two_sevenths_of_the_rotation() {
     let w = 2.0 / 7.0;

@@ -120,6 +120,7 @@ fn frictionless_incline_slides_with_g_sin_alpha() {
     check_incline("incline_frictionless", 0.0);
 }
 
+#[cfg(feature = "ipopt")]
 /// A per-wall diagnostic as (wall name, value) pairs in the scene's order.
 fn per_wall<'a, V: Copy + 'a>(m: impl IntoIterator<Item = (&'a String, &'a V)>) -> Vec<(&'a str, V)> {
     m.into_iter().map(|(k, v)| (k.as_str(), *v)).collect()
@@ -129,6 +130,7 @@ fn per_wall<'a, V: Copy + 'a>(m: impl IntoIterator<Item = (&'a String, &'a V)>) 
 /// coarse for σ = 1/110 (N = 48: Δt ≈ 0.011 s, about the duration of a contact) Ipopt
 /// converges to a trajectory with one bounce where the physics has two; the solve
 /// must say so instead of returning it silently. At the paper's N = 256 it must not.
+#[cfg(feature = "ipopt")]
 #[test]
 fn a_spurious_solution_with_a_missing_bounce_is_flagged() {
     let scene = common::load("tumbler", &Overrides { nodes: Some(48), no_fallback: true, ..Default::default() });

@@ -150,11 +150,13 @@ impl std::str::FromStr for HessianMode {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Backend {
-    /// Ipopt with MUMPS on the KKT system (the default).
-    #[default]
+    /// Ipopt with MUMPS on the KKT system (the default, in a build with Ipopt).
+    #[cfg_attr(feature = "ipopt", default)]
     Ipopt,
     /// Newton's method with a sparse LU of the square Jacobian and a line search on the
-    /// residual norm; hands over to Ipopt when it fails.
+    /// residual norm; hands over to Ipopt when it fails (the default in a build without
+    /// Ipopt).
+    #[cfg_attr(not(feature = "ipopt"), default)]
     Newton,
 }
 

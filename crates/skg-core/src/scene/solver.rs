@@ -10,6 +10,8 @@ use super::error::{readable_number, SceneError};
 use super::file::{IpoptValue, SceneFile};
 use super::overrides::Overrides;
 use super::resolved::{SolverSettings, VerifySettings};
+#[cfg(not(feature = "ipopt"))]
+use super::settings::Backend;
 use super::settings::{Formulation, HessianMode};
 use super::time::MAX_NODES;
 
@@ -38,8 +40,17 @@ impl SceneFile {
             let p = s.print_level.as_ref().expect("the default is in range");
             return Err(self.invalid(p, format!("solver.print_level must be 0 (silent) … 12 (Ipopt's range), got {print_level}")));
         }
+        let backend = ov.backend.or(s.backend).unwrap_or_default();
+        #[cfg(not(feature = "ipopt"))]
+        if backend == Backend::Ipopt {
+            return Err(self.toml_error(
+                "backend = \"ipopt\": this build of skg-solve has no Ipopt (it was built without the `ipopt` feature); use \
+                 backend = \"newton\""
+                    .to_string(),
+            ));
+        }
         Ok(SolverSettings {
-            backend: ov.backend.or(s.backend).unwrap_or_default(),
+            backend,
             tol,
             max_iter: ov.max_iter.or(s.max_iter).unwrap_or(100),
             print_level,

@@ -37,9 +37,9 @@
 use std::time::Instant;
 
 use super::run::error::SolveError;
+use super::run::global::{solve_global, Run};
 use super::run::outcome::{Attempt, Method, Outcome, Work};
 use super::run::piece::{grid, Guess};
-use super::run::global::{solve_global, Run};
 use super::run::window::{self, WindowGrid};
 use crate::discrete::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
 use crate::discrete::trajectory::{NodeSeries, Trajectory};

@@ -33,12 +33,12 @@
 
 use std::collections::HashMap;
 
-use crate::solve::linalg::band::solve_banded;
-use crate::solve::run::error::SolveError;
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
 use crate::sbp::{OperatorKind, SbpOperator};
 use crate::scene::{InitialVelocity, Scene};
+use crate::solve::linalg::band::solve_banded;
+use crate::solve::run::error::SolveError;
 use crate::stepping::equations::{integrate_states, min_spacing, step_budget};
 use crate::stepping::ode::{OdeOptions, OdeStats};
 use crate::stepping::verify::{self, REFERENCE_ATOL, REFERENCE_RTOL};

@@ -39,16 +39,16 @@
 use std::time::Instant;
 
 use super::cost::relative_cost;
-use crate::solve::run::error::SolveError;
-use crate::solve::ladder::{self, hermite, linear, Rungs};
-use crate::solve::run::outcome::{Outcome, RefinedGrid, Refinement, Work};
-use crate::solve::run::piece::{grid, Guess};
 use super::predict::{along_power_law, observed_order, Candidate, Predictor, FINE_NODES};
 use crate::discrete::contact::{self, MIN_STEPS};
 use crate::memory;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::Scene;
+use crate::solve::ladder::{self, hermite, linear, Rungs};
+use crate::solve::run::error::SolveError;
+use crate::solve::run::outcome::{Outcome, RefinedGrid, Refinement, Work};
+use crate::solve::run::piece::{grid, Guess};
 use crate::stepping::verify::VerifyStatus;
 
 /// The fraction of the tolerance the next grid aims at.

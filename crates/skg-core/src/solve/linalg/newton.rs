@@ -1,21 +1,13 @@
 //! Newton's method for a square sparse system `F(x) = 0` with a sparse LU of its
 //! Jacobian (docs/solver.md#the-newton-backend).
 //!
-//! The system is anything that implements [`Problem`] (the same adapters Ipopt is
-//! given): its residual is [`Problem::constraints`], its Jacobian
-//! [`Problem::jacobian_values`] on the fixed [`Problem::jacobian_structure`].
+//! The system is anything that implements [`SquareSystem`].
 //!
-//! **Linear algebra.** A [`SystemSolver`] is built once per sparsity structure: it turns
-//! the structure into a compressed-column pattern and computes the symbolic LU analysis
-//! (a COLAMD fill-reducing column order and the elimination structure) with faer's
-//! sparse LU. Every Newton iteration then does one numeric LU (threshold partial
-//! pivoting by rows, on the stored analysis and into the stored buffers; in single
-//! precision where asked, see "Mixed precision" below) and one pair of triangular
-//! solves (or a few, to refine a single-precision solution). The same value serves any
-//! number of solves of systems with the same structure: successive iterations,
-//! successive time windows, sweep points.
-//! faer was chosen over SuiteSparse's KLU/UMFPACK by measurement (docs/benchmarks.md):
-//! it is fast enough on these matrices and needs no system library or FFI.
+//! **Linear algebra.** A [`SystemSolver`] is built once per sparsity structure: it makes
+//! the sparse LU's symbolic analysis (`lu.rs`). Every Newton iteration then does one
+//! numeric LU and one pair of triangular solves (or a few, to refine a single-precision
+//! solution). The same value serves any number of solves of systems with the same
+//! structure: successive iterations, successive time windows, sweep points.
 //!
 //! **Globalization.** The step `dx = −J(x)⁻¹ F(x)` is tried with `α = 1, ½, ¼, …`
 //! until the Armijo condition on the residual norm
@@ -57,37 +49,22 @@
 //! [`NewtonStats::chord_rejections`] the discarded ones.
 //!
 //! **Mixed precision.** With [`NewtonOptions::single_precision`] the Jacobian is factored
-//! in single precision (`f32`) on the same analysis, and each linear system `A x = b`
-//! of a step is solved by iterative refinement in double precision: `x ← x + M⁻¹ r`,
-//! `r = b − A x` computed with the double-precision `A`, until `max |r|` is at most
-//! `max(10⁻⁶ · max |F|, 0.1 · max(tol, round-off level))` — a step within a relative
-//! 10⁻⁶ of the Newton step, so that the iteration takes the steps of double precision,
-//! and never finer than what can lower the residual. Convergence is still judged on the
-//! residual in double precision, so the answer is that of a double-precision solve
-//! (coordinates within 10⁻¹³ on the chain of 16 rods; the multipliers, which the
-//! residual determines less well, within 2·10⁻⁷). Each refinement step contracts `r` by
-//! about `κ(A) · 2⁻²⁴`; when one contracts by less than one half (single precision no
-//! longer resolves the matrix), or an entry is beyond single precision's
-//! range, the matrix is factored again in double precision, and the structure stays in
-//! double precision for the rest of this solver's life. This is the scheme of LAPACK's
-//! `DSGESV` (Langou et al., *Exploiting the performance of 32 bit floating point
-//! arithmetic in obtaining 64 bit accuracy*, 2006), with a stopping test suited to a
-//! Newton step. A single-precision LU moves half the bytes and fits twice the numbers in
-//! a SIMD register: on the chain of 16 rods at N = 1024 it takes 0.17 s against 0.24 s,
-//! and the process's peak memory falls from 273 to 182 MB. The backend asks for it where
-//! that pays (`backend::single_precision_pays`).
-
+//! in single precision and each step's linear system refined in double precision
+//! (`lu.rs`) until `max |J dx + F| ≤ max(10⁻⁶ · max |F|, 0.1 · max(tol, round-off
+//! level))` — a step within a relative 10⁻⁶ of the Newton step, so that the iteration
+//! takes the steps of double precision, and never finer than what can lower the
+//! residual. Convergence is still judged on the residual in double precision, so the
+//! answer is that of a double-precision solve (coordinates within 10⁻¹³ on the chain of
+//! 16 rods; the multipliers, which the residual determines less well, within 2·10⁻⁷).
+//! The backend asks for it where that pays (`backend::single_precision_pays`).
 use std::fmt;
 use std::time::Instant;
 
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, LuSymbolicParams, NumericLu, SymbolicLu};
-use faer::sparse::linalg::{SupernodalThreshold, SymbolicSupernodalParams};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par};
 use serde::Serialize;
 
-use skg_ipopt::{EvalError, IterationStat, Problem};
+use super::lu::{LuStats, SparseLu};
+use super::roundoff::residual_roundoff_level;
+use super::{max_abs, EvalError, IterationStat, SquareSystem};
 
 /// Smallest step length of the line search: below it the iteration stops with
 /// [`NewtonStatus::LineSearchFailed`] (15 halvings).
@@ -105,49 +82,13 @@ pub const CHORD_CONTRACTION: f64 = 0.1;
 /// factorization (`linear_target`).
 const LINEAR_FORCING: f64 = 1e-6;
 
-/// A refinement step must reduce `max |A x − b|` at least by this factor, or the
-/// refinement is abandoned for a factorization in double precision. With `κ(A)` the
-/// condition number, a step contracts by about `κ(A) · 2⁻²⁴`; at 0.5 the refinement
-/// stops where single precision no longer resolves the matrix.
-const REFINEMENT_CONTRACTION: f64 = 0.5;
-
-/// The most triangular solves of one refinement (the first solve included).
-const MAX_REFINEMENT_SOLVES: usize = 10;
-
-/// The residual's round-off level is taken as `ROUNDOFF · ε · max_i Σ_j |J_ij| |x_j|`.
-/// Measured: at N = 16384 (disk) and 65536 (tumbler) the residual stagnated at 0.4 of
-/// `ε · max_i Σ_j |J_ij| |x_j|` (1.1e-11 and 3.2e-11, above the default tol 1e-11), with
-/// Newton steps that no longer decreased it.
-pub const ROUNDOFF: f64 = 4.0;
-
-/// The round-off level of a residual `F(x)` whose Jacobian has the entries (row,
-/// column, value): `ROUNDOFF · ε · max_i Σ_j |J_ij| |x_j|` over `rows` rows. No step
-/// computed in floating point can bring `max |F|` much below it. Used as a stopping
-/// test by Newton and by the Ipopt path alike (`backend::solve_problem`).
-pub fn residual_roundoff_level(entries: impl Iterator<Item = (usize, usize, f64)>, x: &[f64], rows: usize) -> f64 {
-    row_roundoff_levels(entries, x, rows).into_iter().fold(0.0, f64::max)
-}
-
-/// The round-off level of each row `i` of a residual `F(x)`, `ROUNDOFF · ε · Σ_j |J_ij| |x_j|`
-/// ([`residual_roundoff_level`] is their largest): what one equation's rounding error
-/// can reach, so that a solve stopped at the largest level can be checked equation by
-/// equation (`backend::SquareSolver::equations_at_round_off`).
-pub fn row_roundoff_levels(entries: impl Iterator<Item = (usize, usize, f64)>, x: &[f64], rows: usize) -> Vec<f64> {
-    let mut sums = vec![0.0_f64; rows];
-    for (r, c, v) in entries {
-        sums[r] += v.abs() * x[c].abs();
-    }
-    sums.iter_mut().for_each(|s| *s *= ROUNDOFF * f64::EPSILON);
-    sums
-}
-
 /// How a Newton solve ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum NewtonStatus {
     /// `max |F| ≤ tol`.
     Converged,
     /// `max |F|` is above `tol` but at the residual's round-off level
-    /// `ROUNDOFF · ε · max_i Σ_j |J_ij| |x_j|` ([`ROUNDOFF`]): no step can reduce it further.
+    /// ([`roundoff`](super::roundoff)): no step can reduce it further.
     ConvergedToRoundOff,
     /// The iteration limit was reached first.
     MaximumIterationsExceeded,
@@ -205,8 +146,8 @@ pub enum NewtonError {
     /// The structure is not square or has an index out of range.
     #[error("invalid Jacobian structure: {0}")]
     Structure(String),
-    /// The problem's Jacobian structure differs from the one the solver was built for.
-    #[error("the problem's Jacobian structure differs from the one this solver was analysed for")]
+    /// The system's Jacobian structure differs from the one the solver was built for.
+    #[error("the system's Jacobian structure differs from the one this solver was analysed for")]
     OtherStructure,
     /// The symbolic analysis failed (out of memory).
     #[error("symbolic LU analysis failed: {0}")]
@@ -239,21 +180,11 @@ pub struct NewtonStats {
     pub chord_steps: usize,
     /// Chord steps tried and rejected (each followed by a Newton step from the same point).
     pub chord_rejections: usize,
-    /// Numeric LU factorizations in single precision (module documentation, "Mixed
-    /// precision"); the others of the `jacobian_evaluations` are in double precision.
-    pub single_precision_factorizations: usize,
-    /// Triangular solves with a single-precision factorization, each followed by the
-    /// residual of the linear system in double precision (the refinement steps).
-    pub refinement_solves: usize,
-    /// Times the refinement did not converge and the matrix was factored again in double
-    /// precision (the structure then stays in double precision).
-    pub single_precision_fallbacks: usize,
-    /// Time in the residual and Jacobian callbacks.
+    /// The LU's factorizations and solves.
+    #[serde(flatten)]
+    pub lu: LuStats,
+    /// Time in the residual and Jacobian evaluations.
     pub evaluation_s: f64,
-    /// Time in numeric LU factorizations.
-    pub factorization_s: f64,
-    /// Time in the triangular solves (and the refinement's residuals).
-    pub triangular_solve_s: f64,
 }
 
 /// The result of a Newton solve (whatever its status).
@@ -267,10 +198,7 @@ pub struct NewtonSolution {
     pub max_residual: f64,
     /// Steps taken (Newton steps and chord steps).
     pub iterations: usize,
-    /// One entry per iteration, iteration 0 the start, in Ipopt's layout: `inf_pr` is
-    /// `max |F|`, `d_norm` the step's max-norm, `alpha_pr` the step length, `ls_trials`
-    /// the residual evaluations from that iteration's point (a rejected chord trial and
-    /// the line search's trials); the other fields are 0.
+    /// One entry per iteration, iteration 0 the start ([`IterationStat`]).
     pub history: Vec<IterationStat>,
     /// Counts and times.
     pub stats: NewtonStats,
@@ -278,49 +206,16 @@ pub struct NewtonSolution {
     pub total_s: f64,
 }
 
-/// The sparse LU machinery of one sparsity structure: the compressed-column pattern,
-/// the symbolic analysis, the numeric factorization's storage and the work buffers.
-/// Build it once with [`SystemSolver::new`] and call [`SystemSolver::solve`] for every
-/// system of that structure.
+/// Newton's method for the systems of one sparsity structure: the structure and its
+/// sparse LU's analysis. Build it once with [`SystemSolver::new`] and call
+/// [`SystemSolver::solve`] for every system of that structure.
 pub struct SystemSolver {
     n: usize,
-    /// The (row, column) structure this solver was built for, in the problem's order.
+    /// The (row, column) structure this solver was built for, in the system's order.
     structure: Vec<(u32, u32)>,
-    col_ptr: Vec<u32>,
-    row_idx: Vec<u32>,
-    /// Position in the compressed values of each structure entry (duplicates share one).
-    slot: Vec<usize>,
-    symbolic: SymbolicLu<u32>,
-    numeric: NumericLu<u32, f64>,
-    factor_work: MemBuffer,
-    solve_work: MemBuffer,
-    /// The single-precision factorization and its buffers (empty until used).
-    single: SingleLu,
-    /// The precision of the last successful factorization.
-    factored: Factored,
-    /// Whether a single-precision factorization of this structure failed or did not
-    /// refine: later factorizations are in double precision.
-    single_failed: bool,
+    lu: SparseLu,
     /// Seconds the symbolic analysis took.
     analysis_s: f64,
-}
-
-/// The precision of the factorization in hand.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Factored {
-    None,
-    Double,
-    Single,
-}
-
-/// A numeric LU in single precision on the same symbolic analysis, with its buffers.
-#[derive(Default)]
-struct SingleLu {
-    numeric: NumericLu<u32, f32>,
-    values: Vec<f32>,
-    rhs: Vec<f32>,
-    factor_work: Option<MemBuffer>,
-    solve_work: Option<MemBuffer>,
 }
 
 impl SystemSolver {
@@ -334,26 +229,8 @@ impl SystemSolver {
         if structure.len() > u32::MAX as usize {
             return Err(NewtonError::Structure(format!("{} entries, more than 2³² − 1", structure.len())));
         }
-        let (col_ptr, row_idx, slot) = compressed_columns(n, structure);
-        let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
-        let symbolic = factorize_symbolic_lu(pattern, lu_params()).map_err(|e| NewtonError::Analysis(format!("{e:?}")))?;
-        let factor_req = symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
-        let solve_req: StackReq = symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
-        Ok(SystemSolver {
-            n,
-            structure: structure.to_vec(),
-            col_ptr,
-            row_idx,
-            slot,
-            symbolic,
-            numeric: NumericLu::new(),
-            factor_work: MemBuffer::new(factor_req),
-            solve_work: MemBuffer::new(solve_req),
-            single: SingleLu::default(),
-            factored: Factored::None,
-            single_failed: false,
-            analysis_s: start.elapsed().as_secs_f64(),
-        })
+        let lu = SparseLu::analyse(n, structure).map_err(NewtonError::Analysis)?;
+        Ok(SystemSolver { n, structure: structure.to_vec(), lu, analysis_s: start.elapsed().as_secs_f64() })
     }
 
     /// The size `n` of the systems this solver handles.
@@ -380,299 +257,245 @@ impl SystemSolver {
 
     /// Nonzeros of the compressed pattern (duplicates merged).
     pub fn pattern_nonzeros(&self) -> usize {
-        self.row_idx.len()
+        self.lu.pattern().nonzeros()
     }
 
-    /// Solve `problem`'s system `F(x) = 0` from `x0` by Newton's method with the line
-    /// search of the module documentation. Errors only when the problem does not fit
-    /// this solver (size, structure); a failed iteration is a [`NewtonSolution`] whose
-    /// status says why.
-    pub fn solve<P: Problem>(&mut self, problem: &mut P, x0: &[f64], options: &NewtonOptions) -> Result<NewtonSolution, NewtonError> {
+    /// Solve `system`'s `F(x) = 0` from `x0` by Newton's method with the line search and
+    /// the chord steps of the module documentation. Errors only when the system does not
+    /// fit this solver (size, structure); a failed iteration is a [`NewtonSolution`]
+    /// whose status says why.
+    pub fn solve<S: SquareSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+        x0: &[f64],
+        options: &NewtonOptions,
+    ) -> Result<NewtonSolution, NewtonError> {
         let n = self.n;
-        if problem.num_variables() != n || problem.num_constraints() != n || x0.len() != n {
+        if system.size() != n || x0.len() != n {
             return Err(NewtonError::Structure(format!(
-                "{} variables, {} equations and a start of {} entries for a solver of size {n}",
-                problem.num_variables(),
-                problem.num_constraints(),
+                "a system of {} unknowns and a start of {} entries for a solver of size {n}",
+                system.size(),
                 x0.len()
             )));
         }
-        if !self.fits(n, problem.jacobian_structure()) {
+        if !self.fits(n, system.jacobian_structure()) {
             return Err(NewtonError::OtherStructure);
         }
-        let start = Instant::now();
-        let mut stats = NewtonStats::default();
-        let mut x = x0.to_vec();
-        let mut f = vec![0.0; n];
-        let mut norm = match evaluate_residual(problem, &x, &mut f, &mut stats) {
-            Ok(()) => norm2(&f),
-            Err(_) => f64::NAN,
-        };
-        let mut history = vec![iteration_stat(0, max_abs(&f), 0.0, 0.0, 0)];
-        let mut jac = vec![0.0; self.structure.len()];
-        let mut values = vec![0.0; self.row_idx.len()];
-        let mut step = vec![0.0; n];
-        let mut trial = vec![0.0; n];
-        let mut f_trial = vec![0.0; n];
-        let mut iterations = 0;
-        // The residual's round-off level, from the last Jacobian (none before the first).
-        let mut floor = 0.0;
-        // Whether the next step is tried as a chord step on the stored factorization.
-        let mut chord_next = false;
+        let mut it = Iteration::start(system, x0, self.structure.len(), self.lu.pattern().nonzeros());
         let status = loop {
-            if !norm.is_finite() {
-                break NewtonStatus::InvalidNumber;
-            }
-            let residual = max_abs(&f);
-            if residual <= options.tol {
-                break NewtonStatus::Converged;
-            }
-            // At the round-off level a Newton step no longer decreases the residual; a
-            // chord step that still contracts it is cheap enough to be tried first.
-            if residual <= floor && !chord_next {
-                break NewtonStatus::ConvergedToRoundOff;
-            }
-            if iterations >= options.max_iter as usize {
-                break NewtonStatus::MaximumIterationsExceeded;
+            if let Some(status) = it.stop(options) {
+                break status;
             }
             // Residual evaluations from this point (a rejected chord trial, line-search trials).
             let mut trials = 0;
-            if chord_next {
-                // The chord step: J(x_old) dx = −F(x), taken whole if it contracts enough.
-                step.iter_mut().zip(&f).for_each(|(s, fi)| *s = -fi);
-                if self.solve_linear(&values, &mut step, linear_target(residual, options.tol, floor), &mut stats) {
-                    for ((xt, xi), si) in trial.iter_mut().zip(&x).zip(&step) {
-                        *xt = xi + si;
-                    }
-                    trials += 1;
-                    let ok = evaluate_residual(problem, &trial, &mut f_trial, &mut stats).is_ok();
-                    let trial_norm = norm2(&f_trial);
-                    let target = options.tol.max(floor);
-                    let contraction = trial_norm / norm;
-                    if ok && trial_norm.is_finite() && (contraction <= CHORD_CONTRACTION || max_abs(&f_trial) <= target) {
-                        std::mem::swap(&mut x, &mut trial);
-                        std::mem::swap(&mut f, &mut f_trial);
-                        norm = trial_norm;
-                        iterations += 1;
-                        stats.chord_steps += 1;
-                        chord_next = chord_may_finish(contraction, max_abs(&f), target);
-                        history.push(iteration_stat(iterations as i32, max_abs(&f), max_abs(&step), 1.0, trials));
-                        continue;
-                    }
+            if it.chord_next {
+                if self.chord_step(&mut it, options, &mut trials) {
+                    continue;
                 }
-                stats.chord_rejections += 1;
-                if residual <= floor {
+                if it.residual() <= it.floor {
                     break NewtonStatus::ConvergedToRoundOff;
                 }
             }
-            // The Newton step: J dx = −F.
-            let t = Instant::now();
-            let evaluated = problem.jacobian_values(&x, &mut jac);
-            stats.evaluation_s += t.elapsed().as_secs_f64();
-            stats.jacobian_evaluations += 1;
-            if evaluated.is_err() || jac.iter().any(|v| !v.is_finite()) {
-                break NewtonStatus::InvalidNumber;
+            if let Err(status) = self.newton_step(&mut it, options, &mut trials) {
+                break status;
             }
-            values.fill(0.0);
-            for (&s, &v) in self.slot.iter().zip(&jac) {
-                values[s] += v;
-            }
-            floor = residual_roundoff_level(self.entries(&values), &x, self.n);
-            step.iter_mut().zip(&f).for_each(|(s, fi)| *s = -fi);
-            let target = linear_target(residual, options.tol, floor);
-            if !self.factor(&values, options.single_precision, &mut stats) || !self.solve_linear(&values, &mut step, target, &mut stats) {
-                break NewtonStatus::SingularJacobian;
-            }
-            // Backtracking on ‖F‖₂.
-            let mut alpha = 1.0;
-            let accepted = loop {
-                for ((xt, xi), si) in trial.iter_mut().zip(&x).zip(&step) {
-                    *xt = xi + alpha * si;
-                }
-                trials += 1;
-                let ok = evaluate_residual(problem, &trial, &mut f_trial, &mut stats).is_ok();
-                let trial_norm = norm2(&f_trial);
-                if ok && trial_norm.is_finite() && trial_norm <= (1.0 - ARMIJO * alpha) * norm {
-                    break true;
-                }
-                alpha *= 0.5;
-                if alpha < MIN_STEP {
-                    break false;
-                }
-            };
-            if !accepted {
-                break NewtonStatus::LineSearchFailed;
-            }
-            std::mem::swap(&mut x, &mut trial);
-            std::mem::swap(&mut f, &mut f_trial);
-            let last_norm = norm;
-            norm = norm2(&f);
-            // A full step that contracted well: the Jacobian changed little along it, so
-            // the next step may reuse this factorization if one more such step converges.
-            chord_next = options.chord && alpha == 1.0 && chord_may_finish(norm / last_norm, max_abs(&f), options.tol.max(floor));
-            iterations += 1;
-            history.push(iteration_stat(iterations as i32, max_abs(&f), max_abs(&step), alpha, trials));
         };
-        Ok(NewtonSolution { status, max_residual: max_abs(&f), x, iterations, history, stats, total_s: start.elapsed().as_secs_f64() })
+        Ok(it.finish(status))
     }
 
-    /// The entries (row, column, value) of the compressed matrix with `values`.
-    fn entries<'a>(&'a self, values: &'a [f64]) -> impl Iterator<Item = (usize, usize, f64)> + 'a {
-        (0..self.n).flat_map(move |c| {
-            (self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize).map(move |k| (self.row_idx[k] as usize, c, values[k]))
-        })
-    }
-
-    /// Factor the compressed matrix with `values`: in single precision when `single` and
-    /// single precision has not failed on this structure (falling back to double
-    /// precision when its LU fails, e.g. on an entry beyond single precision's range);
-    /// `false` when the matrix is singular.
-    fn factor(&mut self, values: &[f64], single: bool, stats: &mut NewtonStats) -> bool {
-        if single && !self.single_failed {
-            if self.factor_single(values, stats) {
+    /// The chord step `J(x_old) dx = −F(x)` on the factorization in hand, taken whole if
+    /// it reaches the tolerance (or the round-off level) or contracts `‖F‖₂` by
+    /// [`CHORD_CONTRACTION`]; `false` when it is rejected (counted; the iterate stays).
+    fn chord_step<S: SquareSystem + ?Sized>(&mut self, it: &mut Iteration<'_, S>, options: &NewtonOptions, trials: &mut i32) -> bool {
+        let residual = it.residual();
+        it.step.iter_mut().zip(&it.f).for_each(|(s, fi)| *s = -fi);
+        if self.lu.solve(&it.values, &mut it.step, linear_target(residual, options.tol, it.floor), &mut it.stats.lu) {
+            let trial_norm = it.try_step(1.0, trials);
+            let target = options.tol.max(it.floor);
+            let contraction = trial_norm / it.norm;
+            if trial_norm.is_finite() && (contraction <= CHORD_CONTRACTION || max_abs(&it.f_trial) <= target) {
+                it.accept(trial_norm, 1.0, *trials);
+                it.stats.chord_steps += 1;
+                it.chord_next = chord_may_finish(contraction, max_abs(&it.f), target);
                 return true;
             }
-            self.give_up_single(stats);
         }
-        self.factor_double(values, stats)
+        it.stats.chord_rejections += 1;
+        false
     }
 
-    /// The numeric LU in double precision.
-    fn factor_double(&mut self, values: &[f64], stats: &mut NewtonStats) -> bool {
-        let t = Instant::now();
-        let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
-        let factored = self.symbolic.factorize_numeric_lu(
-            &mut self.numeric,
-            SparseColMatRef::new(pattern, values),
-            Par::Seq,
-            MemStack::new(&mut self.factor_work),
-            Default::default(),
-        );
-        stats.factorization_s += t.elapsed().as_secs_f64();
-        self.factored = if factored.is_ok() { Factored::Double } else { Factored::None };
-        factored.is_ok()
+    /// The Newton step `J dx = −F` with a new Jacobian and factorization, damped by the
+    /// backtracking line search on `‖F‖₂`; the status that ends the solve when there is
+    /// no step.
+    fn newton_step<S: SquareSystem + ?Sized>(
+        &mut self,
+        it: &mut Iteration<'_, S>,
+        options: &NewtonOptions,
+        trials: &mut i32,
+    ) -> Result<(), NewtonStatus> {
+        let residual = it.residual();
+        if !it.evaluate_jacobian(self.lu.pattern()) {
+            return Err(NewtonStatus::InvalidNumber);
+        }
+        it.floor = residual_roundoff_level(self.lu.pattern().entries(&it.values), &it.x, self.n);
+        it.step.iter_mut().zip(&it.f).for_each(|(s, fi)| *s = -fi);
+        let target = linear_target(residual, options.tol, it.floor);
+        if !self.lu.factor(&it.values, options.single_precision, &mut it.stats.lu)
+            || !self.lu.solve(&it.values, &mut it.step, target, &mut it.stats.lu)
+        {
+            return Err(NewtonStatus::SingularJacobian);
+        }
+        let (alpha, trial_norm) = line_search(it, trials).ok_or(NewtonStatus::LineSearchFailed)?;
+        let last_norm = it.norm;
+        it.accept(trial_norm, alpha, *trials);
+        // A full step that contracted well: the Jacobian changed little along it, so
+        // the next step may reuse this factorization if one more such step converges.
+        it.chord_next = options.chord && alpha == 1.0 && chord_may_finish(it.norm / last_norm, max_abs(&it.f), options.tol.max(it.floor));
+        Ok(())
+    }
+}
+
+/// The state of one Newton solve: the iterate and its residual, the last Jacobian's
+/// values and round-off level, the work vectors, the counts and the iteration table.
+struct Iteration<'s, S: SquareSystem + ?Sized> {
+    system: &'s mut S,
+    start: Instant,
+    x: Vec<f64>,
+    f: Vec<f64>,
+    /// `‖F(x)‖₂`, NaN when the start could not be evaluated.
+    norm: f64,
+    /// The Jacobian's entries in the system's order, and compressed.
+    jacobian: Vec<f64>,
+    values: Vec<f64>,
+    step: Vec<f64>,
+    trial: Vec<f64>,
+    f_trial: Vec<f64>,
+    iterations: usize,
+    /// The residual's round-off level, from the last Jacobian (none before the first).
+    floor: f64,
+    /// Whether the next step is tried as a chord step on the stored factorization.
+    chord_next: bool,
+    stats: NewtonStats,
+    history: Vec<IterationStat>,
+}
+
+impl<'s, S: SquareSystem + ?Sized> Iteration<'s, S> {
+    /// The start at `x0`, with room for a Jacobian of `entries` entries and `nonzeros`
+    /// compressed values.
+    fn start(system: &'s mut S, x0: &[f64], entries: usize, nonzeros: usize) -> Self {
+        let n = x0.len();
+        let mut it = Iteration {
+            system,
+            start: Instant::now(),
+            x: x0.to_vec(),
+            f: vec![0.0; n],
+            norm: f64::NAN,
+            jacobian: vec![0.0; entries],
+            values: vec![0.0; nonzeros],
+            step: vec![0.0; n],
+            trial: vec![0.0; n],
+            f_trial: vec![0.0; n],
+            iterations: 0,
+            floor: 0.0,
+            chord_next: false,
+            stats: NewtonStats::default(),
+            history: Vec::new(),
+        };
+        if evaluate_residual(it.system, &it.x, &mut it.f, &mut it.stats).is_ok() {
+            it.norm = norm2(&it.f);
+        }
+        it.history.push(iteration_stat(0, max_abs(&it.f), 0.0, 0.0, 0));
+        it
     }
 
-    /// The numeric LU in single precision; `false` when an entry is beyond its range or
-    /// the LU finds no pivot.
-    fn factor_single(&mut self, values: &[f64], stats: &mut NewtonStats) -> bool {
+    /// `max |F(x)|`.
+    fn residual(&self) -> f64 {
+        max_abs(&self.f)
+    }
+
+    /// The status that ends the solve before the next step, if any: a residual that is
+    /// not finite, at the tolerance, at the round-off level (unless a chord step may
+    /// still contract it: cheap enough to be tried first), or the iteration limit.
+    fn stop(&self, options: &NewtonOptions) -> Option<NewtonStatus> {
+        if !self.norm.is_finite() {
+            return Some(NewtonStatus::InvalidNumber);
+        }
+        let residual = self.residual();
+        if residual <= options.tol {
+            Some(NewtonStatus::Converged)
+        } else if residual <= self.floor && !self.chord_next {
+            Some(NewtonStatus::ConvergedToRoundOff)
+        } else if self.iterations >= options.max_iter as usize {
+            Some(NewtonStatus::MaximumIterationsExceeded)
+        } else {
+            None
+        }
+    }
+
+    /// The Jacobian at `x`, compressed into `values`; `false` when it cannot be
+    /// evaluated or is not finite.
+    fn evaluate_jacobian(&mut self, pattern: &super::pattern::CompressedPattern) -> bool {
         let t = Instant::now();
-        let single = &mut self.single;
-        single.values.clear();
-        single.values.extend(values.iter().map(|&v| v as f32));
-        if single.values.iter().any(|v| !v.is_finite()) {
+        let evaluated = self.system.jacobian_values(&self.x, &mut self.jacobian);
+        self.stats.evaluation_s += t.elapsed().as_secs_f64();
+        self.stats.jacobian_evaluations += 1;
+        if evaluated.is_err() || self.jacobian.iter().any(|v| !v.is_finite()) {
             return false;
         }
-        let symbolic = &self.symbolic;
-        let work = single
-            .factor_work
-            .get_or_insert_with(|| MemBuffer::new(symbolic.factorize_numeric_lu_scratch::<f32>(Par::Seq, Default::default())));
-        let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
-        let factored = symbolic.factorize_numeric_lu(
-            &mut single.numeric,
-            SparseColMatRef::new(pattern, &single.values),
-            Par::Seq,
-            MemStack::new(work),
-            Default::default(),
-        );
-        stats.factorization_s += t.elapsed().as_secs_f64();
-        stats.single_precision_factorizations += 1;
-        self.factored = if factored.is_ok() { Factored::Single } else { Factored::None };
-        factored.is_ok()
+        pattern.gather(&self.jacobian, &mut self.values);
+        true
     }
 
-    /// Stop using single precision on this structure, and free its factorization.
-    fn give_up_single(&mut self, stats: &mut NewtonStats) {
-        stats.single_precision_fallbacks += 1;
-        self.single_failed = true;
-        self.single = SingleLu::default();
-    }
-
-    /// Overwrite `rhs` with the solution of the system of the last factorization, which
-    /// was of the compressed matrix with `values` (the caller knows that it succeeded):
-    /// directly in double precision; in single precision refined until
-    /// `max |A x − rhs| ≤ target`, and when the refinement does not converge, factored
-    /// again in double precision and solved directly. `false` when the solution is not
-    /// finite or the matrix singular.
-    fn solve_linear(&mut self, values: &[f64], rhs: &mut [f64], target: f64, stats: &mut NewtonStats) -> bool {
-        if self.factored == Factored::Single {
-            if self.refine(values, rhs, target, stats) {
-                return true;
-            }
-            self.give_up_single(stats);
-            if !self.factor_double(values, stats) {
-                return false;
-            }
+    /// The residual at `x + alpha · step` into `trial`, `f_trial`; its norm, or NaN when
+    /// it cannot be evaluated. Counts one trial.
+    fn try_step(&mut self, alpha: f64, trials: &mut i32) -> f64 {
+        for ((xt, xi), si) in self.trial.iter_mut().zip(&self.x).zip(&self.step) {
+            *xt = xi + alpha * si;
         }
-        self.solve_double(rhs, stats)
+        *trials += 1;
+        match evaluate_residual(self.system, &self.trial, &mut self.f_trial, &mut self.stats) {
+            Ok(()) => norm2(&self.f_trial),
+            Err(_) => f64::NAN,
+        }
     }
 
-    /// The direct solve with the double-precision factorization.
-    fn solve_double(&mut self, rhs: &mut [f64], stats: &mut NewtonStats) -> bool {
-        let t = Instant::now();
-        LuRef::new_unchecked(&self.symbolic, &self.numeric).solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(rhs, self.n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.solve_work),
-        );
-        stats.triangular_solve_s += t.elapsed().as_secs_f64();
-        rhs.iter().all(|v| v.is_finite())
+    /// Take the trial point as the next iterate (a step of length `alpha`, whose residual
+    /// norm is `norm`, after `trials` residual evaluations), and record it.
+    fn accept(&mut self, norm: f64, alpha: f64, trials: i32) {
+        std::mem::swap(&mut self.x, &mut self.trial);
+        std::mem::swap(&mut self.f, &mut self.f_trial);
+        self.norm = norm;
+        self.iterations += 1;
+        self.history.push(iteration_stat(self.iterations as i32, max_abs(&self.f), max_abs(&self.step), alpha, trials));
     }
 
-    /// Iterative refinement with the single-precision factorization `M ≈ A`:
-    /// `x ← x + M⁻¹ r`, `r = b − A x` in double precision, from `x = 0`, until
-    /// `max |r| ≤ target` after at least one solve; each correction is solved for
-    /// `r / max |r|`, which keeps the right-hand side within single precision's range.
-    /// Fails (`false`, `rhs` unchanged) when a step does not reduce `max |r|` by
-    /// [`REFINEMENT_CONTRACTION`], after [`MAX_REFINEMENT_SOLVES`] solves, or when `x` is
-    /// not finite; on success `rhs` holds `x`.
-    fn refine(&mut self, values: &[f64], rhs: &mut [f64], target: f64, stats: &mut NewtonStats) -> bool {
-        let t = Instant::now();
-        let n = self.n;
-        let single = &mut self.single;
-        let symbolic = &self.symbolic;
-        let work = single.solve_work.get_or_insert_with(|| MemBuffer::new(symbolic.solve_in_place_scratch::<f32>(1, Par::Seq)));
-        let mut x = vec![0.0; n];
-        let mut r = rhs.to_vec();
-        let mut last = max_abs(&r);
-        // At least one solve, even when the right-hand side is already below the target.
-        let mut converged = last == 0.0;
-        for _ in 0..MAX_REFINEMENT_SOLVES {
-            if converged || !last.is_finite() {
-                break;
-            }
-            single.rhs.clear();
-            single.rhs.extend(r.iter().map(|&ri| (ri / last) as f32));
-            LuRef::new_unchecked(symbolic, &single.numeric).solve_in_place_with_conj(
-                Conj::No,
-                MatMut::from_column_major_slice_mut(&mut single.rhs, n, 1),
-                Par::Seq,
-                MemStack::new(work),
-            );
-            stats.refinement_solves += 1;
-            x.iter_mut().zip(&single.rhs).for_each(|(xi, di)| *xi += last * f64::from(*di));
-            // r = b − A x, column by column of the compressed matrix.
-            r.copy_from_slice(rhs);
-            for (c, xc) in x.iter().enumerate() {
-                for k in self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize {
-                    r[self.row_idx[k] as usize] -= values[k] * xc;
-                }
-            }
-            let now = max_abs(&r);
-            if now.is_nan() || now > REFINEMENT_CONTRACTION * last {
-                break;
-            }
-            last = now;
-            converged = now <= target;
+    fn finish(self, status: NewtonStatus) -> NewtonSolution {
+        NewtonSolution {
+            status,
+            max_residual: max_abs(&self.f),
+            x: self.x,
+            iterations: self.iterations,
+            history: self.history,
+            stats: self.stats,
+            total_s: self.start.elapsed().as_secs_f64(),
         }
-        stats.triangular_solve_s += t.elapsed().as_secs_f64();
-        // A solution with a non-finite entry fails too (`max_abs` can miss a NaN of `r`).
-        let solved = converged && x.iter().all(|v| v.is_finite());
-        if solved {
-            rhs.copy_from_slice(&x);
+    }
+}
+
+/// Backtracking on `‖F‖₂` along the step in hand: `α = 1, ½, ¼, …` until the Armijo
+/// condition holds; the step length and the trial's residual norm, or `None` below
+/// [`MIN_STEP`].
+fn line_search<S: SquareSystem + ?Sized>(it: &mut Iteration<'_, S>, trials: &mut i32) -> Option<(f64, f64)> {
+    let mut alpha = 1.0;
+    loop {
+        let trial_norm = it.try_step(alpha, trials);
+        if trial_norm.is_finite() && trial_norm <= (1.0 - ARMIJO * alpha) * it.norm {
+            return Some((alpha, trial_norm));
         }
-        solved
+        alpha *= 0.5;
+        if alpha < MIN_STEP {
+            return None;
+        }
     }
 }
 
@@ -684,39 +507,6 @@ impl SystemSolver {
 /// precision; the second stops refining where the step cannot bring the residual lower.
 fn linear_target(residual: f64, tol: f64, floor: f64) -> f64 {
     (LINEAR_FORCING * residual).max(0.1 * tol.max(floor))
-}
-
-/// Supernode amalgamation of the supernodal LU: two adjacent supernodes of `n` columns
-/// in all are merged when the merged block's explicit zeros are at most the given
-/// fraction of its entries, for the first `n` bound they are within. faer's default is
-/// `(4, 1.0), (16, 0.8), (48, 0.1), (∞, 0.05)`; these admit about twice the zeros in
-/// larger blocks, which makes fewer, larger dense blocks for the blocked kernels. A chain
-/// of 16 rods at N = 1024 (n = 49 216, the Jacobian's time blocks of 48 unknowns):
-/// numeric LU 0.33 → 0.23 s, 375 → 267 MB peak (fewer supernodes, less bookkeeping);
-/// 32 rods at N = 512: 0.42 → 0.37 s, 456 → 383 MB. The band-like systems of the other
-/// shipped scenes (rolling disk, tumbler at N = 65536) keep faer's simplicial LU, which
-/// this does not touch, and do not change beyond the noise of the measurement.
-const SUPERNODE_RELAX: &[(usize, f64)] = &[(8, 1.0), (32, 0.8), (96, 0.2), (usize::MAX, 0.1)];
-
-/// The choice between faer's simplicial (column by column) and supernodal (dense
-/// blocks) numeric LU: supernodal when the analysis's estimate of flops per factor
-/// nonzero exceeds `40 · SUPERNODAL_THRESHOLD` (faer's default threshold is 1). At 1 the
-/// chain of 8 rods (24 unknowns per node) was factored simplicially, at 0.13 s per
-/// numeric LU at N = 1024 where the supernodal LU takes 0.06 s (0.51 → 0.24 s at
-/// N = 4096, for 24 % more memory: 74 → 91 MB, 261 → 324 MB peak); the chains of 16 and
-/// 32 were supernodal already. The rolling disk (N = 16384, 65536), the tumbler, the
-/// pendulum (65536), the knife edge (32768), chain4 and the drum stay simplicial (the
-/// same peak memory; times within the noise of the measurement).
-const SUPERNODAL_THRESHOLD: f64 = 0.5;
-
-/// The symbolic LU's parameters: faer's defaults (COLAMD) with [`SUPERNODAL_THRESHOLD`]
-/// and [`SUPERNODE_RELAX`].
-fn lu_params() -> LuSymbolicParams<'static> {
-    LuSymbolicParams {
-        supernodal_flop_ratio_threshold: SupernodalThreshold(SUPERNODAL_THRESHOLD),
-        supernodal_params: SymbolicSupernodalParams { relax: Some(SUPERNODE_RELAX) },
-        ..Default::default()
-    }
 }
 
 /// Whether the next step is tried as a chord step, after a full step (Newton or chord)
@@ -731,50 +521,10 @@ fn chord_may_finish(contraction: f64, residual: f64, target: f64) -> bool {
     contraction <= CHORD_CONTRACTION && contraction * residual <= target
 }
 
-/// The compressed-column pattern of `structure` (rows sorted within each column,
-/// duplicates merged) and the position of each structure entry in it.
-fn compressed_columns(n: usize, structure: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>, Vec<usize>) {
-    // The entries bucketed by column (a counting sort), then each column's few entries
-    // sorted by row. Linear in the entries but for the short sorts; two counting sorts
-    // (by row, then by column) took 0.02 s on the 736 400 entries of a chain of 16 rods
-    // at N = 1024, a comparison sort of all entries 0.03 s.
-    let mut start = vec![0usize; n + 1];
-    for &(_, c) in structure {
-        start[c as usize + 1] += 1;
-    }
-    for c in 0..n {
-        start[c + 1] += start[c];
-    }
-    // (row, entry) in column order.
-    let mut bucketed = vec![(0u32, 0u32); structure.len()];
-    let mut next = start.clone();
-    for (e, &(r, c)) in structure.iter().enumerate() {
-        bucketed[next[c as usize]] = (r, e as u32);
-        next[c as usize] += 1;
-    }
-    let mut col_ptr = vec![0u32; n + 1];
-    let mut row_idx = Vec::with_capacity(structure.len());
-    let mut slot = vec![0usize; structure.len()];
-    for c in 0..n {
-        let column = &mut bucketed[start[c]..start[c + 1]];
-        column.sort_unstable();
-        let mut last = None;
-        for &(r, e) in column.iter() {
-            if last != Some(r) {
-                row_idx.push(r);
-                last = Some(r);
-            }
-            slot[e as usize] = row_idx.len() - 1;
-        }
-        col_ptr[c + 1] = row_idx.len() as u32;
-    }
-    (col_ptr, row_idx, slot)
-}
-
 /// `F(x)` into `f`, counting and timing the call; non-finite values are an error.
-fn evaluate_residual<P: Problem>(problem: &mut P, x: &[f64], f: &mut [f64], stats: &mut NewtonStats) -> Result<(), EvalError> {
+fn evaluate_residual<S: SquareSystem + ?Sized>(system: &mut S, x: &[f64], f: &mut [f64], stats: &mut NewtonStats) -> Result<(), EvalError> {
     let t = Instant::now();
-    let result = problem.constraints(x, f);
+    let result = system.residual(x, f);
     stats.evaluation_s += t.elapsed().as_secs_f64();
     stats.residual_evaluations += 1;
     result?;
@@ -787,10 +537,6 @@ fn evaluate_residual<P: Problem>(problem: &mut P, x: &[f64], f: &mut [f64], stat
 
 fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-fn max_abs(v: &[f64]) -> f64 {
-    v.iter().fold(0.0_f64, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
 }
 
 fn iteration_stat(iter: i32, inf_pr: f64, d_norm: f64, alpha: f64, ls_trials: i32) -> IterationStat {
@@ -811,32 +557,19 @@ fn iteration_stat(iter: i32, inf_pr: f64, d_norm: f64, alpha: f64, ls_trials: i3
 
 #[cfg(test)]
 mod tests {
-
-    /// `ROUNDOFF · ε · max_i Σ_j |J_ij| |x_j|`, duplicates counted separately (they are
-    /// summed values whose rounding errors add up).
-    #[test]
-    fn roundoff_level_is_the_largest_weighted_row_sum() {
-        // Rows: |2·1| + |−3·(−2)| = 8 and |0.5·1| + |1·(−2)| + |−1·(−2)| = 4.5.
-        let entries = [(0, 0, 2.0), (0, 1, -3.0), (1, 0, 0.5), (1, 1, 1.0), (1, 1, -1.0)];
-        let level = residual_roundoff_level(entries.into_iter(), &[1.0, -2.0], 2);
-        assert_eq!(level, ROUNDOFF * f64::EPSILON * 8.0);
-    }
-
     use super::*;
+    use crate::solve::linalg::IterationStat;
 
     /// `F(x) = (x0² + x1² − 4, x0 − x1)`: root (√2, √2); from (1, 0.5).
     struct Circle {
         jac: Vec<(u32, u32)>,
     }
 
-    impl Problem for Circle {
-        fn num_variables(&self) -> usize {
+    impl SquareSystem for Circle {
+        fn size(&self) -> usize {
             2
         }
-        fn num_constraints(&self) -> usize {
-            2
-        }
-        fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
             c[0] = x[0] * x[0] + x[1] * x[1] - 4.0;
             c[1] = x[0] - x[1];
             Ok(())
@@ -857,14 +590,11 @@ mod tests {
         values: Vec<f64>,
         b: Vec<f64>,
     }
-    impl Problem for Linear {
-        fn num_variables(&self) -> usize {
+    impl SquareSystem for Linear {
+        fn size(&self) -> usize {
             self.b.len()
         }
-        fn num_constraints(&self) -> usize {
-            self.b.len()
-        }
-        fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
             c.iter_mut().zip(&self.b).for_each(|(ci, bi)| *ci = -bi);
             for (&(i, j), a) in self.structure.iter().zip(&self.values) {
                 c[i as usize] += a * x[j as usize];
@@ -882,14 +612,11 @@ mod tests {
 
     /// `F(x) = atan(x)`: one unknown, root 0; Newton's full step overshoots from |x| ≳ 1.39.
     struct Atan(Vec<(u32, u32)>);
-    impl Problem for Atan {
-        fn num_variables(&self) -> usize {
+    impl SquareSystem for Atan {
+        fn size(&self) -> usize {
             1
         }
-        fn num_constraints(&self) -> usize {
-            1
-        }
-        fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
             c[0] = x[0].atan();
             Ok(())
         }
@@ -1076,7 +803,7 @@ mod tests {
             let mut p = Cubic { n, scale: 1.0, diagonal, b: vec![0.0; n], jac };
             let root = Cubic::root(n);
             let mut b = vec![0.0; n];
-            p.constraints(&root, &mut b).unwrap();
+            p.residual(&root, &mut b).unwrap();
             p.b = b;
             p.scale = scale;
             p
@@ -1094,14 +821,11 @@ mod tests {
         }
     }
 
-    impl Problem for Cubic {
-        fn num_variables(&self) -> usize {
+    impl SquareSystem for Cubic {
+        fn size(&self) -> usize {
             self.n
         }
-        fn num_constraints(&self) -> usize {
-            self.n
-        }
-        fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
             c.iter_mut().zip(x).zip(&self.b).for_each(|((ci, xi), bi)| *ci = xi * xi * xi / 10.0 - bi);
             for &(i, j) in &self.jac {
                 c[i as usize] += self.coefficient(i as usize, j as usize) * x[j as usize];
@@ -1148,11 +872,11 @@ mod tests {
         }
         assert_eq!(mixed.iterations, double.iterations);
         assert_eq!(mixed.stats.jacobian_evaluations, double.stats.jacobian_evaluations);
-        assert_eq!(mixed.stats.single_precision_factorizations, mixed.stats.jacobian_evaluations);
-        assert_eq!(mixed.stats.single_precision_fallbacks, 0);
+        assert_eq!(mixed.stats.lu.single_precision_factorizations, mixed.stats.jacobian_evaluations);
+        assert_eq!(mixed.stats.lu.single_precision_fallbacks, 0);
         let linear_solves = mixed.stats.jacobian_evaluations + mixed.stats.chord_steps + mixed.stats.chord_rejections;
-        assert!(mixed.stats.refinement_solves > linear_solves, "{:?}", mixed.stats);
-        assert_eq!(double.stats.single_precision_factorizations + double.stats.refinement_solves, 0);
+        assert!(mixed.stats.lu.refinement_solves > linear_solves, "{:?}", mixed.stats);
+        assert_eq!(double.stats.lu.single_precision_factorizations + double.stats.lu.refinement_solves, 0);
     }
 
     /// Entries beyond single precision's range (about 3.4e38): the structure falls back to
@@ -1166,8 +890,8 @@ mod tests {
         let sol = solver.solve(&mut p, &vec![0.0; n], &opts).unwrap();
         assert!(sol.status.is_success(), "{:?}", sol.status);
         assert!(max_error(&sol.x, &Cubic::root(n)) < 1e-11);
-        assert_eq!(sol.stats.single_precision_fallbacks, 1);
-        assert_eq!(sol.stats.single_precision_factorizations, 0);
+        assert_eq!(sol.stats.lu.single_precision_fallbacks, 1);
+        assert_eq!(sol.stats.lu.single_precision_factorizations, 0);
     }
 
     /// `x0 + x1 = 2`, `x0 + (1 + 10⁻⁹) x1 = 2 + 10⁻⁹` (root (1, 1)): in single precision
@@ -1184,10 +908,10 @@ mod tests {
             assert!(sol.status.is_success(), "{:?}", sol.status);
             // κ ≈ 4·10⁹: the root to about κ·ε.
             assert!((sol.x[0] - 1.0).abs() < 1e-5 && (sol.x[1] - 1.0).abs() < 1e-5, "{:?}", sol.x);
-            assert_eq!(sol.stats.single_precision_factorizations, sol.stats.single_precision_fallbacks);
+            assert_eq!(sol.stats.lu.single_precision_factorizations, sol.stats.lu.single_precision_fallbacks);
         }
         // The second solve of the structure went to double precision directly.
         let sol = solver.solve(&mut p, &[0.0, 0.0], &opts).unwrap();
-        assert_eq!((sol.stats.single_precision_factorizations, sol.stats.single_precision_fallbacks), (0, 0));
+        assert_eq!((sol.stats.lu.single_precision_factorizations, sol.stats.lu.single_precision_fallbacks), (0, 0));
     }
 }

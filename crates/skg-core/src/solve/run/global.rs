@@ -16,7 +16,6 @@ use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::{ConstraintKind, Formulation, Scene, Wall};
 use crate::stepping::verify;
-use skg_ipopt as ipopt;
 
 /// A solution farther than this fraction of the coordinates' range from the
 /// time-stepping solution gets a warning. Discretization errors of usable grids are
@@ -86,7 +85,7 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
         status: run.status,
         verification,
         method,
-        ipopt_version: ipopt::ipopt_version().to_string(),
+        ipopt_version: ipopt_version(),
         backend: run.backend,
         iterations: run.iterations,
         settings: settings(scene, &run.trajectory.t, run.guess),
@@ -237,4 +236,13 @@ fn per_wall<T>(model: &Model, mut value: impl FnMut(usize, &Wall) -> T) -> Index
 /// Number of contact episodes ([`contact::episodes`]) per wall, given the gaps `h[k][j]`.
 fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> IndexMap<String, usize> {
     per_wall(model, |j, w| contact::episodes(h.iter().map(|hk| hk[j]), w.width).len())
+}
+
+/// The version of the Ipopt library this process runs (for the summary), or `none` in a
+/// build without Ipopt.
+fn ipopt_version() -> String {
+    #[cfg(feature = "ipopt")]
+    return skg_ipopt::ipopt_version().to_string();
+    #[cfg(not(feature = "ipopt"))]
+    return "none".to_string();
 }

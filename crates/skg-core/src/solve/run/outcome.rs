@@ -10,9 +10,9 @@ use super::backend::BackendReport;
 use super::status::SolveStatus;
 use crate::discrete::Trajectory;
 use crate::scene::{Backend, Formulation, HessianMode, InitialVelocity};
+use crate::solve::linalg::IterationStat;
 use crate::stepping::ode::OdeStats;
 use crate::stepping::verify::{Verification, VerifyStatus};
-use skg_ipopt as ipopt;
 
 /// Where a solve's wall time went, in seconds.
 #[derive(Debug, Clone, Serialize)]
@@ -312,7 +312,7 @@ pub struct Outcome {
     pub refinement: Option<Refinement>,
     /// The iteration table of the backend that finished (Ipopt's, or Newton's in the
     /// same layout).
-    pub history: Vec<ipopt::IterationStat>,
+    pub history: Vec<IterationStat>,
     /// The solution at the nodes (written as trajectory.csv, not into the summary).
     #[serde(skip)]
     pub trajectory: Trajectory,

@@ -14,7 +14,9 @@
 
 use std::time::Instant;
 
-use super::backend::{BackendError, BackendReport, SolverStatus, SquareSolver};
+#[cfg(feature = "ipopt")]
+use super::backend::{BackendError, SolverStatus};
+use super::backend::{BackendReport, SquareSolver};
 use super::error::SolveError;
 use super::outcome::{Timings, Work};
 use super::status::{SolveStatus, CONVERGED_RESIDUAL};
@@ -22,9 +24,13 @@ use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::discrete::Action;
 use crate::model::{Model, Physical};
 use crate::sbp::SbpOperator;
-use crate::scene::{Formulation, IpoptValue, Scene, SceneError};
+#[cfg(feature = "ipopt")]
+use crate::scene::IpoptValue;
+use crate::scene::{Formulation, Scene, SceneError};
+use crate::solve::linalg::IterationStat;
 use crate::stepping::equations::{integrate_model, min_spacing, step_budget};
 use crate::stepping::ode::{OdeOptions, OdeStats};
+#[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
 
 /// Node times of a scene's grid.
@@ -74,7 +80,7 @@ pub struct Piece {
     /// Iterations of the backend that finished.
     pub iterations: usize,
     /// Its iteration table.
-    pub history: Vec<ipopt::IterationStat>,
+    pub history: Vec<IterationStat>,
     /// Which backend ran, and Newton's own outcome.
     pub backend: BackendReport,
     /// The solution at the action's nodes.
@@ -119,6 +125,7 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     }
 
     let solution = solver.solve(action, &z0).map_err(|e| rejected_option(scene, e.into()))?;
+    #[cfg(feature = "ipopt")]
     if solution.status == SolverStatus::Ipopt(ipopt::Status::InvalidOption) {
         return Err(unusable_option(scene));
     }
@@ -231,6 +238,13 @@ fn check_initial_guess(scene: &Scene, action: &Action, times: &[f64], z0: &[f64]
 
 /// An option Ipopt refused when it was set, as an input error at the option's place in
 /// the scene file; other errors pass through.
+/// Without Ipopt no option is refused by it.
+#[cfg(not(feature = "ipopt"))]
+fn rejected_option(_: &Scene, e: SolveError) -> SolveError {
+    e
+}
+
+#[cfg(feature = "ipopt")]
 fn rejected_option(scene: &Scene, e: SolveError) -> SolveError {
     let SolveError::Backend(BackendError::Ipopt(ipopt::SolveError::BadOption { name, value })) = &e else { return e };
     let message = format!(
@@ -244,6 +258,7 @@ fn rejected_option(scene: &Scene, e: SolveError) -> SolveError {
 /// cannot use, e.g. a linear solver whose library it cannot load), as an input error at
 /// the `linear_solver` Ipopt was given: `[solver.ipopt]`'s, which is passed last and so
 /// wins, else `[solver]`'s.
+#[cfg(feature = "ipopt")]
 fn unusable_option(scene: &Scene) -> SolveError {
     let file = &scene.file.solver;
     let passed = match (scene.solver.ipopt.get("linear_solver"), file.ipopt.get("linear_solver")) {

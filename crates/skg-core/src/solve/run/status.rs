@@ -116,7 +116,7 @@ impl Serialize for SolveStatus {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "ipopt"))]
 mod tests {
     use super::*;
     use crate::solve::newton::NewtonStatus;

@@ -27,9 +27,9 @@ use std::time::Instant;
 
 use super::backend::{BackendReport, SquareSolver};
 use super::error::{SolveError, WindowError};
+use super::global::{sizes, Run};
 use super::outcome::{Method, Timings, Work};
 use super::piece::{build_action_on, grid, solve_piece, Guess, Piece};
-use super::global::{sizes, Run};
 use crate::discrete::contact;
 use crate::discrete::trajectory::Trajectory;
 use crate::scene::{Scene, Windows};

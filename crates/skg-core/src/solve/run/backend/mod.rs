@@ -1,9 +1,11 @@
-//! The solvers of the square system: Ipopt (the default) and Newton's method with a
-//! sparse LU ([`newton`]), behind one interface, [`SquareSolver`].
+//! The solvers of the square system: Ipopt (the default, with the `ipopt` feature) and
+//! Newton's method with a sparse LU ([`newton`](crate::solve::linalg::newton)), behind one
+//! interface, [`SquareSolver`].
 //!
-//! Both see the system through the same adapters of [`skg_ipopt::Problem`]: `Reduced`
-//! (`R(P) = ∂S/∂M = 0`) and `Full` (`∇S(Z) = 0`). A [`SquareSolver`] is built once per
-//! action and keeps what does not change between solves of the same structure: the
+//! Both see the system as a [`SquareSystem`] (`systems.rs`: `Reduced`,
+//! `R(P) = ∂S/∂M = 0`, and `Full`, `∇S(Z) = 0`); Ipopt through one generic adapter
+//! (`ipopt.rs`, which also says how Ipopt is stopped). A [`SquareSolver`] is built once
+//! per action and keeps what does not change between solves of the same structure: the
 //! sparsity plans of the Jacobian (and Hessian) and, for Newton, the symbolic LU
 //! analysis. [`SquareSolver::solve`] can then be called for any number of starting
 //! points or actions of the same model and grid (only the initial state `q0`, `v0` may
@@ -24,32 +26,30 @@
 //! the thread replaces it, or [`discard_kept_analysis`] frees it. Ipopt keeps doing its
 //! own MUMPS analysis in every solve (its C interface offers no way to keep one).
 //!
-//! **Stopping Ipopt.** Ipopt is stopped from its intermediate callback
-//! (`StopWhenSolved`) as soon as `max |c|` meets the tolerance (status
-//! `Solve_Succeeded`: the multipliers of a square system are not used, so the residual
-//! is the whole convergence test, as it is for Newton) or the
-//! residual's round-off level ([`newton::residual_roundoff_level`]; status
-//! `Ipopt_Converged_To_Round_Off`). This saves two costs Ipopt would otherwise pay:
-//! after converging on a square problem it factors the KKT matrix once more to
-//! "recompute multipliers for the feasibility problem" (it prints that this fails; the
-//! multipliers are unused here), and at large `N`, where round-off keeps `max |c|` just
-//! above the tolerance, it iterates on until its acceptable-level test (disk,
-//! N = 16384: 11 iterations instead of 1).
-//!
 //! **Hand-over.** When Newton does not converge, the same system is solved by Ipopt
-//! from the same starting point, so a Newton solve never ends worse than an Ipopt solve;
-//! the [`BackendReport`] records Newton's own outcome and that Ipopt finished.
+//! (when the crate is built with it) from the same starting point, so a Newton solve
+//! never ends worse than an Ipopt solve; the [`BackendReport`] records Newton's own
+//! outcome and that Ipopt finished.
 
 use std::cell::RefCell;
 use std::fmt;
 
 use serde::Serialize;
 
-use crate::solve::linalg::newton::{self, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SystemSolver};
 use crate::discrete::action::{Action, Block, MatrixPlan};
-use crate::model::Workspace;
-use crate::scene::{Backend, ConstraintKind, Formulation, HessianMode, IpoptValue, Scene};
-use skg_ipopt::{self as ipopt, EvalError, IterationStat, Problem};
+use crate::scene::{Backend, Formulation, HessianMode, Scene};
+use crate::solve::linalg::roundoff::row_roundoff_levels;
+use crate::solve::linalg::{IterationStat, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SquareSystem, SystemSolver};
+#[cfg(feature = "ipopt")]
+use skg_ipopt as ipopt;
+
+#[cfg(feature = "ipopt")]
+mod ipopt_square;
+mod systems;
+
+#[cfg(feature = "ipopt")]
+pub use ipopt_square::mumps_options;
+use systems::{Full, Reduced};
 
 /// The status of the backend that ended a solve: Ipopt's or Newton's own.
 ///
@@ -57,10 +57,12 @@ use skg_ipopt::{self as ipopt, EvalError, IterationStat, Problem};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SolverStatus {
     /// Ipopt's return status.
+    #[cfg(feature = "ipopt")]
     Ipopt(ipopt::Status),
     /// Ipopt stopped by its intermediate callback (`StopWhenSolved`) with `max |c|` above
     /// the tolerance but at the residual's round-off level (`Ipopt_Converged_To_Round_Off`):
     /// a success.
+    #[cfg(feature = "ipopt")]
     IpoptConvergedToRoundOff,
     /// Newton's status.
     Newton(NewtonStatus),
@@ -70,13 +72,21 @@ impl SolverStatus {
     /// Whether the backend stopped at the residual's round-off level above the tolerance
     /// (`Ipopt_Converged_To_Round_Off`, `Newton_Converged_To_Round_Off`).
     pub fn is_round_off(&self) -> bool {
-        matches!(self, SolverStatus::IpoptConvergedToRoundOff | SolverStatus::Newton(NewtonStatus::ConvergedToRoundOff))
+        match self {
+            #[cfg(feature = "ipopt")]
+            SolverStatus::IpoptConvergedToRoundOff => true,
+            SolverStatus::Newton(s) => *s == NewtonStatus::ConvergedToRoundOff,
+            #[cfg(feature = "ipopt")]
+            SolverStatus::Ipopt(_) => false,
+        }
     }
 
     /// Whether the backend reports success (Ipopt: [`ipopt::Status::is_success`]).
     pub fn is_success(&self) -> bool {
         match self {
+            #[cfg(feature = "ipopt")]
             SolverStatus::Ipopt(s) => s.is_success(),
+            #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => true,
             SolverStatus::Newton(s) => s.is_success(),
         }
@@ -85,7 +95,9 @@ impl SolverStatus {
     /// The status's stable name: Ipopt's identifier or Newton's `Newton_…` name.
     pub fn name(&self) -> &'static str {
         match self {
+            #[cfg(feature = "ipopt")]
             SolverStatus::Ipopt(s) => s.name(),
+            #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => "Ipopt_Converged_To_Round_Off",
             SolverStatus::Newton(s) => s.name(),
         }
@@ -95,7 +107,9 @@ impl SolverStatus {
 impl fmt::Display for SolverStatus {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            #[cfg(feature = "ipopt")]
             SolverStatus::Ipopt(s) => write!(f, "{s}"),
+            #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => {
                 f.write_str("Ipopt converged to the round-off level of the residual (above the requested tolerance)")
             }
@@ -107,7 +121,9 @@ impl fmt::Display for SolverStatus {
 impl Serialize for SolverStatus {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
         match self {
+            #[cfg(feature = "ipopt")]
             SolverStatus::Ipopt(s) => s.serialize(serializer),
+            #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => serializer.serialize_str(self.name()),
             SolverStatus::Newton(s) => s.serialize(serializer),
         }
@@ -198,8 +214,13 @@ pub struct SystemSolution {
 #[derive(Debug, thiserror::Error)]
 pub enum BackendError {
     /// Ipopt could not be run (options, sizes, a callback error it did not recover from).
+    #[cfg(feature = "ipopt")]
     #[error(transparent)]
     Ipopt(#[from] ipopt::SolveError),
+    /// An Ipopt solve was asked of a build without Ipopt.
+    #[cfg(not(feature = "ipopt"))]
+    #[error("this build of skg-solve has no Ipopt (it was built without the `ipopt` feature)")]
+    NoIpopt,
     /// The Newton backend could not be set up (structure, analysis).
     #[error(transparent)]
     Newton(#[from] NewtonError),
@@ -209,6 +230,7 @@ pub enum BackendError {
 struct Settings {
     backend: Backend,
     newton: NewtonOptions,
+    #[cfg(feature = "ipopt")]
     ipopt: ipopt::Options,
 }
 
@@ -245,7 +267,8 @@ impl SquareSolver {
                     chord: true,
                     single_precision: single_precision_pays(scene, action),
                 },
-                ipopt: ipopt_options(scene),
+                #[cfg(feature = "ipopt")]
+                ipopt: ipopt_square::options(scene),
             },
             jac: action.plan(jac_block),
             hess: exact_hessian.then(|| action.plan(Block::ReducedHessian)),
@@ -297,16 +320,16 @@ impl SquareSolver {
         let n_p = action.layout.n_p;
         match self.formulation {
             Formulation::Reduced => {
-                let mut p = Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac: &self.jac, hess: self.hess.as_ref() };
-                let mut solution = solve_problem(&self.settings, lu, analysis_s, &mut p, &z0[..n_p])?;
+                let mut p = Reduced::new(action, z0, &self.jac, self.hess.as_ref());
+                let mut solution = solve_system(&self.settings, lu, analysis_s, &mut p, &z0[..n_p])?;
                 let mut z = vec![0.0; action.layout.len()];
                 z[..n_p].copy_from_slice(&solution.z);
                 solution.z = z;
                 Ok(solution)
             }
             Formulation::Full => {
-                let mut p = Full { action, ws: action.model.workspace(), jac: &self.jac };
-                solve_problem(&self.settings, lu, analysis_s, &mut p, z0)
+                let mut p = Full::new(action, &self.jac);
+                solve_system(&self.settings, lu, analysis_s, &mut p, z0)
             }
         }
     }
@@ -353,30 +376,27 @@ const SINGLE_PRECISION_MIN_PER_NODE: usize = 24;
 impl SquareSolver {
     /// Whether every equation of `action`'s system at `z` (the whole unknown vector) is
     /// within `floor` or within its own round-off level `ROUNDOFF · ε · Σ_j |J_ij| |x_j|`
-    /// ([`newton::row_roundoff_levels`]). The round-off stop of both backends compares
+    /// ([`row_roundoff_levels`]). The round-off stop of both backends compares
     /// `max |c|` with the *largest* row's level; this checks each equation against its own,
     /// so that an equation with small terms cannot hide behind one with large terms.
     pub fn equations_at_round_off(&self, action: &Action, z: &[f64], floor: f64) -> bool {
         match self.formulation {
-            Formulation::Reduced => {
-                let mut p = Reduced { action, z: z.to_vec(), ws: action.model.workspace(), jac: &self.jac, hess: None };
-                rows_at_round_off(&mut p, &z[..action.layout.n_p], floor)
-            }
-            Formulation::Full => rows_at_round_off(&mut Full { action, ws: action.model.workspace(), jac: &self.jac }, z, floor),
+            Formulation::Reduced => rows_at_round_off(&mut Reduced::new(action, z, &self.jac, None), &z[..action.layout.n_p], floor),
+            Formulation::Full => rows_at_round_off(&mut Full::new(action, &self.jac), z, floor),
         }
     }
 }
 
 /// Whether every residual row of `problem` at `x` is within `floor` or its own round-off
 /// level (see [`SquareSolver::equations_at_round_off`]).
-fn rows_at_round_off<P: Problem>(problem: &mut P, x: &[f64], floor: f64) -> bool {
-    let mut c = vec![0.0; problem.num_constraints()];
-    let mut values = vec![0.0; problem.jacobian_structure().len()];
-    if problem.constraints(x, &mut c).is_err() || problem.jacobian_values(x, &mut values).is_err() {
+fn rows_at_round_off<S: SquareSystem>(system: &mut S, x: &[f64], floor: f64) -> bool {
+    let mut c = vec![0.0; system.size()];
+    let mut values = vec![0.0; system.jacobian_structure().len()];
+    if system.residual(x, &mut c).is_err() || system.jacobian_values(x, &mut values).is_err() {
         return false;
     }
-    let entries = problem.jacobian_structure().iter().zip(&values).map(|(&(r, col), &v)| (r as usize, col as usize, v));
-    let levels = newton::row_roundoff_levels(entries, x, c.len());
+    let entries = system.jacobian_structure().iter().zip(&values).map(|(&(r, col), &v)| (r as usize, col as usize, v));
+    let levels = row_roundoff_levels(entries, x, c.len());
     c.iter().zip(&levels).all(|(ci, level)| ci.abs() <= floor.max(*level))
 }
 
@@ -400,281 +420,81 @@ pub fn discard_kept_analysis() {
     KEPT_ANALYSIS.take();
 }
 
-/// Solve one adapter's system from `x0` (the adapter's unknowns): Newton first with
-/// `lu`, the analysis of its structure (present exactly when the backend is Newton;
-/// `analysis_s` the seconds it took when it was made for this solve, `None` when it was
-/// reused), Ipopt when Newton was not asked for or failed.
-fn solve_problem<P: Problem>(
+/// Solve one system from `x0` (its unknowns): Newton first with `lu`, the analysis of
+/// its structure (present exactly when the backend is Newton; `analysis_s` the seconds
+/// it took when it was made for this solve, `None` when it was reused), Ipopt when
+/// Newton was not asked for or failed (and the crate has Ipopt).
+fn solve_system<S: SquareSystem>(
     settings: &Settings,
     lu: Option<&mut SystemSolver>,
     analysis_s: Option<f64>,
-    problem: &mut P,
+    system: &mut S,
     x0: &[f64],
 ) -> Result<SystemSolution, BackendError> {
     let mut report = BackendReport { requested: settings.backend, newton: None, handed_over_to_ipopt: false, ipopt: None };
-    let (mut total_s, mut evaluation_s) = (0.0, 0.0);
-    if let Some(lu) = lu {
-        let (reusable, analysis_s) = (analysis_s.is_none(), analysis_s.unwrap_or(0.0));
-        let sol = lu.solve(problem, x0, &settings.newton)?;
-        total_s += analysis_s + sol.total_s;
-        evaluation_s += sol.stats.evaluation_s;
-        report.newton = Some(NewtonReport {
-            status: sol.status,
-            iterations: sol.iterations,
-            max_residual: sol.max_residual,
-            analysis_s,
-            analysis_reused: reusable,
-            stats: sol.stats,
-        });
-        if sol.status.is_success() {
-            return Ok(SystemSolution {
-                status: SolverStatus::Newton(sol.status),
-                z: sol.x,
-                max_residual: sol.max_residual,
-                iterations: sol.iterations,
-                history: sol.history,
-                total_s,
-                evaluation_s,
-                report,
-            });
-        }
-        report.handed_over_to_ipopt = true;
-    }
-    let mut stopping = StopWhenSolved::new(problem, settings.ipopt.tol);
-    let sol = ipopt::solve(&mut stopping, x0, &settings.ipopt)?;
-    let calls = |stat: ipopt::EvalStat| stat.calls as usize;
-    report.ipopt = Some(IpoptReport {
+    let Some(lu) = lu else { return solve_by_ipopt(settings, report, 0.0, 0.0, system, x0) };
+    let (reusable, analysis_s) = (analysis_s.is_none(), analysis_s.unwrap_or(0.0));
+    let sol = lu.solve(system, x0, &settings.newton)?;
+    let (total_s, evaluation_s) = (analysis_s + sol.total_s, sol.stats.evaluation_s);
+    report.newton = Some(NewtonReport {
+        status: sol.status,
         iterations: sol.iterations,
-        residual_evaluations: calls(sol.eval.constraints),
-        jacobian_evaluations: calls(sol.eval.jacobian),
-        hessian_evaluations: calls(sol.eval.hessian),
+        max_residual: sol.max_residual,
+        analysis_s,
+        analysis_reused: reusable,
+        stats: sol.stats,
     });
+    if sol.status.is_success() || !cfg!(feature = "ipopt") {
+        return Ok(SystemSolution {
+            status: SolverStatus::Newton(sol.status),
+            z: sol.x,
+            max_residual: sol.max_residual,
+            iterations: sol.iterations,
+            history: sol.history,
+            total_s,
+            evaluation_s,
+            report,
+        });
+    }
+    report.handed_over_to_ipopt = true;
+    solve_by_ipopt(settings, report, total_s, evaluation_s, system, x0)
+}
+
+/// Ipopt's solve of `system` from `x0`, after a Newton solve that took `total_s` and
+/// `evaluation_s` seconds (0 when none ran).
+#[cfg(feature = "ipopt")]
+fn solve_by_ipopt<S: SquareSystem>(
+    settings: &Settings,
+    mut report: BackendReport,
+    total_s: f64,
+    evaluation_s: f64,
+    system: &mut S,
+    x0: &[f64],
+) -> Result<SystemSolution, BackendError> {
+    let sol = ipopt_square::solve(system, x0, &settings.ipopt)?;
+    report.ipopt = Some(sol.report);
     Ok(SystemSolution {
-        status: stopping.status(sol.status),
-        max_residual: sol.max_constraint_violation,
+        status: sol.status,
+        max_residual: sol.max_residual,
         iterations: sol.iterations,
-        total_s: total_s + sol.total_seconds,
-        evaluation_s: evaluation_s + sol.total_seconds - sol.ipopt_seconds,
+        total_s: total_s + sol.total_s,
+        evaluation_s: evaluation_s + sol.evaluation_s,
         history: sol.history,
         z: sol.x,
         report,
     })
 }
 
-/// Why [`StopWhenSolved`] stopped Ipopt.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Stop {
-    /// `max |c| ≤ tol`.
-    Tolerance,
-    /// `max |c|` at the round-off level of the last Jacobian.
-    RoundOff,
-}
-
-/// A problem seen by Ipopt with skg-solve's stopping test in the intermediate callback
-/// (module docs, "Stopping Ipopt"): outside the restoration phase, stop once
-/// `max |c| ≤ tol`, or, after at least one step, once it is at the round-off level of
-/// the last Jacobian Ipopt asked for (as Newton does: the round-off test says that
-/// steps no longer reduce the residual, which a starting point alone cannot show).
-/// `max |c|` is Ipopt's `inf_pr`: unscaled, since skg-solve turns Ipopt's NLP scaling off
-/// (a scene that turns it on under `[solver.ipopt]` is stopped on the scaled value, as
-/// Ipopt's own test would be; convergence is judged on the recomputed unscaled residual
-/// either way). Everything else is passed through to the wrapped adapter.
-struct StopWhenSolved<'p, P: Problem> {
-    inner: &'p mut P,
-    tol: f64,
-    /// Round-off level of the residual from the last Jacobian (0 before the first).
-    roundoff: f64,
-    stopped: Option<Stop>,
-}
-
-impl<'p, P: Problem> StopWhenSolved<'p, P> {
-    fn new(inner: &'p mut P, tol: f64) -> Self {
-        StopWhenSolved { inner, tol, roundoff: 0.0, stopped: None }
-    }
-
-    /// The solve's status: Ipopt's, unless this wrapper stopped it.
-    fn status(&self, ipopt_status: ipopt::Status) -> SolverStatus {
-        match (ipopt_status, self.stopped) {
-            (ipopt::Status::UserRequestedStop, Some(Stop::Tolerance)) => SolverStatus::Ipopt(ipopt::Status::SolveSucceeded),
-            (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff)) => SolverStatus::IpoptConvergedToRoundOff,
-            (status, _) => SolverStatus::Ipopt(status),
-        }
-    }
-}
-
-impl<P: Problem> Problem for StopWhenSolved<'_, P> {
-    fn num_variables(&self) -> usize {
-        self.inner.num_variables()
-    }
-    fn num_constraints(&self) -> usize {
-        self.inner.num_constraints()
-    }
-    fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-        self.inner.variable_bounds(lower, upper)
-    }
-    fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-        self.inner.constraint_bounds(lower, upper)
-    }
-    fn objective(&mut self, x: &[f64]) -> Result<f64, EvalError> {
-        self.inner.objective(x)
-    }
-    fn objective_gradient(&mut self, x: &[f64], grad: &mut [f64]) -> Result<(), EvalError> {
-        self.inner.objective_gradient(x, grad)
-    }
-    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-        self.inner.constraints(x, c)
-    }
-    fn jacobian_structure(&self) -> &[(u32, u32)] {
-        self.inner.jacobian_structure()
-    }
-    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.inner.jacobian_values(x, values)?;
-        let entries = self.inner.jacobian_structure().iter().zip(values.iter()).map(|(&(r, c), &v)| (r as usize, c as usize, v));
-        self.roundoff = newton::residual_roundoff_level(entries, x, self.inner.num_constraints());
-        Ok(())
-    }
-    fn hessian_structure(&self) -> &[(u32, u32)] {
-        self.inner.hessian_structure()
-    }
-    fn hessian_values(&mut self, x: &[f64], obj_factor: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.inner.hessian_values(x, obj_factor, lambda, values)
-    }
-    fn intermediate(&mut self, stat: &IterationStat) -> bool {
-        if !stat.restoration {
-            if stat.inf_pr <= self.tol {
-                self.stopped = Some(Stop::Tolerance);
-            } else if stat.iter >= 1 && stat.inf_pr <= self.roundoff {
-                self.stopped = Some(Stop::RoundOff);
-            }
-        }
-        self.stopped.is_none() && self.inner.intermediate(stat)
-    }
-}
-
-/// MUMPS's options for a scene's KKT matrices: scaling off and the AMF ordering, and,
-/// for a scene with position constraints, QAMD (6) with MUMPS's permutation and scaling
-/// option 6 and its scaling 7 instead. Measured on Debian's MUMPS, release build, no
-/// verification, CPU seconds: a chain of 8 rods (Cartesian coordinates) at N = 1024
-/// 10.7 s → 0.7 s, at N = 4096 over 150 s → 2.3 s (41 s without the scaling), a chain
-/// of 16 rods at N = 1024 27 s → 3.3 s, the pendulum at N = 8192 over 5 minutes
-/// → 0.2 s (11.7 s without the scaling); without position constraints QAMD is not a
-/// gain (the knife edge at N = 4096 0.13 s → 0.50 s). Each is deterministic (SCOTCH,
-/// MUMPS's automatic choice, was not).
-pub fn mumps_options(scene: &Scene) -> Vec<(&'static str, i32)> {
-    if scene.constraints.iter().any(|c| c.kind == ConstraintKind::Position) {
-        vec![("mumps_scaling", 7), ("mumps_pivot_order", 6), ("mumps_permuting_scaling", 6)]
-    } else {
-        vec![("mumps_scaling", 0), ("mumps_pivot_order", 2)]
-    }
-}
-
-/// Ipopt's options for a scene: its `[solver]` settings, then the pass-through options.
-fn ipopt_options(scene: &Scene) -> ipopt::Options {
-    let solver = &scene.solver;
-    let pass_through = solver.ipopt.iter().map(|(k, v)| {
-        let v = match v {
-            IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
-            IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
-            IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
-        };
-        (k.clone(), v)
-    });
-    ipopt::Options {
-        tol: solver.tol,
-        constr_viol_tol: solver.tol,
-        max_iter: solver.max_iter,
-        print_level: solver.print_level,
-        linear_solver: solver.linear_solver.clone(),
-        output_file: solver.ipopt_log.clone(),
-        // MUMPS's default scaling (77, automatic) made the very first factorization of
-        // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
-        // on Debian's MUMPS 5.5). MUMPS's automatic pivot order picks SCOTCH, whose
-        // ordering of the same matrix varied from run to run (different fill): the same
-        // solve gave different trajectories (in the last digits) and, on hard wall
-        // scenes, different iteration counts and exit codes from run to run. AMF (2) is
-        // deterministic and was faster on every scene without position constraints
-        // measured; with them, see [`mumps_options`] (docs/solver.md, "Posing the
-        // system"). The scene's own [solver.ipopt] options come after and override these.
-        extra: mumps_options(scene).into_iter().map(|(k, v)| (k.to_string(), ipopt::OptionValue::Int(v))).chain(pass_through).collect(),
-        ..ipopt::Options::default()
-    }
-}
-
-/// The reduced system R(P) = ∂S/∂M = 0 as a [`Problem`].
-struct Reduced<'a> {
-    action: &'a Action,
-    z: Vec<f64>,
-    ws: Workspace,
-    jac: &'a MatrixPlan,
-    hess: Option<&'a MatrixPlan>,
-}
-
-impl Reduced<'_> {
-    fn set(&mut self, x: &[f64], minus: Option<&[f64]>) {
-        let n_p = self.action.layout.n_p;
-        self.z[..n_p].copy_from_slice(x);
-        match minus {
-            Some(y) => self.z[n_p..].copy_from_slice(y),
-            None => self.z[n_p..].iter_mut().for_each(|v| *v = 0.0),
-        }
-    }
-}
-
-impl Problem for Reduced<'_> {
-    fn num_variables(&self) -> usize {
-        self.action.layout.n_p
-    }
-    fn num_constraints(&self) -> usize {
-        self.action.layout.n_m
-    }
-    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-        self.set(x, None);
-        self.action.gradient(&self.z, true, c, &mut self.ws);
-        Ok(())
-    }
-    fn jacobian_structure(&self) -> &[(u32, u32)] {
-        &self.jac.structure
-    }
-    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.set(x, None);
-        self.action.matrix_values(self.jac, &self.z, values, &mut self.ws);
-        Ok(())
-    }
-    fn hessian_structure(&self) -> &[(u32, u32)] {
-        self.hess.map_or(&[], |h| &h.structure)
-    }
-    fn hessian_values(&mut self, x: &[f64], _obj: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        if let Some(plan) = self.hess {
-            self.set(x, Some(lambda));
-            self.action.matrix_values(plan, &self.z, values, &mut self.ws);
-        }
-        Ok(())
-    }
-}
-
-/// The full system ∇S(Z) = 0 as a [`Problem`].
-struct Full<'a> {
-    action: &'a Action,
-    ws: Workspace,
-    jac: &'a MatrixPlan,
-}
-
-impl Problem for Full<'_> {
-    fn num_variables(&self) -> usize {
-        self.action.layout.len()
-    }
-    fn num_constraints(&self) -> usize {
-        self.action.layout.len()
-    }
-    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-        self.action.gradient(x, false, c, &mut self.ws);
-        Ok(())
-    }
-    fn jacobian_structure(&self) -> &[(u32, u32)] {
-        &self.jac.structure
-    }
-    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.action.matrix_values(self.jac, x, values, &mut self.ws);
-        Ok(())
-    }
+/// Without Ipopt every solve is Newton's (the scene's backend is checked when it is
+/// resolved), so there is nothing to hand over to.
+#[cfg(not(feature = "ipopt"))]
+fn solve_by_ipopt<S: SquareSystem>(
+    _: &Settings,
+    _: BackendReport,
+    _: f64,
+    _: f64,
+    _: &mut S,
+    _: &[f64],
+) -> Result<SystemSolution, BackendError> {
+    Err(BackendError::NoIpopt)
 }

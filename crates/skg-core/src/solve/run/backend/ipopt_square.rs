@@ -1,0 +1,212 @@
+//! Ipopt as a solver of a [`SquareSystem`] (the `ipopt` feature): one generic adapter,
+//! [`IpoptSquare`], poses the system as equality constraints `F(x) = 0` with a zero
+//! objective and no bounds, with skg-solve's stopping test in Ipopt's intermediate
+//! callback; and the options Ipopt is given for a scene.
+//!
+//! **Stopping Ipopt.** Ipopt is stopped from its intermediate callback as soon as
+//! `max |c|` meets the tolerance (status `Solve_Succeeded`: the multipliers of a square
+//! system are not used, so the residual is the whole convergence test, as it is for
+//! Newton) or the residual's round-off level ([`roundoff`](crate::solve::linalg::roundoff);
+//! status `Ipopt_Converged_To_Round_Off`). This saves two costs Ipopt would otherwise
+//! pay: after converging on a square problem it factors the KKT matrix once more to
+//! "recompute multipliers for the feasibility problem" (it prints that this fails; the
+//! multipliers are unused here), and at large `N`, where round-off keeps `max |c|` just
+//! above the tolerance, it iterates on until its acceptable-level test (disk,
+//! N = 16384: 11 iterations instead of 1).
+
+use skg_ipopt::{self as ipopt, Problem};
+
+use super::{IpoptReport, SolverStatus};
+use crate::scene::{ConstraintKind, IpoptValue, Scene};
+use crate::solve::linalg::roundoff::residual_roundoff_level;
+use crate::solve::linalg::{EvalError, IterationStat, SquareSystem};
+
+/// What an Ipopt solve of a square system found.
+pub(super) struct IpoptOutcome {
+    /// Ipopt's status, or the stopping test's.
+    pub status: SolverStatus,
+    /// The last point.
+    pub x: Vec<f64>,
+    /// The unscaled `max |F|` there, recomputed.
+    pub max_residual: f64,
+    /// Ipopt's iterations.
+    pub iterations: usize,
+    /// Its iteration table.
+    pub history: Vec<IterationStat>,
+    /// Wall time of the solve, and of it, the time in the system's evaluations.
+    pub total_s: f64,
+    pub evaluation_s: f64,
+    /// Its iterations and the evaluations it asked for.
+    pub report: IpoptReport,
+}
+
+/// Solve `system` from `x0` with Ipopt and `options`, stopped by the tolerance
+/// `options.tol` or the round-off level (module docs).
+pub(super) fn solve<S: SquareSystem + ?Sized>(
+    system: &mut S,
+    x0: &[f64],
+    options: &ipopt::Options,
+) -> Result<IpoptOutcome, ipopt::SolveError> {
+    let mut square = IpoptSquare { system, tol: options.tol, roundoff: 0.0, stopped: None };
+    let sol = ipopt::solve(&mut square, x0, options)?;
+    let calls = |stat: ipopt::EvalStat| stat.calls as usize;
+    Ok(IpoptOutcome {
+        status: square.status(sol.status),
+        max_residual: sol.max_constraint_violation,
+        iterations: sol.iterations,
+        total_s: sol.total_seconds,
+        evaluation_s: sol.total_seconds - sol.ipopt_seconds,
+        history: sol.history.iter().map(iteration_stat).collect(),
+        x: sol.x,
+        report: IpoptReport {
+            iterations: sol.iterations,
+            residual_evaluations: calls(sol.eval.constraints),
+            jacobian_evaluations: calls(sol.eval.jacobian),
+            hessian_evaluations: calls(sol.eval.hessian),
+        },
+    })
+}
+
+/// Why [`IpoptSquare`] stopped Ipopt.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Stop {
+    /// `max |c| ≤ tol`.
+    Tolerance,
+    /// `max |c|` at the round-off level of the last Jacobian.
+    RoundOff,
+}
+
+/// A square system seen by Ipopt, with skg-solve's stopping test in the intermediate
+/// callback (module docs): outside the restoration phase, stop once `max |c| ≤ tol`,
+/// or, after at least one step, once it is at the round-off level of the last Jacobian
+/// Ipopt asked for (as Newton does: the round-off test says that steps no longer reduce
+/// the residual, which a starting point alone cannot show). `max |c|` is Ipopt's
+/// `inf_pr`: unscaled, since skg-solve turns Ipopt's NLP scaling off (a scene that turns
+/// it on under `[solver.ipopt]` is stopped on the scaled value, as Ipopt's own test
+/// would be; convergence is judged on the recomputed unscaled residual either way).
+pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
+    system: &'p mut S,
+    tol: f64,
+    /// Round-off level of the residual from the last Jacobian (0 before the first).
+    roundoff: f64,
+    stopped: Option<Stop>,
+}
+
+impl<S: SquareSystem + ?Sized> IpoptSquare<'_, S> {
+    /// The solve's status: Ipopt's, unless the stopping test stopped it.
+    fn status(&self, ipopt_status: ipopt::Status) -> SolverStatus {
+        match (ipopt_status, self.stopped) {
+            (ipopt::Status::UserRequestedStop, Some(Stop::Tolerance)) => SolverStatus::Ipopt(ipopt::Status::SolveSucceeded),
+            (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff)) => SolverStatus::IpoptConvergedToRoundOff,
+            (status, _) => SolverStatus::Ipopt(status),
+        }
+    }
+}
+
+/// Our evaluation error as Ipopt's (the wrapper keeps the first for its report).
+fn to_ipopt(e: EvalError) -> ipopt::EvalError {
+    ipopt::EvalError(e.0)
+}
+
+impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
+    fn num_variables(&self) -> usize {
+        self.system.size()
+    }
+    fn num_constraints(&self) -> usize {
+        self.system.size()
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), ipopt::EvalError> {
+        self.system.residual(x, c).map_err(to_ipopt)
+    }
+    fn jacobian_structure(&self) -> &[(u32, u32)] {
+        self.system.jacobian_structure()
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), ipopt::EvalError> {
+        self.system.jacobian_values(x, values).map_err(to_ipopt)?;
+        let entries = self.system.jacobian_structure().iter().zip(values.iter()).map(|(&(r, c), &v)| (r as usize, c as usize, v));
+        self.roundoff = residual_roundoff_level(entries, x, self.system.size());
+        Ok(())
+    }
+    fn hessian_structure(&self) -> &[(u32, u32)] {
+        self.system.hessian_structure()
+    }
+    fn hessian_values(&mut self, x: &[f64], _obj_factor: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), ipopt::EvalError> {
+        self.system.hessian_values(x, lambda, values).map_err(to_ipopt)
+    }
+    fn intermediate(&mut self, stat: &ipopt::IterationStat) -> bool {
+        if !stat.restoration {
+            if stat.inf_pr <= self.tol {
+                self.stopped = Some(Stop::Tolerance);
+            } else if stat.iter >= 1 && stat.inf_pr <= self.roundoff {
+                self.stopped = Some(Stop::RoundOff);
+            }
+        }
+        self.stopped.is_none()
+    }
+}
+
+/// One row of Ipopt's iteration table as the crate's own record.
+fn iteration_stat(s: &ipopt::IterationStat) -> IterationStat {
+    IterationStat {
+        iter: s.iter,
+        objective: s.objective,
+        inf_pr: s.inf_pr,
+        inf_du: s.inf_du,
+        mu: s.mu,
+        d_norm: s.d_norm,
+        regularization: s.regularization,
+        alpha_pr: s.alpha_pr,
+        alpha_du: s.alpha_du,
+        ls_trials: s.ls_trials,
+        restoration: s.restoration,
+    }
+}
+
+/// MUMPS's options for a scene's KKT matrices: scaling off and the AMF ordering, and,
+/// for a scene with position constraints, QAMD (6) with MUMPS's permutation and scaling
+/// option 6 and its scaling 7 instead. Measured on Debian's MUMPS, release build, no
+/// verification, CPU seconds: a chain of 8 rods (Cartesian coordinates) at N = 1024
+/// 10.7 s → 0.7 s, at N = 4096 over 150 s → 2.3 s (41 s without the scaling), a chain
+/// of 16 rods at N = 1024 27 s → 3.3 s, the pendulum at N = 8192 over 5 minutes
+/// → 0.2 s (11.7 s without the scaling); without position constraints QAMD is not a
+/// gain (the knife edge at N = 4096 0.13 s → 0.50 s). Each is deterministic (SCOTCH,
+/// MUMPS's automatic choice, was not).
+pub fn mumps_options(scene: &Scene) -> Vec<(&'static str, i32)> {
+    if scene.constraints.iter().any(|c| c.kind == ConstraintKind::Position) {
+        vec![("mumps_scaling", 7), ("mumps_pivot_order", 6), ("mumps_permuting_scaling", 6)]
+    } else {
+        vec![("mumps_scaling", 0), ("mumps_pivot_order", 2)]
+    }
+}
+
+/// Ipopt's options for a scene: its `[solver]` settings, then the pass-through options.
+pub(super) fn options(scene: &Scene) -> ipopt::Options {
+    let solver = &scene.solver;
+    let pass_through = solver.ipopt.iter().map(|(k, v)| {
+        let v = match v {
+            IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
+            IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
+            IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
+        };
+        (k.clone(), v)
+    });
+    ipopt::Options {
+        tol: solver.tol,
+        constr_viol_tol: solver.tol,
+        max_iter: solver.max_iter,
+        print_level: solver.print_level,
+        linear_solver: solver.linear_solver.clone(),
+        output_file: solver.ipopt_log.clone(),
+        // MUMPS's default scaling (77, automatic) made the very first factorization of
+        // the tumbler's KKT matrix take minutes at N ≥ 2048 (0.06 s without it; measured
+        // on Debian's MUMPS 5.5). MUMPS's automatic pivot order picks SCOTCH, whose
+        // ordering of the same matrix varied from run to run (different fill): the same
+        // solve gave different trajectories (in the last digits) and, on hard wall
+        // scenes, different iteration counts and exit codes from run to run. AMF (2) is
+        // deterministic and was faster on every scene without position constraints
+        // measured; with them, see [`mumps_options`] (docs/solver.md, "Posing the
+        // system"). The scene's own [solver.ipopt] options come after and override these.
+        extra: mumps_options(scene).into_iter().map(|(k, v)| (k.to_string(), ipopt::OptionValue::Int(v))).chain(pass_through).collect(),
+        ..ipopt::Options::default()
+    }
+}
