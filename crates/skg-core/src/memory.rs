@@ -74,22 +74,29 @@ fn columns(scene: &Scene) -> f64 {
     (1 + 2 * scene.coordinates.len() + 3 * scene.constraints.len() + 2 * scene.walls.len() + 2) as f64
 }
 
-/// The nodes of the system a solve of `scene` solves at once: one window's when it is
-/// solved in windows, else all.
-pub fn system_nodes(scene: &Scene) -> f64 {
+/// The nodes of the system a solve of `scene` on `nodes` nodes solves at once: one
+/// window's when it is solved in windows, else all.
+pub fn system_nodes(scene: &Scene, nodes: usize) -> f64 {
     match scene.windows {
         Some(w) => {
-            let dt = (scene.t_end - scene.t_start) / (scene.nodes as f64 - 1.0);
-            ((w.length / dt).round() + 1.0).min(scene.nodes as f64)
+            let dt = (scene.t_end - scene.t_start) / (nodes as f64 - 1.0);
+            ((w.length / dt).round() + 1.0).min(nodes as f64)
         }
-        None => scene.nodes as f64,
+        None => nodes as f64,
     }
 }
 
-/// Estimated peak memory in bytes of solving `scene` (see the module documentation).
+/// Estimated peak memory in bytes of solving `scene` on its own grid with its own
+/// operator (see the module documentation).
 pub fn solve_bytes(scene: &Scene) -> f64 {
+    solve_bytes_with(scene, scene.operator, scene.nodes)
+}
+
+/// Estimated peak memory in bytes of solving `scene` with `operator` on `nodes` nodes
+/// (see the module documentation).
+pub fn solve_bytes_with(scene: &Scene, operator: OperatorKind, nodes: usize) -> f64 {
     let unknowns = (scene.coordinates.len() + scene.constraints.len()) as f64;
-    let stencil = match scene.operator {
+    let stencil = match operator {
         OperatorKind::Sbp121 => 0.6,
         OperatorKind::Sbp242 => 1.0,
         OperatorKind::Sbp121Ad => 1.1,
@@ -99,13 +106,13 @@ pub fn solve_bytes(scene: &Scene) -> f64 {
         OperatorKind::Sbp484Ad => 2.5,
     };
     let formulation = if scene.formulation == Formulation::Full { 3.0 } else { 1.0 };
-    let n = system_nodes(scene);
+    let n = system_nodes(scene, nodes);
     let (per_unknown, per_pair) = match scene.solver.backend {
         Backend::Ipopt => (IPOPT_BYTES_PER_UNKNOWN, IPOPT_BYTES_PER_PAIR),
         Backend::Newton => (NEWTON_BYTES_PER_UNKNOWN, NEWTON_BYTES_PER_PAIR),
     };
     let system = n * (per_unknown * unknowns + per_pair * unknowns * unknowns) * stencil * formulation;
-    BASE_BYTES + scene.nodes as f64 * columns(scene) * TRAJECTORY_BYTES_PER_CELL + system
+    BASE_BYTES + nodes as f64 * columns(scene) * TRAJECTORY_BYTES_PER_CELL + system
 }
 
 /// Estimated peak memory in bytes of a reference of `scene` sampled at `samples` times.

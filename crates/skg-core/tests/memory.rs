@@ -190,9 +190,9 @@ fn a_solve_in_windows_is_estimated_by_one_window() {
     let text = shipped("damped_oscillator", &[("end = 10", "end = 2000"), ("nodes = 512", "nodes = 512\nwindow = 2")]);
     let ov = Overrides { nodes: Some(1_000_000), backend: Some(Backend::Ipopt), ..Overrides::default() };
     let windowed = SceneFile::parse(&text, "o.toml").unwrap().resolve(&ov).unwrap();
-    assert_eq!(memory::system_nodes(&windowed), 1001.0);
+    assert_eq!(memory::system_nodes(&windowed, windowed.nodes), 1001.0);
     let global = SceneFile::parse(&text, "o.toml").unwrap().resolve(&Overrides { window: Some(0.0), ..ov }).unwrap();
-    assert_eq!(memory::system_nodes(&global), 1e6);
+    assert_eq!(memory::system_nodes(&global, global.nodes), 1e6);
     let (w, g) = (memory::solve_bytes(&windowed), memory::solve_bytes(&global));
     assert!(w < 3.0 * 1.04e9 && g > 2.0 * w, "windows {w:e}, global {g:e}");
 }

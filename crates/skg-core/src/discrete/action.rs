@@ -33,6 +33,8 @@
 //! (or [`Action::set_initial_state`], [`Action::set_start_time`]) re-targets it without
 //! rebuilding the model or the plans.
 
+use std::sync::Arc;
+
 use crate::model::{LocalKind, Model, PairTape, Workspace};
 use crate::sbp::SbpOperator;
 use crate::scene::InitialVelocity;
@@ -247,7 +249,7 @@ impl EntryIndex {
 /// The discrete action of one scene on one grid.
 pub struct Action {
     /// The scene's model (the node density and its derivatives).
-    pub model: Model,
+    pub model: Arc<Model>,
     /// The SBP operator on the grid.
     pub op: SbpOperator,
     /// Where each unknown lives in Z.
@@ -275,7 +277,7 @@ impl Action {
     /// The discrete action of `model` on the grid of `op` whose first node is at time
     /// `t0`, with initial state (q0, v0) there imposed as `initial_velocity` says: the
     /// node map T and the boundary terms.
-    pub fn new(model: Model, op: SbpOperator, initial_velocity: InitialVelocity, t0: f64, q0: Vec<f64>, v0: Vec<f64>) -> Action {
+    pub fn new(model: Arc<Model>, op: SbpOperator, initial_velocity: InitialVelocity, t0: f64, q0: Vec<f64>, v0: Vec<f64>) -> Action {
         let (d, n) = (model.layout.d, model.layout.n);
         let nodes = op.len();
         let layout = GlobalLayout::new(d, n, nodes, initial_velocity);

@@ -1,6 +1,8 @@
 //! The discretization on the time grid: the SBP-discretized action of a model, the
 //! trajectory at the nodes, and contact at the nodes.
 //!
+//! * [`discretization`]: what a solve chooses about the discretization of a scene's model
+//!   (operator, nodes, initial-velocity condition; [`Discretization`]).
 //! * [`action`]: the discrete action on the grid — the layout of the unknowns, the node
 //!   times, the boundary terms, the residual and the sparsity plans of its Jacobian and
 //!   Hessian ([`Action`]).
@@ -18,7 +20,9 @@
 
 pub mod action;
 pub mod contact;
+pub mod discretization;
 pub mod trajectory;
 
 pub use action::Action;
+pub use discretization::Discretization;
 pub use trajectory::{trajectory_header, trajectory_rows, NodeSeries, States, Trajectory};

@@ -34,15 +34,17 @@
 //! in `summary.json` (`attempts`), the reported one marked `chosen`. `[solver] fallback =
 //! false` or `--no-fallback` stops after step 1.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use super::run::error::SolveError;
 use super::run::global::{solve_global, Run};
 use super::run::outcome::{Attempt, Method, Outcome, Work};
-use super::run::piece::{grid, Guess};
+use super::run::piece::Guess;
 use super::run::window::{self, WindowGrid};
 use crate::discrete::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
+use crate::discrete::Discretization;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::{Scene, Windows};
@@ -74,13 +76,15 @@ pub enum Rungs {
     GuessOnly,
 }
 
-/// The scene's own solve from `guess` (one global solve, or the scene's windows) and,
-/// when it fails to converge or to verify, the ladder's `rungs` (see the module docs),
-/// stopped at `deadline` and by [`LADDER_COST_FACTOR`]. `progress` is told what each
-/// attempt is about to do ("2. coarse to fine (…)").
+/// The solve of the scene's model `model` with the discretization `disc` from `guess`
+/// (one global solve, or the scene's windows) and, when it fails to converge or to
+/// verify, the ladder's `rungs` (see the module docs), stopped at `deadline` and by
+/// [`LADDER_COST_FACTOR`]. `progress` is told what each attempt is about to do ("2.
+/// coarse to fine (…)").
 pub fn climb(
     scene: &Scene,
-    model: &Model,
+    model: &Arc<Model>,
+    disc: &Discretization,
     guess: &Guess,
     rungs: Rungs,
     deadline: Option<Instant>,
@@ -89,6 +93,7 @@ pub fn climb(
     let mut ladder = Ladder {
         scene,
         model,
+        disc: *disc,
         tried: Vec::new(),
         progress,
         preliminary: Work::default(),
@@ -98,8 +103,8 @@ pub fn climb(
         stopped: None,
     };
     let go_on = match scene.windows {
-        Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, w))?,
-        None => ladder.attempt("one global solve", || solve_global(scene, guess))?,
+        Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, model, disc, w))?,
+        None => ladder.attempt("one global solve", || solve_global(scene, model, disc, guess))?,
     };
     if !go_on || !scene.solver.fallback {
         return Ok(ladder.finish());
@@ -133,7 +138,9 @@ struct Tried {
 
 struct Ladder<'a> {
     scene: &'a Scene,
-    model: &'a Model,
+    /// The scene's model, and the discretization every rung keeps but the coarse grid.
+    model: &'a Arc<Model>,
+    disc: Discretization,
     tried: Vec<Tried>,
     progress: &'a mut dyn FnMut(&str),
     /// The work of the solves run so far for the next attempt (a coarse grid, wider
@@ -188,7 +195,7 @@ impl Ladder<'_> {
         self.announce(description);
         let start = Instant::now();
         let run = run()?;
-        let mut outcome = super::run::global::outcome(self.scene, self.model, run);
+        let mut outcome = super::run::assess::outcome(self.scene, self.model, run);
         outcome.work.add(&std::mem::take(&mut self.preliminary));
         let go_on = !ends_the_ladder(&outcome);
         self.tried.push(Tried { description: description.to_string(), outcome, wall_s: start.elapsed().as_secs_f64() });
@@ -213,33 +220,33 @@ impl Ladder<'_> {
 
     /// Step 2a; `Ok(true)` when it succeeded.
     fn coarse_to_fine(&mut self) -> Result<bool, SolveError> {
-        let scene = self.scene;
-        let coarse_nodes = (scene.nodes - 1) / 2 + 1;
-        if coarse_nodes < scene.operator.min_nodes().max(8) || !self.may_go_on() {
+        let (scene, model, disc) = (self.scene, self.model, self.disc);
+        let coarse_nodes = (disc.nodes - 1) / 2 + 1;
+        if coarse_nodes < disc.operator.min_nodes().max(8) || !self.may_go_on() {
             return Ok(false);
         }
-        let coarse_scene = Scene { nodes: coarse_nodes, ..scene.clone() };
         self.announce(&format!("coarse to fine (solving on {coarse_nodes} nodes first)"));
-        let coarse = solve_global(&coarse_scene, &Guess::TimeStepping)?;
+        let coarse = solve_global(scene, model, &disc.with_nodes(coarse_nodes), &Guess::TimeStepping)?;
         self.preliminary(&coarse);
         let coarse = coarse.solution;
         if !coarse.status.is_converged() {
             self.set_aside_preliminary();
             return Ok(false);
         }
-        let (times, _) = grid(scene);
+        let (times, _) = disc.grid(scene);
         let guess = Guess::States {
             q: hermite(&coarse.trajectory, &times),
             lambda: linear(&coarse.trajectory.t, &coarse.trajectory.lambda, &times),
             description: format!("the solve on {coarse_nodes} nodes, interpolated onto the grid (cubic Hermite)"),
         };
-        self.attempt(&format!("coarse to fine (initial guess from {coarse_nodes} nodes)"), || solve_global(scene, &guess))?;
+        self.attempt(&format!("coarse to fine (initial guess from {coarse_nodes} nodes)"), || solve_global(scene, model, &disc, &guess))?;
         Ok(self.succeeded())
     }
 
-    /// Step 2b; `Ok(true)` when it succeeded.
+    /// Step 2b; `Ok(true)` when it succeeded. The one rung that changes the scene (its
+    /// walls' widths), and so builds models of its own.
     fn width_continuation(&mut self) -> Result<bool, SolveError> {
-        let scene = self.scene;
+        let (scene, model, disc) = (self.scene, self.model, self.disc);
         if scene.walls.is_empty() {
             return Ok(false);
         }
@@ -252,7 +259,7 @@ impl Ladder<'_> {
             self.announce(&format!("wall-width continuation (every wall width × {factor})"));
             let mut wide = scene.clone();
             wide.walls.iter_mut().for_each(|w| w.width *= factor);
-            let run = solve_global(&wide, &guess)?;
+            let run = solve_global(&wide, &Arc::new(Model::build(&wide)?), &disc, &guess)?;
             self.preliminary(&run);
             if run.solution.status.is_converged() {
                 guess = Guess::States {
@@ -268,7 +275,7 @@ impl Ladder<'_> {
             return Ok(false);
         };
         self.attempt(&format!("wall-width continuation (σ × {:?} down to × {last}, then the scene's σ)", WIDTH_FACTORS), || {
-            solve_global(scene, &guess)
+            solve_global(scene, model, &disc, &guess)
         })?;
         Ok(self.succeeded())
     }
@@ -277,27 +284,30 @@ impl Ladder<'_> {
     fn past_the_end(&mut self) -> Result<bool, SolveError> {
         let span = self.scene.t_end - self.scene.t_start;
         let windows = Windows { length: span * (1.0 + END_MARGIN), overlap: span * END_MARGIN };
-        if WindowGrid::new(self.scene, windows).is_err() || !self.may_go_on() {
+        let (scene, model, disc) = (self.scene, self.model, self.disc);
+        if WindowGrid::new(scene, &disc, windows).is_err() || !self.may_go_on() {
             return Ok(false);
         }
-        self.attempt(&format!("one solve {:.0} % past the end time", 100.0 * END_MARGIN), || window::solve_windows(self.scene, windows))?;
+        self.attempt(&format!("one solve {:.0} % past the end time", 100.0 * END_MARGIN), || {
+            window::solve_windows(scene, model, &disc, windows)
+        })?;
         Ok(self.succeeded())
     }
 
     /// Step 4: windows of halving length.
     fn windows(&mut self) -> Result<(), SolveError> {
-        let scene = self.scene;
+        let (scene, model, disc) = (self.scene, self.model, self.disc);
         let mut length = scene.windows.map_or(scene.t_end - scene.t_start, |w| w.length) / 2.0;
         loop {
             if !self.may_go_on() {
                 return Ok(());
             }
             let windows = Windows { length, overlap: length / 4.0 };
-            match WindowGrid::new(scene, windows) {
+            match WindowGrid::new(scene, &disc, windows) {
                 Ok(grid) if grid.nodes >= MIN_WINDOW_NODES => {}
                 _ => return Ok(()),
             }
-            self.attempt(&format!("windows of {length:.4} s"), || window::solve_windows(scene, windows))?;
+            self.attempt(&format!("windows of {length:.4} s"), || window::solve_windows(scene, model, &disc, windows))?;
             if self.succeeded() {
                 return Ok(());
             }
@@ -320,7 +330,7 @@ impl Ladder<'_> {
         let mut outcome = self.tried.swap_remove(chosen).outcome;
         outcome.timings.other_attempts_s = others_s;
         outcome.work = work;
-        outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &outcome, fallback_used, windows_tried));
+        outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &self.disc, &outcome, fallback_used, windows_tried));
         outcome.warnings.extend(self.stopped.take());
         outcome.attempts = attempts;
         outcome
@@ -372,7 +382,7 @@ fn record(t: &Tried, chosen: bool) -> Attempt {
 
 /// What to do about an outcome that cannot be trusted: only steps that apply to the
 /// scene (walls) and were not already tried (windows).
-fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) -> String {
+fn remedy(scene: &Scene, disc: &Discretization, o: &Outcome, fallback_used: bool, windows_tried: bool) -> String {
     let span = scene.t_end - scene.t_start;
     let suggested_window = format!("{:.4}", span / 8.0);
     let walls = !scene.walls.is_empty();
@@ -391,7 +401,7 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
     let friction = scene.walls.iter().any(|w| w.friction > 0.0);
     let friction_hint = "raise the walls' friction_velocity ε (at rest the regularized friction damps at the rate μN/(mε))";
     if !o.converged() {
-        let mut steps = vec![refine(scene, o)];
+        let mut steps = vec![refine(disc, o)];
         if walls && under_resolved_wall(o).is_none() {
             steps.push("widen the walls (a larger σ)".to_string());
         }
@@ -417,17 +427,17 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
         _ => {
             // A dissipative operator damps the mode: its odd-even amplitude is a smooth
             // transient (verify's module documentation).
-            let oddeven = v.max_error.is_some_and(|e| v.odd_even_max >= 0.25 * e) && !scene.operator.is_dissipative();
+            let oddeven = v.max_error.is_some_and(|e| v.odd_even_max >= 0.25 * e) && !disc.operator.is_dissipative();
             let windows = matches!(o.method, Method::Windows { .. });
-            let damped = scene.operator.dissipative();
+            let damped = disc.operator.dissipative();
             let cure = if oddeven && !windows && !windows_tried {
                 format!(
                     "solve in windows (`[time] window = {suggested_window}` or --window {suggested_window}), which bounds the odd-even \
                      mode's growth, or use the dissipative operator {damped} (--operator {damped}), which damps it"
                 )
             } else {
-                let refine = refine(scene, o);
-                let refine = match higher_order(scene.operator).filter(|_| under_resolved_wall(o).is_none()) {
+                let refine = refine(disc, o);
+                let refine = match higher_order(disc.operator).filter(|_| under_resolved_wall(o).is_none()) {
                     Some(op) => format!("{refine} or use a higher-order operator (--operator {})", op.name()),
                     None => refine,
                 };
@@ -456,12 +466,12 @@ fn remedy(scene: &Scene, o: &Outcome, fallback_used: bool, windows_tried: bool) 
 /// contacts under-resolved (fewer than [`MIN_STEPS`] grid steps per contact length,
 /// [`fewest_steps`](crate::discrete::contact::fewest_steps)), the power-of-two multiple of
 /// the nodes that reaches [`RESOLVED_STEPS`] (or a wider wall).
-fn refine(scene: &Scene, o: &Outcome) -> String {
+fn refine(disc: &Discretization, o: &Outcome) -> String {
     let Some((name, r)) = under_resolved_wall(o) else {
-        return format!("refine the grid (--nodes {})", 2 * scene.nodes);
+        return format!("refine the grid (--nodes {})", 2 * disc.nodes);
     };
     let factor = (RESOLVED_STEPS / r.steps).log2().ceil().exp2().max(2.0);
-    let nodes = (scene.nodes as f64 * factor).min(1e15) as usize;
+    let nodes = (disc.nodes as f64 * factor).min(1e15) as usize;
     let steps = if r.steps >= 0.1 { format!("{:.2}", r.steps) } else { format!("{:.1e}", r.steps) };
     format!(
         "refine the grid (--nodes {nodes}) or widen wall `{name}`: the grid does not resolve its contacts, the gap changing by a \

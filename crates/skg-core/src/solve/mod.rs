@@ -1,30 +1,38 @@
-//! The solve: the critical point of the discrete action, found by a backend, assessed,
-//! and, when it fails, the fallback ladder.
+//! The solve: the critical point of the discrete action of a scene's model, found by a
+//! backend, assessed against time stepping, and, when it fails, the fallback ladder;
+//! with `--refine` or `--operator auto`, the discretization chosen to meet a tolerance.
 //!
-//! In the order in which its parts use each other (each only the ones before it):
+//! The front door is [`solve_scene`]: it builds the scene's model once and hands it,
+//! with the discretization the scene asks for ([`Discretization`]), to the ladder or the
+//! refinement. In the order in which the parts use each other (each only the ones
+//! before it):
 //!
-//! * [`newton`]: Newton's method for a square sparse system with a sparse LU;
-//!   [`backend`]: the system of either formulation as an Ipopt [`Problem`], and
-//!   [`SquareSolver`], the chosen backend with its sparsity plans and LU analysis kept
-//!   between solves of equal structure.
-//! * `error.rs`: [`SolveError`], [`WindowError`]; `status.rs`: [`SolveStatus`], how a
-//!   solve ended; `outcome.rs`: [`Outcome`], what a solve produced, and [`Method`].
-//! * `piece.rs`: one solve of one action's system from an initial guess
-//!   ([`solve_piece`], [`Guess`], [`Piece`]) and the action of a scene ([`grid`],
-//!   [`build_action`]).
-//! * `run.rs`: a global run over the span ([`solve_global`], [`Run`]) and its
-//!   assessment ([`outcome`]: verification, diagnostics, warnings).
-//! * [`window`]: a run in windows of equal node count.
-//! * [`ladder`]: the entry point, [`solve_scene`]: the scene's own run, then the
-//!   fallback ladder until a run converges and verifies.
+//! * [`linalg`]: the linear algebra of a square sparse system — the project's own
+//!   [`SquareSystem`](linalg::SquareSystem) trait, Newton's method over a sparse LU (in
+//!   double or single precision), the round-off level of a residual, the band solver.
+//!   It knows nothing of scenes.
+//! * [`run`]: one run of one discretization — the backend ([`SquareSolver`]: Ipopt or
+//!   Newton on the action's system), one piece (the initial guess, the backend's solve,
+//!   the trajectory), a global run or a run in windows, and its assessment (the
+//!   [`Outcome`]: verification, diagnostics, warnings), statuses and errors.
+//! * [`ladder`]: the scene's own run, then the fallback ladder (coarse-to-fine guess,
+//!   wall-width continuation, past the end, windows) until a run converges and verifies.
+//! * [`choice`]: the choice of the discretization — the refinement, the prediction of
+//!   every candidate's error from the time-stepping reference, the measured cost of
+//!   each operator.
 //!
 //! **Place in the flow.** After time stepping: it uses [`scene`](crate::scene),
 //! [`memory`](crate::memory), [`model`](crate::model), [`discrete`](crate::discrete) and
 //! [`stepping`](crate::stepping) (the initial guess and the verification). The output
-//! and the consumers (check, tune, the command line, Python) call [`solve_scene`];
-//! nothing below the ladder calls up into it.
-//!
-//! [`Problem`]: skg_ipopt::Problem
+//! and the consumers (check, tune, the command line, Python) call [`solve_scene`].
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use crate::discrete::Discretization;
+use crate::memory;
+use crate::model::Model;
+use crate::scene::Scene;
 
 pub mod choice;
 pub mod ladder;
@@ -35,10 +43,42 @@ pub use choice::{cost, predict, refine};
 pub use linalg::{band, newton};
 pub use run::{backend, window};
 
-pub use choice::refine::{solve_scene, solve_scene_with_progress};
+pub use run::assess::{energy_drift_skip, outcome, sizes};
 pub use run::backend::SquareSolver;
 pub use run::error::{SolveError, WindowError};
-pub use run::global::{energy_drift_skip, outcome, sizes, solve_global, Run};
+pub use run::global::{solve_global, Run};
 pub use run::outcome::{Attempt, Diagnostics, KineticLoss, Method, Outcome, RefinedGrid, Refinement, Settings, Sizes, Timings, Work};
-pub use run::piece::{build_action, build_action_on, grid, solve_piece, Guess, Piece};
+pub use run::piece::{action_on, build_action, grid, solve_piece, Guess, Piece};
 pub use run::status::{SolveStatus, CONVERGED_RESIDUAL};
+
+/// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
+/// verified against time stepping of the same scene, the fallback ladder when it fails
+/// to converge or to verify, and the refinement or the operator choice when asked for
+/// ([`refine`]).
+///
+/// Refused before anything is allocated if its memory estimate exceeds the available
+/// memory ([`memory`]).
+pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
+    solve_scene_with_progress(scene, &mut |_| {})
+}
+
+/// [`solve_scene`], telling `progress` what each attempt is about to do ("2. coarse to
+/// fine (…)", "grid 2: SBP484 (natural) on 513 nodes"), for a progress display.
+pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
+    let deadline = deadline(scene.solver.time_limit);
+    let chooses = scene.verify.refine || scene.choose_operator;
+    if !chooses {
+        memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
+    }
+    let model = Arc::new(Model::build(scene)?);
+    if chooses {
+        return refine::refine(scene, &model, deadline, progress);
+    }
+    ladder::climb(scene, &model, &Discretization::of(scene), &Guess::TimeStepping, ladder::Rungs::All, deadline, progress)
+}
+
+/// The moment a solve limited to `seconds` must end, if any: none for a limit beyond
+/// what the clock can represent (which no solve reaches).
+fn deadline(seconds: Option<f64>) -> Option<Instant> {
+    Instant::now().checked_add(Duration::try_from_secs_f64(seconds?).ok()?)
+}

@@ -1,8 +1,6 @@
-//! The entry point of a solve, [`solve_scene`], and solving to the accuracy asked for:
-//! the grid refined, and the operator chosen, until the verification passes.
-//!
-//! Without `--refine` and with a named operator, a solve is the scene's own solve and
-//! the fallback ladder ([`ladder`]). Otherwise:
+//! Solving to the accuracy asked for: the grid refined, and the operator chosen, until
+//! the verification passes (`--refine`, `--operator auto`; without them a solve is the
+//! scene's own solve and the fallback ladder, [`ladder`]):
 //!
 //! * **`--operator auto`** (or a refinement with no operator named): among the
 //!   candidates ([`Candidate::all`]: `SBP121` … `SBP484`, each with the strong and, above
@@ -36,11 +34,13 @@
 //! time limit. Every discretization solved is listed in `summary.json` (`refinement`);
 //! the reported solution is the verified one, else the most accurate converged one.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use super::cost::relative_cost;
 use super::predict::{along_power_law, observed_order, Candidate, Predictor, FINE_NODES};
 use crate::discrete::contact::{self, MIN_STEPS};
+use crate::discrete::Discretization;
 use crate::memory;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
@@ -48,7 +48,7 @@ use crate::scene::Scene;
 use crate::solve::ladder::{self, hermite, linear, Rungs};
 use crate::solve::run::error::SolveError;
 use crate::solve::run::outcome::{Outcome, RefinedGrid, Refinement, Work};
-use crate::solve::run::piece::{grid, Guess};
+use crate::solve::run::piece::Guess;
 use crate::stepping::verify::VerifyStatus;
 
 /// The fraction of the tolerance the next grid aims at.
@@ -74,34 +74,22 @@ const CROSS_FAMILY: f64 = 10.0;
 /// extrapolated with the order it shows between the two largest of them.
 const PROXY_MAX_NODES: usize = FINE_NODES;
 
-/// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),
-/// verified against time stepping of the same scene, the fallback ladder when it fails
-/// to converge or to verify, and the refinement or the operator choice when asked for
-/// (see the module docs).
-///
-/// Refused before anything is allocated if its memory estimate exceeds the available
-/// memory ([`memory`]).
-pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
-    solve_scene_with_progress(scene, &mut |_| {})
-}
-
-/// [`solve_scene`], telling `progress` what each attempt is about to do ("2. coarse to
-/// fine (…)", "grid 2: SBP484 (natural) on 513 nodes"), for a progress display.
-pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
-    let deadline = scene.solver.time_limit.map(|s| Instant::now() + std::time::Duration::from_secs_f64(s));
-    if !scene.verify.refine && !scene.choose_operator {
-        memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
-        let model = Model::build(scene)?;
-        return ladder::climb(scene, &model, &Guess::TimeStepping, Rungs::All, deadline, progress);
-    }
-    let model = Model::build(scene)?;
-    Refiner::new(scene, &model, deadline)?.run(progress)
+/// The refinement or the operator choice of `scene` with its model `model` (module
+/// docs), stopped at `deadline`; `progress` is told what each grid and attempt is about
+/// to do ("grid 2: SBP484 (natural) on 513 nodes").
+pub(crate) fn refine(
+    scene: &Scene,
+    model: &Arc<Model>,
+    deadline: Option<Instant>,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Outcome, SolveError> {
+    Refiner::new(scene, model, deadline)?.run(progress)
 }
 
 /// The state of a refinement.
 struct Refiner<'a> {
     scene: &'a Scene,
-    model: &'a Model,
+    model: &'a Arc<Model>,
     deadline: Option<Instant>,
     /// The predictor, unless its reference could not be computed (then: why not).
     predictor: Result<Predictor<'a>, String>,
@@ -126,7 +114,7 @@ struct Refiner<'a> {
 }
 
 impl<'a> Refiner<'a> {
-    fn new(scene: &'a Scene, model: &'a Model, deadline: Option<Instant>) -> Result<Refiner<'a>, SolveError> {
+    fn new(scene: &'a Scene, model: &'a Arc<Model>, deadline: Option<Instant>) -> Result<Refiner<'a>, SolveError> {
         let t = Instant::now();
         let predictor = Predictor::new(scene, model).map_err(|e| e.to_string());
         let candidates: Vec<Candidate> = if scene.choose_operator {
@@ -317,8 +305,7 @@ impl<'a> Refiner<'a> {
             let number = self.grids.len() + 1;
             let what = format!("{} on {nodes} nodes", c.describe());
             // A grid beyond the memory ends the refinement, unless it is the first.
-            let sized = Scene { nodes, operator: c.operator, ..self.scene.clone() };
-            if let Err(e) = memory::check(&sized, "the solve", nodes, memory::solve_bytes(&sized)) {
+            if let Err(e) = memory::check(self.scene, "the solve", nodes, memory::solve_bytes_with(self.scene, c.operator, nodes)) {
                 if self.grids.is_empty() {
                     return Err(e.into());
                 }
@@ -354,7 +341,8 @@ impl<'a> Refiner<'a> {
         predicted: Option<f64>,
         progress: &mut dyn FnMut(&str),
     ) -> Result<Outcome, SolveError> {
-        let scene = Scene { nodes, operator: c.operator, initial_velocity: c.initial_velocity, ..self.scene.clone() };
+        let (scene, model) = (self.scene, self.model);
+        let disc = Discretization { operator: c.operator, nodes, initial_velocity: c.initial_velocity };
         // The ladder's other rungs repair the scene's own discretization; a grid the
         // refinement chose that fails gets a better one instead (and a refinement of the
         // scene's own that is predicted to fail, too).
@@ -365,9 +353,9 @@ impl<'a> Refiner<'a> {
             Rungs::GuessOnly
         };
         let outcome = match &self.best {
-            None => ladder::climb(&scene, self.model, &Guess::TimeStepping, rungs, self.deadline, progress)?,
+            None => ladder::climb(scene, model, &disc, &Guess::TimeStepping, rungs, self.deadline, progress)?,
             Some((best, _)) => {
-                let (times, _) = grid(&scene);
+                let (times, _) = disc.grid(scene);
                 let tr = &best.trajectory;
                 let guess = Guess::States {
                     q: hermite(tr, &times),
@@ -377,7 +365,7 @@ impl<'a> Refiner<'a> {
                         best.settings.operator, best.settings.nodes
                     ),
                 };
-                ladder::climb(&scene, self.model, &guess, Rungs::GuessOnly, self.deadline, progress)?
+                ladder::climb(scene, model, &disc, &guess, Rungs::GuessOnly, self.deadline, progress)?
             }
         };
         Ok(outcome)
@@ -553,8 +541,7 @@ fn budget(scene: &Scene) -> (usize, String) {
     // The largest estimate among the operators the refinement may use.
     let operators: Vec<OperatorKind> = if scene.choose_operator { OperatorKind::ALL.to_vec() } else { vec![scene.operator] };
     let fits = |n: usize| {
-        let need =
-            operators.iter().map(|&operator| memory::solve_bytes(&Scene { nodes: n, operator, ..scene.clone() })).fold(0.0, f64::max);
+        let need = operators.iter().map(|&operator| memory::solve_bytes_with(scene, operator, n)).fold(0.0, f64::max);
         memory::available_bytes().is_none_or(|avail| need <= avail)
     };
     if fits(MAX_NODES_DEFAULT) {

@@ -1,34 +1,27 @@
-//! A run over the scene's whole span ([`Run`]: one global solve here, or windows) and
-//! its assessment: the [`Outcome`] with its verification, diagnostics and warnings.
+//! A run over the scene's whole span in one global solve ([`solve_global`]); a [`Run`]
+//! is what a global solve or a solve in windows ([`window`](super::window)) produced,
+//! before its assessment ([`assess`](super::assess)).
 
+use std::sync::Arc;
 use std::time::Instant;
 
-use indexmap::IndexMap;
-
+use super::assess::sizes;
 use super::backend::SquareSolver;
 use super::error::SolveError;
-use super::outcome::{counted, Diagnostics, KineticLoss, Method, Outcome, Settings, Sizes};
-use super::piece::{build_action, grid, solve_piece, Guess, Piece};
-use super::status::SolveStatus;
-use crate::discrete::contact;
-use crate::discrete::Action;
+use super::outcome::{Method, Sizes};
+use super::piece::{action_on, solve_piece, Guess, Piece};
+use crate::discrete::Discretization;
 use crate::model::Model;
-use crate::sbp::OperatorKind;
-use crate::scene::{ConstraintKind, Formulation, Scene, Wall};
-use crate::stepping::verify;
+use crate::scene::Scene;
 
-/// A solution farther than this fraction of the coordinates' range from the
-/// time-stepping solution gets a warning. Discretization errors of usable grids are
-/// below 1 % (disk N=32 SBP242: 0.4 %); the spurious solutions seen were 35 % (tumbler
-/// N=48) and 100 %+ (knife edge on SBP121, an odd-even mode).
-const FAR_FROM_TIME_STEPPING: f64 = 0.1;
-
-/// One attempt at the whole span: a global solve or a sequence of windows, on the
-/// scene's grid.
+/// One attempt at the whole span: a global solve or a sequence of windows, on one
+/// discretization of the scene's model.
 #[derive(Debug, Clone)]
 pub struct Run {
     /// How the span was covered.
     pub method: Method,
+    /// The discretization solved.
+    pub discretization: Discretization,
     /// The sizes of one piece's system.
     pub sizes: Sizes,
     /// The solution over the whole span. For windows, the pieces joined: converged only
@@ -37,212 +30,15 @@ pub struct Run {
     pub solution: Piece,
 }
 
-/// Solve the scene's whole span in one piece from `guess`.
-pub fn solve_global(scene: &Scene, guess: &Guess) -> Result<Run, SolveError> {
+/// Solve the scene's whole span with its model `model` and the discretization `disc` in
+/// one piece from `guess`.
+pub fn solve_global(scene: &Scene, model: &Arc<Model>, disc: &Discretization, guess: &Guess) -> Result<Run, SolveError> {
     let t_setup = Instant::now();
-    let action = build_action(scene)?;
+    let (times, dt) = disc.grid(scene);
+    let action = action_on(model, scene, disc, disc.nodes, dt)?;
     let mut solver = SquareSolver::new(scene, &action);
     let setup_s = t_setup.elapsed().as_secs_f64();
-    let (times, _) = grid(scene);
     let mut solution = solve_piece(scene, &action, &mut solver, &times, guess)?;
     solution.timings.setup_s = setup_s;
-    Ok(Run { method: Method::Global, sizes: sizes(scene, &action, &solver), solution })
-}
-
-/// The outcome of a run: its diagnostics, verification and warnings (the ladder adds
-/// the attempts and a remedy).
-pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
-    let Run { method, sizes, solution: run } = run;
-    let t = Instant::now();
-    let mut verification = verify::verify(scene, model, &run.trajectory);
-    let mut timings = run.timings.clone();
-    timings.verification_s = t.elapsed().as_secs_f64();
-    let mut work = run.work;
-    work.verification_steps.add(&verification.steps);
-    let diagnostics = diagnose(scene, model, &run);
-    let mut warnings = suspicions(&diagnostics, run.time_stepping_q.as_deref(), run.status);
-    if let Some(newton) = run.backend.newton.as_ref().filter(|_| run.backend.handed_over_to_ipopt) {
-        warnings.push(format!(
-            "Newton's method did not converge ({}, {} iterations, residual {:.3e}); Ipopt solved the system from the same initial guess",
-            newton.status.name(),
-            newton.iterations,
-            newton.max_residual
-        ));
-    }
-    warnings.extend(crate::solve::choice::cost::factorization_note(
-        run.backend.requested,
-        timings.solver_s,
-        timings.solver_internal_s,
-        sizes.variables,
-        sizes.nodes,
-    ));
-    if let Some(loss) = &diagnostics.kinetic_loss {
-        verification.fail(loss.to_string());
-        warnings.push(loss.to_string());
-    }
-    Outcome {
-        scene: scene.name.clone(),
-        status: run.status,
-        verification,
-        method,
-        ipopt_version: ipopt_version(),
-        backend: run.backend,
-        iterations: run.iterations,
-        settings: settings(scene, &run.trajectory.t, run.guess),
-        sizes,
-        timings,
-        work,
-        diagnostics,
-        warnings,
-        attempts: Vec::new(),
-        remedy: None,
-        refinement: None,
-        history: run.history,
-        trajectory: run.trajectory,
-    }
-}
-
-/// The settings a scene is solved with on the grid `times`.
-fn settings(scene: &Scene, times: &[f64], initial_guess: String) -> Settings {
-    Settings {
-        operator: scene.operator.name().to_string(),
-        nodes: scene.nodes,
-        t_start: times[0],
-        t_end: times[times.len() - 1],
-        formulation: scene.formulation,
-        initial_velocity: scene.initial_velocity,
-        backend: scene.solver.backend,
-        hessian: scene.solver.hessian,
-        tol: scene.solver.tol,
-        max_iter: scene.solver.max_iter,
-        parameters: scene.parameters.clone(),
-        initial_guess,
-    }
-}
-
-/// The sizes of the system handed to the backend for one piece (the whole span, or one
-/// window).
-pub fn sizes(scene: &Scene, action: &Action, solver: &SquareSolver) -> Sizes {
-    let (lay, model) = (&action.layout, &action.model);
-    let (variables, equations) = match scene.formulation {
-        Formulation::Reduced => (lay.n_p, lay.n_m),
-        Formulation::Full => (lay.len(), lay.len()),
-    };
-    Sizes {
-        nodes: lay.nodes,
-        coordinates: lay.d,
-        constraints: lay.n,
-        walls: model.walls.len(),
-        variables,
-        equations,
-        jacobian_nonzeros: solver.jacobian_plan().structure.len(),
-        hessian_nonzeros: solver.hessian_plan().map_or(0, |h| h.structure.len()),
-        tape_instructions: model.minus_gradient.len() + model.mixed.tape.len(),
-    }
-}
-
-/// Warnings about a solution: far from time stepping, a contact episode more or less
-/// than time stepping (a spurious critical point or a grid too coarse), or the backend's
-/// success contradicted by the unscaled residual.
-fn suspicions(diagnostics: &Diagnostics, ts_q: Option<&[Vec<f64>]>, status: SolveStatus) -> Vec<String> {
-    let mut warnings = Vec::new();
-    if let (Some(dist), Some(ts)) = (diagnostics.distance_from_time_stepping, ts_q) {
-        let scale = verify::coordinate_scale(ts);
-        if dist > FAR_FROM_TIME_STEPPING * scale {
-            warnings.push(format!(
-                "the solution is {dist:.3e} away from time stepping of the same scene ({:.0} % of the coordinates' range): \
-                 a spurious critical point, an odd-even mode of the operator, or a grid too coarse (refine N or change the operator)",
-                100.0 * dist / scale
-            ));
-        }
-    }
-    if let Some(ts) = &diagnostics.contact_episodes_time_stepping {
-        for ((wall, a), b) in diagnostics.contact_episodes.iter().zip(ts.values()) {
-            if a != b {
-                warnings.push(format!(
-                    "wall `{wall}`: the solution has {}, time stepping of the same scene has {b}: \
-                     possibly a spurious critical point or a grid too coarse for the wall width (refine N)",
-                    counted(*a, "contact episode")
-                ));
-            }
-        }
-    }
-    if let SolveStatus::ResidualTooLarge { residual, .. } = status {
-        warnings
-            .push(format!("the solver reported success but the unscaled residual is {residual:.3e} (> 1e-8): not counted as converged"));
-    }
-    warnings
-}
-
-/// End nodes left out of `energy_drift`: the last two, whose equations are the boundary
-/// closure; for a dissipative operator its boundary rows (2, 4, 6, 8), where the end
-/// closure of `D+` carries a layer in the velocity (the positions there are as accurate
-/// as elsewhere). Measured, SBP242-AD on the pendulum at N = 256: 3.0e-3 over every node,
-/// 6.7e-4 without the last two, 1.9e-4 without the last four (SBP242: 2.0e-4).
-pub fn energy_drift_skip(operator: OperatorKind) -> usize {
-    if operator.is_dissipative() {
-        operator.boundary_rows().max(2)
-    } else {
-        2
-    }
-}
-
-fn diagnose(scene: &Scene, model: &Model, run: &Piece) -> Diagnostics {
-    let tr = &run.trajectory;
-    let nodes = tr.t.len();
-    let max_abs = |rows: &[Vec<f64>]| rows.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
-    let max_constraint_interior = if nodes > 2 { max_abs(&tr.g[1..nodes - 1]) } else { 0.0 };
-    let constraint_last_node = max_abs(&tr.g[nodes - 1..]);
-    let total: Vec<f64> = tr.energy.iter().zip(&tr.wall_energy).map(|(e, w)| e + w).collect();
-    let energy_skip = energy_drift_skip(scene.operator);
-    let drift = |es: &[f64]| es.iter().fold(0.0_f64, |m, e| m.max((e - total[0]).abs()));
-    let positions = model.constraints.iter().filter(|c| c.kind == ConstraintKind::Position);
-    let max_wall_gap = per_wall(model, |j, _| tr.h.iter().map(|h| h[j]).fold(f64::NEG_INFINITY, f64::max));
-    let ts_q = run.time_stepping_q.as_deref();
-    let contact_episodes_time_stepping = ts_q.map(|qs| {
-        let h: Vec<Vec<f64>> = qs.iter().zip(&tr.t).map(|(q, &t)| model.wall_gaps(t, q)).collect();
-        contact_episodes(model, &h)
-    });
-    let distance_from_time_stepping =
-        ts_q.map(|qs| qs.iter().zip(&tr.q).flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs())).fold(0.0_f64, f64::max));
-    Diagnostics {
-        max_residual: run.max_residual,
-        max_eom_residual: run.max_eom_residual,
-        max_constraint_interior,
-        constraint_last_node,
-        max_position_drift: positions.map(|c| c.name.clone()).zip(tr.max_drift()).collect(),
-        depends_on_time: model.depends_on_time,
-        energy_drift: drift(&total[..nodes.saturating_sub(energy_skip).max(1)]),
-        energy_drift_skip: energy_skip,
-        energy_drift_all: drift(&total),
-        max_wall_gap,
-        distance_from_time_stepping,
-        contact_episodes: contact_episodes(model, &tr.h),
-        contact_episodes_time_stepping,
-        max_minus_variable: run.max_minus_variable,
-        kinetic_loss: model.kinetic_loss(&tr.t, &tr.q, &tr.v).map(|(node, min_eigenvalue)| KineticLoss {
-            node,
-            t: tr.t[node],
-            min_eigenvalue,
-        }),
-    }
-}
-
-/// `value(j, wall)` for every wall of the model, keyed by the wall's name in the scene's order.
-fn per_wall<T>(model: &Model, mut value: impl FnMut(usize, &Wall) -> T) -> IndexMap<String, T> {
-    model.walls.iter().enumerate().map(|(j, w)| (w.name.clone(), value(j, w))).collect()
-}
-
-/// Number of contact episodes ([`contact::episodes`]) per wall, given the gaps `h[k][j]`.
-fn contact_episodes(model: &Model, h: &[Vec<f64>]) -> IndexMap<String, usize> {
-    per_wall(model, |j, w| contact::episodes(h.iter().map(|hk| hk[j]), w.width).len())
-}
-
-/// The version of the Ipopt library this process runs (for the summary), or `none` in a
-/// build without Ipopt.
-fn ipopt_version() -> String {
-    #[cfg(feature = "ipopt")]
-    return skg_ipopt::ipopt_version().to_string();
-    #[cfg(not(feature = "ipopt"))]
-    return "none".to_string();
+    Ok(Run { method: Method::Global, discretization: *disc, sizes: sizes(scene, &action, &solver), solution })
 }

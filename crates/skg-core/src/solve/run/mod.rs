@@ -1,5 +1,6 @@
 //! One run of one discretization (placeholder docs, rewritten below).
 
+pub(crate) mod assess;
 pub mod backend;
 pub(crate) mod error;
 pub(crate) mod global;

@@ -12,6 +12,7 @@
 //! velocity extrapolation did not converge on the disk). If time stepping fails, the
 //! guess falls back to constant-velocity extrapolation and the summary says so.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 #[cfg(feature = "ipopt")]
@@ -21,7 +22,7 @@ use super::error::SolveError;
 use super::outcome::{Timings, Work};
 use super::status::{SolveStatus, CONVERGED_RESIDUAL};
 use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
-use crate::discrete::Action;
+use crate::discrete::{Action, Discretization};
 use crate::model::{Model, Physical};
 use crate::sbp::SbpOperator;
 #[cfg(feature = "ipopt")]
@@ -33,25 +34,24 @@ use crate::stepping::ode::{OdeOptions, OdeStats};
 #[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
 
-/// Node times of a scene's grid.
+/// Node times of a scene's own grid, and their spacing.
 pub fn grid(scene: &Scene) -> (Vec<f64>, f64) {
-    let n = scene.nodes;
-    let dt = (scene.t_end - scene.t_start) / (n as f64 - 1.0);
-    ((0..n).map(|k| scene.t_start + k as f64 * dt).collect(), dt)
+    Discretization::of(scene).grid(scene)
 }
 
-/// Build the discrete action of a resolved scene on its whole grid.
+/// Build the discrete action of a resolved scene on its own grid, with a model of its
+/// own.
 pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
-    let (_, dt) = grid(scene);
-    build_action_on(scene, scene.nodes, dt)
+    let disc = Discretization::of(scene);
+    action_on(&Arc::new(Model::build(scene)?), scene, &disc, disc.nodes, disc.spacing(scene))
 }
 
-/// Build the discrete action of a scene on `nodes` nodes of spacing `dt`, from the scene's
-/// initial state (a window re-targets it with [`Action::set_window`]).
-pub fn build_action_on(scene: &Scene, nodes: usize, dt: f64) -> Result<Action, SolveError> {
-    let model = Model::build(scene)?;
-    let op = SbpOperator::new(scene.operator, nodes, dt)?;
-    Ok(Action::new(model, op, scene.initial_velocity, scene.t_start, scene.initial_q.clone(), scene.initial_v.clone()))
+/// The discrete action of `model` (the scene's) with `disc`'s operator and
+/// initial-velocity condition on `nodes` nodes of spacing `dt`, from the scene's initial
+/// state (a window re-targets it with [`Action::set_window`]).
+pub fn action_on(model: &Arc<Model>, scene: &Scene, disc: &Discretization, nodes: usize, dt: f64) -> Result<Action, SolveError> {
+    let op = SbpOperator::new(disc.operator, nodes, dt)?;
+    Ok(Action::new(Arc::clone(model), op, disc.initial_velocity, scene.t_start, scene.initial_q.clone(), scene.initial_v.clone()))
 }
 
 /// How the initial guess of one solve is made.

@@ -23,15 +23,19 @@
 //! A window that does not converge ends the run: the nodes after its start are not
 //! computed (NaN in the trajectory) and the run's status is that window's.
 
+use std::sync::Arc;
 use std::time::Instant;
 
+use super::assess::sizes;
 use super::backend::{BackendReport, SquareSolver};
 use super::error::{SolveError, WindowError};
-use super::global::{sizes, Run};
+use super::global::Run;
 use super::outcome::{Method, Timings, Work};
-use super::piece::{build_action_on, grid, solve_piece, Guess, Piece};
+use super::piece::{action_on, solve_piece, Guess, Piece};
 use crate::discrete::contact;
 use crate::discrete::trajectory::Trajectory;
+use crate::discrete::Discretization;
+use crate::model::Model;
 use crate::scene::{Scene, Windows};
 
 /// Nodes and restart of the windows of a scene.
@@ -49,30 +53,31 @@ pub struct WindowGrid {
 }
 
 impl WindowGrid {
-    /// The windows of `scene` for `windows`, or why they do not fit the scene's grid
-    /// (too few nodes per window for the operator, nothing kept).
-    pub fn new(scene: &Scene, windows: Windows) -> Result<WindowGrid, WindowError> {
-        let (_, dt) = grid(scene);
+    /// The windows of `scene` discretized by `disc` for `windows`, or why they do not fit
+    /// its grid (too few nodes per window for the operator, nothing kept).
+    pub fn new(scene: &Scene, disc: &Discretization, windows: Windows) -> Result<WindowGrid, WindowError> {
+        let dt = disc.spacing(scene);
         let nodes = (windows.length / dt).round() as usize + 1;
         let dropped = (windows.overlap / dt).round() as usize;
-        let min = scene.operator.min_nodes();
+        let min = disc.operator.min_nodes();
         if nodes < min {
-            return Err(WindowError::TooFewNodes { length: windows.length, nodes, dt, operator: scene.operator, min });
+            return Err(WindowError::TooFewNodes { length: windows.length, nodes, dt, operator: disc.operator, min });
         }
         if dropped + 1 >= nodes {
             return Err(WindowError::NothingKept { overlap: windows.overlap, length: windows.length });
         }
         let keep = nodes - 1 - dropped;
-        let count = (scene.nodes.saturating_sub(nodes)).div_ceil(keep) + 1;
+        let count = (disc.nodes.saturating_sub(nodes)).div_ceil(keep) + 1;
         Ok(WindowGrid { dt, nodes, keep, count })
     }
 }
 
-/// Solve `scene` in windows.
-pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError> {
-    let grid = WindowGrid::new(scene, windows).map_err(|error| SolveError::Windows { scene: scene.file.origin.path.clone(), error })?;
+/// Solve `scene` with its model `model` and the discretization `disc` in windows.
+pub fn solve_windows(scene: &Scene, model: &Arc<Model>, disc: &Discretization, windows: Windows) -> Result<Run, SolveError> {
+    let grid =
+        WindowGrid::new(scene, disc, windows).map_err(|error| SolveError::Windows { scene: scene.file.origin.path.clone(), error })?;
     let t_setup = Instant::now();
-    let mut action = build_action_on(scene, grid.nodes, grid.dt)?;
+    let mut action = action_on(model, scene, disc, grid.nodes, grid.dt)?;
     // One solver for all windows: the sparsity plans and Newton's LU analysis are made
     // once and reused by every window.
     let mut solver = SquareSolver::new(scene, &action);
@@ -81,7 +86,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
     timings.setup_s = t_setup.elapsed().as_secs_f64();
     let mut work = Work::default();
 
-    let total = scene.nodes;
+    let total = disc.nodes;
     let mut trajectory = Trajectory::empty();
     let mut time_stepping_q = Some(Vec::with_capacity(total));
     let mut run_status = None;
@@ -151,7 +156,7 @@ pub fn solve_windows(scene: &Scene, windows: Windows) -> Result<Run, SolveError>
         timings,
         work,
     };
-    Ok(Run { method, sizes, solution })
+    Ok(Run { method, discretization: *disc, sizes, solution })
 }
 
 /// Neighbours on each side of a restart node that must be out of contact too.
@@ -184,7 +189,7 @@ mod tests {
     fn windows_cover_the_nodes_with_equal_sizes() {
         // Δt = 0.01: 101 nodes per 1 s window, 25 dropped, 75 kept (nodes 0…74), next at 75.
         let s = scene(1001, 10.0);
-        let g = WindowGrid::new(&s, Windows { length: 1.0, overlap: 0.25 }).unwrap();
+        let g = WindowGrid::new(&s, &Discretization::of(&s), Windows { length: 1.0, overlap: 0.25 }).unwrap();
         assert_eq!((g.nodes, g.keep), (101, 75));
         // Starts 0, 75, …, 900 (the window at 900 reaches node 1000, the last).
         assert_eq!(g.count, 13);
@@ -194,9 +199,9 @@ mod tests {
     #[test]
     fn windows_too_short_for_the_operator_or_the_overlap_are_refused() {
         let s = scene(1001, 10.0);
-        let e = WindowGrid::new(&s, Windows { length: 0.05, overlap: 0.0 }).unwrap_err();
+        let e = WindowGrid::new(&s, &Discretization::of(&s), Windows { length: 0.05, overlap: 0.0 }).unwrap_err();
         assert_eq!(e.to_string(), "a window of 0.05 s has 6 nodes at the scene's spacing Δt = 0.01 s; SBP242 needs at least 8");
-        let e = WindowGrid::new(&s, Windows { length: 1.0, overlap: 0.995 }).unwrap_err();
+        let e = WindowGrid::new(&s, &Discretization::of(&s), Windows { length: 1.0, overlap: 0.995 }).unwrap_err();
         assert_eq!(e.to_string(), "an overlap of 0.995 s leaves nothing to keep of a 1 s window");
     }
 }
