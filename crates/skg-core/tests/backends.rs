@@ -94,7 +94,7 @@ fn an_unreachable_tolerance_stops_both_backends_at_the_round_off_level() {
         assert_eq!(newton.status.solver(), SolverStatus::Newton(NewtonStatus::ConvergedToRoundOff), "{name}");
         assert!(ipopt.trusted() && newton.trusted(), "{name}: {} / {}", ipopt.verification.reason, newton.verification.reason);
         // Quadratic convergence from the time-stepping start reaches round-off in a few
-        // steps; Ipopt used to take 10 or more here.
+        // steps (without the round-off stop Ipopt takes 10 or more here).
         assert!(ipopt.iterations <= newton.iterations + 1 && ipopt.iterations <= 5, "{name}: {} Ipopt iterations", ipopt.iterations);
         let d = max_diff(&newton.trajectory.q, &ipopt.trajectory.q);
         assert!(d < 1e-9, "{name}: max |q_newton − q_ipopt| = {d:e}");

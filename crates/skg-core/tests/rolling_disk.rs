@@ -108,8 +108,6 @@ fn energy_drift_vanishes_at_the_operators_order() {
 /// 1e-8 on others), so this test asserts what a user relies on: the solve converges, by
 /// either path, is trusted and matches the closed form. The round-off path itself is
 /// tested deterministically by [`a_heavy_disk_converges_at_the_round_off_level_of_its_equations`].
-/// (Before the equation-by-equation test this scene was reported as not converged,
-/// exit 3, on every rung of the fallback ladder.)
 #[test]
 fn sbp484_over_twenty_revolutions_converges_and_matches_the_closed_form() {
     use skg_core::scene::Backend;

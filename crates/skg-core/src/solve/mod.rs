@@ -22,7 +22,7 @@
 //!   each operator.
 //!
 //! **Place in the flow.** After time stepping: it uses [`scene`](crate::scene),
-//! [`memory`](crate::memory), [`model`](crate::model), [`discrete`](crate::discrete) and
+//! [`memory`], [`model`](crate::model), [`discrete`](crate::discrete) and
 //! [`stepping`](crate::stepping) (the initial guess and the verification). The output
 //! and the consumers (check, tune, the command line, Python) call [`solve_scene`].
 

@@ -21,10 +21,9 @@
 //! | SBP484-AD | 43.7 | 2.00 | 306 | 2.35 |
 //!
 //! On Ipopt a dissipative operator costs what its centred one does (within the spread of
-//! repeated runs). On Newton, since its LU uses SIMD kernels and one factorization per
-//! solve (issue 23), the dissipative operators' wider, unsymmetric stencils show:
-//! 1.2–1.45× their centred ones (Newton measured 2026-11-26 after those changes, best of
-//! five; Ipopt before them, best of three). The choice still counts a dissipative
+//! repeated runs). On Newton, whose LU uses SIMD kernels and one factorization per solve,
+//! the dissipative operators' wider, unsymmetric stencils show: 1.2–1.45× their centred
+//! ones (Newton best of five, Ipopt best of three; docs/benchmarks.md). The choice still counts a dissipative
 //! operator at its centred one's cost, on both backends: on a contracting scene only a
 //! dissipative operator verifies, and the prediction does not see the centred ones'
 //! odd-even mode. With the measured costs, the damped oscillator on Newton at tolerances
@@ -62,8 +61,8 @@ pub fn relative_cost(operator: OperatorKind, backend: Backend, nodes: usize) -> 
 /// unknowns per grid node (whole process, no verification, release build, OpenBLAS,
 /// CPU seconds; see docs/benchmarks.md#many-body-scenes): the rolling disk (6 per node,
 /// N = 4096), chains of 8 and 16 rods (24 and 48, N = 1024) and of 32 rods (96, N = 512),
-/// the chains after the sparse LU's settings, the chord step and the factorization in
-/// single precision of issue 23.
+/// the chains with the sparse LU's settings, the chord step and the factorization in
+/// single precision.
 const NEWTON_SPEEDUP: [(usize, f64); 4] = [(6, 2.6), (24, 4.5), (48, 8.0), (96, 10.9)];
 
 /// The measured speed-up of `--backend newton` over Ipopt nearest to `per_node`

@@ -1,4 +1,15 @@
-//! The choice of the discretization (placeholder docs).
+//! The choice of the discretization: with `--refine` and `--operator auto`, the
+//! operator, initial-velocity condition and grid of least predicted cost that meet the
+//! verification's tolerance, calibrated by each solve, until one verifies.
+//!
+//! * [`refine`]: the refinement (the candidates, the next grid, what each solve teaches).
+//! * [`predict`]: the error of every candidate on any grid, predicted from the
+//!   time-stepping reference: the discretization applied to the reference's own
+//!   kinematics.
+//! * [`cost`]: the measured time per node of each operator on each backend.
+//!
+//! **Place in the flow.** Above the [`ladder`](crate::solve::ladder), which solves each
+//! grid it chooses; called by [`solve_scene`](crate::solve::solve_scene) alone.
 
 pub mod cost;
 pub mod predict;

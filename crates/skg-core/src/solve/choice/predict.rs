@@ -28,7 +28,7 @@
 //! from N = 65 on; the proxy's order is the observed order (docs/solver.md#refinement).
 //!
 //! The cost is one time-stepping reference per grid (sampled with accelerations at its
-//! nodes) and, per candidate, one banded LU of the grid's size ([`band`](super::band)) with one
+//! nodes) and, per candidate, one banded LU of the grid's size ([`band`](crate::solve::linalg::band)) with one
 //! right-hand side per coordinate: a fraction of one solve's.
 
 use std::collections::HashMap;

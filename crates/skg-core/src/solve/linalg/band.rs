@@ -1,5 +1,5 @@
 //! Gaussian elimination with partial pivoting for banded systems: the predictor's proxy
-//! systems ([`predict`](super::predict)), one per operator and grid.
+//! systems ([`predict`](crate::solve::choice::predict)), one per operator and grid.
 //!
 //! Written by hand because no crate of the stack solves banded systems: faer's and
 //! sprs' sparse LUs analyse each pattern first (sorting, symbolic factorization), which

@@ -6,7 +6,7 @@ use crate::sbp::{OperatorKind, SbpError};
 use crate::scene::{readable_number, SceneError};
 
 /// Why a solve could not be attempted or completed (a non-converged run is not an
-/// error: it is an [`Outcome`](super::Outcome) whose [`SolveStatus`](super::SolveStatus)
+/// error: it is an [`Outcome`](crate::solve::Outcome) whose [`SolveStatus`](crate::solve::SolveStatus)
 /// says so).
 #[derive(Debug, thiserror::Error)]
 pub enum SolveError {
@@ -29,8 +29,7 @@ pub enum SolveError {
     Windows {
         /// The scene file.
         scene: String,
-        /// Why.
-        #[source]
+        /// Why (said in the message, so not also its source).
         error: WindowError,
     },
 }

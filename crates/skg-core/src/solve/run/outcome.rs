@@ -191,7 +191,7 @@ pub struct Diagnostics {
     /// discretization error unless friction or other non-conservative forces act or the
     /// scene depends on `t` explicitly.
     pub energy_drift: f64,
-    /// End nodes left out of `energy_drift` ([`energy_drift_skip`](super::energy_drift_skip)).
+    /// End nodes left out of `energy_drift` ([`energy_drift_skip`](crate::solve::energy_drift_skip)).
     pub energy_drift_skip: usize,
     /// The same over all nodes.
     pub energy_drift_all: f64,
@@ -355,7 +355,7 @@ pub struct Attempt {
     pub chosen: bool,
 }
 
-/// What a refinement ([`refine`](super::refine)) did: every discretization it solved,
+/// What a refinement ([`refine`](crate::solve::choice::refine)) did: every discretization it solved,
 /// and why it stopped (`summary.json`: `refinement`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Refinement {

@@ -98,7 +98,7 @@ pub struct Piece {
     /// Time of the guess and of the backend (setup and output are not a piece's).
     pub timings: Timings,
     /// Its work: the backends' counts and the guess's time stepping (the verification's
-    /// is added by [`outcome`](super::run::outcome)).
+    /// is added by [`outcome`](crate::solve::outcome)).
     pub work: Work,
 }
 

@@ -49,7 +49,7 @@ impl SolveStatus {
     /// The status of a solve that ended with the backend's status `solver` at an
     /// unscaled residual `residual`; `equations_at_round_off` says whether every
     /// equation is within [`CONVERGED_RESIDUAL`] or its own round-off level
-    /// ([`SquareSolver::equations_at_round_off`](super::SquareSolver::equations_at_round_off)). A residual above `CONVERGED_RESIDUAL`
+    /// ([`SquareSolver::equations_at_round_off`](crate::solve::SquareSolver::equations_at_round_off)). A residual above `CONVERGED_RESIDUAL`
     /// counts only after a round-off stop that holds equation by equation: the scale of
     /// a scene's numbers (θ ≈ 600 rad after 20 revolutions, `SBP484`'s closure
     /// coefficients up to 130/Δt) can put the rounding error of its equations above 1e-8.

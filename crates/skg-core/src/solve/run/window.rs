@@ -32,11 +32,13 @@ use super::error::{SolveError, WindowError};
 use super::global::Run;
 use super::outcome::{Method, Timings, Work};
 use super::piece::{action_on, solve_piece, Guess, Piece};
+use super::status::SolveStatus;
 use crate::discrete::contact;
-use crate::discrete::trajectory::Trajectory;
+use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::discrete::Discretization;
 use crate::model::Model;
 use crate::scene::{Scene, Windows};
+use crate::solve::linalg::IterationStat;
 
 /// Nodes and restart of the windows of a scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,81 +84,122 @@ pub fn solve_windows(scene: &Scene, model: &Arc<Model>, disc: &Discretization, w
     // once and reused by every window.
     let mut solver = SquareSolver::new(scene, &action);
     let sizes = sizes(scene, &action, &solver);
-    let mut timings = Timings::zero();
-    timings.setup_s = t_setup.elapsed().as_secs_f64();
-    let mut work = Work::default();
-
     let total = disc.nodes;
-    let mut trajectory = Trajectory::empty();
-    let mut time_stepping_q = Some(Vec::with_capacity(total));
-    let mut run_status = None;
-    let (mut iterations, mut history) = (0, Vec::new());
-    // The first window's backend report (it made the LU analysis), or the first that
-    // handed over to Ipopt.
-    let mut backend: Option<BackendReport> = None;
-    let (mut max_residual, mut max_eom_residual, mut max_minus_variable) = (0.0_f64, 0.0_f64, None::<f64>);
+    let mut joined = Joined::new(total, t_setup.elapsed().as_secs_f64());
     let (mut q0, mut v0) = (scene.initial_q.clone(), scene.initial_v.clone());
-    let (mut start, mut count) = (0, 0);
+    let mut start = 0;
     loop {
         let times: Vec<f64> = (0..grid.nodes).map(|k| scene.t_start + (start + k) as f64 * grid.dt).collect();
         action.set_window(times[0], &q0, &v0);
         let piece = solve_piece(scene, &action, &mut solver, &times, &Guess::TimeStepping)?;
-        timings.add(&piece.timings);
-        work.add(&piece.work);
-        iterations += piece.iterations;
-        history.extend(piece.history);
-        if backend.as_ref().is_none_or(|b| piece.backend.handed_over_to_ipopt && !b.handed_over_to_ipopt) {
-            backend = Some(piece.backend.clone());
-        }
-        max_residual = max_residual.max(piece.max_residual);
-        max_eom_residual = max_eom_residual.max(piece.max_eom_residual);
-        max_minus_variable = piece.max_minus_variable.map(|m| m.max(max_minus_variable.unwrap_or(0.0)));
         let last = start + grid.nodes >= total;
         let keep = if last { total - start } else { restart_node(scene, &piece.trajectory, grid.keep) };
-        trajectory.extend_from(&piece.trajectory, 0..keep);
-        time_stepping_q = match (time_stepping_q, &piece.time_stepping_q) {
+        let restart = (!last).then(|| (piece.trajectory.q[keep].clone(), piece.trajectory.v[keep].clone()));
+        let converged = piece.status.is_converged();
+        joined.add(piece, keep);
+        if !converged {
+            joined.not_computed((start + keep..total).map(|k| scene.t_start + k as f64 * grid.dt));
+            break;
+        }
+        let Some((q, v)) = restart else { break };
+        (q0, v0) = (q, v);
+        start += keep;
+    }
+    let length = (grid.nodes - 1) as f64 * grid.dt;
+    let method =
+        Method::Windows { length, overlap: length - grid.keep as f64 * grid.dt, nodes_per_window: grid.nodes, count: joined.count };
+    Ok(Run { method, discretization: *disc, sizes, solution: joined.into_piece() })
+}
+
+/// The windows' pieces joined into the run's (see [`Run::solution`]).
+struct Joined {
+    count: usize,
+    trajectory: Trajectory,
+    /// The time-stepping coordinates at the kept nodes, while every window has them.
+    time_stepping_q: Option<NodeSeries>,
+    /// The first window's status, or the first that did not converge.
+    status: Option<SolveStatus>,
+    iterations: usize,
+    history: Vec<IterationStat>,
+    /// The first window's backend report (it made the LU analysis), or the first that
+    /// handed over to Ipopt.
+    backend: Option<BackendReport>,
+    max_residual: f64,
+    max_eom_residual: f64,
+    max_minus_variable: Option<f64>,
+    timings: Timings,
+    work: Work,
+}
+
+impl Joined {
+    /// Nothing joined yet, of a run of `total` nodes whose setup took `setup_s`.
+    fn new(total: usize, setup_s: f64) -> Joined {
+        Joined {
+            count: 0,
+            trajectory: Trajectory::empty(),
+            time_stepping_q: Some(Vec::with_capacity(total)),
+            status: None,
+            iterations: 0,
+            history: Vec::new(),
+            backend: None,
+            max_residual: 0.0,
+            max_eom_residual: 0.0,
+            max_minus_variable: None,
+            timings: Timings { setup_s, ..Timings::zero() },
+            work: Work::default(),
+        }
+    }
+
+    /// Join a window's piece, of which the first `keep` nodes are kept.
+    fn add(&mut self, piece: Piece, keep: usize) {
+        self.count += 1;
+        self.timings.add(&piece.timings);
+        self.work.add(&piece.work);
+        self.iterations += piece.iterations;
+        self.history.extend(piece.history);
+        if self.backend.as_ref().is_none_or(|b| piece.backend.handed_over_to_ipopt && !b.handed_over_to_ipopt) {
+            self.backend = Some(piece.backend);
+        }
+        self.max_residual = self.max_residual.max(piece.max_residual);
+        self.max_eom_residual = self.max_eom_residual.max(piece.max_eom_residual);
+        self.max_minus_variable = piece.max_minus_variable.map(|m| m.max(self.max_minus_variable.unwrap_or(0.0)));
+        self.trajectory.extend_from(&piece.trajectory, 0..keep);
+        self.time_stepping_q = match (self.time_stepping_q.take(), &piece.time_stepping_q) {
             (Some(mut acc), Some(ts)) => {
                 acc.extend_from_slice(&ts[..keep]);
                 Some(acc)
             }
             _ => None,
         };
-        if !piece.status.is_converged() {
-            run_status = Some(piece.status);
-            count += 1;
-            for k in start + keep..total {
-                trajectory.push_not_computed(scene.t_start + k as f64 * grid.dt);
-            }
-            time_stepping_q = None;
-            break;
+        if !piece.status.is_converged() || self.status.is_none() {
+            self.status = Some(piece.status);
         }
-        run_status.get_or_insert(piece.status);
-        count += 1;
-        if last {
-            break;
-        }
-        q0 = piece.trajectory.q[keep].clone();
-        v0 = piece.trajectory.v[keep].clone();
-        start += keep;
     }
-    let length = (grid.nodes - 1) as f64 * grid.dt;
-    let method = Method::Windows { length, overlap: length - grid.keep as f64 * grid.dt, nodes_per_window: grid.nodes, count };
-    let solution = Piece {
-        status: run_status.expect("at least one window"),
-        iterations,
-        history,
-        backend: backend.expect("at least one window"),
-        trajectory,
-        max_residual,
-        max_eom_residual,
-        max_minus_variable,
-        time_stepping_q,
-        guess: "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) from each window's initial state"
-            .into(),
-        timings,
-        work,
-    };
-    Ok(Run { method, discretization: *disc, sizes, solution })
+
+    /// The nodes at `times`, after a window that did not converge, are not computed.
+    fn not_computed(&mut self, times: impl Iterator<Item = f64>) {
+        times.for_each(|t| self.trajectory.push_not_computed(t));
+        self.time_stepping_q = None;
+    }
+
+    fn into_piece(self) -> Piece {
+        Piece {
+            status: self.status.expect("at least one window"),
+            iterations: self.iterations,
+            history: self.history,
+            backend: self.backend.expect("at least one window"),
+            trajectory: self.trajectory,
+            max_residual: self.max_residual,
+            max_eom_residual: self.max_eom_residual,
+            max_minus_variable: self.max_minus_variable,
+            time_stepping_q: self.time_stepping_q,
+            guess: "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) from each window's initial \
+                    state"
+                .into(),
+            timings: self.timings,
+            work: self.work,
+        }
+    }
 }
 
 /// Neighbours on each side of a restart node that must be out of contact too.
