@@ -8,7 +8,9 @@
 //! here, with the old and the new counts.
 //!
 //! Each scene is solved as `skg-solve SCENE --backend B` would: its own grid and
-//! settings, the whole fallback ladder. All 12 scenes on both backends take 2.6 s in the
+//! settings, the whole fallback ladder. Beside them, one refined solve on both backends
+//! (the rolling disk to 1e-6 with `--refine --operator auto`, the snapshot's
+//! `rolling_disk_refined`), whose counts add the grids it solved. All 12 scenes on both backends take 2.6 s in the
 //! test profile (measured; the longest, `drum_long` on its 20481 nodes, 1.0 s with Ipopt
 //! and 0.65 s with Newton), so none is replaced by a cheaper variant.
 //!
@@ -30,8 +32,8 @@
 //!   value or two steps, whichever is more, and the right-hand-side evaluations by
 //!   `STEPS_SLACK` or two steps' worth ([`RHS_PER_STEP`] each).
 //!
-//! The ladder's attempts and the systems solved are exact: they follow from whether a
-//! solve converges and verifies, which on the shipped scenes is decided by margins of
+//! The refinement's grids, the ladder's attempts and the systems solved are exact: they
+//! follow from whether a solve converges and verifies, which on the shipped scenes is decided by margins of
 //! orders of magnitude, never by rounding. A change of the method or of its tolerances
 //! moves many steps or iterations at once and still fails here.
 //!
@@ -100,7 +102,7 @@ fn counts(o: &Outcome) -> Vec<(&'static str, usize)> {
 fn allowed(name: &str, expected: usize, systems: usize) -> usize {
     let relative = (STEPS_SLACK * expected as f64).floor() as usize;
     match name {
-        "attempts" | "systems" => expected,
+        "grids" | "attempts" | "systems" => expected,
         _ if name.ends_with("_rhs_evaluations") => expected + relative.max(2 * RHS_PER_STEP),
         _ if name.ends_with("_steps") => expected + relative.max(2),
         "residual_evaluations" => expected + RESIDUALS_PER_SYSTEM * systems,
@@ -127,6 +129,13 @@ fn shipped() -> Vec<String> {
 /// Solve a shipped scene on `backend` with the whole ladder.
 fn solve(name: &str, backend: Backend) -> Outcome {
     solve::solve_scene(&common::load(name, &Overrides { backend: Some(backend), ..Overrides::default() })).unwrap()
+}
+
+/// The refined solve of the snapshot: the rolling disk to 1e-6, the discretization
+/// chosen (`--verify-tol 1e-6 --refine --operator auto`), on `backend`.
+fn solve_refined(backend: Backend) -> Outcome {
+    let ov = Overrides { backend: Some(backend), verify_tol: Some(1e-6), refine: true, auto_operator: true, ..Overrides::default() };
+    solve::solve_scene(&common::load("rolling_disk", &ov)).unwrap()
 }
 
 /// The snapshot's text: one table per scene and backend.
@@ -158,7 +167,16 @@ fn the_solver_does_no_more_work_than_the_snapshot_says() {
             measured.insert(format!("{name}.{backend}"), counts(&o));
         }
     }
-    eprintln!("solved {} scenes on both backends in {:.2} s", measured.len() / 2, start.elapsed().as_secs_f64());
+    for backend in [Backend::Ipopt, Backend::Newton] {
+        let t = Instant::now();
+        let o = solve_refined(backend);
+        assert!(o.trusted(), "the refined disk on {backend}: {}", o.verification.reason);
+        eprintln!("rolling_disk refined on {backend}: {:.3} s", t.elapsed().as_secs_f64());
+        let mut c = counts(&o);
+        c.insert(0, ("grids", o.refinement.as_ref().map_or(0, |r| r.grids.len())));
+        measured.insert(format!("rolling_disk_refined.{backend}"), c);
+    }
+    eprintln!("solved {} scenes and a refined one on both backends in {:.2} s", measured.len() / 2 - 1, start.elapsed().as_secs_f64());
     let path = snapshot_path();
     if std::env::var_os("SKG_UPDATE_SNAPSHOTS").is_some() {
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
