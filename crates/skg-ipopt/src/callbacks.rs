@@ -27,17 +27,27 @@ enum Kind {
 
 /// What the trampolines reach through Ipopt's `user_data` pointer.
 pub(crate) struct Context<'p, P: Problem> {
-    pub(crate) problem: &'p mut P,
-    pub(crate) n: usize,
-    pub(crate) m: usize,
-    pub(crate) nnz_jac: usize,
-    pub(crate) nnz_hess: usize,
+    problem: &'p mut P,
+    n: usize,
+    m: usize,
+    nnz_jac: usize,
+    nnz_hess: usize,
     /// First panic payload; once set, every callback returns false without running user code.
-    pub(crate) panic: Option<Box<dyn Any + Send + 'static>>,
+    panic: Option<Box<dyn Any + Send + 'static>>,
+    record: Record,
+}
+
+/// What the callbacks recorded during a solve, besides a panic.
+pub(crate) struct Record {
+    /// The first `Err` a callback returned.
     pub(crate) first_error: Option<EvalError>,
+    /// How many callbacks returned `Err`.
     pub(crate) failed_evaluations: usize,
+    /// How many callbacks produced NaN or infinite values.
     pub(crate) non_finite_evaluations: usize,
+    /// One entry per call of the intermediate callback.
     pub(crate) history: Vec<IterationStat>,
+    /// Calls and time per kind of evaluation.
     pub(crate) eval: EvalTimes,
     /// All time spent in callbacks (user code), including structure queries.
     pub(crate) callback_seconds: f64,
@@ -49,7 +59,30 @@ enum Outcome {
     NonFinite,
 }
 
-impl<P: Problem> Context<'_, P> {
+impl<'p, P: Problem> Context<'p, P> {
+    /// A context for a problem of `n` variables and `m` constraints with the given
+    /// numbers of Jacobian and Hessian entries, its history allocated for
+    /// `history_capacity` iterations.
+    pub(crate) fn new(problem: &'p mut P, n: usize, m: usize, nnz_jac: usize, nnz_hess: usize, history_capacity: usize) -> Self {
+        let record = Record {
+            first_error: None,
+            failed_evaluations: 0,
+            non_finite_evaluations: 0,
+            history: Vec::with_capacity(history_capacity),
+            eval: EvalTimes::default(),
+            callback_seconds: 0.0,
+        };
+        Context { problem, n, m, nnz_jac, nnz_hess, panic: None, record }
+    }
+
+    /// What the callbacks recorded, or the payload of the first panic of a callback.
+    pub(crate) fn finish(self) -> Result<Record, Box<dyn Any + Send + 'static>> {
+        match self.panic {
+            Some(payload) => Err(payload),
+            None => Ok(self.record),
+        }
+    }
+
     /// Runs user code `f` for one callback: skipped after a panic, timed, panics caught,
     /// `Err` and non-finite output recorded. Returns Ipopt's success flag.
     fn run(&mut self, kind: Kind, f: impl FnOnce(&mut P) -> Result<Outcome, EvalError>) -> Bool {
@@ -60,12 +93,12 @@ impl<P: Problem> Context<'_, P> {
         let problem = &mut *self.problem;
         let result = catch_unwind(AssertUnwindSafe(|| f(problem)));
         let seconds = start.elapsed().as_secs_f64();
-        self.callback_seconds += seconds;
+        self.record.callback_seconds += seconds;
         let stat = match kind {
-            Kind::Objective => Some(&mut self.eval.objective),
-            Kind::Constraints => Some(&mut self.eval.constraints),
-            Kind::Jacobian => Some(&mut self.eval.jacobian),
-            Kind::Hessian => Some(&mut self.eval.hessian),
+            Kind::Objective => Some(&mut self.record.eval.objective),
+            Kind::Constraints => Some(&mut self.record.eval.constraints),
+            Kind::Jacobian => Some(&mut self.record.eval.jacobian),
+            Kind::Hessian => Some(&mut self.record.eval.hessian),
             Kind::Other => None,
         };
         if let Some(stat) = stat {
@@ -75,7 +108,7 @@ impl<P: Problem> Context<'_, P> {
         match result {
             Ok(Ok(Outcome::Finite)) => TRUE,
             Ok(Ok(Outcome::NonFinite)) => {
-                self.non_finite_evaluations += 1;
+                self.record.non_finite_evaluations += 1;
                 FALSE
             }
             Ok(Err(e)) => self.fail(e),
@@ -88,9 +121,9 @@ impl<P: Problem> Context<'_, P> {
 
     /// Records an evaluation error and returns `FALSE`.
     fn fail(&mut self, e: EvalError) -> Bool {
-        self.failed_evaluations += 1;
-        if self.first_error.is_none() {
-            self.first_error = Some(e);
+        self.record.failed_evaluations += 1;
+        if self.record.first_error.is_none() {
+            self.record.first_error = Some(e);
         }
         FALSE
     }
@@ -104,9 +137,9 @@ impl<P: Problem> Context<'_, P> {
 /// Reinterprets Ipopt's `user_data` as our context.
 ///
 /// # Safety
-/// `user_data` must be the `*mut Context<P>` that [`crate::solve`] passed to `IpoptSolve`, and
-/// the call must happen during that `IpoptSolve` (the context is alive and not otherwise
-/// borrowed then).
+/// `user_data` must be the `*mut Context<P>` that the solve (`run_ipopt`) passed to
+/// `IpoptSolve`, and the call must happen during that `IpoptSolve` (the context is alive
+/// and not otherwise borrowed then).
 unsafe fn context<'a, 'p, P: Problem>(user_data: UserDataPtr) -> &'a mut Context<'p, P> {
     // SAFETY: guaranteed by the caller (see above); Ipopt calls back on the solving thread
     // only, one callback at a time.
@@ -371,7 +404,7 @@ pub(crate) unsafe extern "C" fn intermediate<P: Problem>(
         ls_trials,
         restoration: alg_mod == ffi::AlgorithmMode::RestorationPhaseMode.0 as Index,
     };
-    ctx.history.push(stat);
+    ctx.record.history.push(stat);
     let mut keep_going = true;
     let ok = ctx.run(Kind::Other, |p| {
         keep_going = p.intermediate(&stat);

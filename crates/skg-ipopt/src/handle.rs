@@ -16,20 +16,30 @@ use crate::FALSE;
 
 /// An `IpoptProblem` that owns the process-wide lock; freed (under the lock) on drop.
 pub(crate) struct Handle {
-    pub(crate) raw: NonNull<ffi::IpoptProblemInfo>,
+    raw: NonNull<ffi::IpoptProblemInfo>,
     /// Dropped after `Drop::drop` has freed the problem.
-    pub(crate) _lock: MutexGuard<'static, ()>,
+    _lock: MutexGuard<'static, ()>,
 }
 
 impl Drop for Handle {
     fn drop(&mut self) {
-        // SAFETY: `raw` came from a successful CreateIpoptProblem, is freed exactly once
-        // (here), and the lock is still held because fields drop after this body.
+        // SAFETY: `raw` came from a successful CreateIpoptProblem (the contract of
+        // `Handle::new`), is freed exactly once (here), and the lock is still held because
+        // fields drop after this body.
         unsafe { ffi::FreeIpoptProblem(self.raw.as_ptr()) };
     }
 }
 
 impl Handle {
+    /// Takes ownership of a problem and of the lock it was created under.
+    ///
+    /// # Safety
+    /// `raw` must be the result of a successful `CreateIpoptProblem` made while `lock`,
+    /// the process-wide lock of [`crate::lock`], was held, and nothing else may free it.
+    pub(crate) unsafe fn new(raw: NonNull<ffi::IpoptProblemInfo>, lock: MutexGuard<'static, ()>) -> Self {
+        Handle { raw, _lock: lock }
+    }
+
     pub(crate) fn raw(&self) -> ffi::IpoptProblem {
         self.raw.as_ptr()
     }
