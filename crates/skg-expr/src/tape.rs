@@ -1,6 +1,8 @@
 //! Compiled evaluation tapes: straight-line programs over a register file.
 
-use super::{powi, ExprId, Func, FxMap, Graph, Node};
+use crate::graph::{ExprId, Graph};
+use crate::hash::FxMap;
+use crate::node::{powi, Func, Node};
 
 /// Operation of a run of instructions.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
