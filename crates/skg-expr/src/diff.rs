@@ -60,6 +60,9 @@ impl Graph {
         }
     }
 
+    /// The derivative of node `e` with respect to variable `v` (mask bit `bit`), the
+    /// derivatives of its operands being known. The operands' derivatives are taken first,
+    /// in operand order, then the rule of the node's kind builds the result.
     fn diff_node(&mut self, e: ExprId, v: u32, bit: u64) -> ExprId {
         match self.node(e) {
             Node::Const(_) => self.constant(0.0),
@@ -74,16 +77,11 @@ impl Graph {
             }
             Node::Mul(a, b) => {
                 let (da, db) = (self.d_of(a, v, bit), self.d_of(b, v, bit));
-                let t1 = self.mul(da, b);
-                let t2 = self.mul(a, db);
-                self.add(t1, t2)
+                self.diff_product(a, b, da, db)
             }
             Node::Div(a, b) => {
-                // (a/b)' = (da - (a/b)*db) / b
                 let (da, db) = (self.d_of(a, v, bit), self.d_of(b, v, bit));
-                let t = self.mul(e, db);
-                let num = self.sub(da, t);
-                self.div(num, b)
+                self.diff_quotient(e, b, da, db)
             }
             Node::Neg(a) => {
                 let da = self.d_of(a, v, bit);
@@ -91,82 +89,117 @@ impl Graph {
             }
             Node::Powi(a, n) => {
                 let da = self.d_of(a, v, bit);
-                let p = match n.checked_sub(1) {
-                    Some(m) => self.powi(a, m),
-                    None => {
-                        let c = self.constant(n as f64 - 1.0);
-                        self.pow(a, c)
-                    }
-                };
-                let c = self.constant(n as f64);
-                let t = self.mul(c, p);
-                self.mul(t, da)
+                self.diff_integer_power(a, n, da)
             }
             Node::Pow(a, b) => {
                 let (da, db) = (self.d_of(a, v, bit), self.d_of(b, v, bit));
-                if let Some(c) = self.konst(b) {
-                    let cm1 = self.constant(c - 1.0);
-                    let p = self.pow(a, cm1);
-                    let cc = self.constant(c);
-                    let t = self.mul(cc, p);
-                    self.mul(t, da)
-                } else {
-                    // (a^b)' = a^b * (db*log(a) + b*da/a)
-                    let la = self.log(a);
-                    let t1 = self.mul(db, la);
-                    let q = self.div(da, a);
-                    let t2 = self.mul(b, q);
-                    let s = self.add(t1, t2);
-                    self.mul(e, s)
-                }
+                self.diff_power(e, a, b, da, db)
             }
             Node::Atan2(y, x) => {
-                // (x*dy - y*dx) / (x^2 + y^2)
                 let (dy, dx) = (self.d_of(y, v, bit), self.d_of(x, v, bit));
-                let t1 = self.mul(x, dy);
-                let t2 = self.mul(y, dx);
-                let num = self.sub(t1, t2);
-                let x2 = self.powi(x, 2);
-                let y2 = self.powi(y, 2);
-                let den = self.add(x2, y2);
-                self.div(num, den)
+                self.diff_atan2(y, x, dy, dx)
             }
             Node::Func(f, a) => {
                 let da = self.d_of(a, v, bit);
-                let one = self.constant(1.0);
-                let inner = match f {
-                    Func::Sin => self.cos(a),
-                    Func::Cos => {
-                        let s = self.sin(a);
-                        self.neg(s)
-                    }
-                    Func::Tan => {
-                        let e2 = self.powi(e, 2);
-                        self.add(one, e2)
-                    }
-                    Func::Exp => e,
-                    Func::Log => return self.div(da, a),
-                    Func::Sqrt => {
-                        let two = self.constant(2.0);
-                        let den = self.mul(two, e);
-                        return self.div(da, den);
-                    }
-                    Func::Abs => self.div(a, e),
-                    Func::Sinh => self.cosh(a),
-                    Func::Cosh => self.sinh(a),
-                    Func::Tanh => {
-                        let e2 = self.powi(e, 2);
-                        self.sub(one, e2)
-                    }
-                    Func::Atan => {
-                        let a2 = self.powi(a, 2);
-                        let den = self.add(one, a2);
-                        return self.div(da, den);
-                    }
-                };
-                self.mul(inner, da)
+                self.diff_function(e, f, a, da)
             }
         }
+    }
+
+    /// `(a*b)' = da*b + a*db`.
+    fn diff_product(&mut self, a: ExprId, b: ExprId, da: ExprId, db: ExprId) -> ExprId {
+        let t1 = self.mul(da, b);
+        let t2 = self.mul(a, db);
+        self.add(t1, t2)
+    }
+
+    /// `(a/b)' = (da - (a/b)*db) / b`, where `e = a/b`.
+    fn diff_quotient(&mut self, e: ExprId, b: ExprId, da: ExprId, db: ExprId) -> ExprId {
+        let t = self.mul(e, db);
+        let num = self.sub(da, t);
+        self.div(num, b)
+    }
+
+    /// `(a^n)' = n*a^(n-1)*da` for an integer `n` (`a^(n-1)` a general power when `n - 1`
+    /// does not fit in an `i32`).
+    fn diff_integer_power(&mut self, a: ExprId, n: i32, da: ExprId) -> ExprId {
+        let p = match n.checked_sub(1) {
+            Some(m) => self.powi(a, m),
+            None => {
+                let c = self.constant(n as f64 - 1.0);
+                self.pow(a, c)
+            }
+        };
+        let c = self.constant(n as f64);
+        let t = self.mul(c, p);
+        self.mul(t, da)
+    }
+
+    /// `(a^b)'`, where `e = a^b`: `c*a^(c-1)*da` for a constant exponent `c`, else
+    /// `a^b * (db*log(a) + b*da/a)`.
+    fn diff_power(&mut self, e: ExprId, a: ExprId, b: ExprId, da: ExprId, db: ExprId) -> ExprId {
+        if let Some(c) = self.konst(b) {
+            let cm1 = self.constant(c - 1.0);
+            let p = self.pow(a, cm1);
+            let cc = self.constant(c);
+            let t = self.mul(cc, p);
+            self.mul(t, da)
+        } else {
+            let la = self.log(a);
+            let t1 = self.mul(db, la);
+            let q = self.div(da, a);
+            let t2 = self.mul(b, q);
+            let s = self.add(t1, t2);
+            self.mul(e, s)
+        }
+    }
+
+    /// `atan2(y, x)' = (x*dy - y*dx) / (x^2 + y^2)`.
+    fn diff_atan2(&mut self, y: ExprId, x: ExprId, dy: ExprId, dx: ExprId) -> ExprId {
+        let t1 = self.mul(x, dy);
+        let t2 = self.mul(y, dx);
+        let num = self.sub(t1, t2);
+        let x2 = self.powi(x, 2);
+        let y2 = self.powi(y, 2);
+        let den = self.add(x2, y2);
+        self.div(num, den)
+    }
+
+    /// `f(a)' = f'(a)*da`, where `e = f(a)`; `f'` is written with `e` itself where that is
+    /// shorter, and `log`, `sqrt` and `atan` divide `da` directly.
+    fn diff_function(&mut self, e: ExprId, f: Func, a: ExprId, da: ExprId) -> ExprId {
+        let one = self.constant(1.0);
+        let inner = match f {
+            Func::Sin => self.cos(a),
+            Func::Cos => {
+                let s = self.sin(a);
+                self.neg(s)
+            }
+            Func::Tan => {
+                let e2 = self.powi(e, 2);
+                self.add(one, e2)
+            }
+            Func::Exp => e,
+            Func::Log => return self.div(da, a),
+            Func::Sqrt => {
+                let two = self.constant(2.0);
+                let den = self.mul(two, e);
+                return self.div(da, den);
+            }
+            Func::Abs => self.div(a, e),
+            Func::Sinh => self.cosh(a),
+            Func::Cosh => self.sinh(a),
+            Func::Tanh => {
+                let e2 = self.powi(e, 2);
+                self.sub(one, e2)
+            }
+            Func::Atan => {
+                let a2 = self.powi(a, 2);
+                let den = self.add(one, a2);
+                return self.div(da, den);
+            }
+        };
+        self.mul(inner, da)
     }
 
     /// The gradient of `e` with respect to the variables `vars`.

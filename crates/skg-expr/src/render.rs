@@ -30,10 +30,6 @@ impl Graph {
     /// Render `e` as a string, naming variable `i` as `name(i)`. With the names the
     /// expression was parsed with, the result parses back to an equal expression.
     pub fn to_string_with(&self, e: ExprId, name: &dyn Fn(usize) -> String) -> String {
-        enum Task {
-            Node(ExprId, u8),
-            Text(Cow<'static, str>),
-        }
         let mut out = String::new();
         let mut stack = vec![Task::Node(e, 0)];
         while let Some(task) = stack.pop() {
@@ -41,76 +37,91 @@ impl Graph {
                 out.push('…');
                 break;
             }
-            let (n, min_prec) = match task {
-                Task::Text(s) => {
-                    out.push_str(&s);
-                    continue;
-                }
-                Task::Node(n, p) => (n, p),
-            };
-            let node = self.node(n);
-            let prec = match node {
-                Node::Const(bits) => {
-                    if f64::from_bits(bits) < 0.0 {
-                        PREC_UNARY
-                    } else {
-                        PREC_ATOM
-                    }
-                }
-                Node::Var(_) | Node::Func(..) | Node::Atan2(..) => PREC_ATOM,
-                Node::Add(..) | Node::Sub(..) => PREC_SUM,
-                Node::Mul(..) | Node::Div(..) => PREC_PRODUCT,
-                Node::Neg(_) => PREC_UNARY,
-                Node::Powi(..) | Node::Pow(..) => PREC_POWER,
-            };
-            let paren = prec < min_prec;
-            if paren {
-                out.push('(');
-                stack.push(Task::Text(Cow::Borrowed(")")));
-            }
-            // Push in reverse order of output.
-            let binary = |stack: &mut Vec<Task>, a, op, b, pa, pb| {
-                stack.push(Task::Node(b, pb));
-                stack.push(Task::Text(Cow::Borrowed(op)));
-                stack.push(Task::Node(a, pa));
-            };
-            match node {
-                Node::Const(bits) => out.push_str(&format_constant(f64::from_bits(bits))),
-                Node::Var(i) => out.push_str(&name(i as usize)),
-                Node::Add(a, b) => binary(&mut stack, a, " + ", b, PREC_SUM, PREC_PRODUCT),
-                Node::Sub(a, b) => binary(&mut stack, a, " - ", b, PREC_SUM, PREC_PRODUCT),
-                Node::Mul(a, b) => binary(&mut stack, a, "*", b, PREC_PRODUCT, PREC_UNARY),
-                Node::Div(a, b) => binary(&mut stack, a, "/", b, PREC_PRODUCT, PREC_UNARY),
-                Node::Pow(a, b) => binary(&mut stack, a, "^", b, PREC_ATOM, PREC_POWER),
-                Node::Neg(a) => {
-                    out.push('-');
-                    stack.push(Task::Node(a, PREC_POWER));
-                }
-                Node::Powi(a, k) => {
-                    if k < 0 {
-                        stack.push(Task::Text(Cow::Owned(format!("^({k})"))));
-                    } else {
-                        stack.push(Task::Text(Cow::Owned(format!("^{k}"))));
-                    }
-                    stack.push(Task::Node(a, PREC_ATOM));
-                }
-                Node::Func(f, a) => {
-                    out.push_str(f.name());
-                    out.push('(');
-                    stack.push(Task::Text(Cow::Borrowed(")")));
-                    stack.push(Task::Node(a, 0));
-                }
-                Node::Atan2(y, x) => {
-                    out.push_str("atan2(");
-                    stack.push(Task::Text(Cow::Borrowed(")")));
-                    stack.push(Task::Node(x, 0));
-                    stack.push(Task::Text(Cow::Borrowed(", ")));
-                    stack.push(Task::Node(y, 0));
-                }
+            match task {
+                Task::Text(s) => out.push_str(&s),
+                Task::Node(n, min_prec) => self.render_node(n, min_prec, name, &mut out, &mut stack),
             }
         }
         out
     }
+
+    /// Writes the beginning of node `n` to `out`, in parentheses if its precedence is
+    /// below `min_prec`, and pushes the rest (operands, operators, closing parentheses)
+    /// on `stack`, in reverse order of output.
+    fn render_node(&self, n: ExprId, min_prec: u8, name: &dyn Fn(usize) -> String, out: &mut String, stack: &mut Vec<Task>) {
+        let node = self.node(n);
+        if precedence(node) < min_prec {
+            out.push('(');
+            stack.push(Task::Text(Cow::Borrowed(")")));
+        }
+        match node {
+            Node::Const(bits) => out.push_str(&format_constant(f64::from_bits(bits))),
+            Node::Var(i) => out.push_str(&name(i as usize)),
+            Node::Add(a, b) => push_binary(stack, a, " + ", b, PREC_SUM, PREC_PRODUCT),
+            Node::Sub(a, b) => push_binary(stack, a, " - ", b, PREC_SUM, PREC_PRODUCT),
+            Node::Mul(a, b) => push_binary(stack, a, "*", b, PREC_PRODUCT, PREC_UNARY),
+            Node::Div(a, b) => push_binary(stack, a, "/", b, PREC_PRODUCT, PREC_UNARY),
+            Node::Pow(a, b) => push_binary(stack, a, "^", b, PREC_ATOM, PREC_POWER),
+            Node::Neg(a) => {
+                out.push('-');
+                stack.push(Task::Node(a, PREC_POWER));
+            }
+            Node::Powi(a, k) => {
+                if k < 0 {
+                    stack.push(Task::Text(Cow::Owned(format!("^({k})"))));
+                } else {
+                    stack.push(Task::Text(Cow::Owned(format!("^{k}"))));
+                }
+                stack.push(Task::Node(a, PREC_ATOM));
+            }
+            Node::Func(f, a) => {
+                out.push_str(f.name());
+                out.push('(');
+                stack.push(Task::Text(Cow::Borrowed(")")));
+                stack.push(Task::Node(a, 0));
+            }
+            Node::Atan2(y, x) => {
+                out.push_str("atan2(");
+                stack.push(Task::Text(Cow::Borrowed(")")));
+                stack.push(Task::Node(x, 0));
+                stack.push(Task::Text(Cow::Borrowed(", ")));
+                stack.push(Task::Node(y, 0));
+            }
+        }
+    }
+}
+
+/// What is left to write: a node, with the least precedence it may have without
+/// parentheses, or text.
+enum Task {
+    Node(ExprId, u8),
+    Text(Cow<'static, str>),
+}
+
+/// The precedence of a node as written (a negative constant is written with a minus).
+fn precedence(node: Node) -> u8 {
+    match node {
+        Node::Const(bits) => {
+            if f64::from_bits(bits) < 0.0 {
+                PREC_UNARY
+            } else {
+                PREC_ATOM
+            }
+        }
+        Node::Var(_) | Node::Func(..) | Node::Atan2(..) => PREC_ATOM,
+        Node::Add(..) | Node::Sub(..) => PREC_SUM,
+        Node::Mul(..) | Node::Div(..) => PREC_PRODUCT,
+        Node::Neg(_) => PREC_UNARY,
+        Node::Powi(..) | Node::Pow(..) => PREC_POWER,
+    }
+}
+
+/// Pushes `a op b` on the stack (in reverse order of output), `a` needing at least
+/// precedence `pa` and `b` at least `pb` to go without parentheses.
+fn push_binary(stack: &mut Vec<Task>, a: ExprId, op: &'static str, b: ExprId, pa: u8, pb: u8) {
+    stack.push(Task::Node(b, pb));
+    stack.push(Task::Text(Cow::Borrowed(op)));
+    stack.push(Task::Node(a, pa));
 }
 
 /// Format a constant so that it parses back to the same value.
