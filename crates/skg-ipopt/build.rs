@@ -17,15 +17,25 @@ const INSTALL_HINT: &str = "install it with `sudo apt-get install coinor-libipop
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
+    let library = probe_ipopt();
+    emit_link_lines(&library);
+    let header = find_header(&library);
+    generate_bindings(&header, &clang_args(&library));
+}
 
-    let library = pkg_config::Config::new()
+/// Finds Ipopt with pkg-config, without pkg-config's own link lines.
+fn probe_ipopt() -> pkg_config::Library {
+    pkg_config::Config::new()
         .cargo_metadata(false) // we emit our own, reduced link line (see above)
         .env_metadata(true) // rerun when PKG_CONFIG_PATH & co. change
         .probe("ipopt")
-        .unwrap_or_else(|e| panic!("\n\nskg-solve needs Ipopt, but pkg-config could not find it: {e}\n\n{INSTALL_HINT}\n\n"));
+        .unwrap_or_else(|e| panic!("\n\nskg-solve needs Ipopt, but pkg-config could not find it: {e}\n\n{INSTALL_HINT}\n\n"))
+}
 
-    // Link only ipopt. Search path: pkg-config's `libdir` (pkg-config omits system
-    // dirs from --libs) plus any -L directory that actually contains libipopt.
+/// Links only ipopt, and passes Ipopt's version to the crate. Search path: pkg-config's
+/// `libdir` (pkg-config omits system dirs from --libs) plus any -L directory that
+/// actually contains libipopt.
+fn emit_link_lines(library: &pkg_config::Library) {
     let mut search: Vec<PathBuf> = Vec::new();
     if let Ok(libdir) = pkg_config::get_variable("ipopt", "libdir") {
         if !libdir.is_empty() {
@@ -42,15 +52,21 @@ fn main() {
     }
     println!("cargo:rustc-link-lib=ipopt");
     println!("cargo:rustc-env=SKG_IPOPT_VERSION={}", library.version);
+}
 
-    // Header location and clang arguments from the pkg-config cflags.
-    let header = library.include_paths.iter().map(|dir| dir.join("IpStdCInterface.h")).find(|path| path.is_file()).unwrap_or_else(|| {
+/// `IpStdCInterface.h` in one of the include paths pkg-config gives.
+fn find_header(library: &pkg_config::Library) -> PathBuf {
+    library.include_paths.iter().map(|dir| dir.join("IpStdCInterface.h")).find(|path| path.is_file()).unwrap_or_else(|| {
         panic!(
             "\n\npkg-config found Ipopt {} but IpStdCInterface.h is not in its include paths {:?}; \
                  {INSTALL_HINT}\n\n",
             library.version, library.include_paths
         )
-    });
+    })
+}
+
+/// Clang's arguments from the pkg-config cflags: the include paths and the defines.
+fn clang_args(library: &pkg_config::Library) -> Vec<String> {
     let mut clang_args: Vec<String> = library.include_paths.iter().map(|dir| format!("-I{}", dir.display())).collect();
     let mut defines: Vec<_> = library.defines.iter().collect();
     defines.sort();
@@ -60,10 +76,15 @@ fn main() {
             None => clang_args.push(format!("-D{name}")),
         }
     }
+    clang_args
+}
 
+/// Writes `$OUT_DIR/ipopt_bindings.rs`: the functions and types of the C interface the
+/// crate uses.
+fn generate_bindings(header: &Path, clang_args: &[String]) {
     let bindings = bindgen::Builder::default()
         .header(header.to_string_lossy().into_owned())
-        .clang_args(&clang_args)
+        .clang_args(clang_args)
         .allowlist_function("CreateIpoptProblem")
         .allowlist_function("FreeIpoptProblem")
         .allowlist_function("AddIpoptStrOption")

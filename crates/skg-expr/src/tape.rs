@@ -1,6 +1,8 @@
 //! Compiled evaluation tapes: straight-line programs over a register file.
 
-use super::{powi, ExprId, Func, FxMap, Graph, Node};
+use crate::graph::{ExprId, Graph};
+use crate::hash::FxMap;
+use crate::node::{powi, Func, Node};
 
 /// Operation of a run of instructions.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -142,6 +144,184 @@ struct Lowered {
     nops: usize,
 }
 
+/// Step 1 of [`Tape::compile`]: lowers a non-constant node to an instruction whose
+/// register operands may be constant nodes that need a register of their own; `None` for
+/// a constant node.
+fn lower(graph: &Graph, n: ExprId, n_vars: usize) -> Option<Lowered> {
+    let k = |e: ExprId| graph.as_constant(e);
+    let z = ExprId(0);
+    let (op, imm, ops, nops) = match graph.node(n) {
+        Node::Const(_) => return None,
+        Node::Var(v) => {
+            assert!((v as usize) < n_vars, "Tape::compile: an output depends on variable {v} but n_vars = {n_vars}");
+            (Op::Load, Imm::I(v as i32), [z, z], 0)
+        }
+        Node::Add(a, b) => match (k(a), k(b)) {
+            (Some(c), _) => (Op::AddC, Imm::F(c), [b, z], 1),
+            (_, Some(c)) => (Op::AddC, Imm::F(c), [a, z], 1),
+            _ => (Op::Add, Imm::None, [a, b], 2),
+        },
+        // a - c == a + (-c) exactly in IEEE arithmetic
+        Node::Sub(a, b) => match (k(a), k(b)) {
+            (Some(c), _) => (Op::CSub, Imm::F(c), [b, z], 1),
+            (_, Some(c)) => (Op::AddC, Imm::F(-c), [a, z], 1),
+            _ => (Op::Sub, Imm::None, [a, b], 2),
+        },
+        Node::Mul(a, b) => match (k(a), k(b)) {
+            (Some(c), _) => (Op::MulC, Imm::F(c), [b, z], 1),
+            (_, Some(c)) => (Op::MulC, Imm::F(c), [a, z], 1),
+            _ if a == b => (Op::Sq, Imm::None, [a, z], 1),
+            _ => (Op::Mul, Imm::None, [a, b], 2),
+        },
+        Node::Div(a, b) => match (k(a), k(b)) {
+            (Some(c), _) => (Op::CDiv, Imm::F(c), [b, z], 1),
+            (_, Some(c)) => (Op::DivC, Imm::F(c), [a, z], 1),
+            _ => (Op::Div, Imm::None, [a, b], 2),
+        },
+        Node::Pow(a, b) => match k(b) {
+            Some(c) => (Op::PowC, Imm::F(c), [a, z], 1),
+            None => (Op::Pow, Imm::None, [a, b], 2),
+        },
+        Node::Atan2(y, x) => (Op::Atan2, Imm::None, [y, x], 2),
+        Node::Neg(a) => (Op::Neg, Imm::None, [a, z], 1),
+        Node::Powi(a, 2) => (Op::Sq, Imm::None, [a, z], 1),
+        Node::Powi(a, m) => (Op::Powi, Imm::I(m), [a, z], 1),
+        Node::Func(f, a) => (Op::of_func(f), Imm::None, [a, z], 1),
+    };
+    Some(Lowered { node: n, op, imm, ops, nops })
+}
+
+/// Step 2 of [`Tape::compile`]: the order of the instructions (indices into `lowered`)
+/// and its runs. Repeatedly takes all ready instructions of the operation that has the
+/// most ready ones as one run; instructions ready at the same time are independent.
+fn schedule(lowered: &[Lowered]) -> (Vec<usize>, Vec<Run>) {
+    let index: FxMap<ExprId, usize> = lowered.iter().enumerate().map(|(i, l)| (l.node, i)).collect();
+    let mut users: Vec<Vec<usize>> = vec![Vec::new(); lowered.len()];
+    let mut pending = vec![0usize; lowered.len()];
+    for (i, l) in lowered.iter().enumerate() {
+        let mut ops = l.ops[..l.nops].to_vec();
+        ops.dedup();
+        for o in ops {
+            if let Some(&j) = index.get(&o) {
+                users[j].push(i);
+                pending[i] += 1;
+            }
+        }
+    }
+    let mut ready: Vec<Vec<usize>> = vec![Vec::new(); N_OPS];
+    for (i, l) in lowered.iter().enumerate() {
+        if pending[i] == 0 {
+            ready[l.op as usize].push(i);
+        }
+    }
+    let mut schedule: Vec<usize> = Vec::with_capacity(lowered.len());
+    let mut runs: Vec<Run> = Vec::new();
+    while let Some(best) = (0..N_OPS).filter(|&o| !ready[o].is_empty()).max_by_key(|&o| ready[o].len()) {
+        let batch = std::mem::take(&mut ready[best]);
+        runs.push(Run { op: lowered[batch[0]].op, len: batch.len() as u32 });
+        for &i in &batch {
+            for &u in &users[i] {
+                pending[u] -= 1;
+                if pending[u] == 0 {
+                    ready[lowered[u].op as usize].push(u);
+                }
+            }
+        }
+        schedule.extend(batch);
+    }
+    debug_assert_eq!(schedule.len(), lowered.len());
+    (schedule, runs)
+}
+
+/// Step 3 of [`Tape::compile`]: constant nodes that are register operands or outputs get
+/// permanent registers at the front of the register file. Returns their values and the
+/// register of each.
+fn constant_registers(graph: &Graph, lowered: &[Lowered], outputs: &[ExprId]) -> (Vec<f64>, FxMap<ExprId, u32>) {
+    let mut const_regs: Vec<f64> = Vec::new();
+    let mut reg: FxMap<ExprId, u32> = FxMap::default();
+    let operands = lowered.iter().flat_map(|l| l.ops[..l.nops].to_vec());
+    for o in operands.chain(outputs.iter().copied()) {
+        if let Some(c) = graph.as_constant(o) {
+            reg.entry(o).or_insert_with(|| {
+                const_regs.push(c);
+                (const_regs.len() - 1) as u32
+            });
+        }
+    }
+    (const_regs, reg)
+}
+
+/// Step 4 of [`Tape::compile`], liveness: the position in the schedule of the last
+/// instruction reading each node.
+fn last_uses(lowered: &[Lowered], schedule: &[usize]) -> FxMap<ExprId, usize> {
+    let mut last_use: FxMap<ExprId, usize> = FxMap::default();
+    for (pos, &i) in schedule.iter().enumerate() {
+        let l = &lowered[i];
+        for &o in &l.ops[..l.nops] {
+            last_use.insert(o, pos);
+        }
+    }
+    last_use
+}
+
+/// The instructions and constant table of a tape, and the length of its register file.
+struct Emitted {
+    code: Vec<Ins>,
+    consts: Vec<f64>,
+    scratch_len: u32,
+}
+
+/// Step 5 of [`Tape::compile`]: register allocation (a register is reused once its value
+/// is dead; the first `first_free` registers hold constants) and emission of the
+/// instructions in schedule order, immediates placed in the constant table. Adds the
+/// register of every instruction's node to `reg`.
+fn allocate_and_emit(
+    graph: &Graph,
+    lowered: &[Lowered],
+    schedule: &[usize],
+    outputs: &[ExprId],
+    last_use: &FxMap<ExprId, usize>,
+    reg: &mut FxMap<ExprId, u32>,
+    first_free: u32,
+) -> Emitted {
+    let is_output: FxMap<ExprId, ()> = outputs.iter().map(|&o| (o, ())).collect();
+    let mut consts: Vec<f64> = Vec::new();
+    let mut const_index: FxMap<u64, u32> = FxMap::default();
+    let mut free: Vec<u32> = Vec::new();
+    let mut next = first_free;
+    let mut code = Vec::with_capacity(schedule.len());
+    for (pos, &i) in schedule.iter().enumerate() {
+        let l = lowered[i];
+        let a = if l.nops > 0 { reg[&l.ops[0]] } else { 0 };
+        let b = if l.nops > 1 { reg[&l.ops[1]] } else { 0 };
+        for (j, &o) in l.ops[..l.nops].iter().enumerate() {
+            let dup = j == 1 && l.ops[0] == o;
+            if !dup && last_use.get(&o) == Some(&pos) && !is_output.contains_key(&o) && graph.as_constant(o).is_none() {
+                free.push(reg[&o]);
+            }
+        }
+        let d = free.pop().unwrap_or_else(|| {
+            next += 1;
+            next - 1
+        });
+        reg.insert(l.node, d);
+        let (a, b) = match (l.op, l.imm) {
+            (Op::Load, Imm::I(v)) => (v as u32, 0),
+            (_, Imm::I(m)) => (a, m as u32),
+            (_, Imm::F(c)) => {
+                let k = *const_index.entry(c.to_bits()).or_insert_with(|| {
+                    consts.push(c);
+                    (consts.len() - 1) as u32
+                });
+                (a, k)
+            }
+            (_, Imm::None) => (a, b),
+        };
+        code.push(Ins { d, a, b });
+    }
+    Emitted { code, consts, scratch_len: next }
+}
+
 impl Tape {
     /// Compile `outputs` of `graph` into a tape reading a variable vector of length
     /// `n_vars`.
@@ -150,153 +330,11 @@ impl Tape {
     /// If an output depends on a variable with index `>= n_vars`.
     pub fn compile(graph: &Graph, outputs: &[ExprId], n_vars: usize) -> Tape {
         let order = graph.reachable(outputs);
-
-        // 1. Lower every non-constant node to an instruction whose register operands may
-        //    be constant nodes that need a register of their own.
-        let mut lowered: Vec<Lowered> = Vec::new();
-        for &n in &order {
-            let k = |e: ExprId| graph.as_constant(e);
-            let z = ExprId(0);
-            let (op, imm, ops, nops) = match graph.node(n) {
-                Node::Const(_) => continue,
-                Node::Var(v) => {
-                    assert!((v as usize) < n_vars, "Tape::compile: an output depends on variable {v} but n_vars = {n_vars}");
-                    (Op::Load, Imm::I(v as i32), [z, z], 0)
-                }
-                Node::Add(a, b) => match (k(a), k(b)) {
-                    (Some(c), _) => (Op::AddC, Imm::F(c), [b, z], 1),
-                    (_, Some(c)) => (Op::AddC, Imm::F(c), [a, z], 1),
-                    _ => (Op::Add, Imm::None, [a, b], 2),
-                },
-                // a - c == a + (-c) exactly in IEEE arithmetic
-                Node::Sub(a, b) => match (k(a), k(b)) {
-                    (Some(c), _) => (Op::CSub, Imm::F(c), [b, z], 1),
-                    (_, Some(c)) => (Op::AddC, Imm::F(-c), [a, z], 1),
-                    _ => (Op::Sub, Imm::None, [a, b], 2),
-                },
-                Node::Mul(a, b) => match (k(a), k(b)) {
-                    (Some(c), _) => (Op::MulC, Imm::F(c), [b, z], 1),
-                    (_, Some(c)) => (Op::MulC, Imm::F(c), [a, z], 1),
-                    _ if a == b => (Op::Sq, Imm::None, [a, z], 1),
-                    _ => (Op::Mul, Imm::None, [a, b], 2),
-                },
-                Node::Div(a, b) => match (k(a), k(b)) {
-                    (Some(c), _) => (Op::CDiv, Imm::F(c), [b, z], 1),
-                    (_, Some(c)) => (Op::DivC, Imm::F(c), [a, z], 1),
-                    _ => (Op::Div, Imm::None, [a, b], 2),
-                },
-                Node::Pow(a, b) => match k(b) {
-                    Some(c) => (Op::PowC, Imm::F(c), [a, z], 1),
-                    None => (Op::Pow, Imm::None, [a, b], 2),
-                },
-                Node::Atan2(y, x) => (Op::Atan2, Imm::None, [y, x], 2),
-                Node::Neg(a) => (Op::Neg, Imm::None, [a, z], 1),
-                Node::Powi(a, 2) => (Op::Sq, Imm::None, [a, z], 1),
-                Node::Powi(a, m) => (Op::Powi, Imm::I(m), [a, z], 1),
-                Node::Func(f, a) => (Op::of_func(f), Imm::None, [a, z], 1),
-            };
-            lowered.push(Lowered { node: n, op, imm, ops, nops });
-        }
-
-        // 2. Schedule: repeatedly take all ready instructions of the operation that has
-        //    the most ready ones as one run. Instructions ready at the same time are
-        //    independent.
-        let index: FxMap<ExprId, usize> = lowered.iter().enumerate().map(|(i, l)| (l.node, i)).collect();
-        let mut users: Vec<Vec<usize>> = vec![Vec::new(); lowered.len()];
-        let mut pending = vec![0usize; lowered.len()];
-        for (i, l) in lowered.iter().enumerate() {
-            let mut ops = l.ops[..l.nops].to_vec();
-            ops.dedup();
-            for o in ops {
-                if let Some(&j) = index.get(&o) {
-                    users[j].push(i);
-                    pending[i] += 1;
-                }
-            }
-        }
-        let mut ready: Vec<Vec<usize>> = vec![Vec::new(); N_OPS];
-        for (i, l) in lowered.iter().enumerate() {
-            if pending[i] == 0 {
-                ready[l.op as usize].push(i);
-            }
-        }
-        let mut schedule: Vec<usize> = Vec::with_capacity(lowered.len());
-        let mut runs: Vec<Run> = Vec::new();
-        while let Some(best) = (0..N_OPS).filter(|&o| !ready[o].is_empty()).max_by_key(|&o| ready[o].len()) {
-            let batch = std::mem::take(&mut ready[best]);
-            runs.push(Run { op: lowered[batch[0]].op, len: batch.len() as u32 });
-            for &i in &batch {
-                for &u in &users[i] {
-                    pending[u] -= 1;
-                    if pending[u] == 0 {
-                        ready[lowered[u].op as usize].push(u);
-                    }
-                }
-            }
-            schedule.extend(batch);
-        }
-        debug_assert_eq!(schedule.len(), lowered.len());
-
-        // 3. Constant nodes that are register operands or outputs get permanent registers
-        //    at the front of the register file.
-        let mut const_regs: Vec<f64> = Vec::new();
-        let mut reg: FxMap<ExprId, u32> = FxMap::default();
-        let operands = lowered.iter().flat_map(|l| l.ops[..l.nops].to_vec());
-        for o in operands.chain(outputs.iter().copied()) {
-            if let Some(c) = graph.as_constant(o) {
-                reg.entry(o).or_insert_with(|| {
-                    const_regs.push(c);
-                    (const_regs.len() - 1) as u32
-                });
-            }
-        }
-
-        // 4. Liveness: position in the schedule of the last instruction reading each node.
-        let is_output: FxMap<ExprId, ()> = outputs.iter().map(|&o| (o, ())).collect();
-        let mut last_use: FxMap<ExprId, usize> = FxMap::default();
-        for (pos, &i) in schedule.iter().enumerate() {
-            let l = &lowered[i];
-            for &o in &l.ops[..l.nops] {
-                last_use.insert(o, pos);
-            }
-        }
-
-        // 5. Register allocation (a register is reused once its value is dead) and emission.
-        let mut consts: Vec<f64> = Vec::new();
-        let mut const_index: FxMap<u64, u32> = FxMap::default();
-        let mut free: Vec<u32> = Vec::new();
-        let mut next = const_regs.len() as u32;
-        let mut code = Vec::with_capacity(schedule.len());
-        for (pos, &i) in schedule.iter().enumerate() {
-            let l = lowered[i];
-            let a = if l.nops > 0 { reg[&l.ops[0]] } else { 0 };
-            let b = if l.nops > 1 { reg[&l.ops[1]] } else { 0 };
-            for (j, &o) in l.ops[..l.nops].iter().enumerate() {
-                let dup = j == 1 && l.ops[0] == o;
-                if !dup && last_use.get(&o) == Some(&pos) && !is_output.contains_key(&o) && graph.as_constant(o).is_none() {
-                    free.push(reg[&o]);
-                }
-            }
-            let d = free.pop().unwrap_or_else(|| {
-                next += 1;
-                next - 1
-            });
-            reg.insert(l.node, d);
-            let (a, b) = match (l.op, l.imm) {
-                (Op::Load, Imm::I(v)) => (v as u32, 0),
-                (_, Imm::I(m)) => (a, m as u32),
-                (_, Imm::F(c)) => {
-                    let k = *const_index.entry(c.to_bits()).or_insert_with(|| {
-                        consts.push(c);
-                        (consts.len() - 1) as u32
-                    });
-                    (a, k)
-                }
-                (_, Imm::None) => (a, b),
-            };
-            code.push(Ins { d, a, b });
-        }
-
+        let lowered: Vec<Lowered> = order.iter().filter_map(|&n| lower(graph, n, n_vars)).collect();
+        let (schedule, runs) = schedule(&lowered);
+        let (const_regs, mut reg) = constant_registers(graph, &lowered, outputs);
+        let last_use = last_uses(&lowered, &schedule);
+        let emitted = allocate_and_emit(graph, &lowered, &schedule, outputs, &last_use, &mut reg, const_regs.len() as u32);
         let outs = outputs
             .iter()
             .map(|&o| {
@@ -306,7 +344,8 @@ impl Tape {
                 reg[&o]
             })
             .collect();
-        let tape = Tape { code, runs, consts, const_regs, outs, n_vars, scratch_len: next as usize };
+        let Emitted { code, consts, scratch_len } = emitted;
+        let tape = Tape { code, runs, consts, const_regs, outs, n_vars, scratch_len: scratch_len as usize };
         tape.validate();
         tape
     }
