@@ -15,7 +15,6 @@ pub mod check;
 pub mod gallery;
 pub mod plot;
 pub mod reference;
-pub mod slurm;
 pub mod solve;
 pub mod status;
 pub mod sweep;

@@ -73,7 +73,7 @@ fn sharded(dir: &std::path::Path, layout: &ShardLayout) -> Result<()> {
     if shards::merged(dir) {
         println!("  merged: {} holds every point", dir.join("results.csv").display());
     } else {
-        println!("  not merged yet ({})", super::slurm::incomplete_text(layout, &states));
+        println!("  not merged yet ({})", super::sweep::slurm::incomplete_text(layout, &states));
     }
     // The Slurm jobs of the latest submission, while Slurm knows them.
     let jobs = JobsFile::read(dir)?;

@@ -9,7 +9,7 @@ use skg_sweep as sweep;
 use skg_sweep::shards::{self, ShardLayout, ShardState};
 use skg_sweep::slurm::{self, SubmitOptions, SubmitReport};
 
-use super::sweep::SweepArgs;
+use super::SweepArgs;
 
 /// Exit status of a command-line usage error.
 const EXIT_USAGE: u8 = 2;

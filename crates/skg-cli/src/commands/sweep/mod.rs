@@ -14,6 +14,8 @@ use clap::Args;
 
 use skg_sweep as sweep;
 
+pub mod slurm;
+
 /// `skg-solve sweep --help`: what the command writes (column lists from `skg_sweep`).
 pub fn sweep_long_about() -> String {
     let statuses: Vec<&str> = sweep::PointStatus::ALL.iter().map(|s| s.name()).collect();
@@ -119,7 +121,7 @@ pub struct MergeArgs {
 pub fn run(args: SweepArgs) -> Result<ExitCode> {
     let file = sweep::SweepFile::load(&args.sweep)?;
     if args.slurm {
-        return super::slurm::run(&args, &file);
+        return slurm::run(&args, &file);
     }
     let opts = sweep::SweepOptions {
         out_dir: args.output.unwrap_or_else(|| sweep::default_out_dir(&file)),
