@@ -91,10 +91,11 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Bench(a)) => bench::run(a),
+        Some(Command::Sweep(a)) if a.slurm => sweep::slurm::run(a),
         Some(Command::Sweep(a)) => sweep::run(a),
         Some(Command::Merge(a)) => sweep::run_merge(a),
         Some(Command::Status(a)) => status::run(a),
-        Some(Command::SweepMerge { dir }) => sweep::run_merge_shards(&dir),
+        Some(Command::SweepMerge { dir }) => sweep::slurm::run_merge_job(&dir),
         Some(Command::Tune(a)) => tune::run(a),
         Some(Command::Plot(k)) => plot::run(k),
         Some(Command::Animate(a)) => animate::run(a),

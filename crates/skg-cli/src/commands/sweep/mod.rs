@@ -1,4 +1,8 @@
-//! `skg-solve sweep`, `merge` and the hidden `sweep-worker`.
+//! `skg-solve sweep` (local worker processes), `merge` and the hidden `sweep-worker`;
+//! the arguments of `sweep`, which [`slurm`] (`sweep --slurm` and the hidden
+//! `sweep-merge`) shares. This module only declares [`slurm`]: `main` dispatches
+//! `sweep --slurm` there, and the child uses the parent's [`SweepArgs`], not the other
+//! way round.
 //!
 //! The layout of `results.csv` and `sweep.json` is documented in the `skg_sweep` crate;
 //! [`sweep_long_about`] is its summary in `skg-solve sweep --help`. In short: a
@@ -118,11 +122,9 @@ pub struct MergeArgs {
     pub partial: bool,
 }
 
+/// `skg-solve sweep FILE` without `--slurm`: the points in local worker processes.
 pub fn run(args: SweepArgs) -> Result<ExitCode> {
     let file = sweep::SweepFile::load(&args.sweep)?;
-    if args.slurm {
-        return slurm::run(&args, &file);
-    }
     let opts = sweep::SweepOptions {
         out_dir: args.output.unwrap_or_else(|| sweep::default_out_dir(&file)),
         jobs: args.jobs.unwrap_or_else(sweep::default_jobs).max(1),
@@ -169,13 +171,6 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
 
 pub fn run_worker(work: &Path) -> Result<ExitCode> {
     sweep::serve_points(work, std::io::stdin().lock())?;
-    Ok(ExitCode::SUCCESS)
-}
-
-/// `skg-solve sweep-merge DIR` (hidden): the merge job of a sweep on Slurm.
-pub fn run_merge_shards(dir: &Path) -> Result<ExitCode> {
-    let r = sweep::shards::merge_shards(dir)?;
-    println!("merged {} rows into {}: every point of the sweep ({}) is present", r.rows, dir.join("results.csv").display(), r.total);
     Ok(ExitCode::SUCCESS)
 }
 

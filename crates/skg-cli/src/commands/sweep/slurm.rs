@@ -1,6 +1,9 @@
 //! `skg-solve sweep FILE --slurm -o DIR`: the sweep's shards as a Slurm job array and a
-//! merge job after it (`skg_sweep::slurm`), and `--wait` for the merge.
+//! merge job after it (`skg_sweep::slurm`), `--wait` for the merge, and the hidden
+//! `sweep-merge DIR` that the merge job runs. Uses its parent's [`SweepArgs`]; `status`
+//! uses [`incomplete_text`].
 
+use std::path::Path;
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
@@ -14,7 +17,10 @@ use super::SweepArgs;
 /// Exit status of a command-line usage error.
 const EXIT_USAGE: u8 = 2;
 
-pub fn run(args: &SweepArgs, file: &sweep::SweepFile) -> Result<ExitCode> {
+/// `skg-solve sweep FILE --slurm`: write the scripts, submit them, and with `--wait`
+/// wait for the merge.
+pub fn run(args: SweepArgs) -> Result<ExitCode> {
+    let file = &sweep::SweepFile::load(&args.sweep)?;
     let out = args.output.clone().unwrap_or_else(|| sweep::default_out_dir(file));
     let exe = std::env::current_exe().context("locating the skg-solve executable for the jobs")?;
     // The same checks as a local run: every point valid, --yes above 10000 points.
@@ -78,6 +84,13 @@ pub fn run(args: &SweepArgs, file: &sweep::SweepFile) -> Result<ExitCode> {
     }
     let outcome = slurm::wait_for_merge(report.array_job.as_deref(), &merge, |line| eprintln!("  {line}"))?;
     finish(&report, outcome.merge.as_ref())
+}
+
+/// `skg-solve sweep-merge DIR` (hidden): the merge job of a sweep on Slurm.
+pub fn run_merge_job(dir: &Path) -> Result<ExitCode> {
+    let r = shards::merge_shards(dir)?;
+    println!("merged {} rows into {}: every point of the sweep ({}) is present", r.rows, dir.join("results.csv").display(), r.total);
+    Ok(ExitCode::SUCCESS)
 }
 
 /// `shards 1-4 (4 of 4) and their merge`, or `the merge of the complete shards`.
