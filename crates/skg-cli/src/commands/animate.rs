@@ -96,9 +96,6 @@ pub struct AnimateArgs {
     /// [default: 5].
     #[arg(long, value_name = "K")]
     pub strip: Option<usize>,
-    /// No progress bar, no summary line.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), ArgError> {
@@ -111,7 +108,7 @@ fn parse_size(s: &str) -> Result<(u32, u32), ArgError> {
     Ok((w, h))
 }
 
-pub fn run(args: AnimateArgs) -> Result<ExitCode> {
+pub fn run(args: AnimateArgs, quiet: bool) -> Result<ExitCode> {
     let format = Format::of(&args.output)?;
     // What is asked for, checked before anything is read or drawn: a usage error (exit
     // status 2), as clap's own. An option the format does not use is refused, not ignored.
@@ -139,7 +136,7 @@ pub fn run(args: AnimateArgs) -> Result<ExitCode> {
     let written = if format == Format::Png {
         motion::strip(&m, &view, strip, args.size, &args.output)?
     } else {
-        let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(frames as u64) };
+        let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(frames as u64) };
         bar.set_style(
             ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {elapsed} (ETA {eta})")
                 .expect("valid template")
@@ -151,7 +148,7 @@ pub fn run(args: AnimateArgs) -> Result<ExitCode> {
         bar.finish_and_clear();
         written?
     };
-    if !args.quiet {
+    if !quiet {
         println!("wrote {}", written.display());
     }
     Ok(ExitCode::SUCCESS)

@@ -122,13 +122,14 @@ const HEADER: [&str; 15] = [
 const CSV_HEADER: &str =
     "nodes,variables,jacobian_nonzeros,backend,iterations,result,solved_as,setup_s,guess_s,evaluation_s,solver_internal_s,total_s,us_per_node,verify_s,peak_mib";
 
-pub fn run(args: BenchArgs) -> Result<ExitCode> {
+pub fn run(args: BenchArgs, quiet: bool) -> Result<ExitCode> {
     // The CSV's directory is made before the solves, so that a path that cannot be
     // written fails at once, not after minutes of solving.
     if let Some(dir) = args.csv.as_deref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let bar = indicatif::ProgressBar::new(args.nodes.len() as u64 * u64::from(args.repeat));
+    let solves = args.nodes.len() as u64 * u64::from(args.repeat);
+    let bar = if quiet { indicatif::ProgressBar::hidden() } else { indicatif::ProgressBar::new(solves) };
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} solves, {elapsed} elapsed, ETA {eta} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
@@ -153,13 +154,15 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         rows.push(best.expect("at least one repetition"));
     }
     bar.finish_and_clear();
-    println!("| {} |", HEADER.join(" | "));
-    println!(
-        "|{}",
-        HEADER.iter().map(|h| if matches!(*h, "backend" | "result" | "solved as") { ":---:|" } else { "---:|" }).collect::<String>()
-    );
-    for row in &rows {
-        println!("| {} |", row.cells().join(" | "));
+    if !quiet {
+        println!("| {} |", HEADER.join(" | "));
+        println!(
+            "|{}",
+            HEADER.iter().map(|h| if matches!(*h, "backend" | "result" | "solved as") { ":---:|" } else { "---:|" }).collect::<String>()
+        );
+        for row in &rows {
+            println!("| {} |", row.cells().join(" | "));
+        }
     }
     if let Some(path) = &args.csv {
         let mut text = format!("{CSV_HEADER}\n");

@@ -38,9 +38,6 @@ pub struct CheckArgs {
     /// JSON report [default: <SOLUTION without .csv>.check.json].
     #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
-    /// Print only errors and exceeded tolerances.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 /// A tolerance from the command line: a number ≥ 0 (NaN would silently pass every
@@ -64,7 +61,7 @@ struct CheckReport<'a> {
     comparison: &'a check::Comparison,
 }
 
-pub fn run(args: CheckArgs) -> Result<ExitCode> {
+pub fn run(args: CheckArgs, quiet: bool) -> Result<ExitCode> {
     let (solution, pairing) = Table::read_paired(&args.solution)?;
     if let Some(w) = pairing.warning(&args.solution) {
         eprintln!("warning: {w}");
@@ -96,7 +93,7 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
         comparison: &cmp,
     };
     output::write_json(&json, &report)?;
-    if !args.quiet {
+    if !quiet {
         println!("| column | max abs error | at t | RMS error |");
         println!("|---|---:|---:|---:|");
         for c in &cmp.columns {

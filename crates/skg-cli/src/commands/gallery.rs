@@ -30,9 +30,6 @@ pub struct GalleryArgs {
     /// Frames in each strip.
     #[arg(long, default_value_t = 5, value_name = "K")]
     pub strip: usize,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 /// One scene's entry.
@@ -64,7 +61,7 @@ fn duration(s: f64) -> String {
     }
 }
 
-pub fn run(args: GalleryArgs) -> Result<ExitCode> {
+pub fn run(args: GalleryArgs, quiet: bool) -> Result<ExitCode> {
     let scenes = if args.scenes.is_empty() {
         let mut v: Vec<PathBuf> = std::fs::read_dir("scenarios")
             .context("reading scenarios/ (run from the repository root, or name the scenes)")?
@@ -86,7 +83,7 @@ pub fn run(args: GalleryArgs) -> Result<ExitCode> {
     let img_dir = page_dir.join("img").join("gallery");
     // One gallery at a time writes these pictures (and the page beside them).
     let _lock = output::OutputDir::lock(&img_dir)?;
-    let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(scenes.len() as u64) };
+    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(scenes.len() as u64) };
     bar.set_style(
         ProgressStyle::with_template("{msg:30} [{bar:30}] {pos}/{len} scenes, {elapsed}").expect("valid template").progress_chars("=> "),
     );
@@ -130,7 +127,7 @@ pub fn run(args: GalleryArgs) -> Result<ExitCode> {
     bar.finish_and_clear();
     let page = markdown(&entries, &page_dir, args.strip);
     output::write_atomic(&args.output, |w| w.write_all(page.as_bytes())).context("writing the gallery")?;
-    if !args.quiet {
+    if !quiet {
         println!("wrote {} and {} images in {}", args.output.display(), 2 * entries.len(), img_dir.display());
     }
     Ok(ExitCode::SUCCESS)

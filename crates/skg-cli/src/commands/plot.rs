@@ -104,7 +104,7 @@ pub struct ResultsPlotArgs {
     pub title: Option<String>,
 }
 
-pub fn run(kind: PlotKind) -> Result<ExitCode> {
+pub fn run(kind: PlotKind, quiet: bool) -> Result<ExitCode> {
     let parse_filters = |f: &[String]| -> Result<Vec<(String, String)>> {
         f.iter()
             .map(|s| {
@@ -176,8 +176,10 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
             plot::trajectory(&sols, r.as_ref(), &title, &out)?
         }
     };
-    for w in written {
-        println!("wrote {}", w.display());
+    if !quiet {
+        for w in written {
+            println!("wrote {}", w.display());
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

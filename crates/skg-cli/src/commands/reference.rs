@@ -42,12 +42,9 @@ pub struct ReferenceArgs {
     /// Set a scene parameter, e.g. `--set sigma=1/200` (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Print only errors.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
-pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
+pub fn run(args: ReferenceArgs, quiet: bool) -> Result<ExitCode> {
     let mut set = Vec::new();
     for a in &args.set {
         set.push(Overrides::parse_assignment(a)?);
@@ -77,7 +74,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         PathBuf::from("out").join(stem).join(if args.hard_walls { "reference.hard.csv" } else { "reference.regularized.csv" })
     });
     output::write_reference(&out, &scene, &args.scenario.display().to_string(), &r)?;
-    if !args.quiet {
+    if !quiet {
         println!(
             "{}: {} reference, {} samples, {} steps ({} rejected), max |g| {:.1e}, max |E - E0| {:.3e}{}",
             scene.name,

@@ -42,9 +42,6 @@ pub struct SolveArgs {
     /// checked between attempts: the best attempt so far is then reported.
     #[arg(long, value_name = "SECONDS", value_parser = super::positive)]
     pub time_limit: Option<f64>,
-    /// Print only errors.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 /// The backend that finished, for the summary line: `Ipopt`, `Newton`, or
@@ -57,7 +54,7 @@ fn solver_name(outcome: &solve::Outcome) -> &'static str {
     }
 }
 
-pub fn run(args: SolveArgs) -> Result<ExitCode> {
+pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
     let path = args.scenario.expect("clap requires the scenario");
     let mut ov = args.scene.overrides(args.nodes)?;
     ov.refine = args.refine;
@@ -71,10 +68,10 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
-    let spinner = progress_spinner(args.quiet, &scene.name);
+    let spinner = progress_spinner(quiet, &scene.name);
     // On a terminal the spinner names the attempt under way; elsewhere (a log, a pipe,
     // a batch job) one plain line per attempt, so that a long solve is not silent.
-    let lines = !args.quiet && !std::io::stderr().is_terminal();
+    let lines = !quiet && !std::io::stderr().is_terminal();
     let name = scene.name.clone();
     let started = std::time::Instant::now();
     let solved = output::solve_into_with_progress(&dir, &mut scene, &mut |attempt| {
@@ -89,8 +86,8 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         eprintln!("warning: {w}");
     }
     let v = &outcome.verification;
-    print_attempts(&outcome, args.quiet);
-    print_refinement(&outcome, args.quiet);
+    print_attempts(&outcome, quiet);
+    print_refinement(&outcome, quiet);
     if !outcome.converged() {
         eprintln!(
             "error: {}: the solve did not converge: {} ({} iterations, residual {:.3e}); summary in {}",
@@ -117,7 +114,7 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
         print_remedy(&outcome);
         return Ok(ExitCode::from(EXIT_NOT_VERIFIED));
     }
-    if !args.quiet {
+    if !quiet {
         let d = &outcome.diagnostics;
         println!(
             "{}: converged in {} {} iterations ({}), {} {} N={}{}, {:.3} s",

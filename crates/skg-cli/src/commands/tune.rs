@@ -41,7 +41,7 @@ pub struct TuneArgs {
     pub scene: SceneArgs,
 }
 
-pub fn run(args: TuneArgs) -> Result<ExitCode> {
+pub fn run(args: TuneArgs, quiet: bool) -> Result<ExitCode> {
     let ov = args.scene.overrides(args.nodes)?;
     let file = SceneFile::load(&args.scenario)?;
     let opts = skg_core::tune::TuneOptions {
@@ -53,6 +53,9 @@ pub fn run(args: TuneArgs) -> Result<ExitCode> {
         ..Default::default()
     };
     let r = skg_core::tune::tune_width(&file, &ov, &opts, |s| {
+        if quiet {
+            return;
+        }
         eprintln!(
             "  {:.6e}: {} artifact {:.3e} → {} ({:.2} s)",
             s.value,
@@ -65,6 +68,11 @@ pub fn run(args: TuneArgs) -> Result<ExitCode> {
     for n in &r.notes {
         eprintln!("note: {n}");
     }
+    let out = args.output.unwrap_or_else(|| skg_core::tune::default_output(&args.scenario));
+    output::write_json(&out, &r)?;
+    if quiet {
+        return Ok(ExitCode::SUCCESS);
+    }
     println!(
         "{} = {:.6e} (1/{:.1}): the smallest value without energy artifacts above {:e} at N = {}{}",
         r.param,
@@ -74,8 +82,6 @@ pub fn run(args: TuneArgs) -> Result<ExitCode> {
         r.nodes,
         r.failing.map_or(String::new(), |f| format!("; {:.6e} (1/{:.1}) has artifacts", f, 1.0 / f))
     );
-    let out = args.output.unwrap_or_else(|| skg_core::tune::default_output(&args.scenario));
-    output::write_json(&out, &r)?;
     println!("  wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -67,9 +67,6 @@ pub struct SweepArgs {
     /// Run only the points whose index is k−1 mod n (1 ≤ k ≤ n), e.g. `--shard 3/8`.
     #[arg(long, value_name = "k/n")]
     pub shard: Option<sweep::Shard>,
-    /// No progress bar and no summary line.
-    #[arg(short, long)]
-    pub quiet: bool,
     /// Run again the points that did not converge in an earlier run (crashed, timed out,
     /// errors, not converged): their rows in results.csv are replaced.
     #[arg(long)]
@@ -123,19 +120,19 @@ pub struct MergeArgs {
 }
 
 /// `skg-solve sweep FILE` without `--slurm`: the points in local worker processes.
-pub fn run(args: SweepArgs) -> Result<ExitCode> {
+pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
     let file = sweep::SweepFile::load(&args.sweep)?;
     let opts = sweep::SweepOptions {
         out_dir: args.output.unwrap_or_else(|| sweep::default_out_dir(&file)),
         jobs: args.jobs.unwrap_or_else(sweep::default_jobs).max(1),
         shard: args.shard,
         worker_exe: std::env::current_exe().context("locating the skg-solve executable for the workers")?,
-        progress: !args.quiet,
+        progress: !quiet,
         retry_failed: args.retry_failed,
         new_results: args.new_results,
     };
     let plan = sweep::plan(&file, &opts, args.yes)?;
-    if !args.quiet {
+    if !quiet {
         eprintln!("{}", plan.text);
     }
     // SIGTERM (scancel, a Slurm time limit) and Ctrl-C stop the sweep between two rows;
@@ -148,7 +145,7 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
         }
         r => r?,
     };
-    if !args.quiet {
+    if !quiet {
         if let Some(old) = &r.superseded {
             println!("  moved the previous results to {}", old.display());
         }
@@ -174,16 +171,20 @@ pub fn run_worker(work: &Path) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-pub fn run_merge(args: MergeArgs) -> Result<ExitCode> {
+pub fn run_merge(args: MergeArgs, quiet: bool) -> Result<ExitCode> {
     let r = sweep::merge(&args.inputs, &args.output, args.partial)?;
-    println!(
-        "merged {} rows into {}{}",
-        r.rows,
-        args.output.join("results.csv").display(),
-        if r.duplicates > 0 { format!("; {} duplicate rows dropped", r.duplicates) } else { String::new() },
-    );
+    if !quiet {
+        println!(
+            "merged {} rows into {}{}",
+            r.rows,
+            args.output.join("results.csv").display(),
+            if r.duplicates > 0 { format!("; {} duplicate rows dropped", r.duplicates) } else { String::new() },
+        );
+    }
     if r.missing.is_empty() {
-        println!("every point of the sweep ({}) is present", r.total);
+        if !quiet {
+            println!("every point of the sweep ({}) is present", r.total);
+        }
     } else {
         eprintln!(
             "warning: {} of the sweep's {} points are missing (--partial): {}",

@@ -19,7 +19,7 @@ const EXIT_USAGE: u8 = 2;
 
 /// `skg-solve sweep FILE --slurm`: write the scripts, submit them, and with `--wait`
 /// wait for the merge.
-pub fn run(args: SweepArgs) -> Result<ExitCode> {
+pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
     let file = &sweep::SweepFile::load(&args.sweep)?;
     let out = args.output.clone().unwrap_or_else(|| sweep::default_out_dir(file));
     let exe = std::env::current_exe().context("locating the skg-solve executable for the jobs")?;
@@ -45,12 +45,17 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
     let name = &report.layout.name;
     let total = report.layout.total_points;
     if report.submitted.is_empty() && report.merged {
-        println!("{name}: every point of the sweep ({total}) is in {}: nothing to submit", report.dir.join("results.csv").display());
+        if !quiet {
+            println!("{name}: every point of the sweep ({total}) is in {}: nothing to submit", report.dir.join("results.csv").display());
+        }
         return Ok(ExitCode::SUCCESS);
     }
     let what = submitted_text(&report);
     for note in &report.notes {
         eprintln!("note: {note}");
+    }
+    if args.dry_run && quiet {
+        return Ok(ExitCode::SUCCESS);
     }
     if args.dry_run {
         println!(
@@ -65,6 +70,23 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
     }
     let merge = report.merge_job.clone().unwrap_or_default();
     let ids: Vec<String> = report.array_job.iter().cloned().chain([merge.clone()]).collect();
+    if !quiet {
+        print_submitted(&report, &what, &merge, &ids);
+    }
+    if !args.wait {
+        return Ok(ExitCode::SUCCESS);
+    }
+    let outcome = slurm::wait_for_merge(report.array_job.as_deref(), &merge, |line| {
+        if !quiet {
+            eprintln!("  {line}")
+        }
+    })?;
+    finish(&report, outcome.merge.as_ref(), quiet)
+}
+
+/// What was submitted, and how to follow it.
+fn print_submitted(report: &SubmitReport, what: &str, merge: &str, ids: &[String]) {
+    let (name, total) = (&report.layout.name, report.layout.total_points);
     println!(
         "{name}: {total} points in {} shards; submitted {what}: {}",
         report.layout.shards,
@@ -79,16 +101,14 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
         "  when the merge has ended, {} holds every point; if a shard did not finish, run the same command again: only the incomplete shards run",
         report.dir.join("results.csv").display()
     );
-    if !args.wait {
-        return Ok(ExitCode::SUCCESS);
-    }
-    let outcome = slurm::wait_for_merge(report.array_job.as_deref(), &merge, |line| eprintln!("  {line}"))?;
-    finish(&report, outcome.merge.as_ref())
 }
 
 /// `skg-solve sweep-merge DIR` (hidden): the merge job of a sweep on Slurm.
-pub fn run_merge_job(dir: &Path) -> Result<ExitCode> {
+pub fn run_merge_job(dir: &Path, quiet: bool) -> Result<ExitCode> {
     let r = shards::merge_shards(dir)?;
+    if quiet {
+        return Ok(ExitCode::SUCCESS);
+    }
     println!("merged {} rows into {}: every point of the sweep ({}) is present", r.rows, dir.join("results.csv").display(), r.total);
     Ok(ExitCode::SUCCESS)
 }
@@ -105,12 +125,15 @@ fn submitted_text(report: &SubmitReport) -> String {
 
 /// After the merge job of `--wait` has ended: 0 if DIR/results.csv holds every point,
 /// else 1 with the incomplete shards.
-fn finish(report: &SubmitReport, merge: Option<&slurm::JobState>) -> Result<ExitCode> {
+fn finish(report: &SubmitReport, merge: Option<&slurm::JobState>, quiet: bool) -> Result<ExitCode> {
     let dir = &report.dir;
     let merge_id = report.merge_job.as_deref().unwrap_or("?");
     let log = dir.join("slurm").join("logs").join(format!("merge-{merge_id}.out"));
     if shards::merged(dir) {
         let state = shards::results_state(dir)?;
+        if quiet {
+            return Ok(ExitCode::SUCCESS);
+        }
         println!(
             "merged: {} holds every point ({}): {} converged, {} failed",
             dir.join("results.csv").display(),
