@@ -21,8 +21,10 @@ pub mod sweep;
 pub mod tune;
 
 use std::path::Path;
+use std::str::FromStr;
 
 use anyhow::Result;
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 
 use skg_core::sbp::OperatorKind;
@@ -61,8 +63,8 @@ pub struct SceneArgs {
     pub initial_velocity: Option<InitialVelocity>,
     /// Hessian given to Ipopt: `zero` (default; the Newton step of a square system does
     /// not depend on it) or `exact` (reduced formulation only).
-    #[arg(long, value_enum, value_name = "MODE")]
-    pub hessian: Option<HessianArg>,
+    #[arg(long, value_name = "MODE", value_parser = by_name::<HessianMode>(HessianMode::ALL.map(HessianMode::name)))]
+    pub hessian: Option<HessianMode>,
     /// Maximum number of iterations (Ipopt's, or Newton's).
     #[arg(long, value_name = "N")]
     pub max_iter: Option<u32>,
@@ -105,7 +107,7 @@ pub enum OperatorArg {
     Named(OperatorKind),
 }
 
-impl std::str::FromStr for OperatorArg {
+impl FromStr for OperatorArg {
     type Err = skg_core::sbp::ParseOperatorKindError;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
@@ -114,12 +116,6 @@ impl std::str::FromStr for OperatorArg {
         }
         s.parse().map(OperatorArg::Named)
     }
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum HessianArg {
-    Zero,
-    Exact,
 }
 
 impl SceneArgs {
@@ -136,10 +132,7 @@ impl SceneArgs {
             auto_operator: matches!(self.operator, Some(OperatorArg::Auto)),
             formulation: self.formulation,
             initial_velocity: self.initial_velocity,
-            hessian: self.hessian.map(|h| match h {
-                HessianArg::Zero => HessianMode::Zero,
-                HessianArg::Exact => HessianMode::Exact,
-            }),
+            hessian: self.hessian,
             max_iter: self.max_iter,
             backend: self.backend,
             window: self.window,
@@ -184,6 +177,18 @@ pub enum ArgError {
     /// A picture size that is not `WIDTHxHEIGHT` within 64…4096.
     #[error("bad size `{0}`: expected WIDTHxHEIGHT, e.g. 640x480, each 64…4096")]
     Size(String),
+}
+
+/// The value parser of a setting that skg-core names (`--hessian`): one of `names` (the
+/// core's, listed as the possible values in `--help` and in clap's message for any other
+/// value), read by the core's `FromStr`, so that the command line and a scene file accept
+/// the same words.
+fn by_name<T>(names: impl IntoIterator<Item = &'static str>) -> impl TypedValueParser<Value = T>
+where
+    T: FromStr + Clone + Send + Sync + 'static,
+    T::Err: std::error::Error + Send + Sync + 'static,
+{
+    PossibleValuesParser::new(names).try_map(|name| name.parse::<T>())
 }
 
 /// A command-line number that must be finite and positive (a usage error otherwise).
