@@ -1,6 +1,7 @@
 //! Command-line interface of skg-solve.
 
 mod commands;
+mod stdio;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -92,7 +93,15 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    stdio::finish(run())
+}
+
+/// Parse the command line and run the command; its exit status, with an error printed.
+fn run() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return stdio::clap_message(&e),
+    };
     let quiet = cli.quiet;
     let result = match cli.command {
         Some(Command::Bench(a)) => bench::run(a, quiet),
@@ -113,7 +122,7 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {}", describe(&e));
+            stdio::note!("error: {}", describe(&e));
             match e.downcast_ref::<commands::UsageError>() {
                 Some(_) => ExitCode::from(2),
                 None => ExitCode::FAILURE,

@@ -12,6 +12,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use skg_plot::motion::{self, Aspect, Format, Frames, Motion, View};
 
 use super::{ArgError, UsageError};
+use crate::stdio::{note, out};
 
 /// What `plot path` and `animate` draw: a solution, its scene and the two axes.
 #[derive(Args)]
@@ -50,10 +51,10 @@ impl MotionArgs {
     pub fn load(&self) -> Result<(Motion, View)> {
         let m = Motion::load(&self.solution, self.scene.as_deref(), self.reference.as_deref())?;
         for w in &m.warnings {
-            eprintln!("warning: {w}");
+            note!("warning: {w}");
         }
         for n in &m.notes {
-            eprintln!("note: {n}");
+            note!("note: {n}");
         }
         let (dx, dy) = m.default_axes();
         let (x, y) = (self.x.clone().unwrap_or(dx), self.y.clone().unwrap_or(dy));
@@ -149,7 +150,7 @@ pub fn run(args: AnimateArgs, quiet: bool) -> Result<ExitCode> {
         written?
     };
     if !quiet {
-        println!("wrote {}", written.display());
+        out!("wrote {}", written.display());
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -12,6 +12,7 @@ use skg_core::solve::{self, Method, Outcome};
 use skg_core::stepping::verify::VerifyStatus;
 
 use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
+use crate::stdio::{note, out};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -155,13 +156,13 @@ pub fn run(args: BenchArgs, quiet: bool) -> Result<ExitCode> {
     }
     bar.finish_and_clear();
     if !quiet {
-        println!("| {} |", HEADER.join(" | "));
-        println!(
+        out!("| {} |", HEADER.join(" | "));
+        out!(
             "|{}",
             HEADER.iter().map(|h| if matches!(*h, "backend" | "result" | "solved as") { ":---:|" } else { "---:|" }).collect::<String>()
         );
         for row in &rows {
-            println!("| {} |", row.cells().join(" | "));
+            out!("| {} |", row.cells().join(" | "));
         }
     }
     if let Some(path) = &args.csv {
@@ -178,7 +179,7 @@ pub fn run(args: BenchArgs, quiet: bool) -> Result<ExitCode> {
     if untrusted.is_empty() {
         return Ok(ExitCode::SUCCESS);
     }
-    eprintln!(
+    note!(
         "warning: {}; their times are not those of a trustworthy solve (run the scene with `skg-solve` for the reason)",
         untrusted.join(", ")
     );

@@ -11,6 +11,7 @@ use skg_core::output;
 use skg_core::scene::readable_number;
 
 use super::EXIT_TOLERANCE_EXCEEDED;
+use crate::stdio::{note, out};
 
 #[derive(Args)]
 pub struct CheckArgs {
@@ -64,7 +65,7 @@ struct CheckReport<'a> {
 pub fn run(args: CheckArgs, quiet: bool) -> Result<ExitCode> {
     let (solution, pairing) = Table::read_paired(&args.solution)?;
     if let Some(w) = pairing.warning(&args.solution) {
-        eprintln!("warning: {w}");
+        note!("warning: {w}");
     }
     let reference = Table::read(&args.reference)?;
     let opts = CheckOptions { skip_last: args.skip_last, columns: args.columns.clone() };
@@ -94,25 +95,29 @@ pub fn run(args: CheckArgs, quiet: bool) -> Result<ExitCode> {
     };
     output::write_json(&json, &report)?;
     if !quiet {
-        println!("| column | max abs error | at t | RMS error |");
-        println!("|---|---:|---:|---:|");
+        out!("| column | max abs error | at t | RMS error |");
+        out!("|---|---:|---:|---:|");
         for c in &cmp.columns {
-            println!("| {} | {:.3e} | {} | {:.3e} |", c.column, c.max_abs, c.at_t, c.rms);
+            out!("| {} | {:.3e} | {} | {:.3e} |", c.column, c.max_abs, c.at_t, c.rms);
         }
-        println!(
+        out!(
             "{} rows compared ({} interpolated, last {} skipped); worst: {} {:.3e}",
-            cmp.rows_compared, cmp.rows_interpolated, cmp.skipped_last, cmp.worst_column, cmp.max_abs
+            cmp.rows_compared,
+            cmp.rows_interpolated,
+            cmp.skipped_last,
+            cmp.worst_column,
+            cmp.max_abs
         );
         if !cmp.missing_in_reference.is_empty() {
-            println!("not in the reference (not compared): {}", cmp.missing_in_reference.join(", "));
+            out!("not in the reference (not compared): {}", cmp.missing_in_reference.join(", "));
         }
-        println!("wrote {}", json.display());
+        out!("wrote {}", json.display());
     }
     if violations.is_empty() {
         Ok(ExitCode::SUCCESS)
     } else {
         for v in &violations {
-            eprintln!("tolerance exceeded: {v}");
+            note!("tolerance exceeded: {v}");
         }
         Ok(ExitCode::from(EXIT_TOLERANCE_EXCEEDED))
     }

@@ -18,6 +18,7 @@ use skg_core::{output, solve};
 use skg_plot::motion::{self, Aspect, Motion, View};
 
 use super::load;
+use crate::stdio::out;
 
 #[derive(Args)]
 pub struct GalleryArgs {
@@ -128,7 +129,7 @@ pub fn run(args: GalleryArgs, quiet: bool) -> Result<ExitCode> {
     let page = markdown(&entries, &page_dir, args.strip);
     output::write_atomic(&args.output, |w| w.write_all(page.as_bytes())).context("writing the gallery")?;
     if !quiet {
-        println!("wrote {} and {} images in {}", args.output.display(), 2 * entries.len(), img_dir.display());
+        out!("wrote {} and {} images in {}", args.output.display(), 2 * entries.len(), img_dir.display());
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
+use crate::stdio::{note, out};
 use skg_core::check::Table;
 use skg_plot as plot;
 use skg_sweep as sweep;
@@ -163,7 +164,7 @@ pub fn run(kind: PlotKind, quiet: bool) -> Result<ExitCode> {
                 let file = if p.is_dir() { p.join("trajectory.csv") } else { p.clone() };
                 let (t, pairing) = Table::read_paired(&file)?;
                 if let Some(w) = pairing.warning(&file) {
-                    eprintln!("warning: {w}");
+                    note!("warning: {w}");
                 }
                 let name = label.get(k).cloned().unwrap_or_else(|| {
                     let base = if p.is_dir() { p.as_path() } else { p.parent().unwrap_or(p) };
@@ -178,7 +179,7 @@ pub fn run(kind: PlotKind, quiet: bool) -> Result<ExitCode> {
     };
     if !quiet {
         for w in written {
-            println!("wrote {}", w.display());
+            out!("wrote {}", w.display());
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -13,6 +13,7 @@ use skg_core::solve;
 use skg_core::stepping::reference::{self, ReferenceError, ReferenceOptions};
 
 use super::load;
+use crate::stdio::out;
 
 #[derive(Args)]
 pub struct ReferenceArgs {
@@ -75,7 +76,7 @@ pub fn run(args: ReferenceArgs, quiet: bool) -> Result<ExitCode> {
     });
     output::write_reference(&out, &scene, &args.scenario.display().to_string(), &r)?;
     if !quiet {
-        println!(
+        out!(
             "{}: {} reference, {} samples, {} steps ({} rejected), max |g| {:.1e}, max |E - E0| {:.3e}{}",
             scene.name,
             r.kind,
@@ -86,7 +87,7 @@ pub fn run(args: ReferenceArgs, quiet: bool) -> Result<ExitCode> {
             r.energy_drift,
             if args.hard_walls { format!(", {} impacts", r.impacts.len()) } else { String::new() }
         );
-        println!("  wrote {}", out.display());
+        out!("  wrote {}", out.display());
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -14,6 +14,7 @@ use skg_core::stepping::verify::VerifyStatus;
 use skg_core::{output, solve};
 
 use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
+use crate::stdio::{note, out};
 
 #[derive(Args)]
 pub struct SolveArgs {
@@ -62,7 +63,7 @@ pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
     ov.time_limit = args.time_limit;
     let mut scene = load(&path, &ov)?;
     for n in &scene.notes {
-        eprintln!("note: {}: {n}", path.display());
+        note!("note: {}: {n}", path.display());
     }
     let dir = args.output.unwrap_or_else(|| {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
@@ -76,20 +77,20 @@ pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
     let started = std::time::Instant::now();
     let solved = output::solve_into_with_progress(&dir, &mut scene, &mut |attempt| {
         if lines {
-            eprintln!("{name}: {attempt} ({:.1} s)", started.elapsed().as_secs_f64());
+            note!("{name}: {attempt} ({:.1} s)", started.elapsed().as_secs_f64());
         }
         spinner.set_message(attempt.to_string())
     });
     spinner.finish_and_clear();
     let (outcome, written) = solved?;
     for w in &outcome.warnings {
-        eprintln!("warning: {w}");
+        note!("warning: {w}");
     }
     let v = &outcome.verification;
     print_attempts(&outcome, quiet);
     print_refinement(&outcome, quiet);
     if !outcome.converged() {
-        eprintln!(
+        note!(
             "error: {}: the solve did not converge: {} ({} iterations, residual {:.3e}); summary in {}",
             outcome.scene,
             outcome.status,
@@ -105,7 +106,7 @@ pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
             VerifyStatus::Unverified => "could not run",
             _ => "failed",
         };
-        eprintln!(
+        note!(
             "error: {}: the solve converged but its verification {verdict}: {}; summary in {}",
             outcome.scene,
             v.reason,
@@ -116,7 +117,7 @@ pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
     }
     if !quiet {
         let d = &outcome.diagnostics;
-        println!(
+        out!(
             "{}: converged in {} {} iterations ({}), {} {} N={}{}, {:.3} s",
             outcome.scene,
             outcome.iterations,
@@ -129,9 +130,9 @@ pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
             outcome.timings.total()
         );
         if let skg_core::solve::Method::Windows { .. } = outcome.method {
-            println!("  solved as {}", outcome.method);
+            out!("  solved as {}", outcome.method);
         }
-        println!("  verified: {} ({})", v.status, v.reason);
+        out!("  verified: {} ({})", v.status, v.reason);
         let energy_note = if d.depends_on_time {
             "; not conserved: the scene depends on t"
         } else if scene.has_non_conservative_forces() {
@@ -143,12 +144,12 @@ pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
             2 => "last two nodes excluded".to_string(),
             k => format!("last {k} nodes excluded: the end layer of {}", outcome.settings.operator),
         };
-        println!("  residual {:.1e}, energy drift {:.3e} ({excluded}{energy_note})", d.max_residual, d.energy_drift);
+        out!("  residual {:.1e}, energy drift {:.3e} ({excluded}{energy_note})", d.max_residual, d.energy_drift);
         for (name, drift) in &d.max_position_drift {
-            println!("  position constraint {name}: drift max |h| {drift:.1e}");
+            out!("  position constraint {name}: drift max |h| {drift:.1e}");
         }
         for path in written.paths() {
-            println!("  wrote {}", path.display());
+            out!("  wrote {}", path.display());
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -175,9 +176,9 @@ fn print_attempts(outcome: &solve::Outcome, quiet: bool) {
     if outcome.attempts.len() < 2 || (quiet && outcome.trusted()) {
         return;
     }
-    eprintln!("note: the scene's own solve was not trusted; the fallback ladder tried:");
+    note!("note: the scene's own solve was not trusted; the fallback ladder tried:");
     for (i, a) in outcome.attempts.iter().enumerate() {
-        eprintln!("  {}. {}{} ({:.2} s): {}", i + 1, a.method, if a.chosen { " [reported]" } else { "" }, a.wall_s, a.result);
+        note!("  {}. {}{} ({:.2} s): {}", i + 1, a.method, if a.chosen { " [reported]" } else { "" }, a.wall_s, a.result);
     }
 }
 
@@ -193,10 +194,10 @@ fn print_refinement(outcome: &solve::Outcome, quiet: bool) {
         (true, false) => "refined the grid",
         (false, _) => "chose the operator",
     };
-    eprintln!("note: {what} for the tolerance ({}):", r.tolerance);
+    note!("note: {what} for the tolerance ({}):", r.tolerance);
     for (i, g) in r.grids.iter().enumerate() {
         let ratio = |x: Option<f64>| x.map_or("–".to_string(), |x| format!("{x:.2}"));
-        eprintln!(
+        note!(
             "  {}. {} ({}) on {} nodes: {} (error/tolerance {}, predicted {}) ({:.2} s)",
             i + 1,
             g.operator,
@@ -208,12 +209,12 @@ fn print_refinement(outcome: &solve::Outcome, quiet: bool) {
             g.wall_s
         );
     }
-    eprintln!("  {}", r.result);
+    note!("  {}", r.result);
 }
 
 /// Print what to do about a result that cannot be trusted.
 fn print_remedy(outcome: &solve::Outcome) {
     if let Some(r) = &outcome.remedy {
-        eprintln!("  remedy: {r}");
+        note!("  remedy: {r}");
     }
 }

@@ -9,6 +9,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Result};
 use clap::Args;
 
+use crate::stdio::out;
 use skg_sweep::shards::{self, ShardLayout, ShardState};
 use skg_sweep::slurm::{self, JobState, JobsFile};
 use skg_sweep::SweepInfo;
@@ -29,7 +30,7 @@ pub fn run(args: StatusArgs, quiet: bool) -> Result<ExitCode> {
     };
     if !quiet {
         for line in lines {
-            println!("{line}");
+            out!("{line}");
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -10,6 +10,7 @@ use skg_core::output;
 use skg_core::scene::SceneFile;
 
 use super::SceneArgs;
+use crate::stdio::{note, out};
 
 #[derive(Args)]
 pub struct TuneArgs {
@@ -56,7 +57,7 @@ pub fn run(args: TuneArgs, quiet: bool) -> Result<ExitCode> {
         if quiet {
             return;
         }
-        eprintln!(
+        note!(
             "  {:.6e}: {} artifact {:.3e} → {} ({:.2} s)",
             s.value,
             if s.status.is_converged() { "converged," } else { "not converged," },
@@ -66,14 +67,14 @@ pub fn run(args: TuneArgs, quiet: bool) -> Result<ExitCode> {
         );
     })?;
     for n in &r.notes {
-        eprintln!("note: {n}");
+        note!("note: {n}");
     }
     let out = args.output.unwrap_or_else(|| skg_core::tune::default_output(&args.scenario));
     output::write_json(&out, &r)?;
     if quiet {
         return Ok(ExitCode::SUCCESS);
     }
-    println!(
+    out!(
         "{} = {:.6e} (1/{:.1}): the smallest value without energy artifacts above {:e} at N = {}{}",
         r.param,
         r.chosen,
@@ -82,6 +83,6 @@ pub fn run(args: TuneArgs, quiet: bool) -> Result<ExitCode> {
         r.nodes,
         r.failing.map_or(String::new(), |f| format!("; {:.6e} (1/{:.1}) has artifacts", f, 1.0 / f))
     );
-    println!("  wrote {}", out.display());
+    out!("  wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -16,6 +16,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Args;
 
+use crate::stdio::{note, out};
 use skg_sweep as sweep;
 
 pub mod slurm;
@@ -133,23 +134,23 @@ pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
     };
     let plan = sweep::plan(&file, &opts, args.yes)?;
     if !quiet {
-        eprintln!("{}", plan.text);
+        note!("{}", plan.text);
     }
     // SIGTERM (scancel, a Slurm time limit) and Ctrl-C stop the sweep between two rows;
     // then this process dies of the same signal.
     sweep::stop_on_signals();
     let r = match sweep::run_sweep(&file, &plan.expanded, &opts) {
         Err(e @ sweep::SweepError::Stopped { signal, .. }) => {
-            eprintln!("{e}");
+            note!("{e}");
             sweep::die_of(signal)
         }
         r => r?,
     };
     if !quiet {
         if let Some(old) = &r.superseded {
-            println!("  moved the previous results to {}", old.display());
+            out!("  moved the previous results to {}", old.display());
         }
-        println!(
+        out!(
             "{}: {} points{}, {} already done, {} run ({} failed) with {} worker(s) in {:.1} s{}",
             file.name(),
             r.total,
@@ -161,7 +162,7 @@ pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
             r.wall_s,
             if r.duplicates > 0 { format!("; {} duplicate points dropped", r.duplicates) } else { String::new() }
         );
-        println!("  wrote {}", r.results.display());
+        out!("  wrote {}", r.results.display());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -174,7 +175,7 @@ pub fn run_worker(work: &Path) -> Result<ExitCode> {
 pub fn run_merge(args: MergeArgs, quiet: bool) -> Result<ExitCode> {
     let r = sweep::merge(&args.inputs, &args.output, args.partial)?;
     if !quiet {
-        println!(
+        out!(
             "merged {} rows into {}{}",
             r.rows,
             args.output.join("results.csv").display(),
@@ -183,15 +184,10 @@ pub fn run_merge(args: MergeArgs, quiet: bool) -> Result<ExitCode> {
     }
     if r.missing.is_empty() {
         if !quiet {
-            println!("every point of the sweep ({}) is present", r.total);
+            out!("every point of the sweep ({}) is present", r.total);
         }
     } else {
-        eprintln!(
-            "warning: {} of the sweep's {} points are missing (--partial): {}",
-            r.missing.len(),
-            r.total,
-            sweep::list_points(&r.missing)
-        );
+        note!("warning: {} of the sweep's {} points are missing (--partial): {}", r.missing.len(), r.total, sweep::list_points(&r.missing));
     }
     Ok(ExitCode::SUCCESS)
 }

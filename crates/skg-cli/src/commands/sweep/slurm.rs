@@ -13,6 +13,7 @@ use skg_sweep::shards::{self, ShardLayout, ShardState};
 use skg_sweep::slurm::{self, SubmitOptions, SubmitReport};
 
 use super::SweepArgs;
+use crate::stdio::{note, out};
 
 /// Exit status of a command-line usage error.
 const EXIT_USAGE: u8 = 2;
@@ -37,7 +38,7 @@ pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
     let opts = SubmitOptions { shards: args.shards.map(|k| k as usize), sbatch_args: args.sbatch_args.clone(), exe, dry_run: args.dry_run };
     let report = match slurm::submit(file, &plan.expanded, &out, &opts) {
         Err(e) if e.is_usage() => {
-            eprintln!("error: {e}");
+            note!("error: {e}");
             return Ok(ExitCode::from(EXIT_USAGE));
         }
         r => r?,
@@ -46,25 +47,25 @@ pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
     let total = report.layout.total_points;
     if report.submitted.is_empty() && report.merged {
         if !quiet {
-            println!("{name}: every point of the sweep ({total}) is in {}: nothing to submit", report.dir.join("results.csv").display());
+            out!("{name}: every point of the sweep ({total}) is in {}: nothing to submit", report.dir.join("results.csv").display());
         }
         return Ok(ExitCode::SUCCESS);
     }
     let what = submitted_text(&report);
     for note in &report.notes {
-        eprintln!("note: {note}");
+        note!("note: {note}");
     }
     if args.dry_run && quiet {
         return Ok(ExitCode::SUCCESS);
     }
     if args.dry_run {
-        println!(
+        out!(
             "{name}: {total} points in {} shards; would submit {what} (dry run: nothing submitted). Scripts in {}:",
             report.layout.shards,
             report.dir.join("slurm").display()
         );
         for c in &report.commands {
-            println!("  {c}");
+            out!("  {c}");
         }
         return Ok(ExitCode::SUCCESS);
     }
@@ -78,7 +79,7 @@ pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
     }
     let outcome = slurm::wait_for_merge(report.array_job.as_deref(), &merge, |line| {
         if !quiet {
-            eprintln!("  {line}")
+            note!("  {line}")
         }
     })?;
     finish(&report, outcome.merge.as_ref(), quiet)
@@ -87,7 +88,7 @@ pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
 /// What was submitted, and how to follow it.
 fn print_submitted(report: &SubmitReport, what: &str, merge: &str, ids: &[String]) {
     let (name, total) = (&report.layout.name, report.layout.total_points);
-    println!(
+    out!(
         "{name}: {total} points in {} shards; submitted {what}: {}",
         report.layout.shards,
         match &report.array_job {
@@ -95,9 +96,9 @@ fn print_submitted(report: &SubmitReport, what: &str, merge: &str, ids: &[String
             None => format!("merge job {merge}"),
         }
     );
-    println!("  scripts and logs: {}", report.dir.join("slurm").display());
-    println!("  follow them: squeue -j {}   or   skg-solve status {}", ids.join(","), report.dir.display());
-    println!(
+    out!("  scripts and logs: {}", report.dir.join("slurm").display());
+    out!("  follow them: squeue -j {}   or   skg-solve status {}", ids.join(","), report.dir.display());
+    out!(
         "  when the merge has ended, {} holds every point; if a shard did not finish, run the same command again: only the incomplete shards run",
         report.dir.join("results.csv").display()
     );
@@ -109,7 +110,7 @@ pub fn run_merge_job(dir: &Path, quiet: bool) -> Result<ExitCode> {
     if quiet {
         return Ok(ExitCode::SUCCESS);
     }
-    println!("merged {} rows into {}: every point of the sweep ({}) is present", r.rows, dir.join("results.csv").display(), r.total);
+    out!("merged {} rows into {}: every point of the sweep ({}) is present", r.rows, dir.join("results.csv").display(), r.total);
     Ok(ExitCode::SUCCESS)
 }
 
@@ -134,7 +135,7 @@ fn finish(report: &SubmitReport, merge: Option<&slurm::JobState>, quiet: bool) -
         if quiet {
             return Ok(ExitCode::SUCCESS);
         }
-        println!(
+        out!(
             "merged: {} holds every point ({}): {} converged, {} failed",
             dir.join("results.csv").display(),
             state.points,
@@ -144,7 +145,7 @@ fn finish(report: &SubmitReport, merge: Option<&slurm::JobState>, quiet: bool) -
         return Ok(ExitCode::SUCCESS);
     }
     let states = shards::shard_states(dir, &report.layout)?;
-    eprintln!(
+    note!(
         "error: the merge job {merge_id} ended ({}) without merging: {}; its log: {}. Run the same command again to submit the incomplete shards (they resume)",
         merge.map_or("state no longer known to Slurm".into(), |s| s.state.clone()),
         incomplete_text(&report.layout, &states),
