@@ -69,17 +69,7 @@ pub fn run(args: CheckArgs, quiet: bool) -> Result<ExitCode> {
     }
     let reference = Table::read(&args.reference)?;
     let opts = CheckOptions { skip_last: args.skip_last, columns: args.columns.clone() };
-    let mut per_column = Vec::new();
-    for a in &args.tol_column {
-        let (name, value) = a.split_once('=').with_context(|| format!("--tol-column `{a}`: expected COLUMN=TOL"))?;
-        let v: f64 = value.trim().parse().with_context(|| format!("--tol-column `{a}`: `{value}` is not a number"))?;
-        per_column.push((name.trim().to_string(), tolerance(&format!("--tol-column {a}"), v)?));
-    }
-    let tol = Tolerances {
-        max_abs: args.tol.map(|t| tolerance("--tol", t)).transpose()?,
-        rms: args.tol_rms.map(|t| tolerance("--tol-rms", t)).transpose()?,
-        per_column,
-    };
+    let tol = tolerances(&args)?;
     let cmp = check::compare(&solution, &reference, &opts)
         .with_context(|| format!("comparing {} with {}", args.solution.display(), args.reference.display()))?;
     let violations = cmp.violations(&tol)?;
@@ -95,22 +85,7 @@ pub fn run(args: CheckArgs, quiet: bool) -> Result<ExitCode> {
     };
     output::write_json(&json, &report)?;
     if !quiet {
-        out!("| column | max abs error | at t | RMS error |");
-        out!("|---|---:|---:|---:|");
-        for c in &cmp.columns {
-            out!("| {} | {:.3e} | {} | {:.3e} |", c.column, c.max_abs, c.at_t, c.rms);
-        }
-        out!(
-            "{} rows compared ({} interpolated, last {} skipped); worst: {} {:.3e}",
-            cmp.rows_compared,
-            cmp.rows_interpolated,
-            cmp.skipped_last,
-            cmp.worst_column,
-            cmp.max_abs
-        );
-        if !cmp.missing_in_reference.is_empty() {
-            out!("not in the reference (not compared): {}", cmp.missing_in_reference.join(", "));
-        }
+        print_comparison(&cmp);
         out!("wrote {}", json.display());
     }
     if violations.is_empty() {
@@ -120,5 +95,41 @@ pub fn run(args: CheckArgs, quiet: bool) -> Result<ExitCode> {
             note!("tolerance exceeded: {v}");
         }
         Ok(ExitCode::from(EXIT_TOLERANCE_EXCEEDED))
+    }
+}
+
+/// `--tol`, `--tol-rms` and each `--tol-column COLUMN=TOL`, each a number ≥ 0.
+fn tolerances(args: &CheckArgs) -> Result<Tolerances> {
+    let mut per_column = Vec::new();
+    for a in &args.tol_column {
+        let (name, value) = a.split_once('=').with_context(|| format!("--tol-column `{a}`: expected COLUMN=TOL"))?;
+        let v: f64 = value.trim().parse().with_context(|| format!("--tol-column `{a}`: `{value}` is not a number"))?;
+        per_column.push((name.trim().to_string(), tolerance(&format!("--tol-column {a}"), v)?));
+    }
+    Ok(Tolerances {
+        max_abs: args.tol.map(|t| tolerance("--tol", t)).transpose()?,
+        rms: args.tol_rms.map(|t| tolerance("--tol-rms", t)).transpose()?,
+        per_column,
+    })
+}
+
+/// The comparison on stdout: a Markdown table of each column's errors, the rows compared
+/// and the worst column, and the columns the reference lacks.
+fn print_comparison(cmp: &check::Comparison) {
+    out!("| column | max abs error | at t | RMS error |");
+    out!("|---|---:|---:|---:|");
+    for c in &cmp.columns {
+        out!("| {} | {:.3e} | {} | {:.3e} |", c.column, c.max_abs, c.at_t, c.rms);
+    }
+    out!(
+        "{} rows compared ({} interpolated, last {} skipped); worst: {} {:.3e}",
+        cmp.rows_compared,
+        cmp.rows_interpolated,
+        cmp.skipped_last,
+        cmp.worst_column,
+        cmp.max_abs
+    );
+    if !cmp.missing_in_reference.is_empty() {
+        out!("not in the reference (not compared): {}", cmp.missing_in_reference.join(", "));
     }
 }

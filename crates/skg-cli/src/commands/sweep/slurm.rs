@@ -13,66 +13,36 @@ use skg_sweep::shards::{self, ShardLayout, ShardState};
 use skg_sweep::slurm::{self, SubmitOptions, SubmitReport};
 
 use super::SweepArgs;
+use crate::commands::UsageError;
 use crate::stdio::{note, out};
-
-/// Exit status of a command-line usage error.
-const EXIT_USAGE: u8 = 2;
 
 /// `skg-solve sweep FILE --slurm`: write the scripts, submit them, and with `--wait`
 /// wait for the merge.
 pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
-    let file = &sweep::SweepFile::load(&args.sweep)?;
-    let out = args.output.clone().unwrap_or_else(|| sweep::default_out_dir(file));
-    let exe = std::env::current_exe().context("locating the skg-solve executable for the jobs")?;
-    // The same checks as a local run: every point valid, --yes above 10000 points.
-    let plan_opts = sweep::SweepOptions {
-        out_dir: out.clone(),
-        jobs: 1,
-        shard: None,
-        worker_exe: exe.clone(),
-        progress: false,
-        retry_failed: false,
-        new_results: false,
-    };
-    let plan = sweep::plan(file, &plan_opts, args.yes)?;
-    let opts = SubmitOptions { shards: args.shards.map(|k| k as usize), sbatch_args: args.sbatch_args.clone(), exe, dry_run: args.dry_run };
-    let report = match slurm::submit(file, &plan.expanded, &out, &opts) {
-        Err(e) if e.is_usage() => {
-            note!("error: {e}");
-            return Ok(ExitCode::from(EXIT_USAGE));
-        }
-        r => r?,
-    };
-    let name = &report.layout.name;
-    let total = report.layout.total_points;
+    let report = submit(&args)?;
     if report.submitted.is_empty() && report.merged {
         if !quiet {
-            out!("{name}: every point of the sweep ({total}) is in {}: nothing to submit", report.dir.join("results.csv").display());
+            out!(
+                "{}: every point of the sweep ({}) is in {}: nothing to submit",
+                report.layout.name,
+                report.layout.total_points,
+                report.dir.join("results.csv").display()
+            );
         }
         return Ok(ExitCode::SUCCESS);
     }
-    let what = submitted_text(&report);
     for note in &report.notes {
         note!("note: {note}");
     }
-    if args.dry_run && quiet {
-        return Ok(ExitCode::SUCCESS);
-    }
     if args.dry_run {
-        out!(
-            "{name}: {total} points in {} shards; would submit {what} (dry run: nothing submitted). Scripts in {}:",
-            report.layout.shards,
-            report.dir.join("slurm").display()
-        );
-        for c in &report.commands {
-            out!("  {c}");
+        if !quiet {
+            print_dry_run(&report);
         }
         return Ok(ExitCode::SUCCESS);
     }
     let merge = report.merge_job.clone().unwrap_or_default();
-    let ids: Vec<String> = report.array_job.iter().cloned().chain([merge.clone()]).collect();
     if !quiet {
-        print_submitted(&report, &what, &merge, &ids);
+        print_submitted(&report, &merge);
     }
     if !args.wait {
         return Ok(ExitCode::SUCCESS);
@@ -85,12 +55,54 @@ pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
     finish(&report, outcome.merge.as_ref(), quiet)
 }
 
-/// What was submitted, and how to follow it.
-fn print_submitted(report: &SubmitReport, what: &str, merge: &str, ids: &[String]) {
-    let (name, total) = (&report.layout.name, report.layout.total_points);
+/// Check the sweep as a local run would (every point valid, --yes above 10000 points),
+/// write the scripts and submit the incomplete shards (or, with --dry-run, only say
+/// how). An sbatch argument that skg-solve sets itself is a usage error.
+fn submit(args: &SweepArgs) -> Result<SubmitReport> {
+    let file = &sweep::SweepFile::load(&args.sweep)?;
+    let out = args.output.clone().unwrap_or_else(|| sweep::default_out_dir(file));
+    let exe = std::env::current_exe().context("locating the skg-solve executable for the jobs")?;
+    let plan_opts = sweep::SweepOptions {
+        out_dir: out.clone(),
+        jobs: 1,
+        shard: None,
+        worker_exe: exe.clone(),
+        progress: false,
+        retry_failed: false,
+        new_results: false,
+    };
+    let plan = sweep::plan(file, &plan_opts, args.yes)?;
+    let opts = SubmitOptions { shards: args.shards.map(|k| k as usize), sbatch_args: args.sbatch_args.clone(), exe, dry_run: args.dry_run };
+    match slurm::submit(file, &plan.expanded, &out, &opts) {
+        Err(e) if e.is_usage() => Err(UsageError(e.to_string()).into()),
+        r => Ok(r?),
+    }
+}
+
+/// What a dry run would submit, and the sbatch commands.
+fn print_dry_run(report: &SubmitReport) {
     out!(
-        "{name}: {total} points in {} shards; submitted {what}: {}",
+        "{}: {} points in {} shards; would submit {} (dry run: nothing submitted). Scripts in {}:",
+        report.layout.name,
+        report.layout.total_points,
         report.layout.shards,
+        submitted_text(report),
+        report.dir.join("slurm").display()
+    );
+    for c in &report.commands {
+        out!("  {c}");
+    }
+}
+
+/// What was submitted, and how to follow it.
+fn print_submitted(report: &SubmitReport, merge: &str) {
+    let ids: Vec<&str> = report.array_job.iter().map(String::as_str).chain([merge]).collect();
+    out!(
+        "{}: {} points in {} shards; submitted {}: {}",
+        report.layout.name,
+        report.layout.total_points,
+        report.layout.shards,
+        submitted_text(report),
         match &report.array_job {
             Some(a) => format!("array job {a} and merge job {merge} (after the array)"),
             None => format!("merge job {merge}"),
