@@ -161,12 +161,12 @@ pub struct UsageError(pub String);
 #[derive(Debug, thiserror::Error)]
 pub enum ArgError {
     /// Not a number at all.
-    #[error("`{text}` is not a number: {source}")]
+    #[error("`{text}` is not a number: {error}")]
     NotANumber {
         /// The value as given.
         text: String,
-        /// The parser's error.
-        source: std::num::ParseFloatError,
+        /// The parser's error (printed in this message, so not a `source`).
+        error: std::num::ParseFloatError,
     },
     /// A number that must be finite and positive.
     #[error("must be a positive number, got {0}")]
@@ -205,5 +205,5 @@ fn non_negative(text: &str) -> Result<f64, ArgError> {
 
 /// A command-line number, or clap's message for a value that is not one.
 fn number(text: &str) -> Result<f64, ArgError> {
-    text.parse().map_err(|source| ArgError::NotANumber { text: text.to_string(), source })
+    text.parse().map_err(|error| ArgError::NotANumber { text: text.to_string(), error })
 }
