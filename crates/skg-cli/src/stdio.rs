@@ -22,7 +22,8 @@
 //! Progress bars (indicatif) draw only when stderr is a terminal and ignore their own
 //! write errors; they do not come through here.
 //!
-//! Uses only the standard library; the commands use this module, not the other way round.
+//! Uses the standard library and clap's error type; `main` and the commands use this
+//! module, not the other way round.
 
 use std::fmt;
 use std::io::{self, Write};
