@@ -140,18 +140,21 @@ fn a_sweep_worker_with_full_or_closed_streams_does_not_panic() {
     let dir = tempfile::tempdir().unwrap();
     let work = dir.path().join("work");
     std::fs::create_dir(&work).unwrap();
-    let streams: Vec<(&str, Box<dyn Fn() -> Option<Stdio>>)> =
-        vec![("closed", Box::new(|| Some(closed_pipe()))), ("full", Box::new(full)), ("captured", Box::new(|| None))];
-    for (name, stream) in &streams {
-        if *name == "full" && full().is_none() {
+    let stream = |name: &str| match name {
+        "closed" => Some(closed_pipe()),
+        "full" => full(),
+        _ => None,
+    };
+    for name in ["closed", "full", "captured"] {
+        if name == "full" && full().is_none() {
             continue;
         }
         for (stdin, status) in [("", 0), ("0123456789abcdef\n", 1), ("not a point\n", 1)] {
             let mut child = Command::new(env!("CARGO_BIN_EXE_skg-solve"))
                 .args(["sweep-worker", work.to_str().unwrap()])
                 .stdin(Stdio::piped())
-                .stdout(stream().unwrap_or_else(Stdio::piped))
-                .stderr(stream().unwrap_or_else(Stdio::piped))
+                .stdout(stream(name).unwrap_or_else(Stdio::piped))
+                .stderr(stream(name).unwrap_or_else(Stdio::piped))
                 .spawn()
                 .unwrap();
             child.stdin.take().unwrap().write_all(stdin.as_bytes()).unwrap();

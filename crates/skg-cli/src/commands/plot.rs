@@ -171,9 +171,12 @@ fn filters(f: &[String]) -> Result<Vec<(String, String)>> {
         .collect()
 }
 
+/// One line of `plot scaling`: its label and its points (N, total seconds).
+type Benchmark = (String, Vec<(f64, f64)>);
+
 /// The lines of `plot scaling`: each `bench --csv` file's points, labelled by its
 /// `--label` or by its file name and backend.
-fn benchmarks(inputs: &[PathBuf], labels: &[String]) -> Result<Vec<(String, Vec<(f64, f64)>)>> {
+fn benchmarks(inputs: &[PathBuf], labels: &[String]) -> Result<Vec<Benchmark>> {
     let mut benchmarks = Vec::new();
     for (k, p) in inputs.iter().enumerate() {
         let (backend, points) = read_bench_csv(p)?;
