@@ -1,6 +1,7 @@
 //! Command-line interface of skg-solve.
 
 mod commands;
+mod stdio;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -42,6 +43,10 @@ struct Cli {
     command: Option<Command>,
     #[command(flatten)]
     solve: solve::SolveArgs,
+    /// Print only errors and warnings: no progress, no summary lines, no tables. Every
+    /// command takes it after its name, e.g. `skg-solve sweep FILE -q`.
+    #[arg(short, long, global = true)]
+    quiet: bool,
 }
 
 #[derive(Subcommand)]
@@ -88,26 +93,36 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    stdio::finish(run())
+}
+
+/// Parse the command line and run the command; its exit status, with an error printed.
+fn run() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return stdio::clap_message(&e),
+    };
+    let quiet = cli.quiet;
     let result = match cli.command {
-        Some(Command::Bench(a)) => bench::run(a),
-        Some(Command::Sweep(a)) => sweep::run(a),
-        Some(Command::Merge(a)) => sweep::run_merge(a),
-        Some(Command::Status(a)) => status::run(a),
-        Some(Command::SweepMerge { dir }) => sweep::run_merge_shards(&dir),
-        Some(Command::Tune(a)) => tune::run(a),
-        Some(Command::Plot(k)) => plot::run(k),
-        Some(Command::Animate(a)) => animate::run(a),
-        Some(Command::Gallery(a)) => gallery::run(a),
+        Some(Command::Bench(a)) => bench::run(a, quiet),
+        Some(Command::Sweep(a)) if a.slurm => sweep::slurm::run(a, quiet),
+        Some(Command::Sweep(a)) => sweep::run(a, quiet),
+        Some(Command::Merge(a)) => sweep::run_merge(a, quiet),
+        Some(Command::Status(a)) => status::run(a, quiet),
+        Some(Command::SweepMerge { dir }) => sweep::slurm::run_merge_job(&dir, quiet),
+        Some(Command::Tune(a)) => tune::run(a, quiet),
+        Some(Command::Plot(k)) => plot::run(k, quiet),
+        Some(Command::Animate(a)) => animate::run(a, quiet),
+        Some(Command::Gallery(a)) => gallery::run(a, quiet),
         Some(Command::SweepWorker { work }) => sweep::run_worker(&work),
-        Some(Command::Reference(a)) => reference::run(a),
-        Some(Command::Check(a)) => check::run(a),
-        None => solve::run(cli.solve),
+        Some(Command::Reference(a)) => reference::run(a, quiet),
+        Some(Command::Check(a)) => check::run(a, quiet),
+        None => solve::run(cli.solve, quiet),
     };
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {}", describe(&e));
+            stdio::note!("error: {}", describe(&e));
             match e.downcast_ref::<commands::UsageError>() {
                 Some(_) => ExitCode::from(2),
                 None => ExitCode::FAILURE,

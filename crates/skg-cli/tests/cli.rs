@@ -354,8 +354,8 @@ fn a_friction_direction_of_the_wrong_length_is_refused_where_it_is_written() {
 
 /// The same command gives the same bytes: three Ipopt solves of the tumbler at
 /// N = 4096 in separate processes write identical trajectories. (With MUMPS's automatic
-/// pivot order, SCOTCH, whose ordering varied from run to run, three runs gave two or three
-/// different files; skg-solve now sets AMF, docs/solver.md.)
+/// pivot order, SCOTCH, whose ordering varies from run to run, three runs gave two or three
+/// different files; skg-solve sets AMF, docs/solver.md.)
 #[test]
 fn repeated_ipopt_solves_are_bitwise_identical() {
     let dir = tempfile::tempdir().unwrap();

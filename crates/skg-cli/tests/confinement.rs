@@ -1,10 +1,10 @@
-//! A scene file writes only inside its output directory (issue 21, item 1).
+//! A scene file writes only inside its output directory.
 //!
 //! Scene files are shared and downloaded, so none of their keys may make the tool open
 //! a file elsewhere: Ipopt options that name files are refused at their line, and
-//! `[solver] log_file` is confined to the output directory. The repros are the ones
-//! that overwrote files before the fix: the scene itself, an earlier run's summary, an
-//! earlier run's trajectory while another skg-solve held that directory's lock.
+//! `[solver] log_file` is confined to the output directory. The cases are the files a
+//! log file could overwrite: the scene itself, an earlier run's summary, an earlier
+//! run's trajectory while another skg-solve holds that directory's lock.
 
 mod common;
 
@@ -126,7 +126,7 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
     found
 }
 
-/// Non-finite Ipopt option values are errors at their line (issue 21, item 7).
+/// Non-finite Ipopt option values are errors at their line.
 #[test]
 fn non_finite_ipopt_values_are_refused_at_their_line() {
     let dir = tempfile::tempdir().unwrap();

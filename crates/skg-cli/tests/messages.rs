@@ -1,6 +1,6 @@
-//! Messages of the commands (issue 21 items 9 and 10): each names the file it is about
-//! and says what happened in words, never in a library's Debug form; options that
-//! cannot take effect are refused rather than ignored. Each test failed before its fix.
+//! Messages of the commands: each names the file it is about and says what happened in
+//! words, never in a library's Debug form; options that cannot take effect are refused
+//! rather than ignored.
 
 mod common;
 
@@ -24,7 +24,7 @@ fn solved_tumbler(dir: &Path, name: &str) -> std::path::PathBuf {
 }
 
 /// `reference --hard-walls` on a scene it cannot model names the scene file, and the
-/// line of the wall that moves (before the fix: no file at all).
+/// line of the wall that moves.
 #[test]
 fn the_hard_wall_reference_names_the_file_and_the_moving_wall() {
     let dir = tempfile::tempdir().unwrap();
@@ -48,8 +48,8 @@ fn run_with_file_limit(args: &[&str], dir: &Path, kib: u32) -> (Option<i32>, Str
 }
 
 /// A picture that cannot be written (the disk is full, the file too large) says so in
-/// the system's words, naming the file (before the fix: `backend error: Drawing backend
-/// error: GifEncodingError(Io(Os { code: 27, kind: FileTooLarge, … }))`).
+/// the system's words, naming the file, not in the drawing library's Debug form
+/// (`GifEncodingError(Io(Os { code: 27, kind: FileTooLarge, … }))`).
 #[test]
 fn a_picture_that_cannot_be_written_says_why_in_words() {
     let dir = tempfile::tempdir().unwrap();
@@ -107,7 +107,7 @@ fn merging_a_shard_with_a_cut_last_line_names_the_missing_point() {
 }
 
 /// `merge -o sh_1 sh_1 sh_2` would replace shard 1's own results.csv and sweep.json with
-/// the merge: refused, and shard 1 is left as it was (before the fix: overwritten).
+/// the merge: refused, and shard 1 is left as it was.
 #[test]
 fn merging_into_one_of_the_inputs_is_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -125,8 +125,8 @@ fn merging_into_one_of_the_inputs_is_refused() {
 }
 
 /// The row of a point whose worker was killed (here by the sweep's timeout) still says
-/// the point's node count, operator and formulation (before the fix: blank, unless the
-/// point's grid named them).
+/// the point's node count, operator and formulation, also those the point's grid does
+/// not name.
 #[test]
 fn the_row_of_a_timed_out_point_names_its_nodes_operator_and_formulation() {
     let dir = tempfile::tempdir().unwrap();
@@ -146,8 +146,8 @@ fn the_row_of_a_timed_out_point_names_its_nodes_operator_and_formulation() {
 }
 
 /// An animation or strip beyond its bounds is refused at once, before the solution is
-/// read, with the bound (before the fix: --frames 1000000 ran for hours, its file
-/// growing by megabytes a second; --strip 100000 panicked on an overflowing width).
+/// read, with the bound: `--frames 1000000` would run for hours, its file growing by
+/// megabytes a second, and `--strip 100000` would overflow the picture's width.
 #[test]
 fn animations_and_strips_beyond_their_bounds_are_refused_at_once() {
     let dir = tempfile::tempdir().unwrap();
@@ -176,8 +176,8 @@ fn animations_and_strips_beyond_their_bounds_are_refused_at_once() {
     assert!(!dir.path().join("a.gif").exists() && !dir.path().join("s.png").exists());
 }
 
-/// An option the output's format does not use is refused, not ignored (before the fix
-/// `--strip 10` with a .gif, or `--frames 50` with a .png strip, did nothing).
+/// An option the output's format does not use is refused, not ignored: `--strip 10`
+/// with a .gif, or `--frames 50` with a .png strip.
 #[test]
 fn animate_options_the_format_does_not_use_are_usage_errors() {
     let dir = tempfile::tempdir().unwrap();
@@ -199,7 +199,7 @@ fn animate_options_the_format_does_not_use_are_usage_errors() {
 }
 
 /// More `--label`s than inputs: the extra ones would label nothing, so the command is
-/// refused as a usage error (before the fix: ignored without a word).
+/// refused as a usage error rather than ignored.
 #[test]
 fn more_labels_than_inputs_is_a_usage_error() {
     let dir = tempfile::tempdir().unwrap();
@@ -212,7 +212,7 @@ fn more_labels_than_inputs_is_a_usage_error() {
     assert_eq!(code, Some(0), "{t}");
 }
 
-/// `bench --repeat 0` ran once; it is now a usage error.
+/// `bench --repeat 0` is a usage error (there is no fastest of no repetitions).
 #[test]
 fn bench_with_zero_repetitions_is_a_usage_error() {
     let dir = tempfile::tempdir().unwrap();
@@ -277,8 +277,8 @@ fn readers_refuse_what_the_pairing_rule_refuses_and_warn_about_a_lone_trajectory
     }
 }
 
-/// A sweep of 10⁶ points is refused at once, counted from its grid (before the fix,
-/// after every point's scene had been resolved: 30 s and more).
+/// A sweep of 10⁶ points is refused at once, counted from its grid before any point's
+/// scene is resolved (resolving them all takes 30 s and more).
 #[test]
 fn a_sweep_of_a_million_points_is_refused_at_once() {
     let dir = tempfile::tempdir().unwrap();

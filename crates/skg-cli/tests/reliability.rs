@@ -1,5 +1,5 @@
-//! Reliability (issue 11): no lost, mixed or duplicated results, no panics, and exit
-//! codes and messages a script can rely on. Each test fails without its fix.
+//! Reliability: no lost, mixed or duplicated results, no panics, and exit codes and
+//! messages a script can rely on.
 
 mod common;
 

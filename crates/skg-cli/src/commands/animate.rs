@@ -12,6 +12,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use skg_plot::motion::{self, Aspect, Format, Frames, Motion, View};
 
 use super::{ArgError, UsageError};
+use crate::stdio::{note, out};
 
 /// What `plot path` and `animate` draw: a solution, its scene and the two axes.
 #[derive(Args)]
@@ -50,10 +51,10 @@ impl MotionArgs {
     pub fn load(&self) -> Result<(Motion, View)> {
         let m = Motion::load(&self.solution, self.scene.as_deref(), self.reference.as_deref())?;
         for w in &m.warnings {
-            eprintln!("warning: {w}");
+            note!("warning: {w}");
         }
         for n in &m.notes {
-            eprintln!("note: {n}");
+            note!("note: {n}");
         }
         let (dx, dy) = m.default_axes();
         let (x, y) = (self.x.clone().unwrap_or(dx), self.y.clone().unwrap_or(dy));
@@ -96,9 +97,6 @@ pub struct AnimateArgs {
     /// [default: 5].
     #[arg(long, value_name = "K")]
     pub strip: Option<usize>,
-    /// No progress bar, no summary line.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), ArgError> {
@@ -111,7 +109,7 @@ fn parse_size(s: &str) -> Result<(u32, u32), ArgError> {
     Ok((w, h))
 }
 
-pub fn run(args: AnimateArgs) -> Result<ExitCode> {
+pub fn run(args: AnimateArgs, quiet: bool) -> Result<ExitCode> {
     let format = Format::of(&args.output)?;
     // What is asked for, checked before anything is read or drawn: a usage error (exit
     // status 2), as clap's own. An option the format does not use is refused, not ignored.
@@ -139,7 +137,7 @@ pub fn run(args: AnimateArgs) -> Result<ExitCode> {
     let written = if format == Format::Png {
         motion::strip(&m, &view, strip, args.size, &args.output)?
     } else {
-        let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(frames as u64) };
+        let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(frames as u64) };
         bar.set_style(
             ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {elapsed} (ETA {eta})")
                 .expect("valid template")
@@ -151,8 +149,8 @@ pub fn run(args: AnimateArgs) -> Result<ExitCode> {
         bar.finish_and_clear();
         written?
     };
-    if !args.quiet {
-        println!("wrote {}", written.display());
+    if !quiet {
+        out!("wrote {}", written.display());
     }
     Ok(ExitCode::SUCCESS)
 }

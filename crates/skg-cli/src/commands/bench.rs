@@ -12,6 +12,7 @@ use skg_core::solve::{self, Method, Outcome};
 use skg_core::stepping::verify::VerifyStatus;
 
 use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
+use crate::stdio::{note, out};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -122,13 +123,43 @@ const HEADER: [&str; 15] = [
 const CSV_HEADER: &str =
     "nodes,variables,jacobian_nonzeros,backend,iterations,result,solved_as,setup_s,guess_s,evaluation_s,solver_internal_s,total_s,us_per_node,verify_s,peak_mib";
 
-pub fn run(args: BenchArgs) -> Result<ExitCode> {
+pub fn run(args: BenchArgs, quiet: bool) -> Result<ExitCode> {
     // The CSV's directory is made before the solves, so that a path that cannot be
     // written fails at once, not after minutes of solving.
     if let Some(dir) = args.csv.as_deref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let bar = indicatif::ProgressBar::new(args.nodes.len() as u64 * u64::from(args.repeat));
+    let rows = measure(&args, quiet)?;
+    if !quiet {
+        print_table(&rows);
+    }
+    if let Some(path) = &args.csv {
+        let mut text = format!("{CSV_HEADER}\n");
+        for row in &rows {
+            text.push_str(&row.cells().join(","));
+            text.push('\n');
+        }
+        output::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    }
+    // Timings of solves that cannot be trusted are not benchmarks of the scene: say so,
+    // and exit as a solve would (3 if any did not converge, else 4 if any did not verify).
+    let untrusted: Vec<String> = rows.iter().filter(|r| !r.outcome.trusted()).map(|r| format!("N = {} {}", r.nodes, r.result())).collect();
+    if untrusted.is_empty() {
+        return Ok(ExitCode::SUCCESS);
+    }
+    note!(
+        "warning: {}; their times are not those of a trustworthy solve (run the scene with `skg-solve` for the reason)",
+        untrusted.join(", ")
+    );
+    let code = if rows.iter().any(|r| !r.outcome.converged()) { EXIT_NOT_CONVERGED } else { EXIT_NOT_VERIFIED };
+    Ok(ExitCode::from(code))
+}
+
+/// Solve the scene `--repeat` times at each N, with a progress bar (none with
+/// `--quiet`): the fastest repetition at each N.
+fn measure(args: &BenchArgs, quiet: bool) -> Result<Vec<Row>> {
+    let solves = args.nodes.len() as u64 * u64::from(args.repeat);
+    let bar = if quiet { indicatif::ProgressBar::hidden() } else { indicatif::ProgressBar::new(solves) };
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} solves, {elapsed} elapsed, ETA {eta} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
@@ -153,34 +184,19 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         rows.push(best.expect("at least one repetition"));
     }
     bar.finish_and_clear();
-    println!("| {} |", HEADER.join(" | "));
-    println!(
+    Ok(rows)
+}
+
+/// The rows as a Markdown table on stdout.
+fn print_table(rows: &[Row]) {
+    out!("| {} |", HEADER.join(" | "));
+    out!(
         "|{}",
         HEADER.iter().map(|h| if matches!(*h, "backend" | "result" | "solved as") { ":---:|" } else { "---:|" }).collect::<String>()
     );
-    for row in &rows {
-        println!("| {} |", row.cells().join(" | "));
+    for row in rows {
+        out!("| {} |", row.cells().join(" | "));
     }
-    if let Some(path) = &args.csv {
-        let mut text = format!("{CSV_HEADER}\n");
-        for row in &rows {
-            text.push_str(&row.cells().join(","));
-            text.push('\n');
-        }
-        output::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
-    }
-    // Timings of solves that cannot be trusted are not benchmarks of the scene: say so,
-    // and exit as a solve would (3 if any did not converge, else 4 if any did not verify).
-    let untrusted: Vec<String> = rows.iter().filter(|r| !r.outcome.trusted()).map(|r| format!("N = {} {}", r.nodes, r.result())).collect();
-    if untrusted.is_empty() {
-        return Ok(ExitCode::SUCCESS);
-    }
-    eprintln!(
-        "warning: {}; their times are not those of a trustworthy solve (run the scene with `skg-solve` for the reason)",
-        untrusted.join(", ")
-    );
-    let code = if rows.iter().any(|r| !r.outcome.converged()) { EXIT_NOT_CONVERGED } else { EXIT_NOT_VERIFIED };
-    Ok(ExitCode::from(code))
 }
 
 /// The process's peak resident memory since a reset (Linux: `VmHWM` of

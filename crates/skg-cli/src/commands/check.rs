@@ -11,6 +11,7 @@ use skg_core::output;
 use skg_core::scene::readable_number;
 
 use super::EXIT_TOLERANCE_EXCEEDED;
+use crate::stdio::{note, out};
 
 #[derive(Args)]
 pub struct CheckArgs {
@@ -38,9 +39,6 @@ pub struct CheckArgs {
     /// JSON report [default: <SOLUTION without .csv>.check.json].
     #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
-    /// Print only errors and exceeded tolerances.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 /// A tolerance from the command line: a number ≥ 0 (NaN would silently pass every
@@ -64,24 +62,14 @@ struct CheckReport<'a> {
     comparison: &'a check::Comparison,
 }
 
-pub fn run(args: CheckArgs) -> Result<ExitCode> {
+pub fn run(args: CheckArgs, quiet: bool) -> Result<ExitCode> {
     let (solution, pairing) = Table::read_paired(&args.solution)?;
     if let Some(w) = pairing.warning(&args.solution) {
-        eprintln!("warning: {w}");
+        note!("warning: {w}");
     }
     let reference = Table::read(&args.reference)?;
     let opts = CheckOptions { skip_last: args.skip_last, columns: args.columns.clone() };
-    let mut per_column = Vec::new();
-    for a in &args.tol_column {
-        let (name, value) = a.split_once('=').with_context(|| format!("--tol-column `{a}`: expected COLUMN=TOL"))?;
-        let v: f64 = value.trim().parse().with_context(|| format!("--tol-column `{a}`: `{value}` is not a number"))?;
-        per_column.push((name.trim().to_string(), tolerance(&format!("--tol-column {a}"), v)?));
-    }
-    let tol = Tolerances {
-        max_abs: args.tol.map(|t| tolerance("--tol", t)).transpose()?,
-        rms: args.tol_rms.map(|t| tolerance("--tol-rms", t)).transpose()?,
-        per_column,
-    };
+    let tol = tolerances(&args)?;
     let cmp = check::compare(&solution, &reference, &opts)
         .with_context(|| format!("comparing {} with {}", args.solution.display(), args.reference.display()))?;
     let violations = cmp.violations(&tol)?;
@@ -96,27 +84,52 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
         comparison: &cmp,
     };
     output::write_json(&json, &report)?;
-    if !args.quiet {
-        println!("| column | max abs error | at t | RMS error |");
-        println!("|---|---:|---:|---:|");
-        for c in &cmp.columns {
-            println!("| {} | {:.3e} | {} | {:.3e} |", c.column, c.max_abs, c.at_t, c.rms);
-        }
-        println!(
-            "{} rows compared ({} interpolated, last {} skipped); worst: {} {:.3e}",
-            cmp.rows_compared, cmp.rows_interpolated, cmp.skipped_last, cmp.worst_column, cmp.max_abs
-        );
-        if !cmp.missing_in_reference.is_empty() {
-            println!("not in the reference (not compared): {}", cmp.missing_in_reference.join(", "));
-        }
-        println!("wrote {}", json.display());
+    if !quiet {
+        print_comparison(&cmp);
+        out!("wrote {}", json.display());
     }
     if violations.is_empty() {
         Ok(ExitCode::SUCCESS)
     } else {
         for v in &violations {
-            eprintln!("tolerance exceeded: {v}");
+            note!("tolerance exceeded: {v}");
         }
         Ok(ExitCode::from(EXIT_TOLERANCE_EXCEEDED))
+    }
+}
+
+/// `--tol`, `--tol-rms` and each `--tol-column COLUMN=TOL`, each a number ≥ 0.
+fn tolerances(args: &CheckArgs) -> Result<Tolerances> {
+    let mut per_column = Vec::new();
+    for a in &args.tol_column {
+        let (name, value) = a.split_once('=').with_context(|| format!("--tol-column `{a}`: expected COLUMN=TOL"))?;
+        let v: f64 = value.trim().parse().with_context(|| format!("--tol-column `{a}`: `{value}` is not a number"))?;
+        per_column.push((name.trim().to_string(), tolerance(&format!("--tol-column {a}"), v)?));
+    }
+    Ok(Tolerances {
+        max_abs: args.tol.map(|t| tolerance("--tol", t)).transpose()?,
+        rms: args.tol_rms.map(|t| tolerance("--tol-rms", t)).transpose()?,
+        per_column,
+    })
+}
+
+/// The comparison on stdout: a Markdown table of each column's errors, the rows compared
+/// and the worst column, and the columns the reference lacks.
+fn print_comparison(cmp: &check::Comparison) {
+    out!("| column | max abs error | at t | RMS error |");
+    out!("|---|---:|---:|---:|");
+    for c in &cmp.columns {
+        out!("| {} | {:.3e} | {} | {:.3e} |", c.column, c.max_abs, c.at_t, c.rms);
+    }
+    out!(
+        "{} rows compared ({} interpolated, last {} skipped); worst: {} {:.3e}",
+        cmp.rows_compared,
+        cmp.rows_interpolated,
+        cmp.skipped_last,
+        cmp.worst_column,
+        cmp.max_abs
+    );
+    if !cmp.missing_in_reference.is_empty() {
+        out!("not in the reference (not compared): {}", cmp.missing_in_reference.join(", "));
     }
 }

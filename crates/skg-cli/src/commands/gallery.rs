@@ -18,6 +18,7 @@ use skg_core::{output, solve};
 use skg_plot::motion::{self, Aspect, Motion, View};
 
 use super::load;
+use crate::stdio::out;
 
 #[derive(Args)]
 pub struct GalleryArgs {
@@ -30,9 +31,6 @@ pub struct GalleryArgs {
     /// Frames in each strip.
     #[arg(long, default_value_t = 5, value_name = "K")]
     pub strip: usize,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 /// One scene's entry.
@@ -64,7 +62,37 @@ fn duration(s: f64) -> String {
     }
 }
 
-pub fn run(args: GalleryArgs) -> Result<ExitCode> {
+pub fn run(args: GalleryArgs, quiet: bool) -> Result<ExitCode> {
+    let scenes = scene_files(&args)?;
+    if args.strip == 0 {
+        bail!("--strip must be at least 1");
+    }
+    let page_dir = args.output.parent().filter(|d| !d.as_os_str().is_empty()).map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let img_dir = page_dir.join("img").join("gallery");
+    // One gallery at a time writes these pictures (and the page beside them).
+    let _lock = output::OutputDir::lock(&img_dir)?;
+    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(scenes.len() as u64) };
+    bar.set_style(
+        ProgressStyle::with_template("{msg:30} [{bar:30}] {pos}/{len} scenes, {elapsed}").expect("valid template").progress_chars("=> "),
+    );
+    let mut entries = Vec::new();
+    for path in &scenes {
+        let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        bar.set_message(stem.clone());
+        entries.push(solve_and_draw(path, &stem, &img_dir, args.strip)?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let page = markdown(&entries, &page_dir, args.strip);
+    output::write_atomic(&args.output, |w| w.write_all(page.as_bytes())).context("writing the gallery")?;
+    if !quiet {
+        out!("wrote {} and {} images in {}", args.output.display(), 2 * entries.len(), img_dir.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The scene files named, else every scenarios/*.toml in name order; at least one.
+fn scene_files(args: &GalleryArgs) -> Result<Vec<PathBuf>> {
     let scenes = if args.scenes.is_empty() {
         let mut v: Vec<PathBuf> = std::fs::read_dir("scenarios")
             .context("reading scenarios/ (run from the repository root, or name the scenes)")?
@@ -79,61 +107,43 @@ pub fn run(args: GalleryArgs) -> Result<ExitCode> {
     if scenes.is_empty() {
         bail!("no scenes to draw");
     }
-    if args.strip == 0 {
-        bail!("--strip must be at least 1");
-    }
-    let page_dir = args.output.parent().filter(|d| !d.as_os_str().is_empty()).map_or_else(|| PathBuf::from("."), Path::to_path_buf);
-    let img_dir = page_dir.join("img").join("gallery");
-    // One gallery at a time writes these pictures (and the page beside them).
-    let _lock = output::OutputDir::lock(&img_dir)?;
-    let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(scenes.len() as u64) };
-    bar.set_style(
-        ProgressStyle::with_template("{msg:30} [{bar:30}] {pos}/{len} scenes, {elapsed}").expect("valid template").progress_chars("=> "),
-    );
-    let mut entries = Vec::new();
-    for path in &scenes {
-        let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-        bar.set_message(stem.clone());
-        let scene = load(path, &Overrides::default())?;
-        let started = Instant::now();
-        let outcome = solve::solve_scene(&scene)?;
-        let wall_s = started.elapsed().as_secs_f64();
-        let table = Table::of_trajectory(&scene, &outcome.trajectory);
-        let reference = outcome.verification.reference_trajectory.as_ref().map(|r| Table::of_trajectory(&scene, r));
-        let v = &outcome.verification;
-        let entry = Entry {
-            stem: stem.clone(),
-            scene_path: path.clone(),
-            name: scene.name.clone(),
-            description: scene.file.scene.description.clone(),
-            nodes: outcome.settings.nodes,
-            operator: outcome.settings.operator.clone(),
-            method: match &outcome.method {
-                solve::Method::Global => "global".to_string(),
-                solve::Method::Windows { length, count: 1, .. } => format!("1 window of {length:.3} s"),
-                solve::Method::Windows { length, count, .. } => format!("{count} windows of {length:.3} s"),
-            },
-            verification: v.status.to_string(),
-            max_error: v.max_error,
-            tolerance: v.tolerance,
-            trusted: outcome.trusted(),
-            wall_s,
-        };
-        let m = Motion::new(stem.clone(), scene, table, reference)?;
-        let (x, y) = m.default_axes();
-        let view = View { title: format!("{}: {y} against {x}", m.scene.name), x, y, aspect: Aspect::Auto };
-        motion::path_png(&m, &view, (720, 560), &img_dir.join(format!("{stem}.png")))?;
-        motion::strip(&m, &view, args.strip, (260, 230), &img_dir.join(format!("{stem}_frames.png")))?;
-        entries.push(entry);
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    let page = markdown(&entries, &page_dir, args.strip);
-    output::write_atomic(&args.output, |w| w.write_all(page.as_bytes())).context("writing the gallery")?;
-    if !args.quiet {
-        println!("wrote {} and {} images in {}", args.output.display(), 2 * entries.len(), img_dir.display());
-    }
-    Ok(ExitCode::SUCCESS)
+    Ok(scenes)
+}
+
+/// Solve one scene with its own settings, draw its path (`STEM.png`) and a strip of
+/// `strip` frames (`STEM_frames.png`) into `img_dir`: its entry on the page.
+fn solve_and_draw(path: &Path, stem: &str, img_dir: &Path, strip: usize) -> Result<Entry> {
+    let scene = load(path, &Overrides::default())?;
+    let started = Instant::now();
+    let outcome = solve::solve_scene(&scene)?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let table = Table::of_trajectory(&scene, &outcome.trajectory);
+    let reference = outcome.verification.reference_trajectory.as_ref().map(|r| Table::of_trajectory(&scene, r));
+    let v = &outcome.verification;
+    let entry = Entry {
+        stem: stem.to_string(),
+        scene_path: path.to_path_buf(),
+        name: scene.name.clone(),
+        description: scene.file.scene.description.clone(),
+        nodes: outcome.settings.nodes,
+        operator: outcome.settings.operator.clone(),
+        method: match &outcome.method {
+            solve::Method::Global => "global".to_string(),
+            solve::Method::Windows { length, count: 1, .. } => format!("1 window of {length:.3} s"),
+            solve::Method::Windows { length, count, .. } => format!("{count} windows of {length:.3} s"),
+        },
+        verification: v.status.to_string(),
+        max_error: v.max_error,
+        tolerance: v.tolerance,
+        trusted: outcome.trusted(),
+        wall_s,
+    };
+    let m = Motion::new(stem.to_string(), scene, table, reference)?;
+    let (x, y) = m.default_axes();
+    let view = View { title: format!("{}: {y} against {x}", m.scene.name), x, y, aspect: Aspect::Auto };
+    motion::path_png(&m, &view, (720, 560), &img_dir.join(format!("{stem}.png")))?;
+    motion::strip(&m, &view, strip, (260, 230), &img_dir.join(format!("{stem}_frames.png")))?;
+    Ok(entry)
 }
 
 /// A path relative to the page's directory (for links), when it can be made one.

@@ -15,15 +15,16 @@ pub mod check;
 pub mod gallery;
 pub mod plot;
 pub mod reference;
-pub mod slurm;
 pub mod solve;
 pub mod status;
 pub mod sweep;
 pub mod tune;
 
 use std::path::Path;
+use std::str::FromStr;
 
 use anyhow::Result;
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 
 use skg_core::sbp::OperatorKind;
@@ -62,8 +63,8 @@ pub struct SceneArgs {
     pub initial_velocity: Option<InitialVelocity>,
     /// Hessian given to Ipopt: `zero` (default; the Newton step of a square system does
     /// not depend on it) or `exact` (reduced formulation only).
-    #[arg(long, value_enum, value_name = "MODE")]
-    pub hessian: Option<HessianArg>,
+    #[arg(long, value_name = "MODE", value_parser = by_name::<HessianMode>(HessianMode::ALL.map(HessianMode::name)))]
+    pub hessian: Option<HessianMode>,
     /// Maximum number of iterations (Ipopt's, or Newton's).
     #[arg(long, value_name = "N")]
     pub max_iter: Option<u32>,
@@ -106,7 +107,7 @@ pub enum OperatorArg {
     Named(OperatorKind),
 }
 
-impl std::str::FromStr for OperatorArg {
+impl FromStr for OperatorArg {
     type Err = skg_core::sbp::ParseOperatorKindError;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
@@ -115,12 +116,6 @@ impl std::str::FromStr for OperatorArg {
         }
         s.parse().map(OperatorArg::Named)
     }
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum HessianArg {
-    Zero,
-    Exact,
 }
 
 impl SceneArgs {
@@ -137,10 +132,7 @@ impl SceneArgs {
             auto_operator: matches!(self.operator, Some(OperatorArg::Auto)),
             formulation: self.formulation,
             initial_velocity: self.initial_velocity,
-            hessian: self.hessian.map(|h| match h {
-                HessianArg::Zero => HessianMode::Zero,
-                HessianArg::Exact => HessianMode::Exact,
-            }),
+            hessian: self.hessian,
             max_iter: self.max_iter,
             backend: self.backend,
             window: self.window,
@@ -169,12 +161,12 @@ pub struct UsageError(pub String);
 #[derive(Debug, thiserror::Error)]
 pub enum ArgError {
     /// Not a number at all.
-    #[error("`{text}` is not a number: {source}")]
+    #[error("`{text}` is not a number: {error}")]
     NotANumber {
         /// The value as given.
         text: String,
-        /// The parser's error.
-        source: std::num::ParseFloatError,
+        /// The parser's error (printed in this message, so not a `source`).
+        error: std::num::ParseFloatError,
     },
     /// A number that must be finite and positive.
     #[error("must be a positive number, got {0}")]
@@ -185,6 +177,18 @@ pub enum ArgError {
     /// A picture size that is not `WIDTHxHEIGHT` within 64…4096.
     #[error("bad size `{0}`: expected WIDTHxHEIGHT, e.g. 640x480, each 64…4096")]
     Size(String),
+}
+
+/// The value parser of a setting that skg-core names (`--hessian`): one of `names` (the
+/// core's, listed as the possible values in `--help` and in clap's message for any other
+/// value), read by the core's `FromStr`, so that the command line and a scene file accept
+/// the same words.
+fn by_name<T>(names: impl IntoIterator<Item = &'static str>) -> impl TypedValueParser<Value = T>
+where
+    T: FromStr + Clone + Send + Sync + 'static,
+    T::Err: std::error::Error + Send + Sync + 'static,
+{
+    PossibleValuesParser::new(names).try_map(|name| name.parse::<T>())
 }
 
 /// A command-line number that must be finite and positive (a usage error otherwise).
@@ -201,5 +205,5 @@ fn non_negative(text: &str) -> Result<f64, ArgError> {
 
 /// A command-line number, or clap's message for a value that is not one.
 fn number(text: &str) -> Result<f64, ArgError> {
-    text.parse().map_err(|source| ArgError::NotANumber { text: text.to_string(), source })
+    text.parse().map_err(|error| ArgError::NotANumber { text: text.to_string(), error })
 }

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
+use crate::stdio::{note, out};
 use skg_core::check::Table;
 use skg_plot as plot;
 use skg_sweep as sweep;
@@ -104,39 +105,23 @@ pub struct ResultsPlotArgs {
     pub title: Option<String>,
 }
 
-pub fn run(kind: PlotKind) -> Result<ExitCode> {
-    let parse_filters = |f: &[String]| -> Result<Vec<(String, String)>> {
-        f.iter()
-            .map(|s| {
-                s.split_once('=')
-                    .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
-                    .ok_or_else(|| anyhow::anyhow!("--where {s}: expected COLUMN=VALUE"))
-            })
-            .collect()
-    };
-    let title_for = |c: &ResultsPlotArgs, kind: &str| {
-        c.title.clone().unwrap_or_else(|| {
-            let dir = if c.results.is_dir() { c.results.clone() } else { c.results.parent().map(Path::to_path_buf).unwrap_or_default() };
-            let name = dir.file_name().map_or(String::new(), |n| format!(": {}", n.to_string_lossy()));
-            format!("{kind}{name}")
-        })
-    };
+pub fn run(kind: PlotKind, quiet: bool) -> Result<ExitCode> {
     let written = match kind {
         PlotKind::WorkPrecision(c) => {
             let r = sweep::Results::read(&c.results)?;
-            plot::work_precision(&r, &parse_filters(&c.filters)?, &title_for(&c, "work-precision"), &c.output)?
+            plot::work_precision(&r, &filters(&c.filters)?, &c.title_or("work-precision"), &c.output)?
         }
         PlotKind::Tolerance(c) => {
             let r = sweep::Results::read(&c.results)?;
-            plot::tolerance(&r, &parse_filters(&c.filters)?, &title_for(&c, "accuracy asked and reached"), &c.output)?
+            plot::tolerance(&r, &filters(&c.filters)?, &c.title_or("accuracy asked and reached"), &c.output)?
         }
         PlotKind::Convergence(c) => {
             let r = sweep::Results::read(&c.results)?;
-            plot::convergence(&r, &parse_filters(&c.filters)?, &title_for(&c, "convergence"), &c.output)?
+            plot::convergence(&r, &filters(&c.filters)?, &c.title_or("convergence"), &c.output)?
         }
         PlotKind::Stability { common: c, x, y, value } => {
             let r = sweep::Results::read(&c.results)?;
-            plot::stability(&r, &x, &y, &value, &parse_filters(&c.filters)?, &title_for(&c, "stability"), &c.output)?
+            plot::stability(&r, &x, &y, &value, &filters(&c.filters)?, &c.title_or("stability"), &c.output)?
         }
         PlotKind::Path { motion, output } => {
             let (m, view) = motion.load()?;
@@ -144,42 +129,85 @@ pub fn run(kind: PlotKind) -> Result<ExitCode> {
         }
         PlotKind::Scaling { inputs, label, output: out, title } => {
             check_labels(&label, &inputs)?;
-            let mut benchmarks = Vec::new();
-            for (k, p) in inputs.iter().enumerate() {
-                let (backend, points) = read_bench_csv(p)?;
-                let name = p.file_stem().map_or(String::new(), |n| n.to_string_lossy().into_owned());
-                benchmarks.push((label.get(k).cloned().unwrap_or_else(|| format!("{name} ({backend})")), points));
-            }
-            plot::scaling(&benchmarks, &title, &out)?
+            plot::scaling(&benchmarks(&inputs, &label)?, &title, &out)?
         }
         PlotKind::Trajectory { inputs, reference, label, output: out, title } => {
             check_labels(&label, &inputs)?;
-            let mut sols = Vec::new();
-            for (k, p) in inputs.iter().enumerate() {
-                if p.is_dir() && p.join("results.csv").is_file() {
-                    sols.extend(plot::sweep_solutions(p)?);
-                    continue;
-                }
-                let file = if p.is_dir() { p.join("trajectory.csv") } else { p.clone() };
-                let (t, pairing) = Table::read_paired(&file)?;
-                if let Some(w) = pairing.warning(&file) {
-                    eprintln!("warning: {w}");
-                }
-                let name = label.get(k).cloned().unwrap_or_else(|| {
-                    let base = if p.is_dir() { p.as_path() } else { p.parent().unwrap_or(p) };
-                    base.file_name().map_or(file.display().to_string(), |n| n.to_string_lossy().into_owned())
-                });
-                sols.push((name, t));
-            }
+            let sols = solutions(&inputs, &label)?;
             let verification_reference = || inputs.iter().find(|p| p.is_dir()).map(|d| d.join("reference.csv")).filter(|f| f.is_file());
             let r = reference.or_else(verification_reference).as_deref().map(Table::read).transpose()?;
             plot::trajectory(&sols, r.as_ref(), &title, &out)?
         }
     };
-    for w in written {
-        println!("wrote {}", w.display());
+    if !quiet {
+        for w in written {
+            out!("wrote {}", w.display());
+        }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+impl ResultsPlotArgs {
+    /// `--title`, else the kind of chart and the sweep directory's name:
+    /// `convergence: tumbler_convergence`.
+    fn title_or(&self, kind: &str) -> String {
+        self.title.clone().unwrap_or_else(|| {
+            let c = &self.results;
+            let dir = if c.is_dir() { c.clone() } else { c.parent().map(Path::to_path_buf).unwrap_or_default() };
+            let name = dir.file_name().map_or(String::new(), |n| format!(": {}", n.to_string_lossy()));
+            format!("{kind}{name}")
+        })
+    }
+}
+
+/// The `--where COLUMN=VALUE` filters as (column, value) pairs.
+fn filters(f: &[String]) -> Result<Vec<(String, String)>> {
+    f.iter()
+        .map(|s| {
+            s.split_once('=')
+                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+                .ok_or_else(|| anyhow::anyhow!("--where {s}: expected COLUMN=VALUE"))
+        })
+        .collect()
+}
+
+/// One line of `plot scaling`: its label and its points (N, total seconds).
+type Benchmark = (String, Vec<(f64, f64)>);
+
+/// The lines of `plot scaling`: each `bench --csv` file's points, labelled by its
+/// `--label` or by its file name and backend.
+fn benchmarks(inputs: &[PathBuf], labels: &[String]) -> Result<Vec<Benchmark>> {
+    let mut benchmarks = Vec::new();
+    for (k, p) in inputs.iter().enumerate() {
+        let (backend, points) = read_bench_csv(p)?;
+        let name = p.file_stem().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+        benchmarks.push((labels.get(k).cloned().unwrap_or_else(|| format!("{name} ({backend})")), points));
+    }
+    Ok(benchmarks)
+}
+
+/// The solutions of `plot trajectory`, labelled: a sweep directory's kept trajectories,
+/// or a solve's directory or trajectory CSV (labelled by its `--label` or its
+/// directory's name; a trajectory its summary does not vouch for gets a warning).
+fn solutions(inputs: &[PathBuf], labels: &[String]) -> Result<Vec<(String, Table)>> {
+    let mut sols = Vec::new();
+    for (k, p) in inputs.iter().enumerate() {
+        if p.is_dir() && p.join("results.csv").is_file() {
+            sols.extend(plot::sweep_solutions(p)?);
+            continue;
+        }
+        let file = if p.is_dir() { p.join("trajectory.csv") } else { p.clone() };
+        let (t, pairing) = Table::read_paired(&file)?;
+        if let Some(w) = pairing.warning(&file) {
+            note!("warning: {w}");
+        }
+        let name = labels.get(k).cloned().unwrap_or_else(|| {
+            let base = if p.is_dir() { p.as_path() } else { p.parent().unwrap_or(p) };
+            base.file_name().map_or(file.display().to_string(), |n| n.to_string_lossy().into_owned())
+        });
+        sols.push((name, t));
+    }
+    Ok(sols)
 }
 
 /// One `--label` per input at most: an extra one would label nothing (a usage error).

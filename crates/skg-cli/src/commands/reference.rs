@@ -13,6 +13,7 @@ use skg_core::solve;
 use skg_core::stepping::reference::{self, ReferenceError, ReferenceOptions};
 
 use super::load;
+use crate::stdio::out;
 
 #[derive(Args)]
 pub struct ReferenceArgs {
@@ -42,12 +43,9 @@ pub struct ReferenceArgs {
     /// Set a scene parameter, e.g. `--set sigma=1/200` (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Print only errors.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
-pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
+pub fn run(args: ReferenceArgs, quiet: bool) -> Result<ExitCode> {
     let mut set = Vec::new();
     for a in &args.set {
         set.push(Overrides::parse_assignment(a)?);
@@ -77,8 +75,8 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
         PathBuf::from("out").join(stem).join(if args.hard_walls { "reference.hard.csv" } else { "reference.regularized.csv" })
     });
     output::write_reference(&out, &scene, &args.scenario.display().to_string(), &r)?;
-    if !args.quiet {
-        println!(
+    if !quiet {
+        out!(
             "{}: {} reference, {} samples, {} steps ({} rejected), max |g| {:.1e}, max |E - E0| {:.3e}{}",
             scene.name,
             r.kind,
@@ -89,7 +87,7 @@ pub fn run(args: ReferenceArgs) -> Result<ExitCode> {
             r.energy_drift,
             if args.hard_walls { format!(", {} impacts", r.impacts.len()) } else { String::new() }
         );
-        println!("  wrote {}", out.display());
+        out!("  wrote {}", out.display());
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -1,7 +1,7 @@
 //! The default command: solve one scene and write its trajectory and summary.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -9,11 +9,14 @@ use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use skg_core::output::{self, Written};
+use skg_core::scene::{Overrides, Scene};
+use skg_core::solve;
 use skg_core::solve::backend::SolverStatus;
 use skg_core::stepping::verify::VerifyStatus;
-use skg_core::{output, solve};
 
 use super::{load, SceneArgs, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
+use crate::stdio::{note, out};
 
 #[derive(Args)]
 pub struct SolveArgs {
@@ -42,9 +45,6 @@ pub struct SolveArgs {
     /// checked between attempts: the best attempt so far is then reported.
     #[arg(long, value_name = "SECONDS", value_parser = super::positive)]
     pub time_limit: Option<f64>,
-    /// Print only errors.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 /// The backend that finished, for the summary line: `Ipopt`, `Newton`, or
@@ -57,42 +57,64 @@ fn solver_name(outcome: &solve::Outcome) -> &'static str {
     }
 }
 
-pub fn run(args: SolveArgs) -> Result<ExitCode> {
-    let path = args.scenario.expect("clap requires the scenario");
-    let mut ov = args.scene.overrides(args.nodes)?;
-    ov.refine = args.refine;
-    ov.max_nodes = args.max_nodes.map(|n| n as usize);
-    ov.time_limit = args.time_limit;
-    let mut scene = load(&path, &ov)?;
+pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
+    let path = args.scenario.clone().expect("clap requires the scenario");
+    let mut scene = load(&path, &overrides(&args)?)?;
     for n in &scene.notes {
-        eprintln!("note: {}: {n}", path.display());
+        note!("note: {}: {n}", path.display());
     }
     let dir = args.output.unwrap_or_else(|| {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
-    let spinner = progress_spinner(args.quiet, &scene.name);
-    // On a terminal the spinner names the attempt under way; elsewhere (a log, a pipe,
-    // a batch job) one plain line per attempt, so that a long solve is not silent.
-    let lines = !args.quiet && !std::io::stderr().is_terminal();
+    let (outcome, written) = solve_with_progress(&dir, &mut scene, quiet)?;
+    for w in &outcome.warnings {
+        note!("warning: {w}");
+    }
+    print_attempts(&outcome, quiet);
+    print_refinement(&outcome, quiet);
+    if let Some(code) = report_untrusted(&outcome, &written) {
+        return Ok(code);
+    }
+    if !quiet {
+        print_report(&outcome, &scene, &written);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The scene's overrides: the shared options, the node count, and the refinement's.
+fn overrides(args: &SolveArgs) -> Result<Overrides> {
+    let mut ov = args.scene.overrides(args.nodes)?;
+    ov.refine = args.refine;
+    ov.max_nodes = args.max_nodes.map(|n| n as usize);
+    ov.time_limit = args.time_limit;
+    Ok(ov)
+}
+
+/// Solve the scene into `dir`, naming each attempt as it starts: on a terminal in the
+/// spinner, elsewhere (a log, a pipe, a batch job) in one plain line per attempt, so
+/// that a long solve is not silent. Nothing with `--quiet`.
+fn solve_with_progress(dir: &Path, scene: &mut Scene, quiet: bool) -> Result<(solve::Outcome, Written)> {
+    let spinner = progress_spinner(quiet, &scene.name);
+    let lines = !quiet && !std::io::stderr().is_terminal();
     let name = scene.name.clone();
     let started = std::time::Instant::now();
-    let solved = output::solve_into_with_progress(&dir, &mut scene, &mut |attempt| {
+    let solved = output::solve_into_with_progress(dir, scene, &mut |attempt| {
         if lines {
-            eprintln!("{name}: {attempt} ({:.1} s)", started.elapsed().as_secs_f64());
+            note!("{name}: {attempt} ({:.1} s)", started.elapsed().as_secs_f64());
         }
         spinner.set_message(attempt.to_string())
     });
     spinner.finish_and_clear();
-    let (outcome, written) = solved?;
-    for w in &outcome.warnings {
-        eprintln!("warning: {w}");
-    }
+    Ok(solved?)
+}
+
+/// For a solve that did not converge or did not verify: say why, where the summary is
+/// and the remedy, and give the exit status (3 or 4). None for a trusted solve.
+fn report_untrusted(outcome: &solve::Outcome, written: &Written) -> Option<ExitCode> {
     let v = &outcome.verification;
-    print_attempts(&outcome, args.quiet);
-    print_refinement(&outcome, args.quiet);
-    if !outcome.converged() {
-        eprintln!(
+    let code = if !outcome.converged() {
+        note!(
             "error: {}: the solve did not converge: {} ({} iterations, residual {:.3e}); summary in {}",
             outcome.scene,
             outcome.status,
@@ -100,61 +122,74 @@ pub fn run(args: SolveArgs) -> Result<ExitCode> {
             outcome.diagnostics.max_residual,
             written.summary.display()
         );
-        print_remedy(&outcome);
-        return Ok(ExitCode::from(EXIT_NOT_CONVERGED));
-    }
-    if !outcome.trusted() {
+        EXIT_NOT_CONVERGED
+    } else if !outcome.trusted() {
         let verdict = match v.status {
             VerifyStatus::Unverified => "could not run",
             _ => "failed",
         };
-        eprintln!(
+        note!(
             "error: {}: the solve converged but its verification {verdict}: {}; summary in {}",
             outcome.scene,
             v.reason,
             written.summary.display()
         );
-        print_remedy(&outcome);
-        return Ok(ExitCode::from(EXIT_NOT_VERIFIED));
+        EXIT_NOT_VERIFIED
+    } else {
+        return None;
+    };
+    if let Some(r) = &outcome.remedy {
+        note!("  remedy: {r}");
     }
-    if !args.quiet {
-        let d = &outcome.diagnostics;
-        println!(
-            "{}: converged in {} {} iterations ({}), {} {} N={}{}, {:.3} s",
-            outcome.scene,
-            outcome.iterations,
-            solver_name(&outcome),
-            outcome.status,
-            outcome.settings.operator,
-            outcome.settings.formulation,
-            outcome.settings.nodes,
-            if scene.constraints.is_empty() { String::new() } else { format!(", max |g| interior {:.1e}", d.max_constraint_interior) },
-            outcome.timings.total()
-        );
-        if let skg_core::solve::Method::Windows { .. } = outcome.method {
-            println!("  solved as {}", outcome.method);
-        }
-        println!("  verified: {} ({})", v.status, v.reason);
-        let energy_note = if d.depends_on_time {
-            "; not conserved: the scene depends on t"
-        } else if scene.has_non_conservative_forces() {
-            "; not conserved: the scene has declared forces or friction"
-        } else {
-            ""
-        };
-        let excluded = match d.energy_drift_skip {
-            2 => "last two nodes excluded".to_string(),
-            k => format!("last {k} nodes excluded: the end layer of {}", outcome.settings.operator),
-        };
-        println!("  residual {:.1e}, energy drift {:.3e} ({excluded}{energy_note})", d.max_residual, d.energy_drift);
-        for (name, drift) in &d.max_position_drift {
-            println!("  position constraint {name}: drift max |h| {drift:.1e}");
-        }
-        for path in written.paths() {
-            println!("  wrote {}", path.display());
-        }
+    Some(ExitCode::from(code))
+}
+
+/// The report of a trusted solve on stdout: iterations, backend, discretization and
+/// time; how the span was solved (in windows); the verification; the residual and the
+/// energy drift; each position constraint's drift; the files written.
+fn print_report(outcome: &solve::Outcome, scene: &Scene, written: &Written) {
+    let d = &outcome.diagnostics;
+    out!(
+        "{}: converged in {} {} iterations ({}), {} {} N={}{}, {:.3} s",
+        outcome.scene,
+        outcome.iterations,
+        solver_name(outcome),
+        outcome.status,
+        outcome.settings.operator,
+        outcome.settings.formulation,
+        outcome.settings.nodes,
+        if scene.constraints.is_empty() { String::new() } else { format!(", max |g| interior {:.1e}", d.max_constraint_interior) },
+        outcome.timings.total()
+    );
+    if let solve::Method::Windows { .. } = outcome.method {
+        out!("  solved as {}", outcome.method);
     }
-    Ok(ExitCode::SUCCESS)
+    out!("  verified: {} ({})", outcome.verification.status, outcome.verification.reason);
+    out!("  residual {:.1e}, energy drift {:.3e} ({})", d.max_residual, d.energy_drift, energy_drift_note(outcome, scene));
+    for (name, drift) in &d.max_position_drift {
+        out!("  position constraint {name}: drift max |h| {drift:.1e}");
+    }
+    for path in written.paths() {
+        out!("  wrote {}", path.display());
+    }
+}
+
+/// Which nodes the energy drift leaves out, and why the energy is not conserved when it
+/// is not: `last two nodes excluded; not conserved: the scene depends on t`.
+fn energy_drift_note(outcome: &solve::Outcome, scene: &Scene) -> String {
+    let d = &outcome.diagnostics;
+    let excluded = match d.energy_drift_skip {
+        2 => "last two nodes excluded".to_string(),
+        k => format!("last {k} nodes excluded: the end layer of {}", outcome.settings.operator),
+    };
+    let conserved = if d.depends_on_time {
+        "; not conserved: the scene depends on t"
+    } else if scene.has_non_conservative_forces() {
+        "; not conserved: the scene has declared forces or friction"
+    } else {
+        ""
+    };
+    format!("{excluded}{conserved}")
 }
 
 /// A spinner on stderr naming the attempt under way, with the time so far (drawn only
@@ -178,9 +213,9 @@ fn print_attempts(outcome: &solve::Outcome, quiet: bool) {
     if outcome.attempts.len() < 2 || (quiet && outcome.trusted()) {
         return;
     }
-    eprintln!("note: the scene's own solve was not trusted; the fallback ladder tried:");
+    note!("note: the scene's own solve was not trusted; the fallback ladder tried:");
     for (i, a) in outcome.attempts.iter().enumerate() {
-        eprintln!("  {}. {}{} ({:.2} s): {}", i + 1, a.method, if a.chosen { " [reported]" } else { "" }, a.wall_s, a.result);
+        note!("  {}. {}{} ({:.2} s): {}", i + 1, a.method, if a.chosen { " [reported]" } else { "" }, a.wall_s, a.result);
     }
 }
 
@@ -196,10 +231,10 @@ fn print_refinement(outcome: &solve::Outcome, quiet: bool) {
         (true, false) => "refined the grid",
         (false, _) => "chose the operator",
     };
-    eprintln!("note: {what} for the tolerance ({}):", r.tolerance);
+    note!("note: {what} for the tolerance ({}):", r.tolerance);
     for (i, g) in r.grids.iter().enumerate() {
         let ratio = |x: Option<f64>| x.map_or("–".to_string(), |x| format!("{x:.2}"));
-        eprintln!(
+        note!(
             "  {}. {} ({}) on {} nodes: {} (error/tolerance {}, predicted {}) ({:.2} s)",
             i + 1,
             g.operator,
@@ -211,12 +246,5 @@ fn print_refinement(outcome: &solve::Outcome, quiet: bool) {
             g.wall_s
         );
     }
-    eprintln!("  {}", r.result);
-}
-
-/// Print what to do about a result that cannot be trusted.
-fn print_remedy(outcome: &solve::Outcome) {
-    if let Some(r) = &outcome.remedy {
-        eprintln!("  remedy: {r}");
-    }
+    note!("  {}", r.result);
 }

@@ -3,12 +3,13 @@
 //! knows them.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, Result};
 use clap::Args;
 
+use crate::stdio::out;
 use skg_sweep::shards::{self, ShardLayout, ShardState};
 use skg_sweep::slurm::{self, JobState, JobsFile};
 use skg_sweep::SweepInfo;
@@ -20,22 +21,30 @@ pub struct StatusArgs {
     pub dir: PathBuf,
 }
 
-pub fn run(args: StatusArgs) -> Result<ExitCode> {
+pub fn run(args: StatusArgs, quiet: bool) -> Result<ExitCode> {
     let dir = &args.dir;
-    match ShardLayout::read(dir)? {
+    let lines = match ShardLayout::read(dir)? {
         Some(layout) => sharded(dir, &layout)?,
-        None if dir.join("sweep.json").is_file() => {
-            let info = SweepInfo::read(dir)?;
-            let state = shards::results_state(dir)?;
-            println!("{}: {} points in {}", info.name, state.points, dir.display());
-            println!("  {}", counts(&state));
-            if let Some(s) = &info.shard {
-                println!("  (shard {s} of the sweep's {} points)", info.total_points);
-            }
-        }
+        None if dir.join("sweep.json").is_file() => unsharded(dir)?,
         None => bail!("{}: not a sweep directory (no sweep.json and no {})", dir.display(), shards::LAYOUT_FILE),
+    };
+    if !quiet {
+        for line in lines {
+            out!("{line}");
+        }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The report on a sweep run without --slurm (one results.csv, maybe one shard's).
+fn unsharded(dir: &Path) -> Result<Vec<String>> {
+    let info = SweepInfo::read(dir)?;
+    let state = shards::results_state(dir)?;
+    let mut lines = vec![format!("{}: {} points in {}", info.name, state.points, dir.display()), format!("  {}", counts(&state))];
+    if let Some(s) = &info.shard {
+        lines.push(format!("  (shard {s} of the sweep's {} points)", info.total_points));
+    }
+    Ok(lines)
 }
 
 /// `9 converged, 1 failed (1 not_converged), 2 missing`.
@@ -50,10 +59,47 @@ fn counts(s: &ShardState) -> String {
     )
 }
 
-fn sharded(dir: &std::path::Path, layout: &ShardLayout) -> Result<()> {
+/// The report on a sweep run with --slurm: the totals, whether it is merged, the latest
+/// submission's jobs, and a table of the shards.
+fn sharded(dir: &Path, layout: &ShardLayout) -> Result<Vec<String>> {
     let states = shards::shard_states(dir, layout)?;
-    let mut total = ShardState { points: layout.total_points, ..ShardState::default() };
+    let mut lines = vec![
+        format!(
+            "{}: {} points in {} shards in {} ({})",
+            layout.name,
+            layout.total_points,
+            layout.shards,
+            dir.display(),
+            layout.sweep_file.display()
+        ),
+        format!("  {}", counts(&total(layout, &states))),
+        if shards::merged(dir) {
+            format!("  merged: {} holds every point", dir.join("results.csv").display())
+        } else {
+            format!("  not merged yet ({})", super::sweep::slurm::incomplete_text(layout, &states))
+        },
+    ];
+    let jobs = slurm_jobs(dir)?;
+    lines.extend(jobs.line);
+    lines.push(format!("  {:>5} {:>7} {:>9} {:>7} {:>8}  slurm", "shard", "points", "converged", "failed", "missing"));
     for s in &states {
+        lines.push(format!(
+            "  {:>5} {:>7} {:>9} {:>7} {:>8}  {}",
+            s.k,
+            s.points,
+            s.converged,
+            s.failed,
+            s.missing,
+            jobs.tasks.get(&s.k).map_or("", String::as_str)
+        ));
+    }
+    Ok(lines)
+}
+
+/// The counts of every shard together.
+fn total(layout: &ShardLayout, states: &[ShardState]) -> ShardState {
+    let mut total = ShardState { points: layout.total_points, ..ShardState::default() };
+    for s in states {
         total.converged += s.converged;
         total.failed += s.failed;
         total.missing += s.missing;
@@ -61,66 +107,47 @@ fn sharded(dir: &std::path::Path, layout: &ShardLayout) -> Result<()> {
             *total.statuses.entry(k.clone()).or_insert(0) += n;
         }
     }
-    println!(
-        "{}: {} points in {} shards in {} ({})",
-        layout.name,
-        layout.total_points,
-        layout.shards,
-        dir.display(),
-        layout.sweep_file.display()
-    );
-    println!("  {}", counts(&total));
-    if shards::merged(dir) {
-        println!("  merged: {} holds every point", dir.join("results.csv").display());
-    } else {
-        println!("  not merged yet ({})", super::slurm::incomplete_text(layout, &states));
-    }
-    // The Slurm jobs of the latest submission, while Slurm knows them.
+    total
+}
+
+/// The Slurm jobs of the latest submission, while Slurm knows them: a line on the
+/// submission (none before the first), and the state of each shard's array task.
+struct SlurmJobs {
+    line: Option<String>,
+    tasks: BTreeMap<usize, String>,
+}
+
+fn slurm_jobs(dir: &Path) -> Result<SlurmJobs> {
     let jobs = JobsFile::read(dir)?;
-    let mut task_state: BTreeMap<usize, String> = BTreeMap::new();
-    if let Some(last) = jobs.submissions.last() {
-        let ids = last.job_ids();
-        let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
-        let when = ago(now.saturating_sub(last.submitted_unix));
-        match slurm::job_states(&ids) {
-            Ok(states) => {
-                let find = |id: &Option<String>| -> String {
-                    id.as_ref().map_or("not submitted".into(), |id| {
-                        states.iter().find(|s| &s.id == id).map_or("ended (no longer known to Slurm)".into(), describe)
-                    })
-                };
-                if let Some(a) = &last.array_job {
-                    for s in &states {
-                        if let Some(k) = s.task_of(a) {
-                            task_state.insert(k, describe(s));
-                        }
-                    }
-                }
-                println!(
-                    "  Slurm, submission {} ({when}): array job {} (shards {}), merge job {}: {}",
-                    jobs.submissions.len(),
-                    last.array_job.as_deref().unwrap_or("none"),
-                    if last.shards.is_empty() { "none".into() } else { slurm::array_spec(&last.shards) },
-                    last.merge_job.as_deref().unwrap_or("none"),
-                    find(&last.merge_job)
-                );
+    let mut tasks: BTreeMap<usize, String> = BTreeMap::new();
+    let Some(last) = jobs.submissions.last() else { return Ok(SlurmJobs { line: None, tasks }) };
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let when = ago(now.saturating_sub(last.submitted_unix));
+    let states = match slurm::job_states(&last.job_ids()) {
+        Ok(states) => states,
+        Err(e) => return Ok(SlurmJobs { line: Some(format!("  Slurm states not shown: {e}")), tasks }),
+    };
+    let find = |id: &Option<String>| -> String {
+        id.as_ref().map_or("not submitted".into(), |id| {
+            states.iter().find(|s| &s.id == id).map_or("ended (no longer known to Slurm)".into(), describe)
+        })
+    };
+    if let Some(a) = &last.array_job {
+        for s in &states {
+            if let Some(k) = s.task_of(a) {
+                tasks.insert(k, describe(s));
             }
-            Err(e) => println!("  Slurm states not shown: {e}"),
         }
     }
-    println!("  {:>5} {:>7} {:>9} {:>7} {:>8}  slurm", "shard", "points", "converged", "failed", "missing");
-    for s in &states {
-        println!(
-            "  {:>5} {:>7} {:>9} {:>7} {:>8}  {}",
-            s.k,
-            s.points,
-            s.converged,
-            s.failed,
-            s.missing,
-            task_state.get(&s.k).map_or("", String::as_str)
-        );
-    }
-    Ok(())
+    let line = format!(
+        "  Slurm, submission {} ({when}): array job {} (shards {}), merge job {}: {}",
+        jobs.submissions.len(),
+        last.array_job.as_deref().unwrap_or("none"),
+        if last.shards.is_empty() { "none".into() } else { slurm::array_spec(&last.shards) },
+        last.merge_job.as_deref().unwrap_or("none"),
+        find(&last.merge_job)
+    );
+    Ok(SlurmJobs { line: Some(line), tasks })
 }
 
 /// `RUNNING`, `PENDING (Dependency)`.

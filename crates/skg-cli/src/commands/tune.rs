@@ -10,6 +10,7 @@ use skg_core::output;
 use skg_core::scene::SceneFile;
 
 use super::SceneArgs;
+use crate::stdio::{note, out};
 
 #[derive(Args)]
 pub struct TuneArgs {
@@ -41,7 +42,7 @@ pub struct TuneArgs {
     pub scene: SceneArgs,
 }
 
-pub fn run(args: TuneArgs) -> Result<ExitCode> {
+pub fn run(args: TuneArgs, quiet: bool) -> Result<ExitCode> {
     let ov = args.scene.overrides(args.nodes)?;
     let file = SceneFile::load(&args.scenario)?;
     let opts = skg_core::tune::TuneOptions {
@@ -53,7 +54,10 @@ pub fn run(args: TuneArgs) -> Result<ExitCode> {
         ..Default::default()
     };
     let r = skg_core::tune::tune_width(&file, &ov, &opts, |s| {
-        eprintln!(
+        if quiet {
+            return;
+        }
+        note!(
             "  {:.6e}: {} artifact {:.3e} → {} ({:.2} s)",
             s.value,
             if s.status.is_converged() { "converged," } else { "not converged," },
@@ -63,9 +67,14 @@ pub fn run(args: TuneArgs) -> Result<ExitCode> {
         );
     })?;
     for n in &r.notes {
-        eprintln!("note: {n}");
+        note!("note: {n}");
     }
-    println!(
+    let out = args.output.unwrap_or_else(|| skg_core::tune::default_output(&args.scenario));
+    output::write_json(&out, &r)?;
+    if quiet {
+        return Ok(ExitCode::SUCCESS);
+    }
+    out!(
         "{} = {:.6e} (1/{:.1}): the smallest value without energy artifacts above {:e} at N = {}{}",
         r.param,
         r.chosen,
@@ -74,8 +83,6 @@ pub fn run(args: TuneArgs) -> Result<ExitCode> {
         r.nodes,
         r.failing.map_or(String::new(), |f| format!("; {:.6e} (1/{:.1}) has artifacts", f, 1.0 / f))
     );
-    let out = args.output.unwrap_or_else(|| skg_core::tune::default_output(&args.scenario));
-    output::write_json(&out, &r)?;
-    println!("  wrote {}", out.display());
+    out!("  wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -133,16 +133,34 @@ pub struct ParseHessianModeError {
     pub input: String,
 }
 
+impl HessianMode {
+    /// Every mode, in the order the command line's help lists them.
+    pub const ALL: [HessianMode; 2] = [HessianMode::Zero, HessianMode::Exact];
+
+    /// The mode's name in a scene file and on the command line: `zero` or `exact`.
+    pub fn name(self) -> &'static str {
+        match self {
+            HessianMode::Zero => "zero",
+            HessianMode::Exact => "exact",
+        }
+    }
+}
+
 impl std::str::FromStr for HessianMode {
     type Err = ParseHessianModeError;
 
     /// Case-insensitive: `zero` or `exact`.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.to_ascii_lowercase().as_str() {
-            "zero" => Ok(HessianMode::Zero),
-            "exact" => Ok(HessianMode::Exact),
-            _ => Err(ParseHessianModeError { input: s.to_string() }),
-        }
+        HessianMode::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(s))
+            .ok_or_else(|| ParseHessianModeError { input: s.to_string() })
+    }
+}
+
+impl fmt::Display for HessianMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
     }
 }
 

@@ -1,4 +1,8 @@
-//! `skg-solve sweep`, `merge` and the hidden `sweep-worker`.
+//! `skg-solve sweep` (local worker processes), `merge` and the hidden `sweep-worker`;
+//! the arguments of `sweep`, which [`slurm`] (`sweep --slurm` and the hidden
+//! `sweep-merge`) shares. This module only declares [`slurm`]: `main` dispatches
+//! `sweep --slurm` there, and the child uses the parent's [`SweepArgs`], not the other
+//! way round.
 //!
 //! The layout of `results.csv` and `sweep.json` is documented in the `skg_sweep` crate;
 //! [`sweep_long_about`] is its summary in `skg-solve sweep --help`. In short: a
@@ -12,7 +16,10 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Args;
 
+use crate::stdio::{note, out};
 use skg_sweep as sweep;
+
+pub mod slurm;
 
 /// `skg-solve sweep --help`: what the command writes (column lists from `skg_sweep`).
 pub fn sweep_long_about() -> String {
@@ -61,9 +68,6 @@ pub struct SweepArgs {
     /// Run only the points whose index is k−1 mod n (1 ≤ k ≤ n), e.g. `--shard 3/8`.
     #[arg(long, value_name = "k/n")]
     pub shard: Option<sweep::Shard>,
-    /// No progress bar and no summary line.
-    #[arg(short, long)]
-    pub quiet: bool,
     /// Run again the points that did not converge in an earlier run (crashed, timed out,
     /// errors, not converged): their rows in results.csv are replaced.
     #[arg(long)]
@@ -116,39 +120,37 @@ pub struct MergeArgs {
     pub partial: bool,
 }
 
-pub fn run(args: SweepArgs) -> Result<ExitCode> {
+/// `skg-solve sweep FILE` without `--slurm`: the points in local worker processes.
+pub fn run(args: SweepArgs, quiet: bool) -> Result<ExitCode> {
     let file = sweep::SweepFile::load(&args.sweep)?;
-    if args.slurm {
-        return super::slurm::run(&args, &file);
-    }
     let opts = sweep::SweepOptions {
         out_dir: args.output.unwrap_or_else(|| sweep::default_out_dir(&file)),
         jobs: args.jobs.unwrap_or_else(sweep::default_jobs).max(1),
         shard: args.shard,
         worker_exe: std::env::current_exe().context("locating the skg-solve executable for the workers")?,
-        progress: !args.quiet,
+        progress: !quiet,
         retry_failed: args.retry_failed,
         new_results: args.new_results,
     };
     let plan = sweep::plan(&file, &opts, args.yes)?;
-    if !args.quiet {
-        eprintln!("{}", plan.text);
+    if !quiet {
+        note!("{}", plan.text);
     }
     // SIGTERM (scancel, a Slurm time limit) and Ctrl-C stop the sweep between two rows;
     // then this process dies of the same signal.
     sweep::stop_on_signals();
     let r = match sweep::run_sweep(&file, &plan.expanded, &opts) {
         Err(e @ sweep::SweepError::Stopped { signal, .. }) => {
-            eprintln!("{e}");
+            note!("{e}");
             sweep::die_of(signal)
         }
         r => r?,
     };
-    if !args.quiet {
+    if !quiet {
         if let Some(old) = &r.superseded {
-            println!("  moved the previous results to {}", old.display());
+            out!("  moved the previous results to {}", old.display());
         }
-        println!(
+        out!(
             "{}: {} points{}, {} already done, {} run ({} failed) with {} worker(s) in {:.1} s{}",
             file.name(),
             r.total,
@@ -160,7 +162,7 @@ pub fn run(args: SweepArgs) -> Result<ExitCode> {
             r.wall_s,
             if r.duplicates > 0 { format!("; {} duplicate points dropped", r.duplicates) } else { String::new() }
         );
-        println!("  wrote {}", r.results.display());
+        out!("  wrote {}", r.results.display());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -170,30 +172,22 @@ pub fn run_worker(work: &Path) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// `skg-solve sweep-merge DIR` (hidden): the merge job of a sweep on Slurm.
-pub fn run_merge_shards(dir: &Path) -> Result<ExitCode> {
-    let r = sweep::shards::merge_shards(dir)?;
-    println!("merged {} rows into {}: every point of the sweep ({}) is present", r.rows, dir.join("results.csv").display(), r.total);
-    Ok(ExitCode::SUCCESS)
-}
-
-pub fn run_merge(args: MergeArgs) -> Result<ExitCode> {
+pub fn run_merge(args: MergeArgs, quiet: bool) -> Result<ExitCode> {
     let r = sweep::merge(&args.inputs, &args.output, args.partial)?;
-    println!(
-        "merged {} rows into {}{}",
-        r.rows,
-        args.output.join("results.csv").display(),
-        if r.duplicates > 0 { format!("; {} duplicate rows dropped", r.duplicates) } else { String::new() },
-    );
-    if r.missing.is_empty() {
-        println!("every point of the sweep ({}) is present", r.total);
-    } else {
-        eprintln!(
-            "warning: {} of the sweep's {} points are missing (--partial): {}",
-            r.missing.len(),
-            r.total,
-            sweep::list_points(&r.missing)
+    if !quiet {
+        out!(
+            "merged {} rows into {}{}",
+            r.rows,
+            args.output.join("results.csv").display(),
+            if r.duplicates > 0 { format!("; {} duplicate rows dropped", r.duplicates) } else { String::new() },
         );
+    }
+    if r.missing.is_empty() {
+        if !quiet {
+            out!("every point of the sweep ({}) is present", r.total);
+        }
+    } else {
+        note!("warning: {} of the sweep's {} points are missing (--partial): {}", r.missing.len(), r.total, sweep::list_points(&r.missing));
     }
     Ok(ExitCode::SUCCESS)
 }
