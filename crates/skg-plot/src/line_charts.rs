@@ -65,6 +65,31 @@ pub fn work_precision(res: &Results, filters: &[(String, String)], title: &str, 
 /// other axes (e.g. `backend`) when there are several.
 pub fn tolerance(res: &Results, filters: &[(String, String)], title: &str, stem: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let rows = filtered(res, filters)?;
+    let (refined, peer) = tolerance_points(res, &rows)?;
+    if refined.is_empty() {
+        return Err(PlotError::Data("no converged refined point has a tolerance, an error and a wall time".into()));
+    }
+    let (accuracy, time) = tolerance_lines(refined, peer);
+    const TOL_AXIS: &str = "tolerance asked (verify_tol; rtol for time stepping)";
+    fn chart(stem: &Path, title: &str, ydesc: &str, lines: &[Line]) -> Result<Vec<PathBuf>, PlotError> {
+        render!(stem, SIZE, draw_loglog(title, TOL_AXIS, ydesc, lines))
+    }
+    let mut written = chart(stem, title, "max error against the reference", &accuracy)?;
+    let time_stem = stem.with_file_name(format!("{}-time", stem.file_name().map_or("tolerance".into(), |n| n.to_string_lossy())));
+    written.extend(chart(&time_stem, &format!("{title}: wall time"), "wall time [s]", &time)?);
+    Ok(written)
+}
+
+/// The refined points of a tolerance sweep by line label (by backend when the sweep has
+/// that axis): (tolerance asked, error, wall time, tag " operator N").
+type Refined = BTreeMap<String, Vec<(f64, f64, f64, String)>>;
+
+/// The peer's points of a tolerance sweep: (rtol, error, wall time).
+type Peer = Vec<(f64, f64, f64)>;
+
+/// The points of [`tolerance`]: the converged refined points and the peer's, sorted from
+/// the loosest rtol.
+fn tolerance_points(res: &Results, rows: &[&Vec<String>]) -> Result<(Refined, Peer), PlotError> {
     let (im, io, inodes, itol, iw, ie, irtol) = (
         col(res, "method")?,
         col(res, "operator")?,
@@ -75,9 +100,9 @@ pub fn tolerance(res: &Results, filters: &[(String, String)], title: &str, stem:
         col(res, "rtol")?,
     );
     let ib = col(res, "backend").ok();
-    let mut refined: BTreeMap<String, Vec<(f64, f64, f64, String)>> = BTreeMap::new();
-    let mut peer: Vec<(f64, f64, f64)> = Vec::new();
-    for r in &rows {
+    let mut refined: Refined = BTreeMap::new();
+    let mut peer: Peer = Vec::new();
+    for r in rows {
         if r[im] == "ode" {
             if let (Some(rtol), Some(e), Some(w)) = (cell_value(&r[irtol]), cell_value(&r[ie]), cell_value(&r[iw])) {
                 peer.push((rtol, e, w));
@@ -92,10 +117,14 @@ pub fn tolerance(res: &Results, filters: &[(String, String)], title: &str, stem:
             refined.entry(label).or_default().push((tol, e, w, format!(" {} {}", r[io], r[inodes])));
         }
     }
-    if refined.is_empty() {
-        return Err(PlotError::Data("no converged refined point has a tolerance, an error and a wall time".into()));
-    }
     peer.sort_by(|a, b| b.0.total_cmp(&a.0));
+    Ok((refined, peer))
+}
+
+/// The lines of the two charts of [`tolerance`]: the error and the wall time over the
+/// tolerance asked, each refined line and the peer's, and on the first the line
+/// "reached = asked" across the tolerances asked.
+fn tolerance_lines(refined: Refined, peer: Peer) -> (Vec<Line>, Vec<Line>) {
     let mut accuracy = Vec::new();
     let mut time = Vec::new();
     for (i, (label, mut pts)) in refined.into_iter().enumerate() {
@@ -131,14 +160,7 @@ pub fn tolerance(res: &Results, filters: &[(String, String)], title: &str, stem:
         color: RGBColor(150, 150, 150),
         dashed: true,
     });
-    const TOL_AXIS: &str = "tolerance asked (verify_tol; rtol for time stepping)";
-    fn chart(stem: &Path, title: &str, ydesc: &str, lines: &[Line]) -> Result<Vec<PathBuf>, PlotError> {
-        render!(stem, SIZE, draw_loglog(title, TOL_AXIS, ydesc, lines))
-    }
-    let mut written = chart(stem, title, "max error against the reference", &accuracy)?;
-    let time_stem = stem.with_file_name(format!("{}-time", stem.file_name().map_or("tolerance".into(), |n| n.to_string_lossy())));
-    written.extend(chart(&time_stem, &format!("{title}: wall time"), "wall time [s]", &time)?);
-    Ok(written)
+    (accuracy, time)
 }
 
 /// Scaling chart: solve time versus N, log-log, one line per benchmark (label and

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use skg_sweep::{PointStatus, Results};
 
@@ -41,6 +42,39 @@ impl Cell {
     }
 }
 
+/// The colour of a cell of this state.
+fn fill(c: Cell) -> RGBColor {
+    match c {
+        Cell::Converged => RGBColor(120, 190, 120),
+        Cell::Artifacts => RGBColor(245, 180, 80),
+        Cell::NotVerified => RGBColor(170, 130, 210),
+        Cell::Failed => RGBColor(215, 80, 80),
+    }
+}
+
+/// The colour of a cell without a point.
+const NOT_RUN: RGBColor = RGBColor(225, 225, 225);
+
+/// The key above the map: a swatch and the name of each state.
+fn draw_key<DB: DrawingBackend<ErrorType: 'static>>(strip: &DrawingArea<DB, Shift>) -> Result<(), DrawError> {
+    let mut x = 90;
+    for (name, c) in [
+        ("verified", Some(Cell::Converged)),
+        ("verified, energy artifacts", Some(Cell::Artifacts)),
+        ("not verified", Some(Cell::NotVerified)),
+        ("failed", Some(Cell::Failed)),
+        ("not run", None),
+    ] {
+        let col = c.map_or(NOT_RUN, fill);
+        strip.draw(&Rectangle::new([(x, 6), (x + 16, 20)], col.filled()))?;
+        strip.draw(&Text::new(name, (x + 22, 6), ("sans-serif", 13)))?;
+        x += 30 + 8 * name.len() as i32;
+    }
+    Ok(())
+}
+
+/// The map: the key above a grid of `xs` × `ys` cells, each filled by its state and
+/// labelled with its value.
 fn draw_stability<DB: DrawingBackend<ErrorType: 'static>>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
@@ -52,28 +86,9 @@ fn draw_stability<DB: DrawingBackend<ErrorType: 'static>>(
 ) -> Result<(), DrawError> {
     root.fill(&WHITE)?;
     let (nx, ny) = (xs.len() as i32, ys.len() as i32);
-    let fill = |c: Cell| match c {
-        Cell::Converged => RGBColor(120, 190, 120),
-        Cell::Artifacts => RGBColor(245, 180, 80),
-        Cell::NotVerified => RGBColor(170, 130, 210),
-        Cell::Failed => RGBColor(215, 80, 80),
-    };
     let root = root.titled(title, ("sans-serif", 20))?;
     let (strip, main) = root.split_vertically(28);
-    // Legend strip above the map.
-    let mut x = 90;
-    for (name, c) in [
-        ("verified", Some(Cell::Converged)),
-        ("verified, energy artifacts", Some(Cell::Artifacts)),
-        ("not verified", Some(Cell::NotVerified)),
-        ("failed", Some(Cell::Failed)),
-        ("not run", None),
-    ] {
-        let col = c.map_or(RGBColor(225, 225, 225), fill);
-        strip.draw(&Rectangle::new([(x, 6), (x + 16, 20)], col.filled()))?;
-        strip.draw(&Text::new(name, (x + 22, 6), ("sans-serif", 13)))?;
-        x += 30 + 8 * name.len() as i32;
-    }
+    draw_key(&strip)?;
     let mut chart = ChartBuilder::on(&main)
         .margin(12)
         .x_label_area_size(40)
@@ -96,7 +111,7 @@ fn draw_stability<DB: DrawingBackend<ErrorType: 'static>>(
         .draw()?;
     for i in 0..nx {
         for j in 0..ny {
-            let (c, val) = cells.get(&(i as usize, j as usize)).copied().map_or((RGBColor(225, 225, 225), None), |(c, v)| (fill(c), v));
+            let (c, val) = cells.get(&(i as usize, j as usize)).copied().map_or((NOT_RUN, None), |(c, v)| (fill(c), v));
             chart.draw_series(std::iter::once(Rectangle::new(
                 [(SegmentValue::Exact(i), SegmentValue::Exact(j)), (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1))],
                 c.filled(),
@@ -109,10 +124,7 @@ fn draw_stability<DB: DrawingBackend<ErrorType: 'static>>(
                 chart.draw_series(std::iter::once(Text::new(
                     sci(v),
                     (SegmentValue::CenterOf(i), SegmentValue::CenterOf(j)),
-                    ("sans-serif", 12).into_font().color(&BLACK).pos(plotters::style::text_anchor::Pos::new(
-                        plotters::style::text_anchor::HPos::Center,
-                        plotters::style::text_anchor::VPos::Center,
-                    )),
+                    ("sans-serif", 12).into_font().color(&BLACK).pos(Pos::new(HPos::Center, VPos::Center)),
                 )))?;
             }
         }

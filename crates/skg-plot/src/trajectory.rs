@@ -20,6 +20,7 @@ fn coordinates(t: &Table) -> Vec<String> {
     t.columns.iter().filter(|c| *c != "t" && t.index(&format!("{c}{}", skg_core::scene::VELOCITY_SUFFIX)).is_some()).cloned().collect()
 }
 
+/// The chart: the coordinates over time in the left panel, the energy in the right one.
 fn draw_trajectory<DB: DrawingBackend<ErrorType: 'static>>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
@@ -29,8 +30,19 @@ fn draw_trajectory<DB: DrawingBackend<ErrorType: 'static>>(
     root.fill(&WHITE)?;
     let root = root.titled(title, ("sans-serif", 20))?;
     let panels = root.split_evenly((1, 2));
+    draw_panel(&panels[0], "coordinates", "q", coordinate_series(solutions, reference))?;
+    let energy = energy_series(solutions, reference);
+    if energy.is_empty() {
+        return Err(DrawError::no_data("no `energy` column in the solution"));
+    }
+    draw_panel(&panels[1], "energy (without the wall potential)", "E [J]", energy)
+}
+
+/// The coordinates (those of the first solution) over time: the reference's in black,
+/// then each solution's, coloured by coordinate for one solution and by solution for
+/// several.
+fn coordinate_series(solutions: &[(String, Table)], reference: Option<&Table>) -> Vec<Series> {
     let coords = coordinates(&solutions[0].1);
-    // Left: coordinates over time.
     let mut series: Vec<Series> = Vec::new();
     if let Some(r) = reference {
         let ts = r.times();
@@ -50,7 +62,13 @@ fn draw_trajectory<DB: DrawingBackend<ErrorType: 'static>>(
             }
         }
     }
-    let energy: Vec<Series> = reference
+    series
+}
+
+/// The energy over time of the reference (in black) and of each solution that has an
+/// `energy` column.
+fn energy_series(solutions: &[(String, Table)], reference: Option<&Table>) -> Vec<Series> {
+    reference
         .and_then(|r| {
             r.column("energy").map(|e| ("reference".to_string(), r.times().into_iter().zip(e).collect(), RGBColor(0, 0, 0), true))
         })
@@ -58,50 +76,52 @@ fn draw_trajectory<DB: DrawingBackend<ErrorType: 'static>>(
         .chain(solutions.iter().enumerate().filter_map(|(si, (label, t))| {
             t.column("energy").map(|e| (label.clone(), t.times().into_iter().zip(e).collect(), color(si), false))
         }))
-        .collect();
-    let panel = |area: &DrawingArea<DB, Shift>, name: &str, ydesc: &str, data: Vec<Series>| -> Result<(), DrawError> {
-        let xs = data.iter().flat_map(|d| d.1.iter().map(|p| p.0));
-        let (x0, x1) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
-        let (y0, y1) = data
-            .iter()
-            .flat_map(|d| d.1.iter().map(|p| p.1))
-            .filter(|y| y.is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(y), b.max(y)));
-        if x0.partial_cmp(&x1) != Some(std::cmp::Ordering::Less) || !y0.is_finite() {
-            return Err(DrawError::no_data(format!("no data for the {name} panel")));
-        }
-        let pad = ((y1 - y0) * 0.08).max(1e-9 * y1.abs().max(1.0));
-        let mut chart = ChartBuilder::on(area)
-            .caption(name, ("sans-serif", 15))
-            .margin(8)
-            .x_label_area_size(35)
-            .y_label_area_size(55)
-            .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))?;
-        chart.configure_mesh().x_desc("t [s]").y_desc(ydesc).label_style(("sans-serif", 12)).light_line_style(WHITE).draw()?;
-        for (label, pts, c, is_reference) in data {
-            if is_reference {
-                chart
-                    .draw_series(LineSeries::new(pts, ShapeStyle::from(&c).stroke_width(1)))?
-                    .label(label)
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(1)));
-            } else {
-                // The solver's nodes as markers (thinned beyond ~150 per line) on a thin line.
-                let every = pts.len().div_ceil(150).max(1);
-                chart.draw_series(pts.iter().step_by(every).map(|&p| Circle::new(p, 2, c.filled())))?;
-                chart
-                    .draw_series(LineSeries::new(pts, ShapeStyle::from(&c.mix(0.6)).stroke_width(1)))?
-                    .label(label)
-                    .legend(move |(x, y)| Circle::new((x + 9, y), 3, c.filled()));
-            }
-        }
-        draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 11)?;
-        Ok(())
-    };
-    panel(&panels[0], "coordinates", "q", series)?;
-    if energy.is_empty() {
-        return Err(DrawError::no_data("no `energy` column in the solution"));
+        .collect()
+}
+
+/// One panel of time series over the data's time span, its values padded by 8 %: a
+/// reference as a thin line, a solution as dots at its nodes on a thin line.
+fn draw_panel<DB: DrawingBackend<ErrorType: 'static>>(
+    area: &DrawingArea<DB, Shift>,
+    name: &str,
+    ydesc: &str,
+    data: Vec<Series>,
+) -> Result<(), DrawError> {
+    let xs = data.iter().flat_map(|d| d.1.iter().map(|p| p.0));
+    let (x0, x1) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+    let (y0, y1) = data
+        .iter()
+        .flat_map(|d| d.1.iter().map(|p| p.1))
+        .filter(|y| y.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(y), b.max(y)));
+    if x0.partial_cmp(&x1) != Some(std::cmp::Ordering::Less) || !y0.is_finite() {
+        return Err(DrawError::no_data(format!("no data for the {name} panel")));
     }
-    panel(&panels[1], "energy (without the wall potential)", "E [J]", energy)?;
+    let pad = ((y1 - y0) * 0.08).max(1e-9 * y1.abs().max(1.0));
+    let mut chart = ChartBuilder::on(area)
+        .caption(name, ("sans-serif", 15))
+        .margin(8)
+        .x_label_area_size(35)
+        .y_label_area_size(55)
+        .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))?;
+    chart.configure_mesh().x_desc("t [s]").y_desc(ydesc).label_style(("sans-serif", 12)).light_line_style(WHITE).draw()?;
+    for (label, pts, c, is_reference) in data {
+        if is_reference {
+            chart
+                .draw_series(LineSeries::new(pts, ShapeStyle::from(&c).stroke_width(1)))?
+                .label(label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(1)));
+        } else {
+            // The solver's nodes as markers (thinned beyond ~150 per line) on a thin line.
+            let every = pts.len().div_ceil(150).max(1);
+            chart.draw_series(pts.iter().step_by(every).map(|&p| Circle::new(p, 2, c.filled())))?;
+            chart
+                .draw_series(LineSeries::new(pts, ShapeStyle::from(&c.mix(0.6)).stroke_width(1)))?
+                .label(label)
+                .legend(move |(x, y)| Circle::new((x + 9, y), 3, c.filled()));
+        }
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 11)?;
     Ok(())
 }
 

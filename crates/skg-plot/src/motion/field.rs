@@ -15,7 +15,7 @@ impl Scenery<'_> {
     pub(super) fn fields(&self, at: &At, xr: (f64, f64), yr: (f64, f64), grid: usize) -> Vec<Vec<f64>> {
         let model = &self.motion.model;
         let walls = self.motion.scene.walls.len();
-        let positions = self.boundaries_len_hint();
+        let positions = self.position_constraints();
         let mut out = vec![Vec::with_capacity(grid * grid); walls + positions];
         let mut ws = model.workspace();
         let step = |r: (f64, f64), i: usize| r.0 + (r.1 - r.0) * i as f64 / (grid - 1) as f64;
@@ -23,20 +23,7 @@ impl Scenery<'_> {
             let yy = step(yr, j);
             for i in 0..grid {
                 let xx = step(xr, i);
-                let (mut t, mut q, mut v) = match at {
-                    At::State { t, q, v } => (*t, q.clone(), v.clone()),
-                    At::Timeline => {
-                        let t = if self.xv == Var::Time { xx } else { yy };
-                        (t, interpolate(&self.times, &self.q, t), interpolate(&self.times, &self.v, t))
-                    }
-                };
-                for (var, val) in [(self.xv, xx), (self.yv, yy)] {
-                    match var {
-                        Var::Time => t = val,
-                        Var::Coordinate(c) => q[c] = val,
-                        Var::Other => {}
-                    }
-                }
+                let (t, q, mut v) = self.grid_state(at, xx, yy);
                 let gaps = model.wall_gaps(t, &q);
                 for (w, h) in gaps.into_iter().enumerate() {
                     out[w].push(h);
@@ -53,10 +40,32 @@ impl Scenery<'_> {
         out
     }
 
-    fn boundaries_len_hint(&self) -> usize {
+    /// The time, coordinates and velocities at the grid point (`xx`, `yy`): the state
+    /// `at` (along the time axis, the trajectory's at the point's time) with the plotted
+    /// columns set to the point's values.
+    fn grid_state(&self, at: &At, xx: f64, yy: f64) -> (f64, Vec<f64>, Vec<f64>) {
+        let (mut t, mut q, v) = match at {
+            At::State { t, q, v } => (*t, q.clone(), v.clone()),
+            At::Timeline => {
+                let t = if self.xv == Var::Time { xx } else { yy };
+                (t, interpolate(&self.times, &self.q, t), interpolate(&self.times, &self.v, t))
+            }
+        };
+        for (var, val) in [(self.xv, xx), (self.yv, yy)] {
+            match var {
+                Var::Time => t = val,
+                Var::Coordinate(c) => q[c] = val,
+                Var::Other => {}
+            }
+        }
+        (t, q, v)
+    }
+
+    /// The number of position constraints (drawn after the walls).
+    fn position_constraints(&self) -> usize {
         self.motion.scene.constraints.iter().filter(|c| c.kind == skg_core::scene::ConstraintKind::Position).count()
     }
-    /// The zero curves of each boundary at `at` over the ranges.
+
     /// [`Scenery::curves`] of the boundaries drawn once, kept for the next frame of the same ranges.
     pub(super) fn fixed_curves(&self, at: &At, xr: (f64, f64), yr: (f64, f64)) -> Vec<Vec<Polyline>> {
         let mut cache = self.fixed.borrow_mut();
@@ -70,13 +79,15 @@ impl Scenery<'_> {
         }
     }
 
-    /// The grid reaches two cells beyond the plot area, so that the curves run to its edges.
+    /// The zero curves of each boundary at `at` over the ranges. The grid reaches two
+    /// cells beyond the plot area, so that the curves run to its edges.
     pub(super) fn curves(&self, at: &At, xr: (f64, f64), yr: (f64, f64)) -> Vec<Vec<Polyline>> {
         let (xr, yr) = (pad(xr, 2.0 / (GRID - 5) as f64), pad(yr, 2.0 / (GRID - 5) as f64));
         self.fields(at, xr, yr, GRID).iter().map(|f| zero_curves(f, GRID, xr, yr)).collect()
     }
 }
 
+/// The range `r` widened by the fraction `f` of its length on each side.
 pub(super) fn pad(r: (f64, f64), f: f64) -> (f64, f64) {
     let d = (r.1 - r.0).max(1e-9 * r.0.abs().max(1.0)) * f;
     (r.0 - d, r.1 + d)

@@ -12,6 +12,8 @@ use super::field::pad;
 use super::{data_err, Aspect, Motion, Polyline, View, MAX_SNAPSHOTS};
 use crate::PlotError;
 
+/// What a column on an axis is: the time, the coordinate of this index, or any other
+/// column (a velocity, the energy).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum Var {
     Time,
@@ -57,6 +59,7 @@ pub(super) struct Scenery<'a> {
 /// The x and y ranges of a plot.
 pub(super) type Ranges = ((f64, f64), (f64, f64));
 
+/// What the column `name` is, or an error listing the trajectory's columns.
 fn axis_var(m: &Motion, name: &str) -> Result<Var, PlotError> {
     if m.solution.index(name).is_none() {
         return Err(data_err(format!("no column `{name}` in the trajectory (columns: {})", m.solution.columns.join(", "))));
@@ -70,6 +73,7 @@ fn axis_var(m: &Motion, name: &str) -> Result<Var, PlotError> {
     })
 }
 
+/// The x and y ranges of the finite points.
 fn bounds_of<'p>(points: impl Iterator<Item = &'p (f64, f64)>) -> Option<((f64, f64), (f64, f64))> {
     let mut b = ((f64::INFINITY, f64::NEG_INFINITY), (f64::INFINITY, f64::NEG_INFINITY));
     for &(x, y) in points.filter(|p| p.0.is_finite() && p.1.is_finite()) {
@@ -88,6 +92,8 @@ pub(super) fn interpolate(times: &[f64], rows: &[Vec<f64>], t: f64) -> Vec<f64> 
 }
 
 impl<'a> Scenery<'a> {
+    /// The scenery of `motion` seen as `view`; an error names an axis the trajectory does
+    /// not have, or axes without a finite value.
     pub(super) fn new(motion: &'a Motion, view: View) -> Result<Scenery<'a>, PlotError> {
         let sol = &motion.solution;
         let (xv, yv) = (axis_var(motion, &view.x)?, axis_var(motion, &view.y)?);
@@ -133,18 +139,22 @@ impl<'a> Scenery<'a> {
         Ok(s)
     }
 
+    /// Whether walls and constraints are drawn: both axes are coordinates or the time.
     pub(super) fn draws_boundaries(&self) -> bool {
         self.xv != Var::Other && self.yv != Var::Other && self.xv != self.yv
     }
 
+    /// Whether the time is on an axis.
     pub(super) fn timeline(&self) -> bool {
         self.xv == Var::Time || self.yv == Var::Time
     }
 
+    /// The state at node `k`.
     pub(super) fn state(&self, k: usize) -> At {
         At::State { t: self.times[k], q: self.q[k].clone(), v: self.v[k].clone() }
     }
 
+    /// The state at time `t`, interpolated between the nodes.
     pub(super) fn state_at(&self, t: f64) -> At {
         At::State { t, q: interpolate(&self.times, &self.q, t), v: interpolate(&self.times, &self.v, t) }
     }
