@@ -1,6 +1,10 @@
 //! The crate's errors: [`PlotError`], why a chart or picture could not be made, and
 //! [`DrawError`], why drawing one failed (in plotters, for lack of data, or in ffmpeg).
 //! Uses plotters' error types only to turn them into text.
+//!
+//! A variant that wraps another error prints it in its own message and holds it as a
+//! plain field (`error`), not as its `source()`: each message is said once in the chain
+//! ([`skg_core::error_text`]).
 
 use std::path::PathBuf;
 
@@ -19,21 +23,20 @@ pub enum PlotError {
     Results(#[from] SweepError),
     /// Drawing a chart or picture failed (in plotters, for lack of data in a panel, or in
     /// ffmpeg).
-    #[error("drawing {path}: {source}")]
+    #[error("drawing {path}: {error}")]
     Draw {
         /// The chart file.
         path: PathBuf,
         /// What failed.
-        #[source]
-        source: DrawError,
+        error: DrawError,
     },
     /// A solve's `summary.json` is not valid JSON.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Summary {
         /// The file.
         path: PathBuf,
         /// The JSON parser's error (with its line and column).
-        source: serde_json::Error,
+        error: serde_json::Error,
     },
     /// The scene of a picture of the motion is invalid.
     #[error(transparent)]
@@ -45,12 +48,12 @@ pub enum PlotError {
     #[error(transparent)]
     Output(#[from] skg_core::output::OutputError),
     /// A chart or its directory could not be written.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}: {error}")]
     Io {
         /// The file or directory.
         path: PathBuf,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
 }
 
@@ -65,18 +68,18 @@ pub enum DrawError {
     #[error("{0}")]
     NoData(String),
     /// ffmpeg (for an MP4) could not be started.
-    #[error("cannot run ffmpeg ({source}): an MP4 needs ffmpeg on PATH (Debian: apt-get install ffmpeg); a .gif needs nothing")]
+    #[error("cannot run ffmpeg ({error}): an MP4 needs ffmpeg on PATH (Debian: apt-get install ffmpeg); a .gif needs nothing")]
     FfmpegMissing {
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A frame could not be passed to ffmpeg, or ffmpeg could not be waited for.
-    #[error("{doing} ffmpeg: {source}")]
+    #[error("{doing} ffmpeg: {error}")]
     FfmpegPipe {
         /// `writing to` or `waiting for`.
         doing: &'static str,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// ffmpeg ended with an error.
     #[error("ffmpeg failed ({status}): {stderr}")]

@@ -56,12 +56,7 @@ macro_rules! render {
                 let root = plotters::prelude::BitMapBackend::new(&tmp, $size).into_drawing_area();
                 $draw(&root, $($arg),*).and_then(|_| Ok(root.present()?))
             };
-            if let Err(source) = drawn {
-                let _ = std::fs::remove_file(&tmp);
-                return Err($crate::PlotError::Draw { path, source });
-            }
-            std::fs::rename(&tmp, &path).map_err(|source| $crate::PlotError::Io { path: path.clone(), source })?;
-            written.push(path);
+            written.push($crate::render::finish(&tmp, &path, drawn)?);
         }
         Ok(written)
     }};
@@ -87,10 +82,10 @@ pub(crate) fn draw_legend<'a, DB: DrawingBackend<ErrorType: 'static> + 'a, CT: p
 
 /// Rename the finished temporary file over `path`, or remove it when drawing failed.
 pub(crate) fn finish(tmp: &Path, path: &Path, drawn: Result<(), DrawError>) -> Result<PathBuf, PlotError> {
-    if let Err(source) = drawn {
+    if let Err(error) = drawn {
         let _ = std::fs::remove_file(tmp);
-        return Err(PlotError::Draw { path: path.to_path_buf(), source });
+        return Err(PlotError::Draw { path: path.to_path_buf(), error });
     }
-    std::fs::rename(tmp, path).map_err(|source| PlotError::Io { path: path.to_path_buf(), source })?;
+    std::fs::rename(tmp, path).map_err(|error| PlotError::Io { path: path.to_path_buf(), error })?;
     Ok(path.to_path_buf())
 }

@@ -151,10 +151,13 @@ mod tests {
         let table = Table { columns, comments: Vec::new(), rows };
         let stem = dir.join("chart");
         let err = trajectory(&[("solve".into(), table)], None, "title", &stem).unwrap_err();
-        let PlotError::Draw { path, source: DrawError::NoData(what) } = &err else { panic!("expected a draw error, got {err:?}") };
+        let PlotError::Draw { path, error: DrawError::NoData(what) } = &err else { panic!("expected a draw error, got {err:?}") };
         assert_eq!(path, &stem.with_extension("svg"));
         assert_eq!(what, "no `energy` column in the solution");
         assert_eq!(err.to_string(), format!("drawing {}: no `energy` column in the solution", path.display()));
+        // The message is said once: the drawing error is part of the text, not a source.
+        assert!(std::error::Error::source(&err).is_none());
+        assert_eq!(skg_core::error_text(&err), err.to_string());
         let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
         assert!(left.is_empty(), "files left behind: {left:?}");
         std::fs::remove_dir(&dir).unwrap();

@@ -62,7 +62,7 @@ pub const MAX_ANIMATION_PIXELS: u64 = 4_000_000_000;
 impl Frames {
     /// Refuse an animation larger than [`MAX_FRAMES`] frames or [`MAX_ANIMATION_PIXELS`]
     /// pixels, or without a positive frame count and rate, before anything is drawn (an
-    /// animation of 10⁶ frames ran for hours, its file growing by megabytes a second).
+    /// animation of 10⁶ frames runs for hours, its file growing by megabytes a second).
     pub fn check(&self) -> Result<(), PlotError> {
         if self.count == 0 || !(self.fps > 0.0 && self.fps.is_finite()) {
             return Err(data_err("the number of frames and the frame rate must be positive"));
@@ -146,7 +146,7 @@ fn mp4(s: &Scenery<'_>, times: &[f64], frames: &Frames, tmp: &Path, on_frame: &m
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|source| DrawError::FfmpegMissing { source })?;
+        .map_err(|error| DrawError::FfmpegMissing { error })?;
     let mut stdin = child.stdin.take().expect("piped");
     let mut buf = vec![0u8; (w * h * 3) as usize];
     let mut result = Ok(());
@@ -158,14 +158,14 @@ fn mp4(s: &Scenery<'_>, times: &[f64], frames: &Frames, tmp: &Path, on_frame: &m
                 break;
             }
         }
-        if let Err(source) = stdin.write_all(&buf) {
-            result = Err(DrawError::FfmpegPipe { doing: "writing to", source });
+        if let Err(error) = stdin.write_all(&buf) {
+            result = Err(DrawError::FfmpegPipe { doing: "writing to", error });
             break;
         }
         on_frame();
     }
     drop(stdin);
-    let out = child.wait_with_output().map_err(|source| DrawError::FfmpegPipe { doing: "waiting for", source })?;
+    let out = child.wait_with_output().map_err(|error| DrawError::FfmpegPipe { doing: "waiting for", error })?;
     result?;
     if !out.status.success() {
         return Err(DrawError::Ffmpeg { status: out.status, stderr: String::from_utf8_lossy(&out.stderr).trim().to_string() });

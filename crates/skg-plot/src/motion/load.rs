@@ -48,8 +48,8 @@ fn read_summary(path: &Path) -> Result<Option<serde_json::Value>, PlotError> {
     if !path.is_file() {
         return Ok(None);
     }
-    let text = std::fs::read_to_string(path).map_err(|source| PlotError::Io { path: path.to_path_buf(), source })?;
-    Ok(Some(serde_json::from_str(&text).map_err(|source| PlotError::Summary { path: path.to_path_buf(), source })?))
+    let text = std::fs::read_to_string(path).map_err(|error| PlotError::Io { path: path.to_path_buf(), error })?;
+    Ok(Some(serde_json::from_str(&text).map_err(|error| PlotError::Summary { path: path.to_path_buf(), error })?))
 }
 
 /// The scene file: `scene` (--scene), else the one the summary records; an error when
