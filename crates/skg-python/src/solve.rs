@@ -3,13 +3,14 @@
 //! (its trajectory, summary and statuses, and the writing of its files).
 
 use std::path::PathBuf;
+use std::str::FromStr;
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use skg_core::output;
-use skg_core::scene::{Backend, Formulation, HessianMode, InitialVelocity, Overrides, Scene};
+use skg_core::scene::{HessianMode, Overrides, Scene};
 use skg_core::solve::{self, Outcome};
 
 use crate::arrays::trajectory_dict;
@@ -100,64 +101,85 @@ pub(crate) fn solve_scene(
     max_nodes: Option<usize>,
     time_limit: Option<f64>,
 ) -> PyResult<NativeSolution> {
-    let auto_operator = operator.is_some_and(|s| s.trim().eq_ignore_ascii_case("auto"));
-    let operator = operator
-        .filter(|_| !auto_operator)
-        .map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("operator: {e}, or \"auto\""))))
-        .transpose()?;
-    if max_nodes.is_some_and(|n| n < 2) {
-        return Err(PyValueError::new_err("max_nodes: must be at least 2"));
-    }
-    if time_limit.is_some_and(|t| !(t > 0.0 && t.is_finite())) {
-        return Err(PyValueError::new_err("time_limit: must be a positive number of seconds"));
-    }
-    let formulation: Option<Formulation> =
-        formulation.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("formulation: {e}")))).transpose()?;
-    let initial_velocity: Option<InitialVelocity> =
-        initial_velocity.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("initial_velocity: {e}")))).transpose()?;
-    let hessian = match hessian {
-        None => None,
-        Some("zero") => Some(HessianMode::Zero),
-        Some("exact") => Some(HessianMode::Exact),
-        Some(other) => return Err(PyValueError::new_err(format!("hessian: expected \"zero\" or \"exact\", got \"{other}\""))),
-    };
-    let backend: Option<Backend> = backend.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("backend: {e}")))).transpose()?;
-    let ov = Overrides {
-        set: assignments(set)?,
-        backend,
+    let mut ov = Overrides {
         nodes,
-        operator,
-        formulation,
-        initial_velocity,
-        hessian,
         max_iter,
         window,
         overlap,
         verify_tol,
         no_verify,
         no_fallback,
-        auto_operator,
         refine,
         max_nodes,
         time_limit,
+        ..Overrides::default()
     };
+    parse_choices(&mut ov, Choices { operator, formulation, initial_velocity, hessian, backend })?;
+    ov.set = assignments(set)?;
     let mut scene = load(py, &path, &ov)?;
-    let state = match out {
+    let state = run(py, &mut scene, out)?;
+    Ok(NativeSolution { scene, state: std::sync::Mutex::new(state) })
+}
+
+/// The options of [`solve_scene`] given as text, parsed as the command line parses them.
+struct Choices<'a> {
+    operator: Option<&'a str>,
+    formulation: Option<&'a str>,
+    initial_velocity: Option<&'a str>,
+    hessian: Option<&'a str>,
+    backend: Option<&'a str>,
+}
+
+/// Set the overrides given as text (`operator="auto"` asks for the operator predicted to
+/// be cheapest) after checking the limits `max_nodes` and `time_limit` already set; a
+/// `ValueError` names the first argument that is wrong.
+fn parse_choices(ov: &mut Overrides, text: Choices<'_>) -> PyResult<()> {
+    ov.auto_operator = text.operator.is_some_and(|s| s.trim().eq_ignore_ascii_case("auto"));
+    ov.operator = text
+        .operator
+        .filter(|_| !ov.auto_operator)
+        .map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("operator: {e}, or \"auto\""))))
+        .transpose()?;
+    if ov.max_nodes.is_some_and(|n| n < 2) {
+        return Err(PyValueError::new_err("max_nodes: must be at least 2"));
+    }
+    if ov.time_limit.is_some_and(|t| !(t > 0.0 && t.is_finite())) {
+        return Err(PyValueError::new_err("time_limit: must be a positive number of seconds"));
+    }
+    ov.formulation = parsed("formulation", text.formulation)?;
+    ov.initial_velocity = parsed("initial_velocity", text.initial_velocity)?;
+    ov.hessian = match text.hessian {
+        None => None,
+        Some("zero") => Some(HessianMode::Zero),
+        Some("exact") => Some(HessianMode::Exact),
+        Some(other) => return Err(PyValueError::new_err(format!("hessian: expected \"zero\" or \"exact\", got \"{other}\""))),
+    };
+    ov.backend = parsed("backend", text.backend)?;
+    Ok(())
+}
+
+/// The option `name` parsed from its text, or a `ValueError` (`name: why`).
+fn parsed<T: FromStr<Err: std::fmt::Display>>(name: &str, text: Option<&str>) -> PyResult<Option<T>> {
+    text.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("{name}: {e}")))).transpose()
+}
+
+/// Solve the scene: into the directory `out` as `skg-solve SCENE -o OUT` does, else
+/// without writing a file (then a scene's Ipopt log, which is relative to an output
+/// directory, is not written either: a warning says so).
+fn run(py: Python<'_>, scene: &mut Scene, out: Option<PathBuf>) -> PyResult<(Outcome, Option<output::Written>)> {
+    match out {
         Some(dir) => {
-            let (outcome, written) = py.detach(|| output::solve_into(&dir, &mut scene)).map_err(|e| solve_into_err(py, &e))?;
-            (outcome, Some(written))
+            let (outcome, written) = py.detach(|| output::solve_into(&dir, scene)).map_err(|e| solve_into_err(py, &e))?;
+            Ok((outcome, Some(written)))
         }
         None => {
-            // Ipopt's log is relative to an output directory, and there is none: a solve
-            // that owns no directory writes no log.
-            let mut outcome = py.detach(|| solve::solve_scene(&scene)).map_err(|e| solve_err(py, &e))?;
+            let mut outcome = py.detach(|| solve::solve_scene(scene)).map_err(|e| solve_err(py, &e))?;
             if let Some(name) = &scene.solver.log_file {
                 outcome
                     .warnings
                     .push(format!("the scene's [solver] log_file ({}) is written only by a solve into a directory (out=)", name.display()));
             }
-            (outcome, None)
+            Ok((outcome, None))
         }
-    };
-    Ok(NativeSolution { scene, state: std::sync::Mutex::new(state) })
+    }
 }
