@@ -29,10 +29,12 @@ __version__: str = _skg.VERSION
 
 
 def _version_of(exe: Path) -> str:
+    """What ``exe --version`` prints. The system's error is part of the message of
+    :class:`WorkerNotFound`, not its cause, so that a traceback says it once."""
     try:
         out = subprocess.run([str(exe), "--version"], capture_output=True, text=True, timeout=60)
     except OSError as e:
-        raise WorkerNotFound(f"cannot run {exe}: {e}") from e
+        raise WorkerNotFound(f"cannot run {exe}: {e}") from None
     return out.stdout.strip()
 
 

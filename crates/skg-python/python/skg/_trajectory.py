@@ -20,6 +20,8 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 
 def require_pandas(what: str):
+    """pandas, or an ImportError saying that ``what`` needs it and how to install it (the
+    import's own error is its cause: its text is not repeated)."""
     try:
         import pandas
     except ImportError as e:  # pragma: no cover - exercised with pandas hidden
