@@ -5,12 +5,12 @@
 //! (verification and fallback ladder included), integrated by `skg_core::stepping::reference`,
 //! written (into a locked directory) by `skg_core::output`, planned and swept by
 //! `skg_sweep::plan` and `skg_sweep::run_sweep` (split into shards for an executor by
-//! `skg_sweep::shards`). Errors are raised as
-//! the exceptions of `skg._errors` with the command line's message
-//! ([`skg_core::error_text`]). The GIL is released while Rust computes.
+//! `skg_sweep::shards`). Errors are raised as the exceptions of `skg._errors` with the
+//! command line's message ([`skg_core::error_text`]). The GIL is released while Rust
+//! computes.
 //!
-//! Trajectories cross into Python as a dict of NumPy arrays (`trajectory_dict`); the
-//! Python classes (`skg.Trajectory`, `skg.Solution`, …) are written in Python.
+//! Trajectories cross into Python as a dict of NumPy arrays (`arrays::trajectory_dict`);
+//! the Python classes (`skg.Trajectory`, `skg.Solution`, …) are written in Python.
 //!
 //! Its modules: `errors` raises the exceptions; `arrays` makes the NumPy arrays and the
 //! trajectory's dict; `toml_values` converts Python values to TOML and back (a scene or a
