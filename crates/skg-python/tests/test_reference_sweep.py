@@ -67,6 +67,16 @@ def test_sweep_without_an_executable_says_where_it_looked(scene, tmp_path, monke
     assert not (tmp_path / "out").exists()
 
 
+def test_an_executable_that_cannot_run_is_named_with_the_system_error_once(tmp_path):
+    exe = tmp_path / "skg-solve"
+    exe.write_text("not a program")
+    exe.chmod(0o755)
+    with pytest.raises(skg.WorkerNotFound, match=r"cannot run .*skg-solve: \[Errno \d+\]") as e:
+        skg.find_skg_solve(exe)
+    # The system's error is in the message, not also the cause a traceback would print.
+    assert e.value.__cause__ is None and e.value.__suppress_context__
+
+
 def test_sweep_refuses_changed_settings_like_the_command_line(cli_error, scene, skg_solve, tmp_path):
     f = tmp_path / "sweep.toml"
     f.write_text(SWEEP.format(scene=scene("free_fall")))
