@@ -23,7 +23,9 @@ use serde::{Deserialize, Serialize};
 
 use skg_core::output;
 
-use crate::{collect_rows, Expanded, MergeReport, PointStatus, Provenance, Results, SweepError, SweepFile, SweepInfo};
+use crate::error::{create_dir_err, read_err};
+use crate::merge::collect_rows;
+use crate::{Expanded, MergeReport, PointStatus, Provenance, Results, SweepError, SweepFile, SweepInfo};
 
 /// The layout file of a sharded directory.
 pub const LAYOUT_FILE: &str = "shards.json";
@@ -94,7 +96,7 @@ impl ShardLayout {
         if !path.exists() {
             return Ok(None);
         }
-        let text = std::fs::read_to_string(&path).map_err(crate::read_err(&path))?;
+        let text = std::fs::read_to_string(&path).map_err(read_err(&path))?;
         serde_json::from_str(&text)
             .map(Some)
             .map_err(|e| SweepError::Results { path, message: format!("not a shards.json of this skg-solve: {e}") })
@@ -210,7 +212,7 @@ pub fn prepare(
     opts: &PrepareOptions,
 ) -> Result<(ShardLayout, Vec<ShardState>), SweepError> {
     let bad = |path: PathBuf, message: String| SweepError::Results { path, message };
-    let sweep_file = std::path::absolute(&file.origin.path).map_err(crate::read_err(Path::new(&file.origin.path)))?;
+    let sweep_file = std::path::absolute(&file.origin.path).map_err(read_err(Path::new(&file.origin.path)))?;
     let total = expanded.points.len();
     if let Some(k) = opts.shards {
         if k == 0 || k > MAX_SHARDS {
@@ -265,7 +267,7 @@ pub fn prepare(
                 total_points: total,
                 runner: opts.runner,
             };
-            std::fs::create_dir_all(dir).map_err(crate::create_dir_err(dir))?;
+            std::fs::create_dir_all(dir).map_err(create_dir_err(dir))?;
             output::write_json(&dir.join(LAYOUT_FILE), &layout)?;
             layout
         }

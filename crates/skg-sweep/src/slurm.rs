@@ -220,7 +220,7 @@ impl JobsFile {
         if !path.exists() {
             return Ok(JobsFile::default());
         }
-        let text = std::fs::read_to_string(&path).map_err(crate::read_err(&path))?;
+        let text = std::fs::read_to_string(&path).map_err(crate::error::read_err(&path))?;
         serde_json::from_str(&text).map_err(|e| SweepError::Results { path, message: format!("not a jobs.json of this skg-solve: {e}") })
     }
 }
@@ -458,7 +458,7 @@ pub struct SubmitReport {
 /// it).
 pub fn submit(file: &SweepFile, expanded: &Expanded, dir: &Path, opts: &SubmitOptions) -> Result<SubmitReport, SlurmError> {
     check_sbatch_args(&opts.sbatch_args)?;
-    let dir = std::path::absolute(dir).map_err(crate::read_err(dir))?;
+    let dir = std::path::absolute(dir).map_err(crate::error::read_err(dir))?;
     let text = dir.to_string_lossy();
     if text.contains('%') || text.contains('\\') {
         return Err(SlurmError::Path { path: dir.clone(), what: "`%` or `\\`" });

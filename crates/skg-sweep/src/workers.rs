@@ -1,4 +1,7 @@
 //! The worker processes of a sweep and the protocol between them and the driver.
+//! Debian's Ipopt/MUMPS is not thread-safe (docs/solver.md), so points run in child
+//! processes, at most `jobs` at once; a worker dies with the driver
+//! (`PR_SET_PDEATHSIG`), and Ctrl-C reaches the whole process group.
 //!
 //! A worker is `skg-solve sweep-worker WORK` (the hidden subcommand, [`serve_points`]),
 //! started by the driver (`Pool`) and kept alive for any number of points, so that
@@ -50,7 +53,8 @@ use std::time::{Duration, Instant};
 
 use skg_core::output;
 
-use crate::{read_err, run_job, Expanded, Job, Point, PointStatus, Record, SweepError};
+use crate::error::read_err;
+use crate::{run_job, Expanded, Job, Point, PointStatus, Record, SweepError};
 
 /// Lines of a crashed worker's log quoted in its point's message.
 const TAIL_LINES: usize = 3;
