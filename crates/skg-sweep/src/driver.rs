@@ -14,7 +14,7 @@
 //!   reference file, `sweep.json` the [`RowSettings`]; a rerun with other inputs is
 //!   refused ([`SweepOptions::new_results`] moves the old result set aside instead).
 
-use std::collections::VecDeque;
+use std::collections::{HashSet, VecDeque};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -23,8 +23,8 @@ use skg_core::scene::SceneFile;
 
 use crate::error::create_dir_err;
 use crate::{
-    csv_line, header_names, results, results_row, shards, stop_signal, workers, Expanded, Job, Method, Point, Provenance, Record,
-    RowSettings, Shard, SweepError, SweepFile, SweepInfo,
+    csv_line, header_names, results, results_row, shards, stop_signal, workers, Column, Expanded, Job, Method, Point, PointStatus,
+    Provenance, Record, ReferenceSpec, RowSettings, Shard, SweepError, SweepFile, SweepInfo,
 };
 
 /// Options of [`run_sweep`].
@@ -115,46 +115,17 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
     let provenance = Provenance::current(expanded.scene_hash.clone(), expanded.reference_hash.clone());
     let dir = &opts.out_dir;
     let _lock = output::OutputDir::lock(dir)?;
-    if dir.join(shards::LAYOUT_FILE).exists() {
-        return Err(SweepError::Results {
-            path: dir.clone(),
-            message: format!(
-                "is the directory of a sweep split into shards ({}): its results.csv is written only by the merge of \
-                 its shards. Run it as it was started (`skg-solve sweep FILE --slurm -o DIR`, or skg.sweep(..., \
-                 executor=...)), see `skg-solve status DIR`, or use another output directory",
-                shards::LAYOUT_FILE
-            ),
-        });
-    }
+    refuse_sharded_dir(dir)?;
     let superseded = if opts.new_results { supersede_results(dir)? } else { None };
     let settings = file.row_settings();
     check_row_settings(dir, &settings)?;
-    // Worker files left by an interrupted run are stale: start from an empty .work.
-    let work = dir.join(".work");
-    let _ = std::fs::remove_dir_all(&work);
-    std::fs::create_dir_all(&work).map_err(create_dir_err(&work))?;
+    let work = fresh_work_dir(dir)?;
     let results_path = dir.join("results.csv");
-    let (mut results, done) = results::open_results(&results_path, &header_names(&columns), &provenance, opts.retry_failed)?;
-
+    let (results, done) = results::open_results(&results_path, &header_names(&columns), &provenance, opts.retry_failed)?;
     let mine: Vec<&Point> = expanded.points.iter().filter(|p| opts.shard.is_none_or(|s| s.contains(p.index))).collect();
-    let info = SweepInfo {
-        name: file.name(),
-        sweep_file: file.origin.path.clone(),
-        scene: file.scene_path().display().to_string(),
-        provenance: provenance.clone(),
-        total_points: expanded.points.len(),
-        shard: opts.shard.map(|s| format!("{}/{}", s.k, s.n)),
-        settings,
-        ids: mine.iter().map(|p| p.id()).collect(),
-        all_ids: expanded.points.iter().map(Point::id).collect(),
-    };
+    let info = sweep_info(file, expanded, opts.shard, &provenance, settings, &mine);
     output::write_json(&dir.join("sweep.json"), &info)?;
-    // Largest first, equal structures together (stable: the file's order otherwise);
-    // rows carry their index.
-    let mut todo: Vec<Point> = mine.iter().filter(|p| !done.contains(&p.id())).map(|&p| p.clone()).collect();
-    let (costs, structures) = (&expanded.costs, &expanded.structures);
-    todo.sort_by(|a, b| costs[b.index].total_cmp(&costs[a.index]).then_with(|| structures[a.index].cmp(&structures[b.index])));
-    let mut queue: VecDeque<Point> = todo.into();
+    let mut queue = queue(&mine, &done, expanded);
     let mut report = SweepReport {
         total: expanded.points.len(),
         in_shard: mine.len(),
@@ -165,53 +136,171 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
         ..SweepReport::default()
     };
     let bar = progress_bar(opts.progress, mine.len(), report.skipped);
-    let artifact_tol = file.artifact_tol();
-    let reference = file.reference();
-    let scene_path = std::path::absolute(file.scene_path()).unwrap_or(file.scene_path());
-    let job_of = |point: Point| Job {
-        scene: scene_path.clone(),
-        keep_dir: file.sweep.keep_trajectories.then(|| dir.join("points").join(point.id())),
-        point,
-        reference: reference.clone(),
-        compare: file.sweep.compare.as_ref().map(|c| c.get_ref().clone()),
-        skip_last: file.skip_last(),
-        fallback: file.sweep.fallback,
-        refine: file.sweep.refine,
+    let jobs = JobTemplate::new(file, dir);
+    let mut recorder = Recorder {
+        base: SceneFile::load(&jobs.scene).ok(),
+        file: results,
+        path: results_path,
+        columns,
+        provenance,
+        artifact_tol: file.artifact_tol(),
     };
-    let mut pool = workers::Pool::new(&opts.worker_exe, &work, opts.jobs, file.sweep.timeout.as_ref().map(|t| *t.get_ref()));
-    // For the rows of points whose worker crashed or timed out (see fill_point_settings).
-    let base = SceneFile::load(&scene_path).ok();
+    let pool = workers::Pool::new(&opts.worker_exe, &work, opts.jobs, file.sweep.timeout.as_ref().map(|t| *t.get_ref()));
+    let ran = run_points(pool, &mut queue, expanded, &jobs, &mut recorder, &mut report, &bar);
+    bar.finish_and_clear();
+    ran?;
+    let _ = std::fs::remove_dir(&work);
+    report.wall_s = started.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// Refuse a sharded directory ([`shards`]): its results.csv is the merge's alone.
+fn refuse_sharded_dir(dir: &Path) -> Result<(), SweepError> {
+    if !dir.join(shards::LAYOUT_FILE).exists() {
+        return Ok(());
+    }
+    Err(SweepError::Results {
+        path: dir.to_path_buf(),
+        message: format!(
+            "is the directory of a sweep split into shards ({}): its results.csv is written only by the merge of \
+             its shards. Run it as it was started (`skg-solve sweep FILE --slurm -o DIR`, or skg.sweep(..., \
+             executor=...)), see `skg-solve status DIR`, or use another output directory",
+            shards::LAYOUT_FILE
+        ),
+    })
+}
+
+/// An empty work directory `dir/.work` for the workers' files (those left by an
+/// interrupted run are stale).
+fn fresh_work_dir(dir: &Path) -> Result<PathBuf, SweepError> {
+    let work = dir.join(".work");
+    let _ = std::fs::remove_dir_all(&work);
+    std::fs::create_dir_all(&work).map_err(create_dir_err(&work))?;
+    Ok(work)
+}
+
+/// The `sweep.json` of a run over the points `mine` of `expanded`.
+fn sweep_info(
+    file: &SweepFile,
+    expanded: &Expanded,
+    shard: Option<Shard>,
+    provenance: &Provenance,
+    settings: RowSettings,
+    mine: &[&Point],
+) -> SweepInfo {
+    SweepInfo {
+        name: file.name(),
+        sweep_file: file.origin.path.clone(),
+        scene: file.scene_path().display().to_string(),
+        provenance: provenance.clone(),
+        total_points: expanded.points.len(),
+        shard: shard.map(|s| format!("{}/{}", s.k, s.n)),
+        settings,
+        ids: mine.iter().map(|p| p.id()).collect(),
+        all_ids: expanded.points.iter().map(Point::id).collect(),
+    }
+}
+
+/// The points of `mine` not yet `done`, in the order they go out: largest estimated cost
+/// first, equal structures together (stable: the file's order otherwise; rows carry
+/// their index).
+fn queue(mine: &[&Point], done: &HashSet<String>, expanded: &Expanded) -> VecDeque<Point> {
+    let mut todo: Vec<Point> = mine.iter().filter(|p| !done.contains(&p.id())).map(|&p| p.clone()).collect();
+    let (costs, structures) = (&expanded.costs, &expanded.structures);
+    todo.sort_by(|a, b| costs[b.index].total_cmp(&costs[a.index]).then_with(|| structures[a.index].cmp(&structures[b.index])));
+    todo.into()
+}
+
+/// What every job of a run shares: the base scene and the sweep file's settings.
+struct JobTemplate<'a> {
+    file: &'a SweepFile,
+    /// The output directory (a kept point's files go to `points/<id>` in it).
+    dir: &'a Path,
+    /// The base scene file, as an absolute path.
+    scene: PathBuf,
+    reference: Option<ReferenceSpec>,
+}
+
+impl<'a> JobTemplate<'a> {
+    fn new(file: &'a SweepFile, dir: &'a Path) -> JobTemplate<'a> {
+        let scene = std::path::absolute(file.scene_path()).unwrap_or(file.scene_path());
+        JobTemplate { file, dir, scene, reference: file.reference() }
+    }
+
+    /// The job of `point`.
+    fn job(&self, point: Point) -> Job {
+        let sweep = &self.file.sweep;
+        Job {
+            scene: self.scene.clone(),
+            keep_dir: sweep.keep_trajectories.then(|| self.dir.join("points").join(point.id())),
+            point,
+            reference: self.reference.clone(),
+            compare: sweep.compare.as_ref().map(|c| c.get_ref().clone()),
+            skip_last: self.file.skip_last(),
+            fallback: sweep.fallback,
+            refine: sweep.refine,
+        }
+    }
+}
+
+/// Where a run records finished points: `results.csv`, open for appending, and what its
+/// rows need.
+struct Recorder {
+    file: std::fs::File,
+    path: PathBuf,
+    columns: Vec<Column>,
+    provenance: Provenance,
+    artifact_tol: f64,
+    /// The base scene, for the rows of points whose worker crashed or timed out
+    /// ([`fill_point_settings`]).
+    base: Option<SceneFile>,
+}
+
+impl Recorder {
+    /// Append the row of `point`, finished with `rec`; its status.
+    fn record(&mut self, point: &Point, mut rec: Record) -> Result<PointStatus, SweepError> {
+        fill_point_settings(&mut rec, point, self.base.as_ref());
+        let line = csv_line(&results_row(&self.columns, point, &rec, self.artifact_tol, &self.provenance));
+        results::append(&mut self.file, &self.path, &line)?;
+        Ok(rec.status)
+    }
+}
+
+/// Hand the points of `queue` to the workers of `pool` and record each finished one,
+/// until every point is recorded or a stop signal arrives ([`SweepError::Stopped`]: every
+/// row written is whole; the points in flight are lost with their workers, which end
+/// with the pool).
+fn run_points(
+    mut pool: workers::Pool,
+    queue: &mut VecDeque<Point>,
+    expanded: &Expanded,
+    jobs: &JobTemplate,
+    recorder: &mut Recorder,
+    report: &mut SweepReport,
+    bar: &indicatif::ProgressBar,
+) -> Result<(), SweepError> {
     loop {
         if let Some(signal) = stop_signal() {
-            // Every row written is whole; the points in flight are lost with their workers.
-            drop(pool);
-            bar.finish_and_clear();
-            return Err(SweepError::Stopped { signal, recorded: report.ran, results: results_path });
+            return Err(SweepError::Stopped { signal, recorded: report.ran, results: recorder.path.clone() });
         }
-        while pool.hand_out(&mut queue, expanded, job_of)? {}
+        while pool.hand_out(queue, expanded, |point| jobs.job(point))? {}
         if queue.is_empty() {
             pool.close_idle();
             if pool.busy() == 0 {
-                break;
+                return Ok(());
             }
         }
         std::thread::sleep(Duration::from_millis(5));
-        for (point, mut rec) in pool.finished()? {
-            fill_point_settings(&mut rec, &point, base.as_ref());
-            let line = csv_line(&results_row(&columns, &point, &rec, artifact_tol, &provenance));
-            results::append(&mut results, &results_path, &line)?;
+        for (point, rec) in pool.finished()? {
+            let status = recorder.record(&point, rec)?;
             report.ran += 1;
-            if !rec.status.is_converged() {
+            if !status.is_converged() {
                 report.failed += 1;
                 bar.set_message(format!("{} failed", report.failed));
             }
             bar.inc(1);
         }
     }
-    bar.finish_and_clear();
-    let _ = std::fs::remove_dir(&work);
-    report.wall_s = started.elapsed().as_secs_f64();
-    Ok(report)
 }
 
 /// The progress bar of a run over `len` points of which `done` are already done.

@@ -10,8 +10,10 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use skg_core::check::{self, CheckOptions, Comparison, Table};
+use skg_core::discrete::Trajectory;
 use skg_core::output;
 use skg_core::scene::{Scene, SceneError, SceneFile};
+use skg_core::solve::Outcome;
 
 use crate::{AxisError, Method, Point, PointStatus, ReferenceSpec};
 
@@ -119,7 +121,7 @@ impl Record {
 
 /// Run one point in this process (the body of `skg-solve sweep-worker`).
 pub fn run_job(job: &Job) -> Record {
-    match run_job_inner(job) {
+    match compute_point(job) {
         Ok(r) => r,
         Err(e) => Record::new(PointStatus::Error, skg_core::error_text(&e)),
     }
@@ -143,7 +145,9 @@ enum PointError {
     Output(#[from] output::OutputError),
 }
 
-fn run_job_inner(job: &Job) -> Result<Record, PointError> {
+/// The record of a point: its scene resolved, solved or integrated, its errors and energy
+/// artifact measured, its files kept if asked.
+fn compute_point(job: &Job) -> Result<Record, PointError> {
     let mut ov = job.point.overrides()?;
     ov.refine |= job.refine;
     let start = Instant::now();
@@ -154,53 +158,8 @@ fn run_job_inner(job: &Job) -> Result<Record, PointError> {
     let mut rec = Record { nodes: Some(scene.nodes), scene_hash: Some(scene_hash), ..Record::new(PointStatus::Error, String::new()) };
     let compare_cols = job.compare.clone().unwrap_or_else(|| scene.coordinates.clone());
     let (trajectory, ode_csv) = match job.point.method {
-        Method::Skg => {
-            rec.operator = Some(scene.operator.name().to_string());
-            rec.formulation = Some(scene.formulation.to_string());
-            let mut outcome = skg_core::solve::solve_scene(&scene)?;
-            rec.wall_s = Some(start.elapsed().as_secs_f64());
-            if outcome.refinement.is_some() {
-                // The grid and operator the solve ended on, for the row and the errors.
-                scene.nodes = outcome.settings.nodes;
-                scene.operator = outcome.settings.operator.parse().unwrap_or(scene.operator);
-                scene.initial_velocity = outcome.settings.initial_velocity;
-                rec.nodes = Some(scene.nodes);
-                rec.operator = Some(outcome.settings.operator.clone());
-            }
-            rec.status = match (outcome.converged(), outcome.trusted()) {
-                (true, true) => PointStatus::Converged,
-                (true, false) => PointStatus::NotVerified,
-                (false, _) => PointStatus::NotConverged,
-            };
-            rec.solver_status = outcome.status.solver().name().to_string();
-            if outcome.converged() {
-                rec.verification = outcome.verification.status.to_string();
-                rec.verify_error = outcome.verification.max_error;
-            }
-            rec.solved_as = match outcome.method {
-                skg_core::solve::Method::Global => "global".into(),
-                skg_core::solve::Method::Windows { length, .. } => format!("windows {length:.4} s"),
-            };
-            rec.iterations = Some(outcome.iterations);
-            rec.lu_analysis = outcome.backend.newton.as_ref().map_or("", |n| n.lu_analysis()).to_string();
-            let d = &outcome.diagnostics;
-            rec.energy_drift = Some(d.energy_drift);
-            rec.max_residual = Some(d.max_residual);
-            rec.message = outcome.warnings.join(" | ");
-            if let Some(dir) = &job.keep_dir {
-                output::write_outcome(dir, &mut outcome, &scene)?;
-            }
-            (outcome.trajectory, None)
-        }
-        Method::Ode { rtol } => {
-            let (times, _) = skg_core::solve::grid(&scene);
-            let opts = skg_core::stepping::reference::ReferenceOptions { rtol, atol: rtol };
-            let r = skg_core::stepping::reference::regularized(&scene, &times, &opts)?;
-            rec.wall_s = Some(start.elapsed().as_secs_f64());
-            rec.status = PointStatus::Converged;
-            rec.solver_status = "ODE_Succeeded".into();
-            (r.trajectory, Some(format!("time stepping, rtol {rtol:e}")))
-        }
+        Method::Skg => (solve_point(job, &mut scene, &mut rec, start)?, None),
+        Method::Ode { rtol } => (step_point(&scene, rtol, &mut rec, start)?, Some(format!("time stepping, rtol {rtol:e}"))),
     };
     let model = skg_core::model::Model::build(&scene)?;
     if skg_core::tune::conserves_energy(&scene, &model) {
@@ -208,24 +167,90 @@ fn run_job_inner(job: &Job) -> Result<Record, PointError> {
     }
     let solution = Table::of_trajectory(&scene, &trajectory);
     if let Some(r) = &job.reference {
-        match reference_errors(&scene, r, &solution, &compare_cols, job.skip_last) {
-            Ok(c) => {
-                rec.error_max = Some(c.max_abs);
-                rec.error_rms = c.columns.iter().find(|e| e.column == c.worst_column).map(|e| e.rms);
-                rec.error_column = Some(c.worst_column);
-            }
-            Err(e) => {
-                if !rec.message.is_empty() {
-                    rec.message.push_str(" | ");
-                }
-                rec.message.push_str(&format!("reference comparison failed: {}", skg_core::error_text(&e)));
-            }
-        }
+        record_reference_errors(&mut rec, reference_errors(&scene, r, &solution, &compare_cols, job.skip_last));
     }
     if let (Some(dir), Some(comment)) = (&job.keep_dir, ode_csv) {
         output::write_csv(&dir.join("trajectory.csv"), Some(&comment), &solution.columns, &solution.rows)?;
     }
     Ok(rec)
+}
+
+/// Solve the action of a point's `scene` as `skg-solve SCENE` does, into `rec`; the
+/// scene takes the grid and operator a refinement ended on. Its files are written when
+/// the job keeps them.
+fn solve_point(job: &Job, scene: &mut Scene, rec: &mut Record, start: Instant) -> Result<Trajectory, PointError> {
+    rec.operator = Some(scene.operator.name().to_string());
+    rec.formulation = Some(scene.formulation.to_string());
+    let mut outcome = skg_core::solve::solve_scene(scene)?;
+    rec.wall_s = Some(start.elapsed().as_secs_f64());
+    if outcome.refinement.is_some() {
+        // The grid and operator the solve ended on, for the row and the errors.
+        scene.nodes = outcome.settings.nodes;
+        scene.operator = outcome.settings.operator.parse().unwrap_or(scene.operator);
+        scene.initial_velocity = outcome.settings.initial_velocity;
+        rec.nodes = Some(scene.nodes);
+        rec.operator = Some(outcome.settings.operator.clone());
+    }
+    record_outcome(rec, &outcome);
+    if let Some(dir) = &job.keep_dir {
+        output::write_outcome(dir, &mut outcome, scene)?;
+    }
+    Ok(outcome.trajectory)
+}
+
+/// The columns of a solve's row: its status, the solver's, the verification, how it
+/// covered the span, its work and diagnostics, its warnings.
+fn record_outcome(rec: &mut Record, outcome: &Outcome) {
+    rec.status = match (outcome.converged(), outcome.trusted()) {
+        (true, true) => PointStatus::Converged,
+        (true, false) => PointStatus::NotVerified,
+        (false, _) => PointStatus::NotConverged,
+    };
+    rec.solver_status = outcome.status.solver().name().to_string();
+    if outcome.converged() {
+        rec.verification = outcome.verification.status.to_string();
+        rec.verify_error = outcome.verification.max_error;
+    }
+    rec.solved_as = match outcome.method {
+        skg_core::solve::Method::Global => "global".into(),
+        skg_core::solve::Method::Windows { length, .. } => format!("windows {length:.4} s"),
+    };
+    rec.iterations = Some(outcome.iterations);
+    rec.lu_analysis = outcome.backend.newton.as_ref().map_or("", |n| n.lu_analysis()).to_string();
+    let d = &outcome.diagnostics;
+    rec.energy_drift = Some(d.energy_drift);
+    rec.max_residual = Some(d.max_residual);
+    rec.message = outcome.warnings.join(" | ");
+}
+
+/// Integrate a peer point's `scene` by time stepping at `rtol` (= atol) onto its grid,
+/// into `rec`.
+fn step_point(scene: &Scene, rtol: f64, rec: &mut Record, start: Instant) -> Result<Trajectory, PointError> {
+    let (times, _) = skg_core::solve::grid(scene);
+    let opts = skg_core::stepping::reference::ReferenceOptions { rtol, atol: rtol };
+    let r = skg_core::stepping::reference::regularized(scene, &times, &opts)?;
+    rec.wall_s = Some(start.elapsed().as_secs_f64());
+    rec.status = PointStatus::Converged;
+    rec.solver_status = "ODE_Succeeded".into();
+    Ok(r.trajectory)
+}
+
+/// The errors against the reference into `rec`, or why they could not be measured into
+/// its message (the point is not failed for it).
+fn record_reference_errors(rec: &mut Record, comparison: Result<Comparison, PointError>) {
+    match comparison {
+        Ok(c) => {
+            rec.error_max = Some(c.max_abs);
+            rec.error_rms = c.columns.iter().find(|e| e.column == c.worst_column).map(|e| e.rms);
+            rec.error_column = Some(c.worst_column);
+        }
+        Err(e) => {
+            if !rec.message.is_empty() {
+                rec.message.push_str(" | ");
+            }
+            rec.message.push_str(&format!("reference comparison failed: {}", skg_core::error_text(&e)));
+        }
+    }
 }
 
 /// Errors of a solution against the sweep's reference on `columns`, the last

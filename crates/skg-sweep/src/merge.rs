@@ -88,45 +88,20 @@ pub(crate) fn collect_rows(inputs: &[PathBuf], output_dir: &Path) -> Result<Merg
     let mut ids = HashSet::new();
     let mut shards = BTreeSet::new();
     let mut report = MergeReport::default();
-    // The output may not be one of the inputs: its sweep.json and results.csv would be
-    // replaced by the merge, and the shard's own files lost.
-    let output_id = std::fs::canonicalize(output_dir).ok();
-    for input in inputs {
-        let dir = if input.is_dir() { input.clone() } else { input.parent().map(Path::to_path_buf).unwrap_or_default() };
-        if output_id.is_some() && std::fs::canonicalize(&dir).ok() == output_id {
-            return Err(SweepError::Results {
-                path: output_dir.to_path_buf(),
-                message: format!(
-                    "is also an input of the merge ({}): merging into it would replace that shard's results.csv and \
-                     sweep.json; merge into a new directory",
-                    input.display()
-                ),
-            });
-        }
-    }
+    refuse_output_among_inputs(inputs, output_dir)?;
     for input in inputs {
         // A shard's torn last line (its run killed mid-write) is left out: that point is
         // missing from the merge, and the shard's rerun computes it.
         let res = Results::read_whole_rows(input)?;
         let path = res.path.clone();
         let info = SweepInfo::read(path.parent().unwrap_or(Path::new(".")))?;
-        let not_shards =
-            |message: String| SweepError::Results { path: path.clone(), message: format!("{message}: not shards of one sweep") };
-        if let Some((r0, i0)) = &first {
-            if let Some(other) = res.conflict(&i0.provenance).or_else(|| r0.conflict(&info.provenance)) {
-                return Err(not_shards(format!("has rows computed from {other}")));
+        match &first {
+            Some((r0, i0)) => check_same_sweep(r0, i0, &res, &info)?,
+            None => {
+                if let Some(other) = res.conflict(&info.provenance) {
+                    return Err(SweepError::Results { path, message: format!("has rows computed from {other}, unlike its sweep.json") });
+                }
             }
-            if r0.header != res.header {
-                return Err(not_shards("its columns differ from the first input's".into()));
-            }
-            if i0.all_ids != info.all_ids {
-                return Err(not_shards(format!("its sweep.json lists other points than {}'s", r0.path.display())));
-            }
-            if i0.settings != info.settings {
-                return Err(not_shards(format!("its sweep.json records other [sweep] settings than {}'s", r0.path.display())));
-            }
-        } else if let Some(other) = res.conflict(&info.provenance) {
-            return Err(SweepError::Results { path, message: format!("has rows computed from {other}, unlike its sweep.json") });
         }
         shards.extend(info.shard.clone());
         let id_col = res.require_column("id")?;
@@ -146,4 +121,44 @@ pub(crate) fn collect_rows(inputs: &[PathBuf], output_dir: &Path) -> Result<Merg
     rows.sort_by_key(|r| r[idx].parse::<usize>().unwrap_or(usize::MAX));
     report.rows = rows.len();
     Ok(Merged { first, info, rows, shards, report })
+}
+
+/// Refuse an output directory that is one of the inputs: its sweep.json and results.csv
+/// would be replaced by the merge, and the shard's own files lost.
+fn refuse_output_among_inputs(inputs: &[PathBuf], output_dir: &Path) -> Result<(), SweepError> {
+    let Some(output_id) = std::fs::canonicalize(output_dir).ok() else { return Ok(()) };
+    for input in inputs {
+        let dir = if input.is_dir() { input.clone() } else { input.parent().map(Path::to_path_buf).unwrap_or_default() };
+        if std::fs::canonicalize(&dir).ok().as_ref() == Some(&output_id) {
+            return Err(SweepError::Results {
+                path: output_dir.to_path_buf(),
+                message: format!(
+                    "is also an input of the merge ({}): merging into it would replace that shard's results.csv and \
+                     sweep.json; merge into a new directory",
+                    input.display()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Refuse a shard (`res` with its sweep.json `info`) of another sweep than the first
+/// input (`r0`, `i0`): other input content, columns, points or `[sweep]` settings.
+fn check_same_sweep(r0: &Results, i0: &SweepInfo, res: &Results, info: &SweepInfo) -> Result<(), SweepError> {
+    let not_shards =
+        |message: String| SweepError::Results { path: res.path.clone(), message: format!("{message}: not shards of one sweep") };
+    if let Some(other) = res.conflict(&i0.provenance).or_else(|| r0.conflict(&info.provenance)) {
+        return Err(not_shards(format!("has rows computed from {other}")));
+    }
+    if r0.header != res.header {
+        return Err(not_shards("its columns differ from the first input's".into()));
+    }
+    if i0.all_ids != info.all_ids {
+        return Err(not_shards(format!("its sweep.json lists other points than {}'s", r0.path.display())));
+    }
+    if i0.settings != info.settings {
+        return Err(not_shards(format!("its sweep.json records other [sweep] settings than {}'s", r0.path.display())));
+    }
+    Ok(())
 }
