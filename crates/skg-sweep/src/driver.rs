@@ -103,7 +103,7 @@ fn supersede_results(dir: &Path) -> Result<Option<PathBuf>, SweepError> {
     std::fs::create_dir_all(&target).map_err(create_dir_err(&target))?;
     for name in present {
         let (from, to) = (dir.join(name), target.join(name));
-        std::fs::rename(&from, &to).map_err(|source| SweepError::Move { from, to, source })?;
+        std::fs::rename(&from, &to).map_err(|error| SweepError::Move { from, to, error })?;
     }
     Ok(Some(target))
 }

@@ -3,6 +3,10 @@
 //! (a value of a setting axis), and the helpers that the other modules use to build
 //! them (`read_err` and its siblings for I/O errors naming the file, [`list_points`]
 //! for the points a message lists). It uses only the types its variants carry.
+//!
+//! Each message is said once in a chain: a variant prints the error it wraps in its own
+//! message, as a plain field (named `error`, not `source`, so that it is not also the
+//! variant's `source`); `transparent` variants are their inner error.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -18,46 +22,46 @@ use crate::{SchemaError, UnknownStatus, CONFIRM_ABOVE};
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
     /// A file could not be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}: {error}")]
     Read {
         /// The file.
         path: PathBuf,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// `results.csv` could not be opened to append rows to it.
-    #[error("cannot open {path} for appending: {source}")]
+    #[error("cannot open {path} for appending: {error}")]
     Open {
         /// The file.
         path: PathBuf,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A file could not be written, cut back or flushed to disk (a full disk, …).
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}: {error}")]
     Write {
         /// The file.
         path: PathBuf,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A directory could not be created.
-    #[error("cannot create directory {path}: {source}")]
+    #[error("cannot create directory {path}: {error}")]
     CreateDir {
         /// The directory.
         path: PathBuf,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A file or directory could not be moved (`--new-results` moving earlier results aside).
-    #[error("cannot move {from} to {to}: {source}")]
+    #[error("cannot move {from} to {to}: {error}")]
     Move {
         /// What was moved.
         from: PathBuf,
         /// Where to.
         to: PathBuf,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// Bad input at a place in a file (sweep file, or a row of a results file).
     #[error("{location}: {message}")]
@@ -68,38 +72,35 @@ pub enum SweepError {
         message: String,
     },
     /// The base scene, or the scene of one point (the base scene with the point's
-    /// values), is invalid ([`SweepSceneError`]; boxed, to keep every result small). Its
-    /// [`source`](std::error::Error::source) is the scene's own error, with its location
-    /// in the scene file.
+    /// values), is invalid ([`SweepSceneError`]; boxed, to keep every result small). The
+    /// scene's own error, with its location in the scene file, is
+    /// [`SweepError::scene_error`].
     #[error(transparent)]
     Scene(Box<SweepSceneError>),
     /// A value of a setting axis (`nodes`, `operator`, …) that is not a valid setting.
-    #[error("{location}: {source}")]
+    #[error("{location}: {error}")]
     Axis {
         /// The table of the point in the sweep file.
         location: Location,
         /// What is wrong with the value.
-        #[source]
-        source: AxisError,
+        error: AxisError,
     },
     /// A results file of another schema version, or without the columns every results
     /// file has.
-    #[error("{location}: {source}")]
+    #[error("{location}: {error}")]
     Schema {
         /// The results file, and the row's line for a row of another schema version.
         location: Location,
         /// What is wrong.
-        #[source]
-        source: SchemaError,
+        error: SchemaError,
     },
     /// A `status` cell of a results file that is no point status.
-    #[error("{location}: {source}")]
+    #[error("{location}: {error}")]
     Status {
         /// The results file, and the row's line where known.
         location: Location,
         /// The cell.
-        #[source]
-        source: UnknownStatus,
+        error: UnknownStatus,
     },
     /// A results file that cannot be used as asked (layout, other sweep).
     #[error("{path}: {message}")]
@@ -110,12 +111,12 @@ pub enum SweepError {
         message: String,
     },
     /// A worker process could not be started or waited for.
-    #[error("cannot start a worker process ({exe}): {source}")]
+    #[error("cannot start a worker process ({exe}): {error}")]
     Spawn {
         /// The worker executable.
         exe: PathBuf,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// Writing `sweep.json`, a job file or `results.csv` failed.
     #[error(transparent)]
@@ -184,28 +185,28 @@ impl SweepError {
     /// scene file.
     pub fn scene_error(&self) -> Option<&SceneError> {
         match self {
-            SweepError::Scene(e) => Some(&e.source),
+            SweepError::Scene(e) => Some(&e.error),
             _ => None,
         }
     }
 
-    pub(crate) fn scene(location: Location, of: SceneOf, source: SceneError) -> SweepError {
-        SweepError::Scene(Box::new(SweepSceneError { location, of, source }))
+    pub(crate) fn scene(location: Location, of: SceneOf, error: SceneError) -> SweepError {
+        SweepError::Scene(Box::new(SweepSceneError { location, of, error }))
     }
 }
 
 /// An invalid scene of a sweep: where the sweep file asks for it, which scene it is, and
-/// the scene's own error.
+/// the scene's own error (printed in the message; typed, with its location in the scene
+/// file, through [`SweepError::scene_error`]).
 #[derive(Debug, thiserror::Error)]
-#[error("{location}: {of}: {source}")]
+#[error("{location}: {of}: {error}")]
 pub struct SweepSceneError {
     /// Where in the sweep file: the `scene` key, or the table of the point.
     pub location: Location,
     /// Which scene: the base scene or a point's.
     pub of: SceneOf,
     /// The scene's error (its location is in the scene file).
-    #[source]
-    pub source: SceneError,
+    pub error: SceneError,
 }
 
 /// Which scene of a sweep a [`SweepError::Scene`] is about.
@@ -239,12 +240,12 @@ pub enum AxisError {
         value: String,
     },
     /// An unknown SBP operator.
-    #[error("operator = {value}: {source}")]
+    #[error("operator = {value}: {error}")]
     Operator {
         /// The value as written.
         value: String,
         /// The operator parser's error.
-        source: ParseOperatorKindError,
+        error: ParseOperatorKindError,
     },
     /// An unknown formulation.
     #[error(transparent)]
@@ -279,19 +280,19 @@ fn signal_name(signal: i32) -> String {
 }
 
 pub(crate) fn read_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
-    move |source| SweepError::Read { path: path.to_path_buf(), source }
+    move |error| SweepError::Read { path: path.to_path_buf(), error }
 }
 
 pub(crate) fn open_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
-    move |source| SweepError::Open { path: path.to_path_buf(), source }
+    move |error| SweepError::Open { path: path.to_path_buf(), error }
 }
 
 pub(crate) fn write_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
-    move |source| SweepError::Write { path: path.to_path_buf(), source }
+    move |error| SweepError::Write { path: path.to_path_buf(), error }
 }
 
 pub(crate) fn create_dir_err(path: &Path) -> impl FnOnce(std::io::Error) -> SweepError + '_ {
-    move |source| SweepError::CreateDir { path: path.to_path_buf(), source }
+    move |error| SweepError::CreateDir { path: path.to_path_buf(), error }
 }
 
 /// At most this many missing points are listed in a message.

@@ -300,7 +300,7 @@ fn check_points(base: &SceneFile, listed: Vec<Listed>) -> Result<Checked, SweepE
 /// The scene of a point, resolved from the base scene with the point's overrides (cheap:
 /// no model is built), and its memory estimate checked against `limit` bytes.
 fn resolve_point(base: &SceneFile, p: &Point, location: &Location, limit: Option<f64>) -> Result<Scene, SweepError> {
-    let ov = p.overrides().map_err(|source| SweepError::Axis { location: location.clone(), source })?;
+    let ov = p.overrides().map_err(|error| SweepError::Axis { location: location.clone(), error })?;
     let scene_of_point = |e| SweepError::scene(location.clone(), SceneOf::Point(p.canonical()), e);
     let scene = base.clone().resolve(&ov).map_err(scene_of_point)?;
     let memory = match p.method {

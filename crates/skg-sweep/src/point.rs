@@ -92,7 +92,7 @@ impl Point {
             match k.as_str() {
                 "nodes" => ov.nodes = Some(v.parse().map_err(whole("nodes"))?),
                 "operator" if v.trim().eq_ignore_ascii_case("auto") => ov.auto_operator = true,
-                "operator" => ov.operator = Some(v.parse().map_err(|source| AxisError::Operator { value: v.clone(), source })?),
+                "operator" => ov.operator = Some(v.parse().map_err(|error| AxisError::Operator { value: v.clone(), error })?),
                 "verify_tol" => {
                     let tol: f64 = v.trim().parse().map_err(|_| AxisError::VerifyTol { value: v.clone() })?;
                     if !(tol > 0.0 && tol.is_finite()) {

@@ -314,14 +314,14 @@ impl Results {
         let mut r = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text.as_bytes());
         let header: Vec<String> = r.headers().map_err(|e| bad(e.to_string()))?.iter().map(str::to_string).collect();
         let file = Location::file(path.display().to_string());
-        let (schema, status) = schema_and_status_columns(&header).map_err(|source| SweepError::Schema { location: file, source })?;
+        let (schema, status) = schema_and_status_columns(&header).map_err(|error| SweepError::Schema { location: file, error })?;
         let mut rows = Vec::new();
         for rec in r.records() {
             let rec = rec.map_err(|e| bad(e.to_string()))?;
             let location =
                 Location { file: path.display().to_string(), line: rec.position().map(|p| p.line() as usize), col: None, field: None };
-            check_schema_version(&rec[schema]).map_err(|source| SweepError::Schema { location: location.clone(), source })?;
-            rec[status].parse::<PointStatus>().map_err(|source| SweepError::Status { location, source })?;
+            check_schema_version(&rec[schema]).map_err(|error| SweepError::Schema { location: location.clone(), error })?;
+            rec[status].parse::<PointStatus>().map_err(|error| SweepError::Status { location, error })?;
             rows.push(rec.iter().map(str::to_string).collect());
         }
         Ok(Results { path: path.to_path_buf(), header, rows })
@@ -340,7 +340,7 @@ impl Results {
         let i = self.require_column("status")?;
         row[i]
             .parse()
-            .map_err(|source: UnknownStatus| SweepError::Status { location: Location::file(self.path.display().to_string()), source })
+            .map_err(|error: UnknownStatus| SweepError::Status { location: Location::file(self.path.display().to_string()), error })
     }
 
     /// The `<column>_expr` column that keeps `column`'s values as written, if any.
@@ -528,9 +528,9 @@ mod tests {
         let mut full = std::fs::OpenOptions::new().append(true).open("/dev/full").expect("/dev/full");
         let path = Path::new("out/sweeps/demo/results.csv");
         let err = append(&mut full, path, b"a,b\n").unwrap_err();
-        let SweepError::Write { path: named, source } = &err else { panic!("expected a write error, got {err:?}") };
+        let SweepError::Write { path: named, error } = &err else { panic!("expected a write error, got {err:?}") };
         assert_eq!(named, path);
-        assert_eq!(source.kind(), std::io::ErrorKind::StorageFull, "{err}");
+        assert_eq!(error.kind(), std::io::ErrorKind::StorageFull, "{err}");
         assert!(err.to_string().starts_with("cannot write out/sweeps/demo/results.csv: "), "{err}");
     }
 }

@@ -85,12 +85,12 @@ pub enum SlurmError {
         program: String,
     },
     /// A Slurm command could not be started or waited for.
-    #[error("cannot run `{command}`: {source}")]
+    #[error("cannot run `{command}`: {error}")]
     Run {
         /// The command line.
         command: String,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A Slurm command failed; its message is quoted.
     #[error("`{command}` failed ({status}): {message}")]
@@ -160,12 +160,12 @@ pub enum SlurmError {
         what: &'static str,
     },
     /// The array was submitted but its merge job was not.
-    #[error("submitted the shards as array job {array}, but the merge job could not be submitted: {source}; {cancelled}")]
+    #[error("submitted the shards as array job {array}, but the merge job could not be submitted: {error}; {cancelled}")]
     MergeNotSubmitted {
         /// The array job id.
         array: String,
         /// The merge submission's error.
-        source: Box<SlurmError>,
+        error: Box<SlurmError>,
         /// What became of the array job.
         cancelled: String,
     },
@@ -268,11 +268,11 @@ fn command_text(program: &str, args: &[String]) -> String {
 fn run(program: &str, args: &[String], timeout: Duration) -> Result<String, SlurmError> {
     let command = command_text(program, args);
     let mut child =
-        Command::new(program).args(args).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().map_err(|source| {
-            if source.kind() == std::io::ErrorKind::NotFound {
+        Command::new(program).args(args).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().map_err(|error| {
+            if error.kind() == std::io::ErrorKind::NotFound {
                 SlurmError::Missing { program: program.to_string() }
             } else {
-                SlurmError::Run { command: command.clone(), source }
+                SlurmError::Run { command: command.clone(), error }
             }
         })?;
     // Read both pipes in threads, so that a long answer cannot block the command.
@@ -297,7 +297,7 @@ fn run(program: &str, args: &[String], timeout: Duration) -> Result<String, Slur
                 let _ = child.wait();
                 return Err(SlurmError::TimedOut { command, seconds: timeout.as_secs() });
             }
-            Err(source) => return Err(SlurmError::Run { command, source }),
+            Err(error) => return Err(SlurmError::Run { command, error }),
         }
     };
     let (stdout, stderr) = (out.join().unwrap_or_default(), err.join().unwrap_or_default());
@@ -375,7 +375,7 @@ struct Scripts {
 fn write_scripts(dir: &Path, layout: &ShardLayout, exe: &Path) -> Result<Scripts, SlurmError> {
     let slurm = dir.join("slurm");
     let logs = slurm.join("logs");
-    std::fs::create_dir_all(&logs).map_err(|source| SweepError::CreateDir { path: logs.clone(), source })?;
+    std::fs::create_dir_all(&logs).map_err(|error| SweepError::CreateDir { path: logs.clone(), error })?;
     let (q_dir, q_exe, q_file) =
         (shell_quote(&dir.to_string_lossy()), shell_quote(&exe.to_string_lossy()), shell_quote(&layout.sweep_file.to_string_lossy()));
     let shards_dir = shell_quote(&format!("{}/", dir.join("shards").display()));
@@ -609,7 +609,7 @@ fn merge_not_submitted(error: SlurmError, array: Option<String>) -> SlurmError {
         Ok(_) => format!("cancelled array job {array}; run the command again"),
         Err(c) => format!("cancelling array job {array} failed too ({c}): cancel it yourself (scancel {array})"),
     };
-    SlurmError::MergeNotSubmitted { array, source: Box::new(error), cancelled }
+    SlurmError::MergeNotSubmitted { array, error: Box::new(error), cancelled }
 }
 
 /// What [`wait_for_merge`] saw last.

@@ -161,7 +161,7 @@ impl SweepFile {
                 f.origin = origin;
                 Ok(f)
             }
-            Err(TomlError::Io { path, error }) => Err(SweepError::Read { path, source: error }),
+            Err(TomlError::Io { path, error }) => Err(SweepError::Read { path, error }),
             Err(TomlError::Parse { location, mut message }) => {
                 // A table where an array of tables belongs (`[grid]` for `[[grid]]`):
                 // the reader's type error, in serde's or the scene reader's words.
