@@ -24,7 +24,7 @@ pub const MAX_POINTS: usize = 10_000_000;
 pub struct Expanded {
     /// The points, in order (grids, explicit points, peer ladder).
     pub points: Vec<Point>,
-    /// Rough relative cost of each point (see [`estimated_cost`]), by index.
+    /// Estimated seconds of one worker computing each point ([`estimated_cost`]), by index.
     pub costs: Vec<f64>,
     /// Each point's structure key ([`structure_key`]), by index: points with equal keys
     /// are run one after the other by one worker where the order allows.

@@ -1,52 +1,66 @@
 //! Before a run: what it will do and roughly how long it will take ([`plan`]), and the
 //! defaults of a run (output directory, worker count). The time estimate is
 //! [`estimated_cost`] per point, summed over the run's points and divided among the
-//! workers ([`estimated_wall_s`]). A run of more than [`CONFIRM_ABOVE`] points is
-//! refused unless confirmed.
+//! workers ([`estimated_wall_s`]); its model of a solve's cost is skg-core's,
+//! [`skg_core::solve::cost`], the one the refinement chooses discretizations by. A run
+//! of more than [`CONFIRM_ABOVE`] points is refused unless confirmed.
 
 use std::path::PathBuf;
 
 use skg_core::sbp::OperatorKind;
-use skg_core::scene::{Formulation, Scene};
+use skg_core::scene::{Backend, Formulation, Scene};
+use skg_core::solve::cost::{relative_cost, seconds_per_cost};
 
 use crate::{Expanded, Method, Point, SweepError, SweepFile, SweepOptions, MAX_POINTS};
 
 /// Above this many points to run, a sweep starts only when confirmed (`--yes`).
 pub const CONFIRM_ABOVE: usize = 10_000;
 
-/// Rough relative cost of a point, used only to start the expensive points first (so
-/// that a sweep does not end with one long point running alone): N × the operator's
-/// stencil width × 2 for the full formulation; a time-stepping peer point counts N/10.
+/// Estimated seconds of one worker computing a point: the same model of a solve's cost
+/// as the refinement's choice of discretization, [`skg_core::solve::cost`] (the
+/// measured time per node of the point's operator on its backend,
+/// [`relative_cost`], times the seconds per unit, [`seconds_per_cost`]), twice that for
+/// the full formulation (`FULL_FACTOR`); a time-stepping peer point counts
+/// `PEER_SHARE` of a Newton `SBP242` solve of its grid. The driver starts the points
+/// with the largest estimate first, so that a sweep does not end with one long point
+/// running alone, and [`estimated_wall_s`] sums them. A point solved to its tolerance
+/// (`[sweep] refine`, `operator = "auto"`) is estimated on the grid it starts from.
 pub fn estimated_cost(scene: &Scene, method: &Method) -> f64 {
-    let n = scene.nodes as f64;
+    let newton_sbp242 = || relative_cost(OperatorKind::Sbp242, Backend::Newton, scene.nodes) * seconds_per_cost(Backend::Newton);
     match method {
-        Method::Ode { .. } => n / 10.0,
+        Method::Ode { .. } => PEER_SHARE * newton_sbp242(),
         Method::Skg => {
-            let width = match scene.operator {
-                OperatorKind::Sbp121 => 1.0,
-                OperatorKind::Sbp242 | OperatorKind::Sbp121Ad => 2.0,
-                OperatorKind::Sbp363 | OperatorKind::Sbp484 | OperatorKind::Sbp242Ad => 3.0,
-                OperatorKind::Sbp363Ad | OperatorKind::Sbp484Ad => 4.0,
-            };
-            let full = if scene.formulation == Formulation::Full { 2.0 } else { 1.0 };
-            n * width * full
+            let backend = scene.solver.backend;
+            let full = if scene.formulation == Formulation::Full { FULL_FACTOR } else { 1.0 };
+            relative_cost(scene.operator, backend, scene.nodes) * seconds_per_cost(backend) * full
         }
     }
 }
 
-/// Seconds of one worker per unit of [`estimated_cost`], and per point (process start,
-/// scene setup): a rough fit to the release-build timings of docs/benchmarks.md. It
-/// gives 0.08 s for the tumbler at N = 256 (measured: 0.01 s plus the process start),
-/// 3.3 s at N = 16384 (1.5 s) and 0.85 s for the rolling disk at N = 4096 (1.7 s: the
-/// cost of a scene with more unknowns per node grows faster), so within a factor of
-/// about 2 for the shipped scenes: enough to tell minutes from days.
-const SECONDS_PER_COST: f64 = 1.0e-4;
-const SECONDS_PER_POINT: f64 = 0.03;
+/// The time of a solve in the full formulation (twice the unknowns) over the reduced
+/// one's. Measured as sweep points with `SBP242` at N = 4096: 3.1 (Ipopt) and 3.3
+/// (Newton) on the rolling disk, 1.46 and 1.33 on the tumbler.
+const FULL_FACTOR: f64 = 2.0;
+
+/// The time of a time-stepping peer point over a Newton `SBP242` solve of the same grid:
+/// the peer integrates onto the grid with its step capped at the node spacing, as a
+/// solve's verification does, so its time hardly depends on its tolerance (1e-4 and
+/// 1e-12 within 15 %). Measured as sweep points: 0.52 on the rolling disk at N = 16384
+/// (0.354 s against 0.683 s), 0.58 on the tumbler (0.314 s against 0.543 s); 0.6 and
+/// 0.43 at N = 4096.
+const PEER_SHARE: f64 = 0.5;
+
+/// Seconds of one worker per point besides its [`estimated_cost`]: handing the point
+/// out, reading its result, the model built for the energy artifact, writing its row.
+/// Measured as the sweep's wall time less the points' own (`wall_s`), per point: 0.010 s
+/// on the tumbler and 0.011 s on the rolling disk (25 points each, N = 1024 … 16384).
+const SECONDS_PER_POINT: f64 = 0.01;
 
 /// A rough estimate of the wall time of running `points` with `jobs` workers (only to
-/// tell the user what a sweep will take before it starts).
+/// tell the user what a sweep will take before it starts): `SECONDS_PER_POINT` and
+/// [`estimated_cost`] per point, shared evenly among the workers.
 pub fn estimated_wall_s(expanded: &Expanded, points: &[&Point], jobs: usize) -> f64 {
-    let serial: f64 = points.iter().map(|p| SECONDS_PER_POINT + SECONDS_PER_COST * expanded.costs[p.index]).sum();
+    let serial: f64 = points.iter().map(|p| SECONDS_PER_POINT + expanded.costs[p.index]).sum();
     serial / jobs.max(1) as f64
 }
 
