@@ -11,7 +11,8 @@ use skg_core::output;
 use skg_core::scene::provenance;
 use skg_core::scene::Location;
 
-use crate::{open_err, read_err, write_err, Method, Point, PointStatus, Record, SweepError, UnknownStatus};
+use crate::error::{open_err, read_err, write_err};
+use crate::{Method, Point, PointStatus, Record, SweepError, UnknownStatus};
 
 /// A results file that this skg-solve does not read: written before results.csv had a
 /// schema version, with a row of another schema version, or not a results file at all.
@@ -141,6 +142,35 @@ impl Column {
 /// The columns of `results.csv` for a sweep with these grid axes, of which
 /// `expression_axes` have some value written as an expression: the leading columns,
 /// each axis (followed by its `_expr` column if it has one), the results, the provenance.
+///
+/// **`results.csv`** is a plain CSV (one header line, no comments: `pd.read_csv` reads
+/// it). Its columns, in order:
+///
+/// * `id`, `index`, `method` (`skg` or `ode`), `rtol` (the peer's tolerance), `nodes`,
+///   `operator`, `formulation`: the point and its resolved settings;
+/// * one column per grid axis. A scene parameter's column holds the **number** the
+///   resolved scene has (`sigma = "1/110"` gives `0.00909090909090909`, the shortest text
+///   that reads back to the same double, as in every numeric column); a setting's column
+///   (`max_iter`, `hessian`, `backend`) holds the value as written. A parameter axis with at least
+///   one value written as an expression also gets the column **`<axis>_expr`**, right
+///   after it, with every value as written in the sweep file (`1/110`, and `0.005` for a
+///   plain number); an axis whose values are all plain numbers gets none;
+/// * `converged` (`true`/`false`), `status` (the stable name of the [`PointStatus`]:
+///   `converged`, `not_verified`, `not_converged`, `error`, `crashed`, `timeout`),
+///   `solver_status` (the finishing backend's status name, Ipopt's or `Newton_…`,
+///   `ODE_Succeeded` for a peer point, empty when the solver did not finish), then
+///   `verification`, `verify_error`, `solved_as`, `iterations`, `wall_s`, `lu_analysis`
+///   (`computed` or `reused`: the Newton backend's symbolic LU analysis, made for this
+///   point or taken over from the worker's previous point of equal structure; empty
+///   when Newton did not run), `error_max`, `error_rms`, `error_column`,
+///   `energy_drift`, `energy_artifact` (empty unless the energy is conserved:
+///   [`skg_core::tune::conserves_energy`]), `artifacts`, `max_residual`, `message`;
+/// * the provenance ([`Provenance`]): `skg_solve_version`, `schema_version` and
+///   `scene_hash` (`sha256:…` of the base scene file's content, as the worker read it),
+///   `reference_hash` (of the reference file's content; empty without one).
+///
+/// [`Results::read`] refuses a file of another schema version (or one without the
+/// `schema_version` column, written before it existed) with a message naming the file.
 pub fn results_columns(axes: &[String], expression_axes: &[String]) -> Vec<Column> {
     let mut columns: Vec<Column> = LEADING_COLUMNS.iter().map(|c| Column::Fixed(c)).collect();
     for axis in axes.iter().filter(|a| !LEADING_COLUMNS.contains(&a.as_str())) {
@@ -284,14 +314,14 @@ impl Results {
         let mut r = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text.as_bytes());
         let header: Vec<String> = r.headers().map_err(|e| bad(e.to_string()))?.iter().map(str::to_string).collect();
         let file = Location::file(path.display().to_string());
-        let (schema, status) = schema_and_status_columns(&header).map_err(|source| SweepError::Schema { location: file, source })?;
+        let (schema, status) = schema_and_status_columns(&header).map_err(|error| SweepError::Schema { location: file, error })?;
         let mut rows = Vec::new();
         for rec in r.records() {
             let rec = rec.map_err(|e| bad(e.to_string()))?;
             let location =
                 Location { file: path.display().to_string(), line: rec.position().map(|p| p.line() as usize), col: None, field: None };
-            check_schema_version(&rec[schema]).map_err(|source| SweepError::Schema { location: location.clone(), source })?;
-            rec[status].parse::<PointStatus>().map_err(|source| SweepError::Status { location, source })?;
+            check_schema_version(&rec[schema]).map_err(|error| SweepError::Schema { location: location.clone(), error })?;
+            rec[status].parse::<PointStatus>().map_err(|error| SweepError::Status { location, error })?;
             rows.push(rec.iter().map(str::to_string).collect());
         }
         Ok(Results { path: path.to_path_buf(), header, rows })
@@ -310,7 +340,7 @@ impl Results {
         let i = self.require_column("status")?;
         row[i]
             .parse()
-            .map_err(|source: UnknownStatus| SweepError::Status { location: Location::file(self.path.display().to_string()), source })
+            .map_err(|error: UnknownStatus| SweepError::Status { location: Location::file(self.path.display().to_string()), error })
     }
 
     /// The `<column>_expr` column that keeps `column`'s values as written, if any.
@@ -498,9 +528,9 @@ mod tests {
         let mut full = std::fs::OpenOptions::new().append(true).open("/dev/full").expect("/dev/full");
         let path = Path::new("out/sweeps/demo/results.csv");
         let err = append(&mut full, path, b"a,b\n").unwrap_err();
-        let SweepError::Write { path: named, source } = &err else { panic!("expected a write error, got {err:?}") };
+        let SweepError::Write { path: named, error } = &err else { panic!("expected a write error, got {err:?}") };
         assert_eq!(named, path);
-        assert_eq!(source.kind(), std::io::ErrorKind::StorageFull, "{err}");
+        assert_eq!(error.kind(), std::io::ErrorKind::StorageFull, "{err}");
         assert!(err.to_string().starts_with("cannot write out/sweeps/demo/results.csv: "), "{err}");
     }
 }

@@ -23,7 +23,9 @@ use serde::{Deserialize, Serialize};
 
 use skg_core::output;
 
-use crate::{collect_rows, Expanded, MergeReport, PointStatus, Provenance, Results, SweepError, SweepFile, SweepInfo};
+use crate::error::{create_dir_err, read_err};
+use crate::merge::collect_rows;
+use crate::{Expanded, MergeReport, PointStatus, Provenance, Results, SweepError, SweepFile, SweepInfo};
 
 /// The layout file of a sharded directory.
 pub const LAYOUT_FILE: &str = "shards.json";
@@ -94,7 +96,7 @@ impl ShardLayout {
         if !path.exists() {
             return Ok(None);
         }
-        let text = std::fs::read_to_string(&path).map_err(crate::read_err(&path))?;
+        let text = std::fs::read_to_string(&path).map_err(read_err(&path))?;
         serde_json::from_str(&text)
             .map(Some)
             .map_err(|e| SweepError::Results { path, message: format!("not a shards.json of this skg-solve: {e}") })
@@ -209,67 +211,80 @@ pub fn prepare(
     dir: &Path,
     opts: &PrepareOptions,
 ) -> Result<(ShardLayout, Vec<ShardState>), SweepError> {
-    let bad = |path: PathBuf, message: String| SweepError::Results { path, message };
-    let sweep_file = std::path::absolute(&file.origin.path).map_err(crate::read_err(Path::new(&file.origin.path)))?;
+    let sweep_file = std::path::absolute(&file.origin.path).map_err(read_err(Path::new(&file.origin.path)))?;
     let total = expanded.points.len();
-    if let Some(k) = opts.shards {
-        if k == 0 || k > MAX_SHARDS {
-            return Err(bad(dir.to_path_buf(), format!("--shards {k}: expected 1 to {MAX_SHARDS} (Slurm's default MaxArraySize)")));
-        }
-        if k > total {
-            return Err(bad(dir.to_path_buf(), format!("--shards {k}: the sweep has only {total} points (at most one shard per point)")));
-        }
-    }
+    check_shard_count(opts.shards, total, dir)?;
     let layout = match ShardLayout::read(dir)? {
-        Some(old) => {
-            let path = dir.join(LAYOUT_FILE);
-            if old.runner != opts.runner {
-                return Err(bad(
-                    path,
-                    format!("its shards are run by {}, not by {}: use another output directory", old.runner, opts.runner),
-                ));
-            }
-            if old.sweep_file != sweep_file || old.total_points != total {
-                return Err(bad(
-                    path,
-                    format!(
-                        "holds the {} points of {}, not the {total} points of {}: use another output directory",
-                        old.total_points,
-                        old.sweep_file.display(),
-                        sweep_file.display()
-                    ),
-                ));
-            }
-            if let Some(k) = opts.shards.filter(|&k| k != old.shards) {
-                return Err(bad(
-                    path,
-                    format!(
-                        "the sweep here is split into {} shards, not {k}: leave out --shards, or use another output directory",
-                        old.shards
-                    ),
-                ));
-            }
-            old
-        }
-        None => {
-            if dir.join("results.csv").exists() || dir.join("sweep.json").exists() {
-                return Err(bad(
-                    dir.to_path_buf(),
-                    "holds the results of a sweep run on one machine (results.csv, sweep.json): use another output directory".into(),
-                ));
-            }
-            let layout = ShardLayout {
-                name: file.name(),
-                sweep_file,
-                shards: opts.shards.unwrap_or_else(|| default_shards(total)).min(total.max(1)),
-                total_points: total,
-                runner: opts.runner,
-            };
-            std::fs::create_dir_all(dir).map_err(crate::create_dir_err(dir))?;
-            output::write_json(&dir.join(LAYOUT_FILE), &layout)?;
-            layout
-        }
+        Some(old) => check_layout(old, &sweep_file, total, opts, dir)?,
+        None => new_layout(file, sweep_file, total, opts, dir)?,
     };
+    check_shard_files(file, expanded, dir, &layout)?;
+    let states = shard_states(dir, &layout)?;
+    Ok((layout, states))
+}
+
+/// Refuse a number of shards outside 1 … [`MAX_SHARDS`] or above the sweep's `total`
+/// points.
+fn check_shard_count(shards: Option<usize>, total: usize, dir: &Path) -> Result<(), SweepError> {
+    let Some(k) = shards else { return Ok(()) };
+    let bad = |message: String| SweepError::Results { path: dir.to_path_buf(), message };
+    if k == 0 || k > MAX_SHARDS {
+        return Err(bad(format!("--shards {k}: expected 1 to {MAX_SHARDS} (Slurm's default MaxArraySize)")));
+    }
+    if k > total {
+        return Err(bad(format!("--shards {k}: the sweep has only {total} points (at most one shard per point)")));
+    }
+    Ok(())
+}
+
+/// The layout `old` of the sharded directory `dir`, if it is of the same runner, the same
+/// sweep file with `total` points and the number of shards asked for (if any).
+fn check_layout(old: ShardLayout, sweep_file: &Path, total: usize, opts: &PrepareOptions, dir: &Path) -> Result<ShardLayout, SweepError> {
+    let bad = |message: String| SweepError::Results { path: dir.join(LAYOUT_FILE), message };
+    if old.runner != opts.runner {
+        return Err(bad(format!("its shards are run by {}, not by {}: use another output directory", old.runner, opts.runner)));
+    }
+    if old.sweep_file != sweep_file || old.total_points != total {
+        return Err(bad(format!(
+            "holds the {} points of {}, not the {total} points of {}: use another output directory",
+            old.total_points,
+            old.sweep_file.display(),
+            sweep_file.display()
+        )));
+    }
+    if let Some(k) = opts.shards.filter(|&k| k != old.shards) {
+        return Err(bad(format!(
+            "the sweep here is split into {} shards, not {k}: leave out --shards, or use another output directory",
+            old.shards
+        )));
+    }
+    Ok(old)
+}
+
+/// A new layout for `dir` (written to `DIR/shards.json`), unless `dir` holds the results
+/// of a sweep run on one machine.
+fn new_layout(file: &SweepFile, sweep_file: PathBuf, total: usize, opts: &PrepareOptions, dir: &Path) -> Result<ShardLayout, SweepError> {
+    if dir.join("results.csv").exists() || dir.join("sweep.json").exists() {
+        return Err(SweepError::Results {
+            path: dir.to_path_buf(),
+            message: "holds the results of a sweep run on one machine (results.csv, sweep.json): use another output directory".into(),
+        });
+    }
+    let layout = ShardLayout {
+        name: file.name(),
+        sweep_file,
+        shards: opts.shards.unwrap_or_else(|| default_shards(total)).min(total.max(1)),
+        total_points: total,
+        runner: opts.runner,
+    };
+    std::fs::create_dir_all(dir).map_err(create_dir_err(dir))?;
+    output::write_json(&dir.join(LAYOUT_FILE), &layout)?;
+    Ok(layout)
+}
+
+/// Refuse a shard directory whose sweep.json is of another shard, other points, other
+/// input content or other `[sweep]` settings than the sweep `file` has now.
+fn check_shard_files(file: &SweepFile, expanded: &Expanded, dir: &Path, layout: &ShardLayout) -> Result<(), SweepError> {
     let provenance = Provenance::current(expanded.scene_hash.clone(), expanded.reference_hash.clone());
     let all_ids: Vec<String> = expanded.points.iter().map(crate::Point::id).collect();
     let settings = file.row_settings();
@@ -279,29 +294,26 @@ pub fn prepare(
             continue;
         }
         let info = SweepInfo::read(&shard)?;
-        let path = shard.join("sweep.json");
+        let bad = |message: String| SweepError::Results { path: shard.join("sweep.json"), message };
         let expected = format!("{k}/{}", layout.shards);
         if info.shard.as_deref() != Some(expected.as_str()) {
-            return Err(bad(path, format!("is shard {:?}, not {expected}: not a shard of this directory", info.shard)));
+            return Err(bad(format!("is shard {:?}, not {expected}: not a shard of this directory", info.shard)));
         }
         if info.all_ids != all_ids {
             return Err(bad(
-                path,
-                "lists other points than the sweep file now has: the sweep file was edited; use another output directory".into(),
+                "lists other points than the sweep file now has: the sweep file was edited; use another output directory".into()
             ));
         }
         if let Some(other) = provenance.conflict(&info.provenance) {
-            return Err(bad(path, format!("records rows computed from {other}: the inputs changed since; use another output directory")));
+            return Err(bad(format!("records rows computed from {other}: the inputs changed since; use another output directory")));
         }
         if info.settings != settings {
             return Err(bad(
-                path,
-                "records other [sweep] settings than the sweep file now has: restore them, or use another output directory".into(),
+                "records other [sweep] settings than the sweep file now has: restore them, or use another output directory".into()
             ));
         }
     }
-    let states = shard_states(dir, &layout)?;
-    Ok((layout, states))
+    Ok(())
 }
 
 /// Take the lock of `dir`, waiting up to [`LOCK_WAIT`] while another process holds it

@@ -85,12 +85,12 @@ pub enum SlurmError {
         program: String,
     },
     /// A Slurm command could not be started or waited for.
-    #[error("cannot run `{command}`: {source}")]
+    #[error("cannot run `{command}`: {error}")]
     Run {
         /// The command line.
         command: String,
         /// What the system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A Slurm command failed; its message is quoted.
     #[error("`{command}` failed ({status}): {message}")]
@@ -160,12 +160,12 @@ pub enum SlurmError {
         what: &'static str,
     },
     /// The array was submitted but its merge job was not.
-    #[error("submitted the shards as array job {array}, but the merge job could not be submitted: {source}; {cancelled}")]
+    #[error("submitted the shards as array job {array}, but the merge job could not be submitted: {error}; {cancelled}")]
     MergeNotSubmitted {
         /// The array job id.
         array: String,
         /// The merge submission's error.
-        source: Box<SlurmError>,
+        error: Box<SlurmError>,
         /// What became of the array job.
         cancelled: String,
     },
@@ -220,7 +220,7 @@ impl JobsFile {
         if !path.exists() {
             return Ok(JobsFile::default());
         }
-        let text = std::fs::read_to_string(&path).map_err(crate::read_err(&path))?;
+        let text = std::fs::read_to_string(&path).map_err(crate::error::read_err(&path))?;
         serde_json::from_str(&text).map_err(|e| SweepError::Results { path, message: format!("not a jobs.json of this skg-solve: {e}") })
     }
 }
@@ -268,11 +268,11 @@ fn command_text(program: &str, args: &[String]) -> String {
 fn run(program: &str, args: &[String], timeout: Duration) -> Result<String, SlurmError> {
     let command = command_text(program, args);
     let mut child =
-        Command::new(program).args(args).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().map_err(|source| {
-            if source.kind() == std::io::ErrorKind::NotFound {
+        Command::new(program).args(args).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().map_err(|error| {
+            if error.kind() == std::io::ErrorKind::NotFound {
                 SlurmError::Missing { program: program.to_string() }
             } else {
-                SlurmError::Run { command: command.clone(), source }
+                SlurmError::Run { command: command.clone(), error }
             }
         })?;
     // Read both pipes in threads, so that a long answer cannot block the command.
@@ -297,7 +297,7 @@ fn run(program: &str, args: &[String], timeout: Duration) -> Result<String, Slur
                 let _ = child.wait();
                 return Err(SlurmError::TimedOut { command, seconds: timeout.as_secs() });
             }
-            Err(source) => return Err(SlurmError::Run { command, source }),
+            Err(error) => return Err(SlurmError::Run { command, error }),
         }
     };
     let (stdout, stderr) = (out.join().unwrap_or_default(), err.join().unwrap_or_default());
@@ -375,7 +375,7 @@ struct Scripts {
 fn write_scripts(dir: &Path, layout: &ShardLayout, exe: &Path) -> Result<Scripts, SlurmError> {
     let slurm = dir.join("slurm");
     let logs = slurm.join("logs");
-    std::fs::create_dir_all(&logs).map_err(|source| SweepError::CreateDir { path: logs.clone(), source })?;
+    std::fs::create_dir_all(&logs).map_err(|error| SweepError::CreateDir { path: logs.clone(), error })?;
     let (q_dir, q_exe, q_file) =
         (shell_quote(&dir.to_string_lossy()), shell_quote(&exe.to_string_lossy()), shell_quote(&layout.sweep_file.to_string_lossy()));
     let shards_dir = shell_quote(&format!("{}/", dir.join("shards").display()));
@@ -458,14 +458,8 @@ pub struct SubmitReport {
 /// it).
 pub fn submit(file: &SweepFile, expanded: &Expanded, dir: &Path, opts: &SubmitOptions) -> Result<SubmitReport, SlurmError> {
     check_sbatch_args(&opts.sbatch_args)?;
-    let dir = std::path::absolute(dir).map_err(crate::read_err(dir))?;
-    let text = dir.to_string_lossy();
-    if text.contains('%') || text.contains('\\') {
-        return Err(SlurmError::Path { path: dir.clone(), what: "`%` or `\\`" });
-    }
-    if text.contains('\n') {
-        return Err(SlurmError::Path { path: dir.clone(), what: "a line break" });
-    }
+    let dir = std::path::absolute(dir).map_err(crate::error::read_err(dir))?;
+    check_dir_path(&dir)?;
     let lock = output::OutputDir::lock(&dir).map_err(SweepError::from)?;
     let (layout, states) = shards::prepare(file, expanded, &dir, &PrepareOptions { shards: opts.shards, runner: Runner::Slurm })?;
     let mut report = SubmitReport {
@@ -480,62 +474,18 @@ pub fn submit(file: &SweepFile, expanded: &Expanded, dir: &Path, opts: &SubmitOp
         notes: Vec::new(),
     };
     let mut jobs = JobsFile::read(&dir)?;
-    let earlier: Vec<String> = jobs.submissions.iter().flat_map(Submission::job_ids).collect();
-    if !earlier.is_empty() {
-        match job_states(&earlier) {
-            Ok(states) => {
-                let active: Vec<&JobState> = states.iter().filter(|s| s.active()).collect();
-                if !active.is_empty() {
-                    let list: Vec<String> = active.iter().map(|s| format!("{} {}", s.id, s.state)).collect();
-                    return Err(SlurmError::Active { dir, jobs: list.join(", "), ids: earlier.join(",") });
-                }
-            }
-            Err(e) if opts.dry_run => {
-                report.notes.push(format!("not checked whether the earlier jobs ({}) still run: {e}", earlier.join(",")))
-            }
-            Err(e) => return Err(SlurmError::Unchecked { dir, ids: earlier.join(","), reason: e.to_string() }),
-        }
-    }
+    check_earlier_jobs(&jobs, &dir, opts.dry_run, &mut report.notes)?;
     if report.submitted.is_empty() && report.merged {
         return Ok(report);
     }
     let scripts = write_scripts(&dir, &layout, &opts.exe)?;
-    let job_name = format!("skg-{}", layout.name);
-    let array_args = (!report.submitted.is_empty()).then(|| {
-        let mut a = vec![
-            "--parsable".to_string(),
-            format!("--array={}", array_spec(&report.submitted)),
-            format!("--job-name={job_name}"),
-            format!("--output={}", scripts.logs.join("shard-%A_%a.out").display()),
-        ];
-        a.extend(opts.sbatch_args.iter().cloned());
-        a.push(scripts.shard.display().to_string());
-        a
-    });
-    let merge_args = |dependency: Option<&str>| {
-        let mut a = vec!["--parsable".to_string()];
-        a.extend(dependency.map(|id| format!("--dependency=afterany:{id}")));
-        a.push(format!("--job-name={job_name}-merge"));
-        a.push(format!("--output={}", scripts.logs.join("merge-%j.out").display()));
-        a.extend(opts.sbatch_args.iter().cloned());
-        a.push(scripts.merge.display().to_string());
-        a
-    };
+    let sbatch = SbatchArgs::new(&layout, &scripts, &report.submitted, &opts.sbatch_args);
     if opts.dry_run {
-        report.commands.extend(array_args.as_ref().map(|a| command_text("sbatch", a)));
-        report.commands.push(command_text("sbatch", &merge_args(array_args.as_ref().map(|_| "<array job id>"))));
+        report.commands.extend(sbatch.array.as_ref().map(|a| command_text("sbatch", a)));
+        report.commands.push(command_text("sbatch", &sbatch.merge(sbatch.array.as_ref().map(|_| "<array job id>"))));
         drop(lock);
         return Ok(report);
     }
-    let job_id = |args: &[String]| -> Result<String, SlurmError> {
-        let out = run("sbatch", args, SBATCH_TIMEOUT)?;
-        // `N`, or `N;cluster` on a federation.
-        let id = out.trim().split(';').next().unwrap_or("").trim().to_string();
-        if id.is_empty() || !id.bytes().all(|b| b.is_ascii_digit()) {
-            return Err(SlurmError::NoJobId { command: command_text("sbatch", args), stdout: out });
-        }
-        Ok(id)
-    };
     let mut submission = Submission {
         submitted_unix: std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs()),
         array_job: None,
@@ -543,33 +493,123 @@ pub fn submit(file: &SweepFile, expanded: &Expanded, dir: &Path, opts: &SubmitOp
         merge_job: None,
         sbatch_args: opts.sbatch_args.clone(),
     };
-    if let Some(args) = &array_args {
+    if let Some(args) = &sbatch.array {
         report.commands.push(command_text("sbatch", args));
-        submission.array_job = Some(job_id(args)?);
+        submission.array_job = Some(sbatch_job_id(args)?);
     }
-    let args = merge_args(submission.array_job.as_deref());
+    let args = sbatch.merge(submission.array_job.as_deref());
     report.commands.push(command_text("sbatch", &args));
-    let merge = job_id(&args);
-    if let Ok(id) = &merge {
-        submission.merge_job = Some(id.clone());
-    }
+    let merge = sbatch_job_id(&args);
+    submission.merge_job = merge.as_ref().ok().cloned();
     jobs.submissions.push(submission.clone());
     output::write_json(&JobsFile::path(&dir), &jobs)?;
     drop(lock);
-    match (merge, submission.array_job.clone()) {
-        (Ok(_), _) => {}
-        (Err(e), None) => return Err(e),
-        (Err(e), Some(array)) => {
-            let cancelled = match run("scancel", std::slice::from_ref(&array), QUERY_TIMEOUT) {
-                Ok(_) => format!("cancelled array job {array}; run the command again"),
-                Err(c) => format!("cancelling array job {array} failed too ({c}): cancel it yourself (scancel {array})"),
-            };
-            return Err(SlurmError::MergeNotSubmitted { array, source: Box::new(e), cancelled });
-        }
+    if let Err(e) = merge {
+        return Err(merge_not_submitted(e, submission.array_job));
     }
     report.array_job = submission.array_job;
     report.merge_job = submission.merge_job;
     Ok(report)
+}
+
+/// Refuse a directory whose path the scripts or Slurm's file name patterns cannot hold.
+fn check_dir_path(dir: &Path) -> Result<(), SlurmError> {
+    let text = dir.to_string_lossy();
+    if text.contains('%') || text.contains('\\') {
+        return Err(SlurmError::Path { path: dir.to_path_buf(), what: "`%` or `\\`" });
+    }
+    if text.contains('\n') {
+        return Err(SlurmError::Path { path: dir.to_path_buf(), what: "a line break" });
+    }
+    Ok(())
+}
+
+/// Refuse a submission while jobs of an earlier one into `dir` (`jobs`) are queued or
+/// running, or when squeue cannot tell; a dry run only notes the latter in `notes`.
+fn check_earlier_jobs(jobs: &JobsFile, dir: &Path, dry_run: bool, notes: &mut Vec<String>) -> Result<(), SlurmError> {
+    let earlier: Vec<String> = jobs.submissions.iter().flat_map(Submission::job_ids).collect();
+    if earlier.is_empty() {
+        return Ok(());
+    }
+    match job_states(&earlier) {
+        Ok(states) => {
+            let active: Vec<&JobState> = states.iter().filter(|s| s.active()).collect();
+            if !active.is_empty() {
+                let list: Vec<String> = active.iter().map(|s| format!("{} {}", s.id, s.state)).collect();
+                return Err(SlurmError::Active { dir: dir.to_path_buf(), jobs: list.join(", "), ids: earlier.join(",") });
+            }
+        }
+        Err(e) if dry_run => notes.push(format!("not checked whether the earlier jobs ({}) still run: {e}", earlier.join(","))),
+        Err(e) => return Err(SlurmError::Unchecked { dir: dir.to_path_buf(), ids: earlier.join(","), reason: e.to_string() }),
+    }
+    Ok(())
+}
+
+/// The sbatch arguments of a submission: the array job's (None when no shard is to run)
+/// and the merge job's ([`SbatchArgs::merge`]).
+struct SbatchArgs {
+    array: Option<Vec<String>>,
+    job_name: String,
+    merge_output: String,
+    merge_script: String,
+    extra: Vec<String>,
+}
+
+impl SbatchArgs {
+    fn new(layout: &ShardLayout, scripts: &Scripts, shards: &[usize], extra: &[String]) -> SbatchArgs {
+        let job_name = format!("skg-{}", layout.name);
+        let array = (!shards.is_empty()).then(|| {
+            let mut a = vec![
+                "--parsable".to_string(),
+                format!("--array={}", array_spec(shards)),
+                format!("--job-name={job_name}"),
+                format!("--output={}", scripts.logs.join("shard-%A_%a.out").display()),
+            ];
+            a.extend(extra.iter().cloned());
+            a.push(scripts.shard.display().to_string());
+            a
+        });
+        SbatchArgs {
+            array,
+            job_name,
+            merge_output: scripts.logs.join("merge-%j.out").display().to_string(),
+            merge_script: scripts.merge.display().to_string(),
+            extra: extra.to_vec(),
+        }
+    }
+
+    /// The merge job's arguments, after the job `dependency` if any.
+    fn merge(&self, dependency: Option<&str>) -> Vec<String> {
+        let mut a = vec!["--parsable".to_string()];
+        a.extend(dependency.map(|id| format!("--dependency=afterany:{id}")));
+        a.push(format!("--job-name={}-merge", self.job_name));
+        a.push(format!("--output={}", self.merge_output));
+        a.extend(self.extra.iter().cloned());
+        a.push(self.merge_script.clone());
+        a
+    }
+}
+
+/// Submit a job with `sbatch args`; its id.
+fn sbatch_job_id(args: &[String]) -> Result<String, SlurmError> {
+    let out = run("sbatch", args, SBATCH_TIMEOUT)?;
+    // `N`, or `N;cluster` on a federation.
+    let id = out.trim().split(';').next().unwrap_or("").trim().to_string();
+    if id.is_empty() || !id.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(SlurmError::NoJobId { command: command_text("sbatch", args), stdout: out });
+    }
+    Ok(id)
+}
+
+/// The error of a merge job that could not be submitted (`error`): after an array job,
+/// that job is cancelled, so that no shard runs without its merge.
+fn merge_not_submitted(error: SlurmError, array: Option<String>) -> SlurmError {
+    let Some(array) = array else { return error };
+    let cancelled = match run("scancel", std::slice::from_ref(&array), QUERY_TIMEOUT) {
+        Ok(_) => format!("cancelled array job {array}; run the command again"),
+        Err(c) => format!("cancelling array job {array} failed too ({c}): cancel it yourself (scancel {array})"),
+    };
+    SlurmError::MergeNotSubmitted { array, error: Box::new(error), cancelled }
 }
 
 /// What [`wait_for_merge`] saw last.

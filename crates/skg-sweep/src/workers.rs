@@ -1,4 +1,7 @@
 //! The worker processes of a sweep and the protocol between them and the driver.
+//! Debian's Ipopt/MUMPS is not thread-safe (docs/solver.md), so points run in child
+//! processes, at most `jobs` at once; a worker dies with the driver
+//! (`PR_SET_PDEATHSIG`), and Ctrl-C reaches the whole process group.
 //!
 //! A worker is `skg-solve sweep-worker WORK` (the hidden subcommand, [`serve_points`]),
 //! started by the driver (`Pool`) and kept alive for any number of points, so that
@@ -31,7 +34,7 @@
 //! unrecorded and runs again on a resume.
 //!
 //! A worker's stderr goes to `WORK/worker-<k>.log` (its stdout, where Ipopt would
-//! print, is discarded as before); the driver notes the file's length when it hands
+//! print, is discarded); the driver notes the file's length when it hands
 //! out a point, so the log since then is that point's. A worker dies with the driver (`PR_SET_PDEATHSIG`, Linux); closing its
 //! stdin ends it. The files are removed as the points and workers finish.
 //!
@@ -50,7 +53,8 @@ use std::time::{Duration, Instant};
 
 use skg_core::output;
 
-use crate::{read_err, run_job, Expanded, Job, Point, PointStatus, Record, SweepError};
+use crate::error::read_err;
+use crate::{run_job, Expanded, Job, Point, PointStatus, Record, SweepError};
 
 /// Lines of a crashed worker's log quoted in its point's message.
 const TAIL_LINES: usize = 3;
@@ -264,7 +268,7 @@ impl Pool {
             let reported = read_record(&flight.result);
             let exit = match reported {
                 Some(_) => None,
-                None => w.child.try_wait().map_err(|source| SweepError::Spawn { exe: self.exe.clone(), source })?,
+                None => w.child.try_wait().map_err(|error| SweepError::Spawn { exe: self.exe.clone(), error })?,
             };
             let elapsed = flight.started.elapsed().as_secs_f64();
             let rec = match (reported, exit) {
@@ -357,7 +361,7 @@ pub(crate) fn next_point(queue: &mut VecDeque<Point>, expanded: &Expanded, previ
 
 /// Start `exe sweep-worker WORK` with its stdin a pipe and its stderr `log`.
 fn spawn_worker(exe: &Path, work: &Path, log: &Path) -> Result<Child, SweepError> {
-    let spawn_err = |source| SweepError::Spawn { exe: exe.to_path_buf(), source };
+    let spawn_err = |error| SweepError::Spawn { exe: exe.to_path_buf(), error };
     let err = File::create(log).map_err(spawn_err)?;
     let mut cmd = Command::new(exe);
     cmd.arg("sweep-worker").arg(work).stdin(Stdio::piped()).stdout(Stdio::null()).stderr(err);

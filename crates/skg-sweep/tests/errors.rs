@@ -1,7 +1,6 @@
-//! The sweep's errors say what failed and where: a scene's error keeps its location in
-//! the scene file, and a failed write or directory creation is not called a read.
+//! The sweep's errors say what failed and where, each thing once: a scene's error keeps its
+//! location in the scene file, and a failed write or directory creation is not called a read.
 
-use std::error::Error as _;
 use std::path::{Path, PathBuf};
 
 use skg_core::scene::{Location, SceneError};
@@ -60,12 +59,11 @@ fn the_base_scene_error_keeps_its_location_in_the_scene_file() {
 
     // Where in the scene file: line 4, column 1 (the key; counted in the text above).
     assert_eq!(BAD_SCENE.lines().nth(3).map(|l| l.find("colour")), Some(Some(0)));
-    for scene_error in [err.scene_error().unwrap(), err.source().and_then(|s| s.downcast_ref::<SceneError>()).unwrap()] {
-        let at = scene_location(scene_error).unwrap_or_else(|| panic!("no location in {scene_error:?}"));
-        assert_eq!(at.file, scene.display().to_string());
-        assert_eq!(at.line, Some(4), "{scene_error}");
-        assert_eq!(at.col, Some(1), "{scene_error}");
-    }
+    let scene_error = err.scene_error().unwrap();
+    let at = scene_location(scene_error).unwrap_or_else(|| panic!("no location in {scene_error:?}"));
+    assert_eq!(at.file, scene.display().to_string());
+    assert_eq!(at.line, Some(4), "{scene_error}");
+    assert_eq!(at.col, Some(1), "{scene_error}");
 
     // The message is the one the command line has always printed.
     let text = err.to_string();
@@ -83,7 +81,7 @@ fn a_point_whose_scene_is_invalid_names_the_point_and_the_scene_location() {
     let sweep = write(dir.path(), "sweep.toml", "[sweep]\nscene = \"scene.toml\"\n\n[[grid]]\nnodes = [16, 1]\n");
     let err = SweepFile::load(&sweep).unwrap().expand().unwrap_err();
     let SweepError::Scene(e) = &err else { panic!("expected a scene error, got {err:?}") };
-    let SweepSceneError { location, of, source } = &**e;
+    let SweepSceneError { location, of, error: source } = &**e;
     // The grid's table starts on line 4 of the sweep file.
     assert_eq!(location.line, Some(4), "{err}");
     assert_eq!(*of, SceneOf::Point("method=skg;nodes=1".into()), "{err}");
@@ -142,4 +140,43 @@ fn a_results_file_that_cannot_be_opened_for_appending_says_so() {
     let text = err.to_string();
     let expected = format!("cannot open {} for appending: ", out.join("results.csv").display());
     assert!(text.starts_with(&expected), "expected `{expected}…`, got: {text}");
+}
+
+/// No error of the crate says a thing twice: a variant that prints the error it wraps in
+/// its message does not also expose it as its source (the message of the whole chain,
+/// `skg_core::error_text`, would otherwise depend on its dropping repeated texts).
+#[test]
+fn no_message_repeats_its_source() {
+    use skg_sweep::slurm::SlurmError;
+    use skg_sweep::{AxisError, SchemaError, UnknownStatus};
+    let io = || std::io::Error::new(std::io::ErrorKind::PermissionDenied, "permission denied");
+    let at = || Location::file("sweep.toml".to_string());
+    let run = || SlurmError::Run { command: "sbatch merge.sh".into(), error: io() };
+    let operator = "SBP999".parse::<skg_core::sbp::OperatorKind>().unwrap_err();
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "scene.toml", BAD_SCENE);
+    let sweep = write(dir.path(), "sweep.toml", "[sweep]\nscene = \"scene.toml\"\n[[grid]]\nnodes = [16]\n");
+    let errors: Vec<Box<dyn std::error::Error>> = vec![
+        Box::new(SweepError::Read { path: "a.csv".into(), error: io() }),
+        Box::new(SweepError::Open { path: "a.csv".into(), error: io() }),
+        Box::new(SweepError::Write { path: "a.csv".into(), error: io() }),
+        Box::new(SweepError::CreateDir { path: "out".into(), error: io() }),
+        Box::new(SweepError::Move { from: "a".into(), to: "b".into(), error: io() }),
+        Box::new(SweepError::Spawn { exe: "skg-solve".into(), error: io() }),
+        Box::new(SweepError::Axis { location: at(), error: AxisError::Hessian { value: "some".into() } }),
+        Box::new(SweepError::Axis { location: at(), error: AxisError::Operator { value: "SBP999".into(), error: operator } }),
+        Box::new(SweepError::Schema { location: at(), error: SchemaError::Unversioned }),
+        Box::new(SweepError::Status { location: at(), error: UnknownStatus("done".into()) }),
+        Box::new(SweepFile::load(&sweep).unwrap().expand().unwrap_err()),
+        Box::new(run()),
+        Box::new(SlurmError::MergeNotSubmitted { array: "17".into(), error: Box::new(run()), cancelled: "cancelled array job 17".into() }),
+    ];
+    for e in &errors {
+        let text = e.to_string();
+        let mut source = e.source();
+        while let Some(s) = source {
+            assert!(!text.contains(&s.to_string()), "`{text}` repeats its source `{s}`");
+            source = s.source();
+        }
+    }
 }

@@ -87,6 +87,20 @@ pub fn factorization_note(backend: Backend, solver_s: f64, solver_internal_s: f6
     ))
 }
 
+/// Seconds of a whole solve per unit of [`relative_cost`] on `backend`, for estimates of
+/// wall time (a sweep's plan), not for choosing: the wall time per node of an `SBP242`
+/// solve as [`solve_scene`](crate::solve::solve_scene) runs it (setup, guess, solve and
+/// verification), measured as sweep points on the rolling disk at N = 4096 (`wall_s` of
+/// results.csv, release build, one worker, the 2-core machine shared with other work):
+/// Newton 34 µs, Ipopt 81 µs. From N = 1024 to 16384 the disk took 29–42 and 81–145 µs,
+/// the tumbler (fewer unknowns per node, but walls) 33–52 and 42–60 µs.
+pub fn seconds_per_cost(backend: Backend) -> f64 {
+    match backend {
+        Backend::Newton => 34e-6,
+        Backend::Ipopt => 81e-6,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
