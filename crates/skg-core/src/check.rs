@@ -18,8 +18,9 @@
 //! extrapolated.
 //!
 //! **Place in the flow.** A consumer of results, after the output: it uses
-//! [`scene`](crate::scene) and [`discrete`](crate::discrete) (the trajectory's columns)
-//! and [`output`](crate::output) (the pairing rule every reader checks).
+//! [`scene`](crate::scene), [`discrete`](crate::discrete) (the trajectory's columns and
+//! its cubic Hermite interpolation) and [`output`](crate::output) (the pairing rule
+//! every reader checks).
 
 // `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -27,6 +28,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use crate::discrete::interpolate::{segment, Hermite};
 use crate::discrete::trajectory::Trajectory;
 use crate::scene::Scene;
 
@@ -331,7 +333,7 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
     for row in rows {
         let t = row[0];
         // Interval [rt[j], rt[j+1]] containing t.
-        let j = rt.partition_point(|&x| x <= t).saturating_sub(1).min(rt.len().saturating_sub(2));
+        let j = segment(&rt, t);
         let exact = if (rt[j] - t).abs() <= eps {
             Some(j)
         } else if j + 1 < rt.len() && (rt[j + 1] - t).abs() <= eps {
@@ -392,14 +394,7 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
 /// interval starting at row `j`.
 fn hermite(tab: &Table, j: usize, k: usize, kd: usize, t: f64) -> f64 {
     let (a, b) = (&tab.rows[j], &tab.rows[j + 1]);
-    let h = b[0] - a[0];
-    let s = (t - a[0]) / h;
-    let (s2, s3) = (s * s, s * s * s);
-    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-    let h10 = s3 - 2.0 * s2 + s;
-    let h01 = -2.0 * s3 + 3.0 * s2;
-    let h11 = s3 - s2;
-    h00 * a[k] + h10 * h * a[kd] + h01 * b[k] + h11 * h * b[kd]
+    Hermite::new(a[0], b[0], t).eval(a[k], a[kd], b[k], b[kd])
 }
 
 /// Cubic Lagrange interpolation of column `k` through the four reference rows nearest
