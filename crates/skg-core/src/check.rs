@@ -36,12 +36,12 @@ use crate::scene::Scene;
 #[derive(Debug, thiserror::Error)]
 pub enum CheckError {
     /// The file cannot be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}: {error}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// Why.
-        source: std::io::Error,
+        /// Why (part of the message, not its `source`).
+        error: std::io::Error,
     },
     /// A line of the table is malformed.
     #[error("{path}:{line}: {message}")]
@@ -101,7 +101,7 @@ impl Table {
     /// beside it: a reader of a run's solution warns when it is not
     /// [`Pairing::Listed`](crate::output::Pairing) ([`Pairing::warning`](crate::output::Pairing::warning)).
     pub fn read_paired(path: &Path) -> Result<(Table, crate::output::Pairing), CheckError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CheckError::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|error| CheckError::Io { path: path.to_path_buf(), error })?;
         let pairing = crate::output::verify_pairing(path, text.as_bytes())?;
         Ok((Table::parse(&text, &path.display().to_string())?, pairing))
     }
@@ -458,8 +458,10 @@ mod tests {
         assert!(Table::parse("# only\n", "f.csv").unwrap_err().to_string().contains("no header"));
         assert!(Table::parse("t,x\n", "f.csv").unwrap_err().to_string().contains("no data rows"));
         assert!(Table::parse("t,x,x\n0,1,1\n", "f.csv").unwrap_err().to_string().contains("twice"));
-        let e = Table::read(Path::new("/nonexistent/ref.csv")).unwrap_err().to_string();
-        assert!(e.contains("/nonexistent/ref.csv"), "{e}");
+        let e = Table::read(Path::new("/nonexistent/ref.csv")).unwrap_err();
+        // The operating system's reason is said once: in the message, not again as a source.
+        assert!(e.to_string().contains("/nonexistent/ref.csv: No such file"), "{e}");
+        assert!(std::error::Error::source(&e).is_none(), "{e}");
     }
 
     #[test]
