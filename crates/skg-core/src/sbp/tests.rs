@@ -346,10 +346,10 @@ fn dissipative_pair_is_centred_plus_dissipation() {
     }
 }
 
-/// The closures and interior stencils of `Δt·D+` against the table the research for
-/// issue 22 generated independently (Python, exact `fractions.Fraction`, from the same
-/// definition): every entry of SBP121-AD and SBP242-AD, and the interior stencils and
-/// chosen entries of SBP363-AD and SBP484-AD.
+/// The closures and interior stencils of `Δt·D+` against a table generated
+/// independently (Python, exact `fractions.Fraction`, from the same definition): every
+/// entry of SBP121-AD and SBP242-AD, and the interior stencils and chosen entries of
+/// SBP363-AD and SBP484-AD.
 #[test]
 fn dissipative_coefficients_match_an_independent_table() {
     let f = |v: &[(i64, i64)]| v.to_vec();

@@ -24,7 +24,7 @@
 //!   again without an error path; the crate is edition 2024 (Rust ≥ 1.85, this crate
 //!   declares 1.80) and brings a large dependency tree.
 //!
-//! Re-checked for the reference solutions (issue 3): `differential-equations` 0.7 builds
+//! Re-checked when the references needed event location: `differential-equations` 0.7 builds
 //! here (rustc 1.95, 17 s) and has dense output and Brent event location, but its
 //! right-hand side is still infallible (`diff(&self, …)`, so our model's workspace would
 //! need a `RefCell` and failures a NaN convention), and it pulls simba 0.10 beside this
