@@ -230,6 +230,11 @@ where
 /// Interior points (fractions of a step) where the event function is sampled.
 const EVENT_SAMPLES: [f64; 4] = [0.25, 0.5, 0.75, 1.0];
 
+/// The integration behind [`integrate`], [`integrate_checked`] and
+/// [`integrate_to_event`]: attempts of steps ([`Dop853::attempt`]) under Hairer's
+/// step-size control ([`Controller`]), the requested times filled from each accepted
+/// step, and the integration stopped at the first crossing of `event`
+/// ([`Dop853::first_crossing`]).
 fn run<F, E, C>(
     f: F,
     y0: &[f64],
@@ -246,146 +251,193 @@ where
     validate(y0, times, opts)?;
     let t0 = times[0];
     let t_end = times[times.len() - 1];
-    let mut out =
-        OdeSolution { times: times.to_vec(), states: Vec::with_capacity(times.len()), stats: OdeStats::default(), method: METHOD };
-    let mut next = times.iter().take_while(|&&t| t == t0).count();
-    out.states.resize(next, y0.to_vec());
-    if next == times.len() || y0.is_empty() {
+    let mut samples = Samples::new(times, y0);
+    if samples.done() || y0.is_empty() {
         // Nothing to integrate: no time span, or an empty state.
-        out.states.resize(times.len(), y0.to_vec());
-        return Ok((out, None));
+        return Ok((samples.constant(y0), None));
     }
 
     let mut s = Dop853::new(f, y0, opts);
     let mut t = t0;
     s.eval(t, Stage::Y, 0).map_err(|error| OdeError::Rhs { t, error })?;
-    let hmax = opts.max_step.unwrap_or(f64::INFINITY).min(t_end - t0);
-    let mut h = match opts.initial_step {
-        Some(h0) => h0.min(hmax),
-        None => s.hinit(t, hmax),
-    };
-    let mut reject = false;
-    let mut last_failure: Option<(f64, RhsError)> = None;
-    let mut attempts = 0usize;
-
+    let mut control = Controller::new(&mut s, t0, t_end, opts);
     loop {
-        if attempts >= opts.max_steps {
-            return Err(OdeError::MaxSteps { t, steps: attempts });
+        let (h, t_new) = control.next_step(t)?;
+        // The dense output is needed when a requested time or the event's samples lie inside.
+        let dense_wanted = samples.next_time() < t_new || event.is_some();
+        let fac11 = match s.attempt(t, h, t_new, dense_wanted, &mut accept) {
+            Ok(fac11) => fac11,
+            Err(rejection) => {
+                s.stats.rejected += 1;
+                control.rejected(rejection);
+                continue;
+            }
+        };
+        s.stats.accepted += 1;
+        if let Some(hit) = event.as_mut().and_then(|ev| s.first_crossing(ev, t, h, t_new)) {
+            samples.fill(&s, (t, h, t_new), |ts| ts < hit.t);
+            return Ok((samples.solution(s.stats), Some(hit)));
         }
-        let hmin = 10.0 * f64::EPSILON * t.abs().max(t_end.abs());
-        if h.is_nan() || h <= hmin {
-            return Err(match last_failure.take() {
+        samples.fill(&s, (t, h, t_new), |ts| ts <= t_new);
+        s.commit();
+        t = t_new;
+        if samples.done() {
+            break;
+        }
+        control.accepted(fac11);
+    }
+    Ok((samples.solution(s.stats), None))
+}
+
+/// The requested times of [`run`] and the states found for them so far, in order.
+struct Samples<'a> {
+    /// The requested times.
+    times: &'a [f64],
+    /// The states at `times[..states.len()]`.
+    states: Vec<Vec<f64>>,
+}
+
+impl<'a> Samples<'a> {
+    /// The start state at every requested time equal to the start time.
+    fn new(times: &'a [f64], y0: &[f64]) -> Samples<'a> {
+        let mut states = Vec::with_capacity(times.len());
+        states.resize(times.iter().take_while(|&&t| t == times[0]).count(), y0.to_vec());
+        Samples { times, states }
+    }
+
+    /// Whether every requested time has its state.
+    fn done(&self) -> bool {
+        self.states.len() == self.times.len()
+    }
+
+    /// The first requested time without its state.
+    fn next_time(&self) -> f64 {
+        self.times[self.states.len()]
+    }
+
+    /// Push the states at the next requested times that the accepted step `(t, h,
+    /// t_new)` of `s` covers and `wanted` admits (the first one not admitted ends it):
+    /// the new state at its end, the dense output inside.
+    fn fill<F>(&mut self, s: &Dop853<F>, (t, h, t_new): (f64, f64, f64), wanted: impl Fn(f64) -> bool)
+    where
+        F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+    {
+        while !self.done() && wanted(self.next_time()) {
+            let ts = self.next_time();
+            self.states.push(if ts == t_new { s.ynew.clone() } else { s.dense((ts - t) / h) });
+        }
+    }
+
+    /// The solution of a state that does not change: `y0` at every requested time.
+    fn constant(mut self, y0: &[f64]) -> OdeSolution {
+        self.states.resize(self.times.len(), y0.to_vec());
+        self.solution(OdeStats::default())
+    }
+
+    /// The solution at the times filled so far, with the integration's statistics.
+    fn solution(self, stats: OdeStats) -> OdeSolution {
+        OdeSolution { times: self.times.to_vec(), states: self.states, stats, method: METHOD }
+    }
+}
+
+/// Hairer's step-size control between the attempts of [`run`]: the next step's size,
+/// shrunk after a rejection and grown after an acceptance, and when to give up.
+struct Controller {
+    /// The size of the next attempt.
+    h: f64,
+    /// The largest step: the option, at most the span.
+    hmax: f64,
+    /// The end of the integration, which the last step hits exactly.
+    t_end: f64,
+    /// The most attempts allowed.
+    max_steps: usize,
+    /// The attempts made.
+    attempts: usize,
+    /// Whether the last attempt was rejected (the next step may then not grow).
+    after_rejection: bool,
+    /// The failure of the right-hand side since the last accepted step, reported if the
+    /// step shrinks to nothing.
+    last_failure: Option<(f64, RhsError)>,
+}
+
+impl Controller {
+    /// The control of an integration from `t0` to `t_end` of the stepper `s` (which
+    /// holds `k[0] = f(t0, y0)`), starting with the option's initial step or `hinit`'s.
+    fn new<F>(s: &mut Dop853<F>, t0: f64, t_end: f64, opts: &OdeOptions) -> Controller
+    where
+        F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+    {
+        let hmax = opts.max_step.unwrap_or(f64::INFINITY).min(t_end - t0);
+        let h = match opts.initial_step {
+            Some(h0) => h0.min(hmax),
+            None => s.hinit(t0, hmax),
+        };
+        Controller { h, hmax, t_end, max_steps: opts.max_steps, attempts: 0, after_rejection: false, last_failure: None }
+    }
+
+    /// The size and end time of the next attempt from `t` (the last step stretched or
+    /// shrunk to end at `t_end`), or why there is none: the attempts are used up, or the
+    /// step has shrunk below the round-off limit (the last failure of the right-hand
+    /// side, if any, is the reason).
+    fn next_step(&mut self, t: f64) -> Result<(f64, f64), OdeError> {
+        if self.attempts >= self.max_steps {
+            return Err(OdeError::MaxSteps { t, steps: self.attempts });
+        }
+        let hmin = 10.0 * f64::EPSILON * t.abs().max(self.t_end.abs());
+        if self.h.is_nan() || self.h <= hmin {
+            return Err(match self.last_failure.take() {
                 Some((t, error)) => OdeError::Rhs { t, error },
                 None => OdeError::StepTooSmall { t },
             });
         }
-        let mut last = false;
-        if t + 1.01 * h >= t_end {
-            h = t_end - t;
-            last = true;
+        let last = t + 1.01 * self.h >= self.t_end;
+        if last {
+            self.h = self.t_end - t;
         }
-        attempts += 1;
-
-        // Stages 1..=11, the new solution and its error.
-        if let Err(fail) = s.main_stages(t, h) {
-            s.stats.rejected += 1;
-            last_failure = Some(fail);
-            h *= 0.5;
-            reject = true;
-            continue;
-        }
-        let err = s.error_norm(h);
-        let fac11 = err.powf(0.125);
-        if err <= 1.0 && !accept(t, &s.y, if last { t_end } else { t + h }, &s.ynew) {
-            s.stats.rejected += 1;
-            h *= 0.5;
-            reject = true;
-            continue;
-        }
-        if err <= 1.0 {
-            let t_new = if last { t_end } else { t + h };
-            // First stage of the next step, and the dense output if a sample lies inside.
-            let needs_dense = times[next] < t_new || event.is_some();
-            let extra = s.eval(t_new, Stage::YNew, 12).map_err(|error| (t_new, error)).and_then(|()| {
-                if needs_dense {
-                    s.dense_stages(t, h)
-                } else {
-                    Ok(())
-                }
-            });
-            if let Err(fail) = extra {
-                s.stats.rejected += 1;
-                last_failure = Some(fail);
-                h *= 0.5;
-                reject = true;
-                continue;
-            }
-            s.stats.accepted += 1;
-            last_failure = None;
-            // Terminal event inside this step?
-            let mut hit: Option<EventHit> = None;
-            if let Some(ev) = event.as_mut() {
-                let mut e_prev = ev(t, &s.y);
-                let mut th_prev = 0.0;
-                for &th in &EVENT_SAMPLES {
-                    let y_th = if th == 1.0 { s.ynew.clone() } else { s.dense(th) };
-                    let e_th = ev(t + th * h, &y_th);
-                    if e_prev < 0.0 && e_th >= 0.0 {
-                        let (mut a, mut b) = (th_prev, th);
-                        // Bisection on the dense output (its bracket shrinks to round-off).
-                        for _ in 0..200 {
-                            let m = 0.5 * (a + b);
-                            if m <= a || m >= b || (b - a) * h.abs() <= 4.0 * f64::EPSILON * t.abs().max(t_new.abs()) {
-                                break;
-                            }
-                            if ev(t + m * h, &s.dense(m)) < 0.0 {
-                                a = m;
-                            } else {
-                                b = m;
-                            }
-                        }
-                        let te = if b == 1.0 { t_new } else { t + b * h };
-                        let ye = if b == 1.0 { s.ynew.clone() } else { s.dense(b) };
-                        hit = Some(EventHit { t: te, y: ye });
-                        break;
-                    }
-                    e_prev = e_th;
-                    th_prev = th;
-                }
-            }
-            if let Some(hit) = hit {
-                while next < times.len() && times[next] < hit.t {
-                    out.states.push(s.dense((times[next] - t) / h));
-                    next += 1;
-                }
-                out.stats = s.stats;
-                return Ok((out, Some(hit)));
-            }
-            while next < times.len() && times[next] <= t_new {
-                let ts = times[next];
-                out.states.push(if ts == t_new { s.ynew.clone() } else { s.dense((ts - t) / h) });
-                next += 1;
-            }
-            s.commit();
-            t = t_new;
-            if next == times.len() {
-                break;
-            }
-            let fac = (fac11 / SAFE).clamp(FAC_MIN, FAC_MAX);
-            let mut hnew = (h / fac).min(hmax);
-            if reject {
-                hnew = hnew.min(h);
-            }
-            reject = false;
-            h = hnew;
-        } else {
-            s.stats.rejected += 1;
-            h /= FAC_MAX.min(fac11 / SAFE);
-            reject = true;
-        }
+        self.attempts += 1;
+        Ok((self.h, if last { self.t_end } else { t + self.h }))
     }
-    out.stats = s.stats;
-    Ok((out, None))
+
+    /// After a rejected attempt: half the step after a failure or a refusal, or the step
+    /// the error estimate asks for (shrinking by at most 3).
+    fn rejected(&mut self, rejection: Rejection) {
+        match rejection {
+            Rejection::Failed(failure) => {
+                self.last_failure = Some(failure);
+                self.h *= 0.5;
+            }
+            Rejection::Refused => self.h *= 0.5,
+            Rejection::TooLarge { fac11 } => self.h /= FAC_MAX.min(fac11 / SAFE),
+        }
+        self.after_rejection = true;
+    }
+
+    /// After an accepted step whose error gave `fac11` (`err^(1/8)`): the next step,
+    /// changed by a factor in [1/3, 6], at most `hmax`, and not larger right after a
+    /// rejection.
+    fn accepted(&mut self, fac11: f64) {
+        self.last_failure = None;
+        let fac = (fac11 / SAFE).clamp(FAC_MIN, FAC_MAX);
+        let mut hnew = (self.h / fac).min(self.hmax);
+        if self.after_rejection {
+            hnew = hnew.min(self.h);
+        }
+        self.after_rejection = false;
+        self.h = hnew;
+    }
+}
+
+/// Why an attempt of a step was rejected ([`Dop853::attempt`]).
+enum Rejection {
+    /// The right-hand side failed in a stage, at the time given.
+    Failed((f64, RhsError)),
+    /// The caller's test refused the step ([`integrate_checked`]).
+    Refused,
+    /// The error estimate is too large.
+    TooLarge {
+        /// `err^(1/8)`, which sets how much the step shrinks.
+        fac11: f64,
+    },
 }
 
 /// Safety factor of the step-size controller.
@@ -527,6 +579,68 @@ where
             *yn = y + h * bk;
         }
         Ok(())
+    }
+
+    /// One attempt of the step from `(t, y)` of size `h` to `t_new`: the stages, the
+    /// error estimate, the caller's test `accept`, then the first stage of the next step
+    /// and, if `dense_wanted`, the dense output's stages. Accepted, it gives `err^(1/8)`
+    /// (which sets the next step's size) with `ynew` the new state and `k[12]` its
+    /// derivative.
+    fn attempt<C>(&mut self, t: f64, h: f64, t_new: f64, dense_wanted: bool, accept: &mut C) -> Result<f64, Rejection>
+    where
+        C: FnMut(f64, &[f64], f64, &[f64]) -> bool,
+    {
+        self.main_stages(t, h).map_err(Rejection::Failed)?;
+        let err = self.error_norm(h);
+        let fac11 = err.powf(0.125);
+        if err <= 1.0 {
+            if !accept(t, &self.y, t_new, &self.ynew) {
+                return Err(Rejection::Refused);
+            }
+            self.eval(t_new, Stage::YNew, 12).map_err(|error| Rejection::Failed((t_new, error)))?;
+            if dense_wanted {
+                self.dense_stages(t, h).map_err(Rejection::Failed)?;
+            }
+            Ok(fac11)
+        } else {
+            Err(Rejection::TooLarge { fac11 })
+        }
+    }
+
+    /// The first upward zero crossing of `event` in the accepted step from `(t, y)` of
+    /// size `h` to `t_new` (before [`commit`](Self::commit)): sampled at
+    /// [`EVENT_SAMPLES`], a sign change bracketed and bisected on the dense output down
+    /// to round-off.
+    fn first_crossing<E>(&self, event: &mut E, t: f64, h: f64, t_new: f64) -> Option<EventHit>
+    where
+        E: FnMut(f64, &[f64]) -> f64,
+    {
+        let mut e_prev = event(t, &self.y);
+        let mut th_prev = 0.0;
+        for &th in &EVENT_SAMPLES {
+            let y_th = if th == 1.0 { self.ynew.clone() } else { self.dense(th) };
+            let e_th = event(t + th * h, &y_th);
+            if e_prev < 0.0 && e_th >= 0.0 {
+                let (mut a, mut b) = (th_prev, th);
+                for _ in 0..200 {
+                    let m = 0.5 * (a + b);
+                    if m <= a || m >= b || (b - a) * h.abs() <= 4.0 * f64::EPSILON * t.abs().max(t_new.abs()) {
+                        break;
+                    }
+                    if event(t + m * h, &self.dense(m)) < 0.0 {
+                        a = m;
+                    } else {
+                        b = m;
+                    }
+                }
+                let te = if b == 1.0 { t_new } else { t + b * h };
+                let ye = if b == 1.0 { self.ynew.clone() } else { self.dense(b) };
+                return Some(EventHit { t: te, y: ye });
+            }
+            e_prev = e_th;
+            th_prev = th;
+        }
+        None
     }
 
     /// Scaled error of the step (≤ 1: accept), Hairer's combination of the 5th- and
