@@ -270,6 +270,35 @@ impl Comparison {
 
 /// Compare `solution` with `reference` evaluated at the solution's times.
 pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Result<Comparison, CheckError> {
+    let names = compared_columns(solution, reference, opts)?;
+    let missing_in_reference = solution.columns[1..].iter().filter(|c| reference.index(c).is_none()).cloned().collect();
+    let (rows, eps) = compared_rows(solution, reference, opts)?;
+    let (columns, rows_interpolated) = column_errors(solution, reference, &names, rows, eps);
+    let worst = columns
+        .iter()
+        .max_by(|a, b| {
+            // NaN sorts as the largest.
+            a.max_abs.partial_cmp(&b.max_abs).unwrap_or(if a.max_abs.is_nan() {
+                std::cmp::Ordering::Greater
+            } else {
+                std::cmp::Ordering::Less
+            })
+        })
+        .expect("at least one column");
+    Ok(Comparison {
+        max_abs: worst.max_abs,
+        worst_column: worst.column.clone(),
+        rows_compared: rows.len(),
+        skipped_last: opts.skip_last,
+        rows_interpolated,
+        missing_in_reference,
+        columns,
+    })
+}
+
+/// The columns to compare: those asked for, each in both tables and not `t`, or every
+/// column both share besides `t`; at least one.
+fn compared_columns(solution: &Table, reference: &Table, opts: &CheckOptions) -> Result<Vec<String>, CheckError> {
     let names: Vec<String> = match &opts.columns {
         Some(cols) => {
             if cols.is_empty() {
@@ -303,7 +332,13 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
             reference.columns.join(", ")
         )));
     }
-    let missing_in_reference = solution.columns[1..].iter().filter(|c| reference.index(c).is_none()).cloned().collect();
+    Ok(names)
+}
+
+/// The solution's rows to compare (the last `skip_last` left out, at least one left),
+/// each inside the reference's time range, and the tolerance `eps` within which two
+/// times are the same (`1e-12` relative to the time span).
+fn compared_rows<'a>(solution: &'a Table, reference: &Table, opts: &CheckOptions) -> Result<(&'a [Vec<f64>], f64), CheckError> {
     let n_rows = solution.rows.len();
     if opts.skip_last >= n_rows {
         return Err(CheckError::Mismatch(format!(
@@ -322,7 +357,13 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
             bad[0]
         )));
     }
+    Ok((rows, eps))
+}
 
+/// The error of each column `names` over the solution's `rows` against the reference
+/// evaluated at their times, and how many rows needed the reference interpolated.
+fn column_errors(solution: &Table, reference: &Table, names: &[String], rows: &[Vec<f64>], eps: f64) -> (Vec<ColumnError>, usize) {
+    let rt = reference.times();
     let cols_ref: Vec<usize> = names.iter().map(|c| reference.index(c).expect("checked")).collect();
     let cols_sol: Vec<usize> = names.iter().map(|c| solution.index(c).expect("checked")).collect();
     let derivs: Vec<Option<usize>> = names.iter().map(|c| reference.index(&format!("{c}_dot"))).collect();
@@ -332,15 +373,7 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
     let mut rows_interpolated = 0;
     for row in rows {
         let t = row[0];
-        // Interval [rt[j], rt[j+1]] containing t.
-        let j = segment(&rt, t);
-        let exact = if (rt[j] - t).abs() <= eps {
-            Some(j)
-        } else if j + 1 < rt.len() && (rt[j + 1] - t).abs() <= eps {
-            Some(j + 1)
-        } else {
-            None
-        };
+        let (j, exact) = reference_rows_at(&rt, t, eps);
         if exact.is_none() {
             rows_interpolated += 1;
         }
@@ -363,31 +396,26 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
         }
     }
     let m = rows.len() as f64;
-    let columns: Vec<ColumnError> = names
+    let columns = names
         .iter()
         .enumerate()
         .map(|(c, name)| ColumnError { column: name.clone(), max_abs: max_abs[c], rms: (sum_sq[c] / m).sqrt(), at_t: at_t[c] })
         .collect();
-    let worst = columns
-        .iter()
-        .max_by(|a, b| {
-            // NaN sorts as the largest.
-            a.max_abs.partial_cmp(&b.max_abs).unwrap_or(if a.max_abs.is_nan() {
-                std::cmp::Ordering::Greater
-            } else {
-                std::cmp::Ordering::Less
-            })
-        })
-        .expect("at least one column");
-    Ok(Comparison {
-        max_abs: worst.max_abs,
-        worst_column: worst.column.clone(),
-        rows_compared: rows.len(),
-        skipped_last: opts.skip_last,
-        rows_interpolated,
-        missing_in_reference,
-        columns,
-    })
+    (columns, rows_interpolated)
+}
+
+/// The reference interval `[rt[j], rt[j+1]]` that holds `t`, and the reference row at
+/// `t` itself (within `eps`), if there is one.
+fn reference_rows_at(rt: &[f64], t: f64, eps: f64) -> (usize, Option<usize>) {
+    let j = segment(rt, t);
+    let exact = if (rt[j] - t).abs() <= eps {
+        Some(j)
+    } else if j + 1 < rt.len() && (rt[j + 1] - t).abs() <= eps {
+        Some(j + 1)
+    } else {
+        None
+    };
+    (j, exact)
 }
 
 /// Cubic Hermite interpolation of column `k` (derivative column `kd`) on the reference
