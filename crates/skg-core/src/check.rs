@@ -18,8 +18,9 @@
 //! extrapolated.
 //!
 //! **Place in the flow.** A consumer of results, after the output: it uses
-//! [`scene`](crate::scene) and [`discrete`](crate::discrete) (the trajectory's columns)
-//! and [`output`](crate::output) (the pairing rule every reader checks).
+//! [`scene`](crate::scene), [`discrete`](crate::discrete) (the trajectory's columns and
+//! its cubic Hermite interpolation) and [`output`](crate::output) (the pairing rule
+//! every reader checks).
 
 // `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -27,6 +28,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use crate::discrete::interpolate::{segment, Hermite};
 use crate::discrete::trajectory::Trajectory;
 use crate::scene::Scene;
 
@@ -34,12 +36,12 @@ use crate::scene::Scene;
 #[derive(Debug, thiserror::Error)]
 pub enum CheckError {
     /// The file cannot be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}: {error}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// Why.
-        source: std::io::Error,
+        /// Why (part of the message, not its `source`).
+        error: std::io::Error,
     },
     /// A line of the table is malformed.
     #[error("{path}:{line}: {message}")]
@@ -99,7 +101,7 @@ impl Table {
     /// beside it: a reader of a run's solution warns when it is not
     /// [`Pairing::Listed`](crate::output::Pairing) ([`Pairing::warning`](crate::output::Pairing::warning)).
     pub fn read_paired(path: &Path) -> Result<(Table, crate::output::Pairing), CheckError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CheckError::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|error| CheckError::Io { path: path.to_path_buf(), error })?;
         let pairing = crate::output::verify_pairing(path, text.as_bytes())?;
         Ok((Table::parse(&text, &path.display().to_string())?, pairing))
     }
@@ -268,6 +270,35 @@ impl Comparison {
 
 /// Compare `solution` with `reference` evaluated at the solution's times.
 pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Result<Comparison, CheckError> {
+    let names = compared_columns(solution, reference, opts)?;
+    let missing_in_reference = solution.columns[1..].iter().filter(|c| reference.index(c).is_none()).cloned().collect();
+    let (rows, eps) = compared_rows(solution, reference, opts)?;
+    let (columns, rows_interpolated) = column_errors(solution, reference, &names, rows, eps);
+    let worst = columns
+        .iter()
+        .max_by(|a, b| {
+            // NaN sorts as the largest.
+            a.max_abs.partial_cmp(&b.max_abs).unwrap_or(if a.max_abs.is_nan() {
+                std::cmp::Ordering::Greater
+            } else {
+                std::cmp::Ordering::Less
+            })
+        })
+        .expect("at least one column");
+    Ok(Comparison {
+        max_abs: worst.max_abs,
+        worst_column: worst.column.clone(),
+        rows_compared: rows.len(),
+        skipped_last: opts.skip_last,
+        rows_interpolated,
+        missing_in_reference,
+        columns,
+    })
+}
+
+/// The columns to compare: those asked for, each in both tables and not `t`, or every
+/// column both share besides `t`; at least one.
+fn compared_columns(solution: &Table, reference: &Table, opts: &CheckOptions) -> Result<Vec<String>, CheckError> {
     let names: Vec<String> = match &opts.columns {
         Some(cols) => {
             if cols.is_empty() {
@@ -301,7 +332,13 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
             reference.columns.join(", ")
         )));
     }
-    let missing_in_reference = solution.columns[1..].iter().filter(|c| reference.index(c).is_none()).cloned().collect();
+    Ok(names)
+}
+
+/// The solution's rows to compare (the last `skip_last` left out, at least one left),
+/// each inside the reference's time range, and the tolerance `eps` within which two
+/// times are the same (`1e-12` relative to the time span).
+fn compared_rows<'a>(solution: &'a Table, reference: &Table, opts: &CheckOptions) -> Result<(&'a [Vec<f64>], f64), CheckError> {
     let n_rows = solution.rows.len();
     if opts.skip_last >= n_rows {
         return Err(CheckError::Mismatch(format!(
@@ -320,7 +357,13 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
             bad[0]
         )));
     }
+    Ok((rows, eps))
+}
 
+/// The error of each column `names` over the solution's `rows` against the reference
+/// evaluated at their times, and how many rows needed the reference interpolated.
+fn column_errors(solution: &Table, reference: &Table, names: &[String], rows: &[Vec<f64>], eps: f64) -> (Vec<ColumnError>, usize) {
+    let rt = reference.times();
     let cols_ref: Vec<usize> = names.iter().map(|c| reference.index(c).expect("checked")).collect();
     let cols_sol: Vec<usize> = names.iter().map(|c| solution.index(c).expect("checked")).collect();
     let derivs: Vec<Option<usize>> = names.iter().map(|c| reference.index(&format!("{c}_dot"))).collect();
@@ -330,15 +373,7 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
     let mut rows_interpolated = 0;
     for row in rows {
         let t = row[0];
-        // Interval [rt[j], rt[j+1]] containing t.
-        let j = rt.partition_point(|&x| x <= t).saturating_sub(1).min(rt.len().saturating_sub(2));
-        let exact = if (rt[j] - t).abs() <= eps {
-            Some(j)
-        } else if j + 1 < rt.len() && (rt[j + 1] - t).abs() <= eps {
-            Some(j + 1)
-        } else {
-            None
-        };
+        let (j, exact) = reference_rows_at(&rt, t, eps);
         if exact.is_none() {
             rows_interpolated += 1;
         }
@@ -361,45 +396,33 @@ pub fn compare(solution: &Table, reference: &Table, opts: &CheckOptions) -> Resu
         }
     }
     let m = rows.len() as f64;
-    let columns: Vec<ColumnError> = names
+    let columns = names
         .iter()
         .enumerate()
         .map(|(c, name)| ColumnError { column: name.clone(), max_abs: max_abs[c], rms: (sum_sq[c] / m).sqrt(), at_t: at_t[c] })
         .collect();
-    let worst = columns
-        .iter()
-        .max_by(|a, b| {
-            // NaN sorts as the largest.
-            a.max_abs.partial_cmp(&b.max_abs).unwrap_or(if a.max_abs.is_nan() {
-                std::cmp::Ordering::Greater
-            } else {
-                std::cmp::Ordering::Less
-            })
-        })
-        .expect("at least one column");
-    Ok(Comparison {
-        max_abs: worst.max_abs,
-        worst_column: worst.column.clone(),
-        rows_compared: rows.len(),
-        skipped_last: opts.skip_last,
-        rows_interpolated,
-        missing_in_reference,
-        columns,
-    })
+    (columns, rows_interpolated)
+}
+
+/// The reference interval `[rt[j], rt[j+1]]` that holds `t`, and the reference row at
+/// `t` itself (within `eps`), if there is one.
+fn reference_rows_at(rt: &[f64], t: f64, eps: f64) -> (usize, Option<usize>) {
+    let j = segment(rt, t);
+    let exact = if (rt[j] - t).abs() <= eps {
+        Some(j)
+    } else if j + 1 < rt.len() && (rt[j + 1] - t).abs() <= eps {
+        Some(j + 1)
+    } else {
+        None
+    };
+    (j, exact)
 }
 
 /// Cubic Hermite interpolation of column `k` (derivative column `kd`) on the reference
 /// interval starting at row `j`.
 fn hermite(tab: &Table, j: usize, k: usize, kd: usize, t: f64) -> f64 {
     let (a, b) = (&tab.rows[j], &tab.rows[j + 1]);
-    let h = b[0] - a[0];
-    let s = (t - a[0]) / h;
-    let (s2, s3) = (s * s, s * s * s);
-    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-    let h10 = s3 - 2.0 * s2 + s;
-    let h01 = -2.0 * s3 + 3.0 * s2;
-    let h11 = s3 - s2;
-    h00 * a[k] + h10 * h * a[kd] + h01 * b[k] + h11 * h * b[kd]
+    Hermite::new(a[0], b[0], t).eval(a[k], a[kd], b[k], b[kd])
 }
 
 /// Cubic Lagrange interpolation of column `k` through the four reference rows nearest
@@ -463,8 +486,10 @@ mod tests {
         assert!(Table::parse("# only\n", "f.csv").unwrap_err().to_string().contains("no header"));
         assert!(Table::parse("t,x\n", "f.csv").unwrap_err().to_string().contains("no data rows"));
         assert!(Table::parse("t,x,x\n0,1,1\n", "f.csv").unwrap_err().to_string().contains("twice"));
-        let e = Table::read(Path::new("/nonexistent/ref.csv")).unwrap_err().to_string();
-        assert!(e.contains("/nonexistent/ref.csv"), "{e}");
+        let e = Table::read(Path::new("/nonexistent/ref.csv")).unwrap_err();
+        // The operating system's reason is said once: in the message, not again as a source.
+        assert!(e.to_string().contains("/nonexistent/ref.csv: No such file"), "{e}");
+        assert!(std::error::Error::source(&e).is_none(), "{e}");
     }
 
     #[test]

@@ -58,8 +58,7 @@ pub const NEWTON_BYTES_PER_UNKNOWN: f64 = 720.0;
 /// Bytes per node and pair of unknowns of the Newton backend's system (the LU). Fitted to
 /// the chains, whose LU is in single precision (docs/solver.md#mixed-precision); their
 /// double-precision factors (a chain below 10 000 unknowns, or one that falls back to
-/// double precision) take up to 1.6 times as much and stay below the estimate (was
-/// 200 before single precision).
+/// double precision) take up to 1.6 times as much and stay below the estimate.
 pub const NEWTON_BYTES_PER_PAIR: f64 = 120.0;
 /// Bytes a reference keeps per sample, besides its columns.
 pub const REFERENCE_BYTES_PER_SAMPLE: f64 = 800.0;

@@ -237,24 +237,12 @@ pub fn width_parameter(file: &SceneFile) -> Result<String, TuneError> {
 
 /// Find the smallest value of the width parameter whose energy artifact stays below
 /// `opts.tol` at the scene's N (bisection in log scale). `progress` sees every step.
-pub fn tune_width(
-    file: &SceneFile,
-    ov: &Overrides,
-    opts: &TuneOptions,
-    mut progress: impl FnMut(&TuneStep),
-) -> Result<TuneResult, TuneError> {
+pub fn tune_width(file: &SceneFile, ov: &Overrides, opts: &TuneOptions, progress: impl FnMut(&TuneStep)) -> Result<TuneResult, TuneError> {
     let param = match &opts.param {
         Some(p) => p.clone(),
         None => width_parameter(file)?,
     };
-    if opts.tol.is_nan() || opts.tol <= 0.0 {
-        return Err(TuneError::BadTolerance(opts.tol));
-    }
-    for (name, value) in [("lo", opts.lo), ("hi", opts.hi), ("rel", Some(opts.rel))] {
-        if let Some(value) = value.filter(|v| !(*v > 0.0 && v.is_finite())) {
-            return Err(TuneError::BadSearchOption { name, value });
-        }
-    }
+    check_search_options(opts)?;
     let base = file.clone().resolve(ov)?;
     if !conserves_energy(&base, &crate::model::Model::build(&base)?) {
         return Err(TuneError::NotConservative(non_conservative_part(&base)));
@@ -263,61 +251,19 @@ pub fn tune_width(
         .parameters
         .get(&param)
         .ok_or_else(|| TuneError::UnknownParameter { param: param.clone(), known: base.parameters.keys().cloned().collect() })?;
-    let mut steps = Vec::new();
+    let mut trials = Trials { file, ov, opts, param: &param, progress, steps: Vec::new() };
     let mut notes = Vec::new();
-    let mut eval = |value: f64, steps: &mut Vec<TuneStep>| -> Result<bool, TuneError> {
-        let mut o = ov.clone();
-        o.set.retain(|(k, _)| *k != param);
-        o.set.push((param.clone(), format!("{value:?}")));
-        let scene = file.clone().resolve(&o)?;
-        let t = std::time::Instant::now();
-        let out = solve::solve_scene(&scene)?;
-        let artifact = energy_artifact(&scene, &out.trajectory, opts.skip_last).value;
-        let step = TuneStep {
-            value,
-            status: out.status,
-            artifact,
-            ok: out.converged() && artifact <= opts.tol,
-            wall_s: t.elapsed().as_secs_f64(),
-        };
-        progress(&step);
-        let ok = step.ok;
-        steps.push(step);
-        Ok(ok)
-    };
-    let mut hi = opts.hi.unwrap_or(current);
+    let hi = opts.hi.unwrap_or(current);
     if hi.is_nan() || hi <= 0.0 {
         return Err(TuneError::NotPositive { param, value: hi });
     }
-    let mut grow = 0;
-    while !eval(hi, &mut steps)? {
-        grow += 1;
-        if grow > 4 {
-            return Err(TuneError::ArtifactsEverywhere { param, value: hi, tol: opts.tol, nodes: base.nodes });
-        }
-        hi *= 2.0;
-    }
-    let mut lo = opts.lo.unwrap_or(hi / 8.0).min(hi / (1.0 + opts.rel));
-    let mut shrink = 0;
-    let mut failing = None;
-    loop {
-        if !eval(lo, &mut steps)? {
-            failing = Some(lo);
-            break;
-        }
-        hi = lo;
-        shrink += 1;
-        if shrink > 4 {
-            notes.push(format!("no artifacts down to {param} = {lo:.6e}: the search stopped there"));
-            break;
-        }
-        lo /= 2.0;
-    }
+    let hi = trials.first_without_artifacts(hi, base.nodes)?;
+    let (mut lo, mut hi, mut failing) = trials.first_with_artifacts(hi, &mut notes)?;
     if failing.is_some() {
         let mut solves = 0;
         while hi / lo > 1.0 + opts.rel && solves < opts.max_solves {
             let mid = (hi * lo).sqrt();
-            if eval(mid, &mut steps)? {
+            if trials.passes(mid)? {
                 hi = mid;
             } else {
                 lo = mid;
@@ -326,7 +272,94 @@ pub fn tune_width(
         }
         failing = Some(lo);
     }
+    let steps = trials.steps;
     Ok(TuneResult { param, nodes: base.nodes, tol: opts.tol, chosen: hi, failing, steps, notes })
+}
+
+/// The tolerance is positive, and the bracket's ends and relative width positive numbers.
+fn check_search_options(opts: &TuneOptions) -> Result<(), TuneError> {
+    if opts.tol.is_nan() || opts.tol <= 0.0 {
+        return Err(TuneError::BadTolerance(opts.tol));
+    }
+    for (name, value) in [("lo", opts.lo), ("hi", opts.hi), ("rel", Some(opts.rel))] {
+        if let Some(value) = value.filter(|v| !(*v > 0.0 && v.is_finite())) {
+            return Err(TuneError::BadSearchOption { name, value });
+        }
+    }
+    Ok(())
+}
+
+/// The solves of the search: the scene with the parameter set to a trial value, each
+/// recorded and shown to `progress`.
+struct Trials<'a, P> {
+    file: &'a SceneFile,
+    ov: &'a Overrides,
+    opts: &'a TuneOptions,
+    /// The parameter tuned.
+    param: &'a str,
+    progress: P,
+    /// Every solve so far, in order.
+    steps: Vec<TuneStep>,
+}
+
+impl<P: FnMut(&TuneStep)> Trials<'_, P> {
+    /// Whether the solve with the parameter at `value` converges with an energy artifact
+    /// within the tolerance.
+    fn passes(&mut self, value: f64) -> Result<bool, TuneError> {
+        let mut o = self.ov.clone();
+        o.set.retain(|(k, _)| *k != self.param);
+        o.set.push((self.param.to_string(), format!("{value:?}")));
+        let scene = self.file.clone().resolve(&o)?;
+        let t = std::time::Instant::now();
+        let out = solve::solve_scene(&scene)?;
+        let artifact = energy_artifact(&scene, &out.trajectory, self.opts.skip_last).value;
+        let step = TuneStep {
+            value,
+            status: out.status,
+            artifact,
+            ok: out.converged() && artifact <= self.opts.tol,
+            wall_s: t.elapsed().as_secs_f64(),
+        };
+        (self.progress)(&step);
+        let ok = step.ok;
+        self.steps.push(step);
+        Ok(ok)
+    }
+
+    /// The bracket's upper end: `hi`, doubled until it passes (at most four times; an
+    /// error if even `16 hi` does not at the scene's `nodes`).
+    fn first_without_artifacts(&mut self, mut hi: f64, nodes: usize) -> Result<f64, TuneError> {
+        let mut grow = 0;
+        while !self.passes(hi)? {
+            grow += 1;
+            if grow > 4 {
+                return Err(TuneError::ArtifactsEverywhere { param: self.param.to_string(), value: hi, tol: self.opts.tol, nodes });
+            }
+            hi *= 2.0;
+        }
+        Ok(hi)
+    }
+
+    /// The bracket's lower end below the passing `hi`: the option's `lo` (default
+    /// `hi/8`, at most `hi/(1 + rel)`), halved while it passes (moving `hi` down to it),
+    /// at most four times. Returns `(lo, hi, failing)`, `failing` the value that failed,
+    /// if one did (else a note says where the search stopped).
+    fn first_with_artifacts(&mut self, mut hi: f64, notes: &mut Vec<String>) -> Result<(f64, f64, Option<f64>), TuneError> {
+        let mut lo = self.opts.lo.unwrap_or(hi / 8.0).min(hi / (1.0 + self.opts.rel));
+        let mut shrink = 0;
+        loop {
+            if !self.passes(lo)? {
+                return Ok((lo, hi, Some(lo)));
+            }
+            hi = lo;
+            shrink += 1;
+            if shrink > 4 {
+                notes.push(format!("no artifacts down to {} = {lo:.6e}: the search stopped there", self.param));
+                return Ok((lo, hi, None));
+            }
+            lo /= 2.0;
+        }
+    }
 }
 
 /// Where a tune result is written (beside the scene's usual output).

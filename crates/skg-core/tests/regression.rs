@@ -3,26 +3,17 @@
 //! error against the hard-wall reference as σ shrinks (the paper's Fig. 3, centre).
 //!
 //! The tolerances come from the measured study in docs/validation.md ("Convergence against the
-//! references"): `cargo test --release -p skg-core --test regression -- --ignored
-//! --nocapture measure` prints that table again.
+//! references"): `cargo run --release -p skg-core --example reference_convergence_study`
+//! prints that table again.
 
 mod common;
+#[path = "studies/reference_errors.rs"]
+mod reference_errors;
 
-use skg_core::check::{self, CheckOptions, Table};
-use skg_core::convergence::{fit_order, pairwise_orders};
-use skg_core::scene::{Overrides, Scene};
-use skg_core::solve::{self, Outcome};
-use skg_core::stepping::reference::{self, ReferenceOptions};
+use reference_errors::{model_error, try_discretization_error};
+use skg_core::convergence::fit_order;
+use skg_core::solve::Outcome;
 use skg_core::stepping::verify::VerifyStatus;
-
-/// The solver's trajectory as a [`Table`] (the CSV it would write).
-fn table(scene: &Scene, o: &Outcome) -> Table {
-    Table::of_trajectory(scene, &o.trajectory)
-}
-
-fn ref_table(scene: &Scene, r: &reference::Reference) -> Table {
-    Table::of_trajectory(scene, &r.trajectory)
-}
 
 /// Max error of the coordinates (not velocities) against the regularized reference on
 /// the same grid, last two nodes excluded (the end nodes' benign boundary error).
@@ -30,91 +21,6 @@ fn discretization_error(name: &str, nodes: usize, op: &str) -> (f64, Outcome) {
     let (e, o) = try_discretization_error(name, nodes, op);
     assert!(o.converged(), "{name} {op} N={nodes}: {} after {} iterations", o.status, o.iterations);
     (e, o)
-}
-
-/// As [`discretization_error`], also for a solve that did not converge (error = NaN).
-fn try_discretization_error(name: &str, nodes: usize, op: &str) -> (f64, Outcome) {
-    let ov = common::grid(nodes, op);
-    let scene = common::load(name, &ov);
-    let o = solve::solve_scene(&scene).unwrap();
-    if !o.converged() {
-        return (f64::NAN, o);
-    }
-    let (times, _) = solve::grid(&scene);
-    let r = reference::regularized(&scene, &times, &ReferenceOptions::default()).unwrap();
-    let cmp = check::compare(
-        &table(&scene, &o),
-        &ref_table(&scene, &r),
-        &CheckOptions { skip_last: 2, columns: Some(scene.coordinates.clone()) },
-    )
-    .unwrap();
-    assert_eq!(cmp.rows_interpolated, 0);
-    (cmp.max_abs, o)
-}
-
-/// Max error of the tumbler's x, y against its hard-wall reference (model error).
-fn model_error(sigma: &str, nodes: usize) -> (f64, f64) {
-    let ov = Overrides { set: vec![("sigma".into(), sigma.into())], nodes: Some(nodes), no_fallback: true, ..Default::default() };
-    let scene = common::load("tumbler", &ov);
-    let o = common::solve("tumbler", &ov);
-    let (times, _) = solve::grid(&scene);
-    let hard = reference::hard_wall(&scene, &times, &ReferenceOptions::default()).unwrap();
-    let reg = reference::regularized(&scene, &times, &ReferenceOptions::default()).unwrap();
-    let opts = CheckOptions { skip_last: 0, columns: Some(vec!["x".into(), "y".into()]) };
-    let sol = table(&scene, &o);
-    let m = check::compare(&sol, &ref_table(&scene, &hard), &opts).unwrap().max_abs;
-    let d = check::compare(&sol, &ref_table(&scene, &reg), &opts).unwrap().max_abs;
-    (m, d)
-}
-
-/// (scene, N ladder) of the measured study.
-const STUDY: &[(&str, &[usize])] = &[
-    ("free_fall", &[16, 32, 64, 128]),
-    ("rolling_disk", &[32, 64, 128, 256]),
-    ("tumbler", &[256, 512, 1024]),
-    ("incline_friction", &[64, 128, 256, 512]),
-    ("incline_frictionless", &[64, 128, 256, 512]),
-    ("knife_edge", &[32, 64, 128, 256]),
-    ("driven_oscillator", &[64, 128, 256, 512]),
-    ("pendulum", &[64, 128, 256, 512]),
-    ("vibrating_plate", &[256, 512, 1024, 2048]),
-];
-const OPERATORS: &[&str] = &["SBP121", "SBP242", "SBP363"];
-
-/// Prints the convergence and σ-ladder tables of docs/validation.md.
-#[test]
-#[ignore = "measurement, minutes; run with --ignored --nocapture"]
-fn measure() {
-    println!("| scene | operator | N | max error of q | pairwise order | solve s |");
-    println!("|---|---|---:|---:|---:|---:|");
-    for (name, ns) in STUDY {
-        for op in OPERATORS {
-            let mut errs = Vec::new();
-            let mut hs = Vec::new();
-            for &n in *ns {
-                let t = std::time::Instant::now();
-                let (e, o) = try_discretization_error(name, n, op);
-                let s = t.elapsed().as_secs_f64();
-                if !o.converged() {
-                    println!("| {name} | {op} | {n} | no convergence ({}, {} iterations) | | {s:.2} |", o.status, o.iterations);
-                    continue;
-                }
-                hs.push(1.0 / (n as f64 - 1.0));
-                errs.push(e);
-                let ord = if errs.len() > 1 { format!("{:.2}", pairwise_orders(&hs, &errs).last().unwrap()) } else { String::new() };
-                println!("| {name} | {op} | {n} | {e:.3e} | {ord} | {s:.2} |");
-            }
-            let fit = fit_order(&hs, &errs, 1e-11);
-            println!("| {name} | {op} | fit | {fit:?} | | |");
-        }
-    }
-    println!();
-    println!("| σ | model error (x, y vs hard wall) | discretization error (vs regularized) |");
-    println!("|---|---:|---:|");
-    for k in [10, 20, 30, 40, 50, 60, 70, 80, 90, 100, 110] {
-        let (m, d) = model_error(&format!("1/{k}"), 256);
-        println!("| 1/{k} | {m:.3e} | {d:.3e} |");
-    }
 }
 
 /// Solve `name` with `op` on the ladder `ns`, compare with the regularized reference on

@@ -9,6 +9,9 @@
 //! * [`trajectory`]: the states at the nodes with their physical columns, the common
 //!   result type of a solve and a reference, and the CSV layout of a trajectory
 //!   ([`Trajectory`]).
+//! * [`interpolate`]: a trajectory between its nodes — cubic Hermite interpolation of
+//!   the coordinates with their velocities as slopes, linear interpolation of any node
+//!   series.
 //! * [`contact`]: when a node is in contact with a wall, contact episodes, and how
 //!   finely the nodes of a trajectory resolve a wall's contacts. It sits here rather than
 //!   with the model because it is about nodes: it measures trajectories.
@@ -21,6 +24,7 @@
 pub mod action;
 pub mod contact;
 pub mod discretization;
+pub mod interpolate;
 pub mod trajectory;
 
 pub use action::Action;

@@ -3,70 +3,80 @@
 //! inside every wall, every expression finite), and the same checks a solution's nodes
 //! need (the kinetic matrix, finite expressions).
 
+// `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use nalgebra::{DMatrix, DVector};
 use toml::Spanned;
 
-use super::{Model, WallModel};
+use super::{Model, Physical, WallModel};
 use crate::scene::{readable_number, ConstraintKind, Location, Scene, SceneError};
 
 impl Model {
-    /// Checks on the initial state at the start time, in this order: a positive-definite
-    /// kinetic matrix (masses and inertias), no constraint with a zero gradient ∂g/∂q̇,
-    /// initial positions on every position constraint (before the rank, so that two
-    /// contradictory constraints are reported as the one the position violates),
-    /// independent constraints (∂g/∂q̇ of full row rank, each row scaled to its largest
-    /// entry so that a constraint's scale does not matter), initial velocities that
-    /// satisfy every constraint, and an initial position on the allowed side of every wall.
-    // `!(a <= b)` on purpose: a NaN must fail every check, not pass it.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    /// Checks on the initial state at the start time, in this order: every expression
+    /// finite, a positive-definite kinetic matrix (masses and inertias), no constraint
+    /// with a zero gradient ∂g/∂q̇, initial positions on every position constraint
+    /// (before the rank, so that two contradictory constraints are reported as the one
+    /// the position violates), independent constraints (∂g/∂q̇ of full row rank, each row
+    /// scaled to its largest entry so that a constraint's scale does not matter), initial
+    /// velocities that satisfy every constraint, and an initial position on the allowed
+    /// side of every wall.
     pub(super) fn validate_initial_state(&self, scene: &Scene) -> Result<(), SceneError> {
-        let mut ws = self.workspace();
         let (q0, v0) = (&scene.initial_q, &scene.initial_v);
-        let file = &scene.file;
-        if let Some((what, location)) = self.non_finite_expression(scene, scene.t_start, q0, v0) {
-            let state = scene.coordinates.iter().zip(q0).map(|(c, x)| format!("{c} = {}", readable_number(*x)));
-            let state = state.chain(scene.coordinates.iter().zip(v0).map(|(c, x)| format!("{c}_dot = {}", readable_number(*x))));
-            return Err(SceneError::Invalid {
-                location,
-                message: format!(
-                    "{what} is not finite at the initial state ({}): the scene's expressions must be defined there",
-                    state.collect::<Vec<_>>().join(", ")
-                ),
-            });
-        }
-        let ph = self.physical(scene.t_start, q0, v0, &mut ws);
-        let min = smallest_eigenvalue(&ph.kinetic);
-        if min.is_nan() || min <= 0.0 {
-            return Err(SceneError::Invalid {
-                location: file.origin.locate_in(&file.scene.lagrangian, None),
-                message: format!(
-                    "the kinetic matrix ∂²L/∂q̇² of the Lagrangian is not positive definite at the initial state \
-                     (smallest eigenvalue {min:.3e}): check the masses and inertias in the Lagrangian"
-                ),
-            });
-        }
-        let constraint_error = |a: usize, message: String| SceneError::Invalid {
-            location: file.origin.locate_in(&file.constraints[a].expression, None),
-            message,
-        };
-        // A constraint whose gradient vanishes at the initial state fixes no direction
-        // there (its multiplier is not determined), whatever the other constraints are.
-        if let Some(a) = (0..ph.gv.nrows()).find(|&a| !(scaled_norm(ph.gv.row(a).iter()) > 0.0)) {
-            let name = &self.constraints[a].name;
-            let what = match self.constraints[a].kind {
-                ConstraintKind::Velocity => format!("constraint `{name}`: its gradient ∂g/∂q̇ is zero"),
-                ConstraintKind::Position => format!("position constraint `{name}`: its gradient ∇h is zero"),
-            };
-            return Err(constraint_error(
-                a,
-                format!(
-                    "{what} at the initial state, so it fixes no direction there and its multiplier is not determined \
-                     (a constraint written as a square, like (x^2 + y^2 - l^2)^2 or x_dot^2 + y_dot^2, has a zero \
-                     gradient wherever it holds: write the expression whose zero is meant, not its square)"
-                ),
-            ));
-        }
+        self.check_finite_at_start(scene)?;
+        let ph = self.physical(scene.t_start, q0, v0, &mut self.workspace());
+        check_kinetic_matrix(scene, &ph)?;
+        self.check_constraint_gradients(scene, &ph)?;
         let qmax = q0.iter().fold(1.0_f64, |m, q| m.max(q.abs()));
+        self.check_initial_positions(scene, &ph, qmax)?;
+        self.check_independent_constraints(scene, &ph)?;
+        self.check_initial_velocities(scene, &ph)?;
+        self.check_inside_walls(scene, &ph, qmax)
+    }
+
+    /// Every expression of the scene is finite at its initial state.
+    fn check_finite_at_start(&self, scene: &Scene) -> Result<(), SceneError> {
+        let (q0, v0) = (&scene.initial_q, &scene.initial_v);
+        let Some((what, location)) = self.non_finite_expression(scene, scene.t_start, q0, v0) else {
+            return Ok(());
+        };
+        let state = scene.coordinates.iter().zip(q0).map(|(c, x)| format!("{c} = {}", readable_number(*x)));
+        let state = state.chain(scene.coordinates.iter().zip(v0).map(|(c, x)| format!("{c}_dot = {}", readable_number(*x))));
+        Err(SceneError::Invalid {
+            location,
+            message: format!(
+                "{what} is not finite at the initial state ({}): the scene's expressions must be defined there",
+                state.collect::<Vec<_>>().join(", ")
+            ),
+        })
+    }
+
+    /// No constraint's gradient vanishes at the initial state: such a constraint fixes no
+    /// direction there (its multiplier is not determined), whatever the other
+    /// constraints are.
+    fn check_constraint_gradients(&self, scene: &Scene, ph: &Physical) -> Result<(), SceneError> {
+        let Some(a) = (0..ph.gv.nrows()).find(|&a| !(scaled_norm(ph.gv.row(a).iter()) > 0.0)) else {
+            return Ok(());
+        };
+        let name = &self.constraints[a].name;
+        let what = match self.constraints[a].kind {
+            ConstraintKind::Velocity => format!("constraint `{name}`: its gradient ∂g/∂q̇ is zero"),
+            ConstraintKind::Position => format!("position constraint `{name}`: its gradient ∇h is zero"),
+        };
+        Err(constraint_error(
+            scene,
+            a,
+            format!(
+                "{what} at the initial state, so it fixes no direction there and its multiplier is not determined \
+                 (a constraint written as a square, like (x^2 + y^2 - l^2)^2 or x_dot^2 + y_dot^2, has a zero \
+                 gradient wherever it holds: write the expression whose zero is meant, not its square)"
+            ),
+        ))
+    }
+
+    /// The initial position lies on every position constraint, within
+    /// [`POSITION_TOLERANCE`] relative to the coordinates' size `qmax`.
+    fn check_initial_positions(&self, scene: &Scene, ph: &Physical, qmax: f64) -> Result<(), SceneError> {
         let positions = self.constraints.iter().enumerate().filter(|(_, c)| c.kind == ConstraintKind::Position).map(|(a, _)| a);
         for (a, &h) in positions.zip(&ph.drift) {
             let name = &self.constraints[a].name;
@@ -75,6 +85,7 @@ impl Model {
             let tol = POSITION_TOLERANCE * grad * qmax;
             if !(h.abs() <= tol) {
                 return Err(constraint_error(
+                    scene,
                     a,
                     format!(
                         "the initial position violates position constraint `{name}`: h(q₀, t₀) = {h:.6e} \
@@ -84,36 +95,55 @@ impl Model {
                 ));
             }
         }
-        if let Some(a) = self.dependent_constraint(&ph.gv) {
-            return Err(SceneError::Invalid {
-                location: file.origin.locate_in(&file.constraints[a].expression, None),
-                message: format!(
-                    "constraint `{}` is redundant at the initial state: its gradient ∂g/∂q̇ is a combination of those of {} \
-                     (the constraints' Jacobian ∂g/∂q̇ has rank below {}), so its multiplier is not determined: remove it \
-                     or make the constraints independent",
-                    self.constraints[a].name,
-                    self.constraints[..a].iter().map(|c| format!("`{}`", c.name)).collect::<Vec<_>>().join(", "),
-                    self.constraints.len()
-                ),
-            });
-        }
-        let vmax = v0.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        Ok(())
+    }
+
+    /// The constraints are independent at the initial state ([`Model::dependent_constraint`]).
+    fn check_independent_constraints(&self, scene: &Scene, ph: &Physical) -> Result<(), SceneError> {
+        let Some(a) = self.dependent_constraint(&ph.gv) else {
+            return Ok(());
+        };
+        Err(constraint_error(
+            scene,
+            a,
+            format!(
+                "constraint `{}` is redundant at the initial state: its gradient ∂g/∂q̇ is a combination of those of {} \
+                 (the constraints' Jacobian ∂g/∂q̇ has rank below {}), so its multiplier is not determined: remove it \
+                 or make the constraints independent",
+                self.constraints[a].name,
+                self.constraints[..a].iter().map(|c| format!("`{}`", c.name)).collect::<Vec<_>>().join(", "),
+                self.constraints.len()
+            ),
+        ))
+    }
+
+    /// The initial velocities satisfy every constraint (a position constraint's time
+    /// derivative), within `1e-9 · max(1, max|v₀|)²`.
+    fn check_initial_velocities(&self, scene: &Scene, ph: &Physical) -> Result<(), SceneError> {
+        let vmax = scene.initial_v.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
         let tol = 1e-9 * vmax * vmax;
-        for (a, val) in ph.g.iter().enumerate() {
-            if !(val.abs() <= tol) {
-                let name = &self.constraints[a].name;
-                let (what, advice) = match self.constraints[a].kind {
-                    ConstraintKind::Velocity => (name.clone(), "choose initial velocities that satisfy it"),
-                    ConstraintKind::Position => {
-                        ("its time derivative ∇h·q̇ + ∂h/∂t".to_string(), "choose initial velocities tangent to it (∇h·q̇₀ = −∂h/∂t)")
-                    }
-                };
-                return Err(constraint_error(
-                    a,
-                    format!("the initial state violates constraint `{name}`: {what} = {val:.6e} (tolerance {tol:.1e}); {advice}"),
-                ));
+        let Some((a, val)) = ph.g.iter().enumerate().find(|(_, val)| !(val.abs() <= tol)) else {
+            return Ok(());
+        };
+        let name = &self.constraints[a].name;
+        let (what, advice) = match self.constraints[a].kind {
+            ConstraintKind::Velocity => (name.clone(), "choose initial velocities that satisfy it"),
+            ConstraintKind::Position => {
+                ("its time derivative ∇h·q̇ + ∂h/∂t".to_string(), "choose initial velocities tangent to it (∇h·q̇₀ = −∂h/∂t)")
             }
-        }
+        };
+        Err(constraint_error(
+            scene,
+            a,
+            format!("the initial state violates constraint `{name}`: {what} = {val:.6e} (tolerance {tol:.1e}); {advice}"),
+        ))
+    }
+
+    /// The initial position is on the allowed side of every wall: strictly inside a
+    /// Gaussian wall, which pushes at h = 0 already; inside or touching an ideal wall
+    /// (a sliding contact), within [`ON_WALL_TOLERANCE`] relative to `qmax`.
+    fn check_inside_walls(&self, scene: &Scene, ph: &Physical, qmax: f64) -> Result<(), SceneError> {
+        let file = &scene.file;
         for (j, &h) in ph.h.iter().enumerate() {
             if !h.is_finite() {
                 return Err(SceneError::Invalid {
@@ -121,8 +151,6 @@ impl Model {
                     message: format!("wall `{}`: h is not finite at the initial state ({h})", self.walls[j].name),
                 });
             }
-            // An ideal wall may be touched at the start (sliding contact); a Gaussian wall
-            // pushes at h = 0 already, so its scene must start strictly inside.
             let allowed = match self.wall_model {
                 WallModel::Gaussian => h < 0.0,
                 WallModel::Hard => h <= ON_WALL_TOLERANCE * qmax,
@@ -199,6 +227,26 @@ impl Model {
             None => (format!("∂L/∂{name} or a wall's force on `{name}`"), at(&file.scene.lagrangian)),
         })
     }
+}
+
+/// The kinetic matrix ∂²L/∂q̇² is positive definite at the initial state `ph`.
+fn check_kinetic_matrix(scene: &Scene, ph: &Physical) -> Result<(), SceneError> {
+    let min = smallest_eigenvalue(&ph.kinetic);
+    if min.is_nan() || min <= 0.0 {
+        return Err(SceneError::Invalid {
+            location: scene.file.origin.locate_in(&scene.file.scene.lagrangian, None),
+            message: format!(
+                "the kinetic matrix ∂²L/∂q̇² of the Lagrangian is not positive definite at the initial state \
+                 (smallest eigenvalue {min:.3e}): check the masses and inertias in the Lagrangian"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// An error at constraint `a`'s expression in the scene file.
+fn constraint_error(scene: &Scene, a: usize, message: String) -> SceneError {
+    SceneError::Invalid { location: scene.file.origin.locate_in(&scene.file.constraints[a].expression, None), message }
 }
 
 /// The Euclidean norm of `xs` computed after scaling by the largest magnitude, so that it

@@ -92,7 +92,7 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::R
         w.flush().map_err(io_err(path))?;
     }
     tmp.as_file().sync_all().map_err(io_err(path))?;
-    tmp.persist(path).map_err(|e| OutputError::Io { path: path.to_path_buf(), source: e.error })?;
+    tmp.persist(path).map_err(|e| OutputError::Io { path: path.to_path_buf(), error: e.error })?;
     Ok(())
 }
 
@@ -165,6 +165,17 @@ mod tests {
         // No temporary file is left behind.
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names.len(), 1, "{names:?}");
+    }
+
+    #[test]
+    fn the_reason_of_a_failed_write_is_said_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("file");
+        std::fs::write(&file, "").unwrap();
+        let e = write_atomic(&file.join("a.txt"), |_| Ok(())).unwrap_err();
+        let text = e.to_string();
+        assert!(text.starts_with(&format!("cannot write {}: ", file.display())) && text.contains("(os error "), "{text}");
+        assert!(std::error::Error::source(&e).is_none(), "{text}");
     }
 
     #[test]

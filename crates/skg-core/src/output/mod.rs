@@ -56,12 +56,12 @@ pub use solution::{solve_into, solve_into_with_progress, summary_json, write_out
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// Creating, writing or renaming the file failed.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}: {error}")]
     Io {
         /// The target file or directory.
         path: PathBuf,
-        /// Why.
-        source: std::io::Error,
+        /// Why (part of the message, not its `source`).
+        error: std::io::Error,
     },
     /// The value could not be serialized.
     #[error("cannot write {path}: {message}")]
@@ -102,5 +102,5 @@ pub const REFERENCE_FILE: &str = "reference.csv";
 pub const SUMMARY_FILE: &str = "summary.json";
 
 pub(super) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
-    move |source| OutputError::Io { path: path.to_path_buf(), source }
+    move |error| OutputError::Io { path: path.to_path_buf(), error }
 }

@@ -11,7 +11,8 @@
 //! differences, `(D_p u)_k = Σ_{l=0..p} (−1)^{p−l} C(p, l) u_{k+l}`, and `p` one more than
 //! the boundary order ([`OperatorKind::dissipation_order`](super::OperatorKind::dissipation_order)). MSN2004 write the dissipation as
 //! `H⁻¹ D_pᵀ B_p D_p` with a boundary-aware weight `B_p`; here `B_p = I` and `D_p` has no
-//! boundary rows (the simplification measured in the research for issue 22).
+//! boundary rows, a simplification measured to keep every property below
+//! (docs/mathematics.md §3).
 //!
 //! Every property the solver relies on follows from the form of the added term:
 //!

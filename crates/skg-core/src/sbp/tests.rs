@@ -30,122 +30,142 @@ fn sbp_properties_all_kinds() {
     }
 }
 
+/// The properties of `kind` (of its partner if `minus`) on several sizes and steps.
 fn sbp_properties(kind: OperatorKind, minus: bool) {
-    {
-        let p = kind.boundary_order();
-        let q_int = kind.interior_order();
-        let b = kind.boundary_rows();
-        for n in [kind.min_nodes(), kind.min_nodes() + 3, 50] {
-            for dt in [1.0, 0.37] {
-                let ctx = format!("{kind}{} n={n} dt={dt}", if minus { " partner" } else { "" });
-                let plus = SbpOperator::new(kind, n, dt).unwrap();
-                let op = if minus { plus.partner() } else { plus.clone() };
-                let other = op.partner();
-                assert_eq!(op.len(), n);
-                assert_eq!(op.kind(), kind);
-                assert_eq!(op.is_partner(), minus && kind.is_dissipative(), "{ctx}");
-                assert!(!other.is_partner() || !op.is_partner(), "{ctx}");
+    for n in [kind.min_nodes(), kind.min_nodes() + 3, 50] {
+        for dt in [1.0, 0.37] {
+            let ctx = format!("{kind}{} n={n} dt={dt}", if minus { " partner" } else { "" });
+            let plus = SbpOperator::new(kind, n, dt).unwrap();
+            let op = if minus { plus.partner() } else { plus.clone() };
+            let other = op.partner();
+            assert_eq!(op.len(), n);
+            assert_eq!(op.kind(), kind);
+            assert_eq!(op.is_partner(), minus && kind.is_dissipative(), "{ctx}");
+            assert!(!other.is_partner() || !op.is_partner(), "{ctx}");
+            check_norm(&ctx, &op);
+            check_sbp_identity(&ctx, &op, &other);
+            check_rows_and_apply(&ctx, &op);
+            check_polynomial_exactness(&ctx, &op, dt);
+            check_quadrature(&ctx, &op, dt);
+        }
+    }
+}
 
-                // (d) H positive, symmetric, sums to the interval length.
-                let h = op.norm();
-                assert!(h.iter().all(|&w| w > 0.0), "{ctx}: H not positive");
-                for i in 0..n {
-                    assert_eq!(h[i], h[n - 1 - i], "{ctx}");
-                }
+/// (d) H positive, symmetric, sums to the interval length.
+fn check_norm(ctx: &str, op: &SbpOperator) {
+    let (h, n) = (op.norm(), op.len());
+    assert!(h.iter().all(|&w| w > 0.0), "{ctx}: H not positive");
+    for i in 0..n {
+        assert_eq!(h[i], h[n - 1 - i], "{ctx}");
+    }
+}
 
-                // (a) SBP identity H D + (H D')ᵀ = B entrywise, D' the partner (for a
-                // centred kind D' = D: Q + Qᵀ = B).
-                let dd = dense_d(&op);
-                let dp = dense_d(&other);
-                if !kind.is_dissipative() {
-                    assert_eq!(dd, dp, "{ctx}: the partner of a centred operator is itself");
-                }
-                let q: Vec<Vec<f64>> = dd.iter().zip(h).map(|(row, &w)| row.iter().map(|v| w * v).collect()).collect();
-                let qp: Vec<Vec<f64>> = dp.iter().zip(h).map(|(row, &w)| row.iter().map(|v| w * v).collect()).collect();
-                for i in 0..n {
-                    for j in 0..n {
-                        let bij = if i == 0 && j == 0 {
-                            -1.0
-                        } else if i == n - 1 && j == n - 1 {
-                            1.0
-                        } else {
-                            0.0
-                        };
-                        let s = q[i][j] + qp[j][i];
-                        assert!((s - bij).abs() <= 1e-13, "{ctx}: (HD + (HD')ᵀ)[{i},{j}] = {s}");
-                    }
-                }
+/// (a) SBP identity H D + (H D')ᵀ = B entrywise, D' the partner `other` (for a centred
+/// kind D' = D: Q + Qᵀ = B).
+fn check_sbp_identity(ctx: &str, op: &SbpOperator, other: &SbpOperator) {
+    let (h, n) = (op.norm(), op.len());
+    let dd = dense_d(op);
+    let dp = dense_d(other);
+    if !op.kind().is_dissipative() {
+        assert_eq!(dd, dp, "{ctx}: the partner of a centred operator is itself");
+    }
+    let q: Vec<Vec<f64>> = dd.iter().zip(h).map(|(row, &w)| row.iter().map(|v| w * v).collect()).collect();
+    let qp: Vec<Vec<f64>> = dp.iter().zip(h).map(|(row, &w)| row.iter().map(|v| w * v).collect()).collect();
+    for i in 0..n {
+        for j in 0..n {
+            let bij = if i == 0 && j == 0 {
+                -1.0
+            } else if i == n - 1 && j == n - 1 {
+                1.0
+            } else {
+                0.0
+            };
+            let s = q[i][j] + qp[j][i];
+            assert!((s - bij).abs() <= 1e-13, "{ctx}: (HD + (HD')ᵀ)[{i},{j}] = {s}");
+        }
+    }
+}
 
-                // row() lists nonzero entries sorted by column, and apply() is the
-                // matrix with those rows: D e_j is column j.
-                for k in 0..n {
-                    let row = op.row(k);
-                    assert!(row.windows(2).all(|w| w[0].0 < w[1].0), "{ctx}");
-                    assert!(row.iter().all(|&(_, v)| v != 0.0), "{ctx}: structural zero in row {k}");
-                }
-                let mut e = vec![0.0; n];
-                let mut col = vec![0.0; n];
-                for j in 0..n {
-                    e[j] = 1.0;
-                    op.apply(&e, &mut col);
-                    e[j] = 0.0;
-                    for k in 0..n {
-                        assert_eq!(col[k], dd[k][j], "{ctx}: D[{k},{j}]");
-                    }
-                }
+/// row() lists nonzero entries sorted by column, and apply() is the matrix with those
+/// rows: D e_j is column j.
+fn check_rows_and_apply(ctx: &str, op: &SbpOperator) {
+    let n = op.len();
+    let dd = dense_d(op);
+    for k in 0..n {
+        let row = op.row(k);
+        assert!(row.windows(2).all(|w| w[0].0 < w[1].0), "{ctx}");
+        assert!(row.iter().all(|&(_, v)| v != 0.0), "{ctx}: structural zero in row {k}");
+    }
+    let mut e = vec![0.0; n];
+    let mut col = vec![0.0; n];
+    for j in 0..n {
+        e[j] = 1.0;
+        op.apply(&e, &mut col);
+        e[j] = 0.0;
+        for k in 0..n {
+            assert_eq!(col[k], dd[k][j], "{ctx}: D[{k},{j}]");
+        }
+    }
+}
 
-                // (b) exactness on polynomials, grid with nonzero start; scaled variable
-                // s = (t − a)/L keeps the values O(1) so the check is about the
-                // coefficients, not round-off.
-                let t0 = 0.3;
-                let t: Vec<f64> = (0..n).map(|k| t0 + k as f64 * dt).collect();
-                let a = t0 + 0.41 * (n - 1) as f64 * dt;
-                let l = 0.5 * (n - 1) as f64 * dt;
-                let mut du = vec![0.0; n];
-                let mut du_s = vec![0.0; n];
-                for j in 0..=q_int {
-                    let u: Vec<f64> = t.iter().map(|&tk| ((tk - a) / l).powi(j as i32)).collect();
-                    let exact: Vec<f64> =
-                        t.iter().map(|&tk| if j == 0 { 0.0 } else { j as f64 * ((tk - a) / l).powi(j as i32 - 1) / l }).collect();
-                    op.apply(&u, &mut du);
-                    let scale = exact.iter().fold(1.0 / l, |m, e| m.max(e.abs()));
-                    for k in 0..n {
-                        let interior = k >= b && k < n - b;
-                        if j <= p || interior {
-                            let rel = (du[k] - exact[k]).abs() / scale;
-                            assert!(rel <= 1e-10, "{ctx}: D t^{j} wrong in row {k}: rel {rel:e}");
-                        }
-                    }
-                    // apply_strided on interleaved data gives the same result.
-                    let mut inter = vec![f64::NAN; 3 * n + 1];
-                    for k in 0..n {
-                        inter[1 + 3 * k] = u[k];
-                    }
-                    op.apply_strided(&inter, 3, 1, &mut du_s);
-                    assert_eq!(du_s, du, "{ctx}");
-                }
-                // The boundary rows are not exact one degree higher (the boundary order is sharp).
-                {
-                    let j = p + 1;
-                    let u: Vec<f64> = t.iter().map(|&tk| ((tk - a) / l).powi(j as i32)).collect();
-                    op.apply(&u, &mut du);
-                    let e0 = (du[0] - j as f64 * ((t[0] - a) / l).powi(j as i32 - 1) / l).abs();
-                    assert!(e0 * l > 1e-8, "{ctx}: row 0 unexpectedly exact for degree {j}");
-                }
+/// The grid of the polynomial checks: nonzero start 0.3, step `dt`.
+fn grid_from(n: usize, dt: f64) -> Vec<f64> {
+    (0..n).map(|k| 0.3 + k as f64 * dt).collect()
+}
 
-                // (c) quadrature: 1ᵀ H sʲ = ∫ sʲ dt exactly up to degree 2p−1, not for 2p.
-                let span = (n - 1) as f64 * dt;
-                for j in 0..=2 * p {
-                    let approx: f64 = t.iter().zip(h).map(|(&tk, &w)| w * ((tk - t0) / span).powi(j as i32)).sum();
-                    let exact = span / (j + 1) as f64;
-                    let rel = (approx - exact).abs() / exact;
-                    if j <= kind.quadrature_degree() {
-                        assert!(rel <= 1e-12, "{ctx}: quadrature of degree {j}: rel {rel:e}");
-                    } else {
-                        assert!(rel > 1e-12, "{ctx}: quadrature unexpectedly exact for degree {j}");
-                    }
-                }
+/// (b) exactness on polynomials, on a grid with a nonzero start: up to the boundary
+/// order in every row and the interior order in the interior rows, not one degree
+/// higher in the first row (the boundary order is sharp). The scaled variable
+/// s = (t − a)/L keeps the values O(1) so the check is about the coefficients, not
+/// round-off. `apply_strided` on interleaved data gives the same result as `apply`.
+fn check_polynomial_exactness(ctx: &str, op: &SbpOperator, dt: f64) {
+    let (kind, n) = (op.kind(), op.len());
+    let (p, q_int, b) = (kind.boundary_order(), kind.interior_order(), kind.boundary_rows());
+    let t = grid_from(n, dt);
+    let a = t[0] + 0.41 * (n - 1) as f64 * dt;
+    let l = 0.5 * (n - 1) as f64 * dt;
+    let mut du = vec![0.0; n];
+    let mut du_s = vec![0.0; n];
+    for j in 0..=q_int {
+        let u: Vec<f64> = t.iter().map(|&tk| ((tk - a) / l).powi(j as i32)).collect();
+        let exact: Vec<f64> = t.iter().map(|&tk| if j == 0 { 0.0 } else { j as f64 * ((tk - a) / l).powi(j as i32 - 1) / l }).collect();
+        op.apply(&u, &mut du);
+        let scale = exact.iter().fold(1.0 / l, |m, e| m.max(e.abs()));
+        for k in 0..n {
+            let interior = k >= b && k < n - b;
+            if j <= p || interior {
+                let rel = (du[k] - exact[k]).abs() / scale;
+                assert!(rel <= 1e-10, "{ctx}: D t^{j} wrong in row {k}: rel {rel:e}");
             }
+        }
+        let mut inter = vec![f64::NAN; 3 * n + 1];
+        for k in 0..n {
+            inter[1 + 3 * k] = u[k];
+        }
+        op.apply_strided(&inter, 3, 1, &mut du_s);
+        assert_eq!(du_s, du, "{ctx}");
+    }
+    let j = p + 1;
+    let u: Vec<f64> = t.iter().map(|&tk| ((tk - a) / l).powi(j as i32)).collect();
+    op.apply(&u, &mut du);
+    let e0 = (du[0] - j as f64 * ((t[0] - a) / l).powi(j as i32 - 1) / l).abs();
+    assert!(e0 * l > 1e-8, "{ctx}: row 0 unexpectedly exact for degree {j}");
+}
+
+/// (c) quadrature: 1ᵀ H sʲ = ∫ sʲ dt exactly up to the quadrature degree (2p−1), not
+/// for 2p.
+fn check_quadrature(ctx: &str, op: &SbpOperator, dt: f64) {
+    let (kind, n, h) = (op.kind(), op.len(), op.norm());
+    let t = grid_from(n, dt);
+    let span = (n - 1) as f64 * dt;
+    for j in 0..=2 * kind.boundary_order() {
+        let approx: f64 = t.iter().zip(h).map(|(&tk, &w)| w * ((tk - t[0]) / span).powi(j as i32)).sum();
+        let exact = span / (j + 1) as f64;
+        let rel = (approx - exact).abs() / exact;
+        if j <= kind.quadrature_degree() {
+            assert!(rel <= 1e-12, "{ctx}: quadrature of degree {j}: rel {rel:e}");
+        } else {
+            assert!(rel > 1e-12, "{ctx}: quadrature unexpectedly exact for degree {j}");
         }
     }
 }
@@ -346,10 +366,10 @@ fn dissipative_pair_is_centred_plus_dissipation() {
     }
 }
 
-/// The closures and interior stencils of `Δt·D+` against the table the research for
-/// issue 22 generated independently (Python, exact `fractions.Fraction`, from the same
-/// definition): every entry of SBP121-AD and SBP242-AD, and the interior stencils and
-/// chosen entries of SBP363-AD and SBP484-AD.
+/// The closures and interior stencils of `Δt·D+` against a table generated
+/// independently (Python, exact `fractions.Fraction`, from the same definition): every
+/// entry of SBP121-AD and SBP242-AD, and the interior stencils and chosen entries of
+/// SBP363-AD and SBP484-AD.
 #[test]
 fn dissipative_coefficients_match_an_independent_table() {
     let f = |v: &[(i64, i64)]| v.to_vec();

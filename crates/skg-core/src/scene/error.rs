@@ -12,12 +12,12 @@ use super::location::{Location, TomlError};
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The scene file cannot be read.
-    #[error("cannot read scene file {path}: {source}")]
+    #[error("cannot read scene file {path}: {error}")]
     Io {
         /// The file as given.
         path: PathBuf,
-        /// Why it cannot be read.
-        source: std::io::Error,
+        /// Why it cannot be read (part of the message, not its `source`).
+        error: std::io::Error,
     },
     /// The file is not valid TOML, or has unknown keys or values of the wrong type.
     #[error("{location}: {message}")]
@@ -69,7 +69,7 @@ pub enum SceneError {
 impl From<TomlError> for SceneError {
     fn from(e: TomlError) -> Self {
         match e {
-            TomlError::Io { path, error } => SceneError::Io { path, source: error },
+            TomlError::Io { path, error } => SceneError::Io { path, error },
             TomlError::Parse { location, message } => SceneError::Toml { location, message },
         }
     }

@@ -160,3 +160,10 @@ fn a_scene_built_as_a_table_names_fields_in_errors() {
     });
     assert!(msg.starts_with("<python>: constraints[0].expression: ") && msg.contains("unknown symbol `tt`"), "{msg}");
 }
+
+#[test]
+fn the_reason_a_scene_file_cannot_be_read_is_said_once() {
+    let e = SceneFile::load(std::path::Path::new("/nonexistent/scene.toml")).unwrap_err();
+    assert_eq!(e.to_string(), "cannot read scene file /nonexistent/scene.toml: No such file or directory (os error 2)");
+    assert!(std::error::Error::source(&e).is_none(), "{e}");
+}

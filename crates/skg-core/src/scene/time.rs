@@ -151,41 +151,14 @@ impl SceneFile {
         params: &IndexMap<String, f64>,
         grid: &Grid,
     ) -> Result<(Option<Windows>, Option<String>), SceneError> {
-        let from_file = |v: &Option<Spanned<NumOrExpr>>, key: &str| v.as_ref().map(|v| self.eval_value(v, key, params)).transpose();
-        let length = match ov.window {
-            Some(w) => Some(w),
-            None => from_file(&self.time.window, "time.window")?,
-        };
-        let overlap = match ov.overlap {
-            Some(o) => Some(o),
-            None => from_file(&self.time.overlap, "time.overlap")?,
-        };
-        // The value's origin: the scene file's line, or the command line.
-        let here = |key: &Option<Spanned<NumOrExpr>>, from_cli: Option<f64>, option: &str, message: String| match (key, from_cli) {
-            (Some(v), None) => self.invalid(v, message),
-            (_, given) => SceneError::Setting { setting: format!("{option} {}", given.map_or("?".into(), readable_number)), message },
-        };
+        let (length, overlap) = self.window_settings(ov, params)?;
         let turned_off = ov.window == Some(0.0);
         let Some(length) = length.filter(|_| !turned_off) else {
-            // An overlap of the file's own windows is moot once --window 0 turns them off;
-            // one given on the command line with them is not.
-            let moot = turned_off && ov.overlap.is_none();
-            if let (Some(o), false) = (overlap, moot) {
-                return Err(here(
-                    &self.time.overlap,
-                    ov.overlap,
-                    "--overlap",
-                    format!(
-                        "time.overlap = {} s is given without a window: it applies only to a solve in windows; \
-                         set [time] window (or --window), or remove the overlap",
-                        readable_number(o)
-                    ),
-                ));
-            }
+            self.check_overlap_without_window(ov, overlap, turned_off)?;
             return Ok((None, None));
         };
         if !(length > 0.0 && length.is_finite()) {
-            return Err(here(
+            return Err(self.setting_error(
                 &self.time.window,
                 ov.window,
                 "--window",
@@ -194,7 +167,7 @@ impl SceneFile {
         }
         let overlap = overlap.unwrap_or(length / 4.0);
         if !(0.0..length).contains(&overlap) {
-            return Err(here(
+            return Err(self.setting_error(
                 &self.time.overlap,
                 ov.overlap,
                 "--overlap",
@@ -214,11 +187,62 @@ impl SceneFile {
             );
             return Ok((None, Some(note)));
         }
-        let dt = span / (grid.nodes as f64 - 1.0);
+        self.check_window_nodes(ov, grid, length, overlap)?;
+        Ok((Some(Windows { length, overlap }), None))
+    }
+
+    /// The window's length and overlap as given: on the command line, else in the file.
+    fn window_settings(&self, ov: &Overrides, params: &IndexMap<String, f64>) -> Result<(Option<f64>, Option<f64>), SceneError> {
+        let from_file = |v: &Option<Spanned<NumOrExpr>>, key: &str| v.as_ref().map(|v| self.eval_value(v, key, params)).transpose();
+        let length = match ov.window {
+            Some(w) => Some(w),
+            None => from_file(&self.time.window, "time.window")?,
+        };
+        let overlap = match ov.overlap {
+            Some(o) => Some(o),
+            None => from_file(&self.time.overlap, "time.overlap")?,
+        };
+        Ok((length, overlap))
+    }
+
+    /// An error about a window setting, at its origin: the scene file's line `key`, or
+    /// the command line's `option` when `from_cli` gives the value.
+    fn setting_error(&self, key: &Option<Spanned<NumOrExpr>>, from_cli: Option<f64>, option: &str, message: String) -> SceneError {
+        match (key, from_cli) {
+            (Some(v), None) => self.invalid(v, message),
+            (_, given) => SceneError::Setting { setting: format!("{option} {}", given.map_or("?".into(), readable_number)), message },
+        }
+    }
+
+    /// Without windows, an overlap is refused (it would do nothing), except the file's
+    /// own once `--window 0` has `turned_off` its windows; one given on the command line
+    /// with them is not moot.
+    fn check_overlap_without_window(&self, ov: &Overrides, overlap: Option<f64>, turned_off: bool) -> Result<(), SceneError> {
+        let moot = turned_off && ov.overlap.is_none();
+        match (overlap, moot) {
+            (Some(o), false) => Err(self.setting_error(
+                &self.time.overlap,
+                ov.overlap,
+                "--overlap",
+                format!(
+                    "time.overlap = {} s is given without a window: it applies only to a solve in windows; \
+                     set [time] window (or --window), or remove the overlap",
+                    readable_number(o)
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// A window of `length` s has the operator's minimum of nodes at the grid's spacing
+    /// (`round(length/Δt) + 1`), and the `round(overlap/Δt)` nodes dropped leave one to
+    /// keep.
+    fn check_window_nodes(&self, ov: &Overrides, grid: &Grid, length: f64, overlap: f64) -> Result<(), SceneError> {
+        let dt = (grid.t_end - grid.t_start) / (grid.nodes as f64 - 1.0);
         let nodes = (length / dt).round() + 1.0;
         let min = grid.operator.min_nodes();
         if nodes < min as f64 {
-            return Err(here(
+            return Err(self.setting_error(
                 &self.time.window,
                 ov.window,
                 "--window",
@@ -234,7 +258,7 @@ impl SceneFile {
             ));
         }
         if (overlap / dt).round() + 1.0 >= nodes {
-            return Err(here(
+            return Err(self.setting_error(
                 &self.time.overlap,
                 ov.overlap,
                 "--overlap",
@@ -247,6 +271,6 @@ impl SceneFile {
                 ),
             ));
         }
-        Ok((Some(Windows { length, overlap }), None))
+        Ok(())
     }
 }

@@ -43,7 +43,7 @@ use super::run::outcome::{Attempt, Method, Outcome, Work};
 use super::run::piece::Guess;
 use super::run::window::{self, WindowGrid};
 use crate::discrete::contact::{WallResolution, MIN_STEPS, RESOLVED_STEPS};
-use crate::discrete::trajectory::{NodeSeries, Trajectory};
+use crate::discrete::interpolate::{hermite, linear};
 use crate::discrete::Discretization;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
@@ -493,43 +493,9 @@ fn higher_order(op: OperatorKind) -> Option<OperatorKind> {
     family.iter().position(|&k| k == op).and_then(|i| family.get(i + 1)).copied()
 }
 
-/// Cubic Hermite interpolation of the coordinates of `tr` (values and velocities) at `times`.
-pub(super) fn hermite(tr: &Trajectory, times: &[f64]) -> NodeSeries {
-    times
-        .iter()
-        .map(|&t| {
-            let k = segment(&tr.t, t);
-            let (t0, t1) = (tr.t[k], tr.t[k + 1]);
-            let h = t1 - t0;
-            let s = (t - t0) / h;
-            let (h00, h10, h01, h11) =
-                (2.0 * s.powi(3) - 3.0 * s * s + 1.0, s.powi(3) - 2.0 * s * s + s, -2.0 * s.powi(3) + 3.0 * s * s, s.powi(3) - s * s);
-            (0..tr.q[k].len()).map(|i| h00 * tr.q[k][i] + h10 * h * tr.v[k][i] + h01 * tr.q[k + 1][i] + h11 * h * tr.v[k + 1][i]).collect()
-        })
-        .collect()
-}
-
-/// Linear interpolation of a node series at `times`.
-pub(super) fn linear(t: &[f64], series: &NodeSeries, times: &[f64]) -> NodeSeries {
-    times
-        .iter()
-        .map(|&x| {
-            let k = segment(t, x);
-            let s = (x - t[k]) / (t[k + 1] - t[k]);
-            series[k].iter().zip(&series[k + 1]).map(|(a, b)| a + s * (b - a)).collect()
-        })
-        .collect()
-}
-
-/// The index k of the interval [t[k], t[k+1]] that holds `x` (clamped to the first and last).
-fn segment(t: &[f64], x: f64) -> usize {
-    t.partition_point(|&tk| tk <= x).clamp(1, t.len() - 1) - 1
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::discrete::trajectory::States;
 
     #[test]
     fn the_higher_order_operator_is_the_next_one_up_and_none_above_sbp484() {
@@ -540,28 +506,5 @@ mod tests {
         assert_eq!(higher_order(OperatorKind::Sbp121Ad), Some(OperatorKind::Sbp242Ad));
         assert_eq!(higher_order(OperatorKind::Sbp363Ad), Some(OperatorKind::Sbp484Ad));
         assert_eq!(higher_order(OperatorKind::Sbp484Ad), None);
-    }
-
-    #[test]
-    fn hermite_is_exact_for_cubics() {
-        let t: Vec<f64> = (0..6).map(|k| k as f64 * 0.4).collect();
-        let f = |x: f64| 1.0 - 2.0 * x + 0.5 * x * x - 0.3 * x.powi(3);
-        let df = |x: f64| -2.0 + x - 0.9 * x * x;
-        let states = States {
-            q: t.iter().map(|&x| vec![f(x)]).collect(),
-            v: t.iter().map(|&x| vec![df(x)]).collect(),
-            lambda: t.iter().map(|&x| vec![x]).collect(),
-        };
-        let mut tr = Trajectory::empty();
-        tr.t = t.clone();
-        tr.q = states.q;
-        tr.v = states.v;
-        let fine: Vec<f64> = (0..21).map(|k| k as f64 * 0.1).collect();
-        for (x, q) in fine.iter().zip(hermite(&tr, &fine)) {
-            assert!((q[0] - f(*x)).abs() < 1e-13, "{x}: {} vs {}", q[0], f(*x));
-        }
-        for (x, l) in fine.iter().zip(linear(&t, &states.lambda, &fine)) {
-            assert!((l[0] - x).abs() < 1e-14);
-        }
     }
 }

@@ -13,9 +13,9 @@
 //! Regularized walls bound every step ([`wall_step_accepted`]): a step may change a
 //! wall's gap by at most half of its distance from the wall plus the wall's width. The
 //! error estimate of a step sees only what its stages sample, so without this bound a
-//! wall much thinner than the step (σ = 1e-5 at 1 m/s on a grid of 64 nodes) was crossed
-//! unhindered by the verification and the guess alike, and a solve that never bounced
-//! was verified against a reference that did not bounce either.
+//! wall much thinner than the step (σ = 1e-5 at 1 m/s on a grid of 64 nodes) would be
+//! crossed unhindered by the verification and the guess alike, and a solve that never
+//! bounced would be verified against a reference that did not bounce either.
 
 use crate::discrete::trajectory::States;
 use crate::model::{DynamicsError, Model, WallModel, Workspace};

@@ -500,50 +500,13 @@ const MAX_IMPACTS: usize = 10_000;
 /// The hard-wall reference of `scene` sampled at `times` (see the module documentation).
 pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Result<Reference, ReferenceError> {
     check_times(scene, times)?;
-    // What the hard-wall reference does not model is a property of the scene file: the
-    // error names the file and the place that makes it so (the wall's h, the first
-    // constraint), like any other error of the scene.
-    let file = &scene.file;
-    let unsupported = |location: Location, e: HardWallError| -> ReferenceError {
-        SceneError::Invalid { location, message: format!("hard-wall reference: {e}") }.into()
-    };
-    if scene.walls.is_empty() {
-        return Err(unsupported(file.origin.whole(), HardWallError::NoWalls { scene: scene.name.clone() }));
-    }
-    if let Some(c) = file.constraints.first() {
-        let at = file.origin.locate_in(&c.expression, None);
-        return Err(unsupported(at, HardWallError::WallsWithConstraints { scene: scene.name.clone() }));
-    }
-    // No wall force: the motion between impacts is the scene's without its walls. Building
-    // the model checks that the start is not beyond a wall.
-    let model = Model::with_hard_walls(scene)?;
-    if let Some(j) = (0..model.walls.len()).find(|&j| model.wall_moves(j)) {
-        let at = file.origin.locate_in(&file.walls[j].h, None);
-        return Err(unsupported(at, HardWallError::MovingWall { wall: model.walls[j].name.clone() }));
-    }
+    let model = hard_wall_model(scene)?;
     let d = scene.coordinates.len();
     let ode_opts = opts.ode(times);
     let vscale = 1.0 + scene.initial_v.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    let kinetic = |t: f64, q: &[f64], v: &[f64]| {
-        let mut ws = model.workspace();
-        model.physical(t, q, v, &mut ws).kinetic
-    };
-
     let t0 = times[0];
-    let mut y: Vec<f64> = scene.initial_q.iter().chain(&scene.initial_v).copied().collect();
-    let (j0, h0) = max_gap(&model, t0, &scene.initial_q);
-    let on_wall_tol = ON_WALL_TOLERANCE * scene.initial_q.iter().fold(1.0_f64, |m, q| m.max(q.abs()));
     // Contact: Some((wall, start time)).
-    let mut contact: Option<(usize, f64)> = None;
-    if h0 >= -on_wall_tol {
-        // Starting on a wall: slide along it if it pushes, else leave it.
-        let w = kinetic(t0, &y[..d], &y[d..]);
-        let Some(vt) = slide_if_pushed(&model, j0, t0, &y[..d], &y[d..], &w)? else {
-            return Err(HardWallError::StartsLeaving { wall: model.walls[j0].name.clone() }.into());
-        };
-        y[d..].copy_from_slice(&vt);
-        contact = Some((j0, t0));
-    }
+    let (mut y, mut contact) = start_state(scene, &model, t0)?;
 
     let mut states: Vec<Vec<f64>> = Vec::with_capacity(times.len());
     let mut impacts = Vec::new();
@@ -566,33 +529,13 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         first = false;
         let Some(EventHit { t, y: ye }) = hit else { break };
         t_cur = t;
-        if let Some((j, t0)) = contact.take() {
-            contacts.push(Contact { wall: model.walls[j].name.clone(), t_start: t0, t_end: Some(t) });
-            y = ye;
-            if states.len() == times.len() {
-                break;
+        (y, contact) = match contact.take() {
+            Some((j, t0)) => {
+                contacts.push(Contact { wall: model.walls[j].name.clone(), t_start: t0, t_end: Some(t) });
+                (ye, None)
             }
-            continue;
-        }
-        let (j, _) = max_gap(&model, t, &ye[..d]);
-        let w = kinetic(t, &ye[..d], &ye[d..]);
-        let (v_new, vn) = reflect(&model, j, t, &ye[..d], &ye[d..], &w)?;
-        impacts.push(Impact { t, wall: model.walls[j].name.clone(), normal_speed: vn, q: ye[..d].to_vec() });
-        if vn.abs() <= 1e-7 * vscale {
-            // Grazing arrival: slide along the wall if it pushes back.
-            if let Some(vt) = slide_if_pushed(&model, j, t, &ye[..d], &ye[d..], &w)? {
-                contact = Some((j, t));
-                y = ye[..d].iter().chain(&vt).copied().collect();
-                if states.len() == times.len() {
-                    break;
-                }
-                continue;
-            }
-        }
-        if impacts.len() >= MAX_IMPACTS || (impacts.len() > 1 && t - impacts[impacts.len() - 2].t <= 1e-9 * (1.0 + t.abs())) {
-            return Err(HardWallError::ImpactsAccumulate { t, wall: model.walls[j].name.clone(), normal_speed: vn }.into());
-        }
-        y = ye[..d].iter().chain(&v_new).copied().collect();
+            None => after_impact(&model, t, &ye[..d], &ye[d..], vscale, &mut impacts)?,
+        };
         if states.len() == times.len() {
             break;
         }
@@ -614,6 +557,83 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         position_drift,
         energy_drift,
     })
+}
+
+/// The model of the hard-wall reference: the scene without its wall forces, so that the
+/// motion between impacts is the scene's without its walls (building it checks that the
+/// start is not beyond a wall). What the reference does not model (no walls, walls and
+/// constraints, moving walls) is a property of the scene file: the error names the file
+/// and the place that makes it so (the wall's h, the first constraint), like any other
+/// error of the scene.
+fn hard_wall_model(scene: &Scene) -> Result<Model, ReferenceError> {
+    let file = &scene.file;
+    let unsupported = |location: Location, e: HardWallError| -> ReferenceError {
+        SceneError::Invalid { location, message: format!("hard-wall reference: {e}") }.into()
+    };
+    if scene.walls.is_empty() {
+        return Err(unsupported(file.origin.whole(), HardWallError::NoWalls { scene: scene.name.clone() }));
+    }
+    if let Some(c) = file.constraints.first() {
+        let at = file.origin.locate_in(&c.expression, None);
+        return Err(unsupported(at, HardWallError::WallsWithConstraints { scene: scene.name.clone() }));
+    }
+    let model = Model::with_hard_walls(scene)?;
+    if let Some(j) = (0..model.walls.len()).find(|&j| model.wall_moves(j)) {
+        let at = file.origin.locate_in(&file.walls[j].h, None);
+        return Err(unsupported(at, HardWallError::MovingWall { wall: model.walls[j].name.clone() }));
+    }
+    Ok(model)
+}
+
+/// Where a phase of the hard-wall integration starts: the state `y = (q, v)`, and the
+/// wall it slides on with the contact's start time (`None`: free flight).
+type PhaseStart = (Vec<f64>, Option<(usize, f64)>);
+
+/// The kinetic matrix ∂²L/∂q̇² at (q, v) at time t: the metric of impacts and sliding.
+fn kinetic(model: &Model, t: f64, q: &[f64], v: &[f64]) -> nalgebra::DMatrix<f64> {
+    let mut ws = model.workspace();
+    model.physical(t, q, v, &mut ws).kinetic
+}
+
+/// The start state `y = (q, v)` of the hard-wall reference at `t0`, and the wall it
+/// starts sliding on with the start time, if it starts on a wall (within
+/// [`ON_WALL_TOLERANCE`]): it slides along it if the wall pushes, and a start that
+/// leaves the wall at once is an error.
+fn start_state(scene: &Scene, model: &Model, t0: f64) -> Result<PhaseStart, ReferenceError> {
+    let d = scene.coordinates.len();
+    let mut y: Vec<f64> = scene.initial_q.iter().chain(&scene.initial_v).copied().collect();
+    let (j0, h0) = max_gap(model, t0, &scene.initial_q);
+    let on_wall_tol = ON_WALL_TOLERANCE * scene.initial_q.iter().fold(1.0_f64, |m, q| m.max(q.abs()));
+    if h0 < -on_wall_tol {
+        return Ok((y, None));
+    }
+    let w = kinetic(model, t0, &y[..d], &y[d..]);
+    let Some(vt) = slide_if_pushed(model, j0, t0, &y[..d], &y[d..], &w)? else {
+        return Err(HardWallError::StartsLeaving { wall: model.walls[j0].name.clone() }.into());
+    };
+    y[d..].copy_from_slice(&vt);
+    Ok((y, Some((j0, t0))))
+}
+
+/// The impact at time `t` on the wall the particle at `(q, v)` has reached, recorded in
+/// `impacts`, and the state to go on from with the contact it starts: the reflected
+/// velocity, or, for a grazing arrival (normal speed at most `1e-7 · vscale`) on a wall
+/// that pushes back, sliding along the wall. Impacts that accumulate (more than
+/// [`MAX_IMPACTS`], or two within `1e-9` relative in time) are an error.
+fn after_impact(model: &Model, t: f64, q: &[f64], v: &[f64], vscale: f64, impacts: &mut Vec<Impact>) -> Result<PhaseStart, ReferenceError> {
+    let (j, _) = max_gap(model, t, q);
+    let w = kinetic(model, t, q, v);
+    let (v_new, vn) = reflect(model, j, t, q, v, &w)?;
+    impacts.push(Impact { t, wall: model.walls[j].name.clone(), normal_speed: vn, q: q.to_vec() });
+    if vn.abs() <= 1e-7 * vscale {
+        if let Some(vt) = slide_if_pushed(model, j, t, q, v, &w)? {
+            return Ok((q.iter().chain(&vt).copied().collect(), Some((j, t))));
+        }
+    }
+    if impacts.len() >= MAX_IMPACTS || (impacts.len() > 1 && t - impacts[impacts.len() - 2].t <= 1e-9 * (1.0 + t.abs())) {
+        return Err(HardWallError::ImpactsAccumulate { t, wall: model.walls[j].name.clone(), normal_speed: vn }.into());
+    }
+    Ok((q.iter().chain(&v_new).copied().collect(), None))
 }
 
 /// The provenance comment of a reference CSV (deterministic: no dates, no paths other

@@ -44,7 +44,7 @@ use indexmap::IndexMap;
 use serde::Serialize;
 
 use crate::discrete::contact::{self, WallResolution};
-use crate::discrete::trajectory::{NodeSeries, Trajectory};
+use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::Scene;
@@ -174,9 +174,29 @@ impl Verification {
 /// Verify `tr`, a solution of `scene` with model `model` by the SBP operator `operator`,
 /// against time stepping of the same scene from its initial state, sampled at `tr.t`.
 pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorKind) -> Verification {
+    let base = not_compared(scene, tr);
+    if let Some(bad) = first_non_finite(scene, tr) {
+        return Verification { status: VerifyStatus::Failed, reason: bad, ..base };
+    }
+    if !scene.verify.enabled {
+        return Verification { reason: "verification switched off (--no-verify); every number is finite".into(), ..base };
+    }
+    let (integrated, reference) = time_stepping_at_nodes(scene, model, tr);
+    match integrated {
+        Ok((states, steps)) => {
+            let reference_trajectory = Trajectory::with_physical_columns(model, &tr.t, states);
+            Verification { reference, steps, ..compare_with_reference(scene, model, tr, operator, reference_trajectory, base) }
+        }
+        Err(e) => Verification { status: VerifyStatus::Unverified, reference, reason: time_stepping_failure(&e), ..base },
+    }
+}
+
+/// The verification of `tr` before any comparison (skipped, with the odd-even amplitudes
+/// of its coordinates).
+fn not_compared(scene: &Scene, tr: &Trajectory) -> Verification {
     let odd_even = odd_even_amplitudes(&scene.coordinates, &tr.q);
     let odd_even_max = odd_even.values().copied().fold(0.0, f64::max);
-    let base = Verification {
+    Verification {
         status: VerifyStatus::Skipped,
         max_error: None,
         errors: IndexMap::new(),
@@ -192,13 +212,15 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorK
         wall_resolution: IndexMap::new(),
         reference_trajectory: None,
         steps: OdeStats::default(),
-    };
-    if let Some(bad) = first_non_finite(scene, tr) {
-        return Verification { status: VerifyStatus::Failed, reason: bad, ..base };
     }
-    if !scene.verify.enabled {
-        return Verification { reason: "verification switched off (--no-verify); every number is finite".into(), ..base };
-    }
+}
+
+/// Time stepping of `scene` from its initial state, sampled at `tr.t`, with the
+/// description of the reference. A tight tolerance needs a tighter reference: a given
+/// tolerance is judged on the motion's size as the solve found it; the default ones,
+/// relative to the ranges, only once the reference has them (then a second pass, whose
+/// work adds to the first's, if they are tight).
+fn time_stepping_at_nodes(scene: &Scene, model: &Model, tr: &Trajectory) -> (Result<(States, OdeStats), OdeError>, String) {
     let integrate = |rtol: f64, atol: f64| {
         let opts = OdeOptions { rtol, atol, max_step: min_spacing(&tr.t), max_steps: step_budget(tr.t.len()), ..OdeOptions::default() };
         let reference = format!(
@@ -206,9 +228,6 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorK
         );
         (integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts), reference)
     };
-    // A tight tolerance needs a tighter reference. A given tolerance is judged on the
-    // motion's size as the solve found it; the default ones, relative to the ranges,
-    // only once the reference has them (then a second pass if they are tight).
     let first_rtol = match scene.verify.tol {
         Some(tol) => reference_rtol(&[tol], &tr.q),
         None => REFERENCE_RTOL,
@@ -224,41 +243,40 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorK
             }
         }
     }
-    let (states, steps) = match integrated {
-        Ok(integrated) => integrated,
-        Err(e) => {
-            return Verification {
-                status: VerifyStatus::Unverified,
-                reference,
-                reason: match e {
-                    OdeError::MaxSteps { .. } => format!(
-                        "time stepping of the same scene failed, so the solve could not be checked: {e} (more than {} steps per \
-                         node: the motion is far finer than the grid, or the scene is stiff, e.g. strongly damped, so that \
-                         explicit time stepping needs steps far shorter than the motion; refine N or shorten the span)",
-                        STEPS_PER_NODE
-                    ),
-                    e => format!("time stepping of the same scene failed, so the solve could not be checked: {e}"),
-                },
-                ..base
-            }
-        }
-    };
-    let reference_trajectory = Trajectory::with_physical_columns(model, &tr.t, states);
+    (integrated, reference)
+}
+
+/// Why a solve could not be checked when the time stepping failed with `e`.
+fn time_stepping_failure(e: &OdeError) -> String {
+    match e {
+        OdeError::MaxSteps { .. } => format!(
+            "time stepping of the same scene failed, so the solve could not be checked: {e} (more than {} steps per \
+             node: the motion is far finer than the grid, or the scene is stiff, e.g. strongly damped, so that \
+             explicit time stepping needs steps far shorter than the motion; refine N or shorten the span)",
+            STEPS_PER_NODE
+        ),
+        e => format!("time stepping of the same scene failed, so the solve could not be checked: {e}"),
+    }
+}
+
+/// The verdict on `tr` against the time stepping `reference_trajectory` at its nodes
+/// (every node but the last [`SKIP_LAST`]): each coordinate's error within its
+/// tolerance, the worst coordinate named, and the contacts' resolution measured on the
+/// reference.
+fn compare_with_reference(
+    scene: &Scene,
+    model: &Model,
+    tr: &Trajectory,
+    operator: OperatorKind,
+    reference_trajectory: Trajectory,
+    base: Verification,
+) -> Verification {
     let (tolerances, tolerance_source) = tolerances(scene, &reference_trajectory.q);
     let tolerance = tolerances.iter().copied().fold(0.0, f64::max);
     let compared = tr.t.len().saturating_sub(SKIP_LAST).max(1);
     let errors = coordinate_errors(&scene.coordinates, &tr.q[..compared], &reference_trajectory.q[..compared]);
     let max_error = errors.values().map(|&(_, e)| e).fold(0.0_f64, f64::max);
-    // The verdict's coordinate: the one furthest beyond (or least within) its tolerance.
-    let (worst_name, worst_node, worst_error, worst_tol) = errors
-        .iter()
-        .zip(&tolerances)
-        .map(|((name, &(k, e)), &tol)| (name.clone(), k, e, tol))
-        .fold(None, |best: Option<(String, usize, f64, f64)>, cur| match best {
-            Some(b) if b.2 / b.3 >= cur.2 / cur.3 => Some(b),
-            _ => Some(cur),
-        })
-        .unwrap_or((String::new(), 0, 0.0, tolerance));
+    let (worst_name, worst_node, worst_error, worst_tol) = worst_coordinate(&errors, &tolerances, tolerance);
     let worst_t = tr.t[worst_node];
     let passed = errors.values().zip(&tolerances).all(|(&(_, e), &tol)| e <= tol);
     let own = if scene.verify.tol.is_none() && scene.coordinates.len() > 1 { format!(" of {worst_name}") } else { String::new() };
@@ -267,10 +285,11 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorK
     } else {
         let mut r =
             format!("max |q − q_ref| = {worst_error:.3e} ({worst_name} at t = {worst_t:.6}) exceeds the tolerance{own} {worst_tol:.3e}");
-        if odd_even_max >= 0.25 * max_error && !operator.is_dissipative() {
+        if base.odd_even_max >= 0.25 * max_error && !operator.is_dissipative() {
             r.push_str(&format!(
-                "; the odd-even (−1)^k component of the solution is {odd_even_max:.3e}: the parasitic mode of centred SBP stencils, \
-                 which damping, contraction or a long contact amplifies"
+                "; the odd-even (−1)^k component of the solution is {:.3e}: the parasitic mode of centred SBP stencils, \
+                 which damping, contraction or a long contact amplifies",
+                base.odd_even_max
             ));
         }
         r
@@ -283,13 +302,25 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorK
         tolerance: Some(tolerance),
         tolerances: scene.coordinates.iter().cloned().zip(tolerances).collect(),
         tolerance_source,
-        reference,
         reason,
         wall_resolution: contact::resolution(model, &reference_trajectory),
         reference_trajectory: Some(reference_trajectory),
-        steps,
         ..base
     }
+}
+
+/// The verdict's coordinate: the one furthest beyond (or least within) its tolerance,
+/// as (name, node, error, tolerance); `tolerance` when there is no coordinate.
+fn worst_coordinate(errors: &IndexMap<String, (usize, f64)>, tolerances: &[f64], tolerance: f64) -> (String, usize, f64, f64) {
+    errors
+        .iter()
+        .zip(tolerances)
+        .map(|((name, &(k, e)), &tol)| (name.clone(), k, e, tol))
+        .fold(None, |best: Option<(String, usize, f64, f64)>, cur| match best {
+            Some(b) if b.2 / b.3 >= cur.2 / cur.3 => Some(b),
+            _ => Some(cur),
+        })
+        .unwrap_or((String::new(), 0, 0.0, tolerance))
 }
 
 /// The tolerance of each coordinate and where they came from: the scene's or the command

@@ -14,6 +14,10 @@
 //! output (three extra right-hand-side evaluations in a step that contains one); the final
 //! time is hit exactly by the last step.
 //!
+//! This module holds the options, the errors, the step-size control and the requested
+//! times; one step of the method (its stages, error estimate, dense output and event
+//! location) is `stepper.rs`, its coefficients `tableau.rs`, its tests `tests.rs`.
+//!
 //! # Why not a crate
 //! The two maintained Rust crates with DOP853 were evaluated (`cargo info`, their sources):
 //! * `ode_solvers` 0.6: the right-hand side is `fn system(&self, x, &y, &mut dy)` with no
@@ -24,7 +28,7 @@
 //!   again without an error path; the crate is edition 2024 (Rust ≥ 1.85, this crate
 //!   declares 1.80) and brings a large dependency tree.
 //!
-//! Re-checked for the reference solutions (issue 3): `differential-equations` 0.7 builds
+//! Re-checked when the references needed event location: `differential-equations` 0.7 builds
 //! here (rustc 1.95, 17 s) and has dense output and Brent event location, but its
 //! right-hand side is still infallible (`diff(&self, …)`, so our model's workspace would
 //! need a `RefCell` and failures a NaN convention), and it pulls simba 0.10 beside this
@@ -45,6 +49,11 @@
 //! the true solution does not); once the step size has shrunk below the round-off limit
 //! the last failure is returned as [`OdeError::Rhs`], whose `t` is then the time where the
 //! right-hand side stops being defined along the solution (to about `1e-14` relative).
+
+mod stepper;
+mod tableau;
+
+use stepper::{Dop853, Rejection, Stage};
 
 /// Name of the method reported in [`OdeSolution::method`].
 pub const METHOD: &str = "DOP853 (Hairer-Norsett-Wanner 8(5,3) with 7th-order dense output; built-in implementation)";
@@ -227,9 +236,11 @@ where
     run(f, y0, times, opts, Some(event), |_, _, _, _| true)
 }
 
-/// Interior points (fractions of a step) where the event function is sampled.
-const EVENT_SAMPLES: [f64; 4] = [0.25, 0.5, 0.75, 1.0];
-
+/// The integration behind [`integrate`], [`integrate_checked`] and
+/// [`integrate_to_event`]: attempts of steps ([`Dop853::attempt`]) under Hairer's
+/// step-size control ([`Controller`]), the requested times filled from each accepted
+/// step, and the integration stopped at the first crossing of `event`
+/// ([`Dop853::first_crossing`]).
 fn run<F, E, C>(
     f: F,
     y0: &[f64],
@@ -246,146 +257,180 @@ where
     validate(y0, times, opts)?;
     let t0 = times[0];
     let t_end = times[times.len() - 1];
-    let mut out =
-        OdeSolution { times: times.to_vec(), states: Vec::with_capacity(times.len()), stats: OdeStats::default(), method: METHOD };
-    let mut next = times.iter().take_while(|&&t| t == t0).count();
-    out.states.resize(next, y0.to_vec());
-    if next == times.len() || y0.is_empty() {
+    let mut samples = Samples::new(times, y0);
+    if samples.done() || y0.is_empty() {
         // Nothing to integrate: no time span, or an empty state.
-        out.states.resize(times.len(), y0.to_vec());
-        return Ok((out, None));
+        return Ok((samples.constant(y0), None));
     }
 
     let mut s = Dop853::new(f, y0, opts);
     let mut t = t0;
     s.eval(t, Stage::Y, 0).map_err(|error| OdeError::Rhs { t, error })?;
-    let hmax = opts.max_step.unwrap_or(f64::INFINITY).min(t_end - t0);
-    let mut h = match opts.initial_step {
-        Some(h0) => h0.min(hmax),
-        None => s.hinit(t, hmax),
-    };
-    let mut reject = false;
-    let mut last_failure: Option<(f64, RhsError)> = None;
-    let mut attempts = 0usize;
-
+    let mut control = Controller::new(&mut s, t0, t_end, opts);
     loop {
-        if attempts >= opts.max_steps {
-            return Err(OdeError::MaxSteps { t, steps: attempts });
+        let (h, t_new) = control.next_step(t)?;
+        // The dense output is needed when a requested time or the event's samples lie inside.
+        let dense_wanted = samples.next_time() < t_new || event.is_some();
+        let fac11 = match s.attempt(t, h, t_new, dense_wanted, &mut accept) {
+            Ok(fac11) => fac11,
+            Err(rejection) => {
+                s.stats.rejected += 1;
+                control.rejected(rejection);
+                continue;
+            }
+        };
+        s.stats.accepted += 1;
+        if let Some(hit) = event.as_mut().and_then(|ev| s.first_crossing(ev, t, h, t_new)) {
+            samples.fill(&s, (t, h, t_new), |ts| ts < hit.t);
+            return Ok((samples.solution(s.stats), Some(hit)));
         }
-        let hmin = 10.0 * f64::EPSILON * t.abs().max(t_end.abs());
-        if h.is_nan() || h <= hmin {
-            return Err(match last_failure.take() {
+        samples.fill(&s, (t, h, t_new), |ts| ts <= t_new);
+        s.commit();
+        t = t_new;
+        if samples.done() {
+            break;
+        }
+        control.accepted(fac11);
+    }
+    Ok((samples.solution(s.stats), None))
+}
+
+/// The requested times of [`run`] and the states found for them so far, in order.
+struct Samples<'a> {
+    /// The requested times.
+    times: &'a [f64],
+    /// The states at `times[..states.len()]`.
+    states: Vec<Vec<f64>>,
+}
+
+impl<'a> Samples<'a> {
+    /// The start state at every requested time equal to the start time.
+    fn new(times: &'a [f64], y0: &[f64]) -> Samples<'a> {
+        let mut states = Vec::with_capacity(times.len());
+        states.resize(times.iter().take_while(|&&t| t == times[0]).count(), y0.to_vec());
+        Samples { times, states }
+    }
+
+    /// Whether every requested time has its state.
+    fn done(&self) -> bool {
+        self.states.len() == self.times.len()
+    }
+
+    /// The first requested time without its state.
+    fn next_time(&self) -> f64 {
+        self.times[self.states.len()]
+    }
+
+    /// Push the states at the next requested times that the accepted step `(t, h,
+    /// t_new)` of `s` covers and `wanted` admits (the first one not admitted ends it):
+    /// the new state at its end, the dense output inside.
+    fn fill<F>(&mut self, s: &Dop853<F>, (t, h, t_new): (f64, f64, f64), wanted: impl Fn(f64) -> bool)
+    where
+        F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+    {
+        while !self.done() && wanted(self.next_time()) {
+            let ts = self.next_time();
+            self.states.push(if ts == t_new { s.ynew.clone() } else { s.dense((ts - t) / h) });
+        }
+    }
+
+    /// The solution of a state that does not change: `y0` at every requested time.
+    fn constant(mut self, y0: &[f64]) -> OdeSolution {
+        self.states.resize(self.times.len(), y0.to_vec());
+        self.solution(OdeStats::default())
+    }
+
+    /// The solution at the times filled so far, with the integration's statistics.
+    fn solution(self, stats: OdeStats) -> OdeSolution {
+        OdeSolution { times: self.times.to_vec(), states: self.states, stats, method: METHOD }
+    }
+}
+
+/// Hairer's step-size control between the attempts of [`run`]: the next step's size,
+/// shrunk after a rejection and grown after an acceptance, and when to give up.
+struct Controller {
+    /// The size of the next attempt.
+    h: f64,
+    /// The largest step: the option, at most the span.
+    hmax: f64,
+    /// The end of the integration, which the last step hits exactly.
+    t_end: f64,
+    /// The most attempts allowed.
+    max_steps: usize,
+    /// The attempts made.
+    attempts: usize,
+    /// Whether the last attempt was rejected (the next step may then not grow).
+    after_rejection: bool,
+    /// The failure of the right-hand side since the last accepted step, reported if the
+    /// step shrinks to nothing.
+    last_failure: Option<(f64, RhsError)>,
+}
+
+impl Controller {
+    /// The control of an integration from `t0` to `t_end` of the stepper `s` (which
+    /// holds `k[0] = f(t0, y0)`), starting with the option's initial step or `hinit`'s.
+    fn new<F>(s: &mut Dop853<F>, t0: f64, t_end: f64, opts: &OdeOptions) -> Controller
+    where
+        F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+    {
+        let hmax = opts.max_step.unwrap_or(f64::INFINITY).min(t_end - t0);
+        let h = match opts.initial_step {
+            Some(h0) => h0.min(hmax),
+            None => s.hinit(t0, hmax),
+        };
+        Controller { h, hmax, t_end, max_steps: opts.max_steps, attempts: 0, after_rejection: false, last_failure: None }
+    }
+
+    /// The size and end time of the next attempt from `t` (the last step stretched or
+    /// shrunk to end at `t_end`), or why there is none: the attempts are used up, or the
+    /// step has shrunk below the round-off limit (the last failure of the right-hand
+    /// side, if any, is the reason).
+    fn next_step(&mut self, t: f64) -> Result<(f64, f64), OdeError> {
+        if self.attempts >= self.max_steps {
+            return Err(OdeError::MaxSteps { t, steps: self.attempts });
+        }
+        let hmin = 10.0 * f64::EPSILON * t.abs().max(self.t_end.abs());
+        if self.h.is_nan() || self.h <= hmin {
+            return Err(match self.last_failure.take() {
                 Some((t, error)) => OdeError::Rhs { t, error },
                 None => OdeError::StepTooSmall { t },
             });
         }
-        let mut last = false;
-        if t + 1.01 * h >= t_end {
-            h = t_end - t;
-            last = true;
+        let last = t + 1.01 * self.h >= self.t_end;
+        if last {
+            self.h = self.t_end - t;
         }
-        attempts += 1;
-
-        // Stages 1..=11, the new solution and its error.
-        if let Err(fail) = s.main_stages(t, h) {
-            s.stats.rejected += 1;
-            last_failure = Some(fail);
-            h *= 0.5;
-            reject = true;
-            continue;
-        }
-        let err = s.error_norm(h);
-        let fac11 = err.powf(0.125);
-        if err <= 1.0 && !accept(t, &s.y, if last { t_end } else { t + h }, &s.ynew) {
-            s.stats.rejected += 1;
-            h *= 0.5;
-            reject = true;
-            continue;
-        }
-        if err <= 1.0 {
-            let t_new = if last { t_end } else { t + h };
-            // First stage of the next step, and the dense output if a sample lies inside.
-            let needs_dense = times[next] < t_new || event.is_some();
-            let extra = s.eval(t_new, Stage::YNew, 12).map_err(|error| (t_new, error)).and_then(|()| {
-                if needs_dense {
-                    s.dense_stages(t, h)
-                } else {
-                    Ok(())
-                }
-            });
-            if let Err(fail) = extra {
-                s.stats.rejected += 1;
-                last_failure = Some(fail);
-                h *= 0.5;
-                reject = true;
-                continue;
-            }
-            s.stats.accepted += 1;
-            last_failure = None;
-            // Terminal event inside this step?
-            let mut hit: Option<EventHit> = None;
-            if let Some(ev) = event.as_mut() {
-                let mut e_prev = ev(t, &s.y);
-                let mut th_prev = 0.0;
-                for &th in &EVENT_SAMPLES {
-                    let y_th = if th == 1.0 { s.ynew.clone() } else { s.dense(th) };
-                    let e_th = ev(t + th * h, &y_th);
-                    if e_prev < 0.0 && e_th >= 0.0 {
-                        let (mut a, mut b) = (th_prev, th);
-                        // Bisection on the dense output (its bracket shrinks to round-off).
-                        for _ in 0..200 {
-                            let m = 0.5 * (a + b);
-                            if m <= a || m >= b || (b - a) * h.abs() <= 4.0 * f64::EPSILON * t.abs().max(t_new.abs()) {
-                                break;
-                            }
-                            if ev(t + m * h, &s.dense(m)) < 0.0 {
-                                a = m;
-                            } else {
-                                b = m;
-                            }
-                        }
-                        let te = if b == 1.0 { t_new } else { t + b * h };
-                        let ye = if b == 1.0 { s.ynew.clone() } else { s.dense(b) };
-                        hit = Some(EventHit { t: te, y: ye });
-                        break;
-                    }
-                    e_prev = e_th;
-                    th_prev = th;
-                }
-            }
-            if let Some(hit) = hit {
-                while next < times.len() && times[next] < hit.t {
-                    out.states.push(s.dense((times[next] - t) / h));
-                    next += 1;
-                }
-                out.stats = s.stats;
-                return Ok((out, Some(hit)));
-            }
-            while next < times.len() && times[next] <= t_new {
-                let ts = times[next];
-                out.states.push(if ts == t_new { s.ynew.clone() } else { s.dense((ts - t) / h) });
-                next += 1;
-            }
-            s.commit();
-            t = t_new;
-            if next == times.len() {
-                break;
-            }
-            let fac = (fac11 / SAFE).clamp(FAC_MIN, FAC_MAX);
-            let mut hnew = (h / fac).min(hmax);
-            if reject {
-                hnew = hnew.min(h);
-            }
-            reject = false;
-            h = hnew;
-        } else {
-            s.stats.rejected += 1;
-            h /= FAC_MAX.min(fac11 / SAFE);
-            reject = true;
-        }
+        self.attempts += 1;
+        Ok((self.h, if last { self.t_end } else { t + self.h }))
     }
-    out.stats = s.stats;
-    Ok((out, None))
+
+    /// After a rejected attempt: half the step after a failure or a refusal, or the step
+    /// the error estimate asks for (shrinking by at most 3).
+    fn rejected(&mut self, rejection: Rejection) {
+        match rejection {
+            Rejection::Failed(failure) => {
+                self.last_failure = Some(failure);
+                self.h *= 0.5;
+            }
+            Rejection::Refused => self.h *= 0.5,
+            Rejection::TooLarge { fac11 } => self.h /= FAC_MAX.min(fac11 / SAFE),
+        }
+        self.after_rejection = true;
+    }
+
+    /// After an accepted step whose error gave `fac11` (`err^(1/8)`): the next step,
+    /// changed by a factor in [1/3, 6], at most `hmax`, and not larger right after a
+    /// rejection.
+    fn accepted(&mut self, fac11: f64) {
+        self.last_failure = None;
+        let fac = (fac11 / SAFE).clamp(FAC_MIN, FAC_MAX);
+        let mut hnew = (self.h / fac).min(self.hmax);
+        if self.after_rejection {
+            hnew = hnew.min(self.h);
+        }
+        self.after_rejection = false;
+        self.h = hnew;
+    }
 }
 
 /// Safety factor of the step-size controller.
@@ -427,207 +472,6 @@ fn validate(y0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<(), OdeError
     }
     Ok(())
 }
-
-/// Which state a stage evaluation reads.
-#[derive(Clone, Copy)]
-enum Stage {
-    /// The current accepted state `y`.
-    Y,
-    /// The new solution `y_new`.
-    YNew,
-    /// The scratch stage state.
-    Tmp,
-}
-
-/// Work space of the DOP853 stepper.
-struct Dop853<F> {
-    f: F,
-    n: usize,
-    rtol: f64,
-    atol: f64,
-    /// Stage derivatives `k_0..k_15`.
-    k: Vec<Vec<f64>>,
-    y: Vec<f64>,
-    ynew: Vec<f64>,
-    tmp: Vec<f64>,
-    /// `Σ b_j k_j` of the current step.
-    bk: Vec<f64>,
-    /// Coefficients of the dense output polynomial of the current step.
-    rcont: Vec<Vec<f64>>,
-    stats: OdeStats,
-}
-
-impl<F> Dop853<F>
-where
-    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
-{
-    fn new(f: F, y0: &[f64], opts: &OdeOptions) -> Self {
-        let n = y0.len();
-        Dop853 {
-            f,
-            n,
-            rtol: opts.rtol,
-            atol: opts.atol,
-            k: vec![vec![0.0; n]; 16],
-            y: y0.to_vec(),
-            ynew: vec![0.0; n],
-            tmp: vec![0.0; n],
-            bk: vec![0.0; n],
-            rcont: vec![vec![0.0; n]; 8],
-            stats: OdeStats::default(),
-        }
-    }
-
-    /// `k[stage] = f(t, state)`; a non-finite derivative counts as a failure.
-    fn eval(&mut self, t: f64, state: Stage, stage: usize) -> Result<(), RhsError> {
-        self.stats.rhs_evals += 1;
-        let y = match state {
-            Stage::Y => &self.y,
-            Stage::YNew => &self.ynew,
-            Stage::Tmp => &self.tmp,
-        };
-        let dy = &mut self.k[stage];
-        dy.fill(0.0);
-        (self.f)(t, y, dy)?;
-        if let Some(i) = dy.iter().position(|v| !v.is_finite()) {
-            return Err(RhsError(format!("the right-hand side returned a non-finite value in component {i}")));
-        }
-        Ok(())
-    }
-
-    /// Stage `i`: `tmp = y + h Σ_j a_ij k_j`, `k_i = f(t + c_i h, tmp)`.
-    fn stage(&mut self, t: f64, h: f64, i: usize) -> Result<(), (f64, RhsError)> {
-        self.tmp.copy_from_slice(&self.y);
-        for (j, &a) in tableau::A[i].iter().enumerate() {
-            if a != 0.0 {
-                let ha = h * a;
-                for (o, kj) in self.tmp.iter_mut().zip(&self.k[j]) {
-                    *o += ha * kj;
-                }
-            }
-        }
-        let ti = t + tableau::C[i] * h;
-        self.eval(ti, Stage::Tmp, i).map_err(|error| (ti, error))
-    }
-
-    /// Stages 1..=11 and the new solution `ynew = y + h Σ b_j k_j`.
-    fn main_stages(&mut self, t: f64, h: f64) -> Result<(), (f64, RhsError)> {
-        for i in 1..12 {
-            self.stage(t, h, i)?;
-        }
-        self.bk.fill(0.0);
-        for (j, &b) in tableau::A[12].iter().enumerate() {
-            if b != 0.0 {
-                for (o, kj) in self.bk.iter_mut().zip(&self.k[j]) {
-                    *o += b * kj;
-                }
-            }
-        }
-        for ((yn, y), bk) in self.ynew.iter_mut().zip(&self.y).zip(&self.bk) {
-            *yn = y + h * bk;
-        }
-        Ok(())
-    }
-
-    /// Scaled error of the step (≤ 1: accept), Hairer's combination of the 5th- and
-    /// 3rd-order estimators. Non-finite values map to `+∞` (reject).
-    fn error_norm(&self, h: f64) -> f64 {
-        let (mut err, mut err2) = (0.0, 0.0);
-        for i in 0..self.n {
-            let sk = (self.atol + self.rtol * self.y[i].abs().max(self.ynew[i].abs())).max(f64::MIN_POSITIVE);
-            let k = |j: usize| self.k[j][i];
-            let e3 = self.bk[i] - tableau::BHH[0] * k(0) - tableau::BHH[1] * k(8) - tableau::BHH[2] * k(11);
-            let e5: f64 = tableau::ER.iter().enumerate().map(|(j, &e)| e * k(j)).sum();
-            err2 += (e3 / sk).powi(2);
-            err += (e5 / sk).powi(2);
-        }
-        let mut deno = err + 0.01 * err2;
-        if deno <= 0.0 {
-            deno = 1.0;
-        }
-        let e = h.abs() * err / (self.n as f64 * deno).sqrt();
-        if e.is_finite() {
-            e
-        } else {
-            f64::INFINITY
-        }
-    }
-
-    /// The three extra stages of the dense output and the interpolation coefficients
-    /// (needs `k[12] = f(t + h, ynew)`).
-    fn dense_stages(&mut self, t: f64, h: f64) -> Result<(), (f64, RhsError)> {
-        for i in 13..16 {
-            self.stage(t, h, i)?;
-        }
-        for i in 0..self.n {
-            let ydiff = self.ynew[i] - self.y[i];
-            let bspl = h * self.k[0][i] - ydiff;
-            self.rcont[0][i] = self.y[i];
-            self.rcont[1][i] = ydiff;
-            self.rcont[2][i] = bspl;
-            self.rcont[3][i] = ydiff - h * self.k[12][i] - bspl;
-            for (r, d) in tableau::DENSE.iter().enumerate() {
-                let mut acc = 0.0;
-                for (j, &dj) in d.iter().enumerate() {
-                    if dj != 0.0 {
-                        acc += dj * self.k[j][i];
-                    }
-                }
-                self.rcont[4 + r][i] = h * acc;
-            }
-        }
-        Ok(())
-    }
-
-    /// Dense output at `θ = (t − t_old)/h ∈ [0, 1]` (Hairer's `contd8`).
-    fn dense(&self, theta: f64) -> Vec<f64> {
-        let s = theta;
-        let s1 = 1.0 - s;
-        let r = &self.rcont;
-        (0..self.n)
-            .map(|i| {
-                let conpar = r[4][i] + s * (r[5][i] + s1 * (r[6][i] + s * r[7][i]));
-                r[0][i] + s * (r[1][i] + s1 * (r[2][i] + s * (r[3][i] + s1 * conpar)))
-            })
-            .collect()
-    }
-
-    /// Accept the step: `y ← ynew`, `k_0 ← k_12`.
-    fn commit(&mut self) {
-        std::mem::swap(&mut self.y, &mut self.ynew);
-        self.k.swap(0, 12);
-    }
-
-    /// Initial step size guess (Hairer's `hinit` for order 8); needs `k[0] = f(t, y)`.
-    fn hinit(&mut self, t: f64, hmax: f64) -> f64 {
-        let sk: Vec<f64> = self.y.iter().map(|y| (self.atol + self.rtol * y.abs()).max(f64::MIN_POSITIVE)).collect();
-        let dnf: f64 = self.k[0].iter().zip(&sk).map(|(f, s)| (f / s).powi(2)).sum();
-        let dny: f64 = self.y.iter().zip(&sk).map(|(y, s)| (y / s).powi(2)).sum();
-        let mut h = if dnf <= 1e-10 || dny <= 1e-10 { 1e-6 } else { (dny / dnf).sqrt() * 0.01 };
-        if !(h.is_finite() && h > 0.0) {
-            h = 1e-6;
-        }
-        h = h.min(hmax);
-        // One explicit Euler step to estimate the second derivative.
-        for i in 0..self.n {
-            self.tmp[i] = self.y[i] + h * self.k[0][i];
-        }
-        if self.eval(t + h, Stage::Tmp, 1).is_err() {
-            return h;
-        }
-        let der2 = self.k[1].iter().zip(&self.k[0]).zip(&sk).map(|((f1, f0), s)| ((f1 - f0) / s).powi(2)).sum::<f64>().sqrt() / h;
-        let der12 = der2.max(dnf.sqrt());
-        let h1 = if der12 <= 1e-15 { (h * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / 8.0) };
-        let h_new = (100.0 * h).min(h1).min(hmax);
-        if h_new.is_finite() && h_new > 0.0 {
-            h_new
-        } else {
-            h
-        }
-    }
-}
-
-mod tableau;
 
 #[cfg(test)]
 mod tests;
