@@ -7,6 +7,7 @@
 #   cargo fmt --all --check                                formatting
 #   bash ci/check-links.sh                                 the docs' links, anchors and quoted paths
 #   cargo clippy --workspace --all-targets -- -D warnings  lints, tests included
+#   cargo clippy -p skg-core --no-default-features …       skg-core builds without Ipopt
 #   RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps  the API docs, links checked
 #   cargo build --workspace --examples                     the examples compile
 #   cargo run -p skg-core --example oscillator             a scene solved from code
@@ -34,6 +35,7 @@ step() {
 step cargo fmt --all --check
 step bash ci/check-links.sh
 step cargo clippy --workspace --all-targets -- -D warnings
+step cargo clippy -p skg-core --no-default-features --all-targets -- -D warnings
 step env RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 step cargo build --workspace --examples
 step cargo run --quiet -p skg-core --example oscillator
