@@ -38,6 +38,20 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// `text` as a TOML basic string, control characters as `\uXXXX` escapes.
+fn toml_string(text: &str) -> String {
+    let body: String = text
+        .chars()
+        .map(|c| match c {
+            '"' => "\\\"".to_string(),
+            '\\' => "\\\\".to_string(),
+            c if c.is_control() => format!("\\u{:04X}", c as u32),
+            c => c.to_string(),
+        })
+        .collect();
+    format!("\"{body}\"")
+}
+
 #[test]
 fn merge_of_incomplete_shards_lists_the_missing_points_and_exits_1() {
     let dir = tempfile::tempdir().unwrap();
@@ -196,12 +210,24 @@ fn retry_failed_runs_crashed_and_failed_points_again() {
 #[test]
 fn sweep_names_and_compare_columns_are_checked_before_anything_runs() {
     let dir = tempfile::tempdir().unwrap();
-    for name in ["../../x", "", ".", "..", "a/b"] {
-        let sweep = free_fall_sweep(dir.path(), 1, &format!("name = {name:?}\n"));
-        let (code, t) = run(&["sweep", s(&sweep)], dir.path());
-        assert_eq!(code, Some(1), "{name:?}: {t}");
-        assert!(t.contains("sweep.toml:3:8") && t.contains("plain file name"), "{name:?}: {t}");
+    let long = "n".repeat(201);
+    for name in ["../../x", "", ".", "..", "a/b", "q\necho INJECTED > PWNED #", "tab\there", "\u{1b}[2Jclear", ".hidden", &long] {
+        let sweep = free_fall_sweep(dir.path(), 1, &format!("name = {}\n", toml_string(name)));
+        for args in [vec!["sweep", s(&sweep)], vec!["sweep", s(&sweep), "--slurm", "--dry-run"]] {
+            let (code, t) = run(&args, dir.path());
+            assert_eq!(code, Some(1), "{name:?} {args:?}: {t}");
+            assert!(t.contains("sweep.toml:3:8") && t.contains("plain file name"), "{name:?}: {t}");
+            // The name is quoted with its escapes: no raw control character reaches the terminal.
+            assert!(!t.chars().any(|c| c.is_control() && c != '\n'), "{name:?}: {t:?}");
+        }
     }
+    // A sweep file whose own name would be the sweep's (no `[sweep] name`) is refused alike.
+    let named = dir.path().join("q\necho INJECTED > PWNED #.toml");
+    std::fs::copy(free_fall_sweep(dir.path(), 1, ""), &named).unwrap();
+    let (code, t) = run(&["sweep", s(&named), "--slurm", "--dry-run"], dir.path());
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("control character") && t.contains("give the file another name"), "{t}");
+    std::fs::remove_file(&named).unwrap();
     let written: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(written, ["sweep.toml"], "nothing written anywhere");
     let sweep = free_fall_sweep(dir.path(), 1, "reference = \"integrate\"\ncompare = [\"x\", \"y\"]\n");

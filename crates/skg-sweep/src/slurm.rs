@@ -391,8 +391,8 @@ fn write_scripts(dir: &Path, layout: &ShardLayout, exe: &Path) -> Result<Scripts
          jobs=${{SLURM_CPUS_PER_TASK:-${{SLURM_CPUS_ON_NODE:-1}}}}\n\
          exec {q_exe} sweep {q_file} --shard \"$k/{k}\" -o {shards_dir}\"$k\" --jobs \"$jobs\" --yes\n",
         k = layout.shards,
-        name = layout.name,
-        dir = dir.display(),
+        name = comment_text(&layout.name),
+        dir = comment_text(&dir.to_string_lossy()),
     );
     let merge = format!(
         "#!/bin/bash\n\
@@ -402,7 +402,7 @@ fn write_scripts(dir: &Path, layout: &ShardLayout, exe: &Path) -> Result<Scripts
          # incomplete shards; running the same skg-solve sweep --slurm again submits only them).\n\
          cd {q_dir} || exit 1\n\
          exec {q_exe} sweep-merge {q_dir}\n",
-        dir = dir.display(),
+        dir = comment_text(&dir.to_string_lossy()),
     );
     let paths = Scripts { shard: slurm.join("shard.sh"), merge: slurm.join("merge.sh"), logs };
     for (path, text) in [(&paths.shard, shard), (&paths.merge, merge)] {
@@ -512,14 +512,22 @@ pub fn submit(file: &SweepFile, expanded: &Expanded, dir: &Path, opts: &SubmitOp
     Ok(report)
 }
 
+/// `text` as it may stand in a `#` comment of a script: every control character (a line
+/// break would end the comment and start a command) written as its escape. Names and
+/// paths are checked before they get here (`name_problem`, [`check_dir_path`]); this
+/// keeps the scripts safe whatever reaches them.
+fn comment_text(text: &str) -> String {
+    text.chars().flat_map(|c| if c.is_control() { c.escape_default().collect::<Vec<_>>() } else { vec![c] }).collect()
+}
+
 /// Refuse a directory whose path the scripts or Slurm's file name patterns cannot hold.
 fn check_dir_path(dir: &Path) -> Result<(), SlurmError> {
     let text = dir.to_string_lossy();
     if text.contains('%') || text.contains('\\') {
         return Err(SlurmError::Path { path: dir.to_path_buf(), what: "`%` or `\\`" });
     }
-    if text.contains('\n') {
-        return Err(SlurmError::Path { path: dir.to_path_buf(), what: "a line break" });
+    if text.chars().any(char::is_control) {
+        return Err(SlurmError::Path { path: dir.to_path_buf(), what: "a line break or another control character" });
     }
     Ok(())
 }
@@ -704,6 +712,29 @@ mod tests {
         {
             assert!(check_sbatch_args(&[good.to_string()]).is_ok(), "{good}");
         }
+    }
+
+    /// A name that reached the scripts with a line break (the sweep file refuses such
+    /// names: this is the second line of defence) stays inside its comment: no line of
+    /// the script runs it, and the script's commands are the ones it always has.
+    #[test]
+    fn a_line_break_in_a_name_stays_inside_the_comment() {
+        let dir = tempfile::tempdir().unwrap();
+        let layout = ShardLayout {
+            name: "q\necho INJECTED > PWNED #".into(),
+            sweep_file: dir.path().join("s.toml"),
+            shards: 2,
+            total_points: 4,
+            runner: Runner::Slurm,
+        };
+        let scripts = write_scripts(dir.path(), &layout, Path::new("/usr/bin/skg-solve")).unwrap();
+        for path in [&scripts.shard, &scripts.merge] {
+            let text = std::fs::read_to_string(path).unwrap();
+            assert!(text.lines().all(|l| !l.starts_with("echo")), "{text}");
+            let commands: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).collect();
+            assert!(commands.iter().all(|l| ["cd ", "k=", "jobs=", "exec "].iter().any(|p| l.starts_with(p))), "{commands:?}");
+        }
+        assert!(std::fs::read_to_string(&scripts.shard).unwrap().contains(r"sweep q\necho INJECTED > PWNED # into"));
     }
 
     #[test]

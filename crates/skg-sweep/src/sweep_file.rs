@@ -213,17 +213,24 @@ impl SweepFile {
         }
     }
 
-    /// Refuse a `[sweep] name` that is not a plain file name: it names the default
-    /// output directory `out/sweeps/<name>`, which must not be the parent directory or
-    /// lie outside.
+    /// Refuse a sweep's name (`[sweep] name`, else the sweep file's name) that is not a
+    /// plain, printable file name: it names the default output directory
+    /// `out/sweeps/<name>`, which must not be the parent directory or lie outside, and it
+    /// is data that reaches the terminal, `sweep.json`, Slurm's job names and the
+    /// comments of the Slurm scripts, where a line break would start a command (a sweep
+    /// file is shared and downloaded like a scene).
     pub(crate) fn check_name(&self) -> Result<(), SweepError> {
-        let Some(name) = &self.sweep.name else { return Ok(()) };
-        let n = name.get_ref();
-        let plain = !n.trim().is_empty() && n != "." && n != ".." && !n.contains(['/', '\\', '\0']);
-        if plain {
-            return Ok(());
-        }
-        Err(self.invalid(name, format!("sweep.name = {n:?} must be a plain file name (no `/`, not empty, not `.` or `..`): it names the output directory out/sweeps/<name>")))
+        let name = self.name();
+        let Some(problem) = name_problem(&name) else { return Ok(()) };
+        let message =
+            format!("the sweep's name {name:?} {problem}; it must be a plain file name of printable characters: it names the output directory out/sweeps/<name>");
+        Err(match &self.sweep.name {
+            Some(spanned) => self.invalid(spanned, format!("sweep.name: {message}")),
+            None => SweepError::Invalid {
+                location: self.origin.whole(),
+                message: format!("{message}; the name is the sweep file's, so give the file another name or set `[sweep] name`"),
+            },
+        })
     }
 
     /// Refuse `compare` columns that a trajectory of the base scene, or the reference
@@ -289,5 +296,28 @@ impl SweepFile {
         let mut grid_points = self.grid.iter().map(|g| g.get_ref().values().map(|v| v.values().len()).try_fold(1usize, usize::checked_mul));
         let peer = self.peer.as_ref().map_or(0, |p| p.get_ref().tolerances.len());
         grid_points.try_fold(self.points.len().checked_add(peer)?, |sum, n| n.and_then(|n| sum.checked_add(n)))
+    }
+}
+
+/// The longest sweep name, in bytes (a file name may have 255).
+pub const MAX_NAME_BYTES: usize = 200;
+
+/// Why `name` cannot name a sweep, if it cannot: it must be a plain file name (not
+/// empty, not `.` or `..`, no `/` or `\`, not hidden: the output directory's lock and
+/// temporary files start with a dot) of printable characters (no line break, tab, escape
+/// or other control character) and at most [`MAX_NAME_BYTES`] bytes.
+pub fn name_problem(name: &str) -> Option<&'static str> {
+    if name.trim().is_empty() || name == "." || name == ".." {
+        Some("is empty, `.` or `..`")
+    } else if name.contains(['/', '\\']) {
+        Some("contains `/` or `\\`")
+    } else if name.chars().any(char::is_control) {
+        Some("contains a control character (a line break, a tab, an escape)")
+    } else if name.starts_with('.') {
+        Some("starts with `.` (a hidden file)")
+    } else if name.len() > MAX_NAME_BYTES {
+        Some("is longer than 200 bytes")
+    } else {
+        None
     }
 }
