@@ -3,6 +3,8 @@
 //!
 //! * [`ode`]: the adaptive DOP853 integrator with dense output and event location (its
 //!   coefficients in `ode/tableau.rs`, its tests in `ode/tests.rs`).
+//! * [`radau`]: the implicit Radau IIA integrator of order 5 for stiff equations, with
+//!   the same contract (its coefficients in `radau/coefficients.rs`).
 //! * [`equations`]: the index-reduced Lagrange–d'Alembert equations of a model
 //!   integrated by it and sampled at given times ([`integrate_model`]).
 //! * [`verify`]: a trajectory compared with time stepping of the same scene at its nodes,
@@ -18,6 +20,7 @@
 
 pub mod equations;
 pub mod ode;
+pub mod radau;
 pub mod reference;
 pub mod verify;
 

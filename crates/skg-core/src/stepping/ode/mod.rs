@@ -91,6 +91,12 @@ pub struct OdeStats {
     pub rejected: usize,
     /// Evaluations of the right-hand side, failed ones included.
     pub rhs_evals: usize,
+    /// Evaluations of the Jacobian `∂f/∂y` (implicit stepping only; forward differences
+    /// count their right-hand sides in `rhs_evals` too).
+    pub jacobian_evals: usize,
+    /// LU factorizations of the implicit stepping's iteration matrices (one real and one
+    /// complex each).
+    pub factorizations: usize,
 }
 
 impl OdeStats {
@@ -100,6 +106,8 @@ impl OdeStats {
         self.accepted += other.accepted;
         self.rejected += other.rejected;
         self.rhs_evals += other.rhs_evals;
+        self.jacobian_evals += other.jacobian_evals;
+        self.factorizations += other.factorizations;
     }
 }
 
