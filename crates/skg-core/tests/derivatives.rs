@@ -165,9 +165,10 @@ fn discrete_systems_are_square_and_nonsingular_at_small_n() {
             assert_eq!(lay.n_p, nodes * lay.d + nodes * lay.n + boundary, "{name} {op}: unknowns");
             // At the time-stepping solution (a point near the critical point).
             let (times, _) = skg_core::solve::grid(&scene);
-            let (states, _) =
+            let states =
                 skg_core::stepping::equations::integrate_model(&action.model, action.q0(), action.v0(), &times, &Default::default())
-                    .unwrap();
+                    .unwrap()
+                    .states;
             let (q, lam) = (states.q, states.lambda);
             let mut z = vec![0.0; lay.len()];
             for k in 0..nodes {

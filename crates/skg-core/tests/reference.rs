@@ -301,7 +301,7 @@ fn loose_tolerance_does_not_step_across_the_tumbler_wall() {
     let scene = common::load("tumbler", &Overrides::default());
     let reference_table = checked_in("tumbler.csv");
     let times = reference_table.times();
-    let loose = reference::regularized(&scene, &times, &ReferenceOptions { rtol: 1e-8, atol: 1e-8 }).unwrap();
+    let loose = reference::regularized(&scene, &times, &ReferenceOptions { rtol: 1e-8, atol: 1e-8, ..Default::default() }).unwrap();
     let (x, y) = (col(&reference_table, "x"), col(&reference_table, "y"));
     let e = loose.trajectory.q.iter().enumerate().fold(0.0_f64, |m, (k, q)| m.max((q[0] - x[k]).abs()).max((q[1] - y[k]).abs()));
     assert!(e < 1e-6, "rtol 1e-8 is {e:e} away from the reference");

@@ -50,7 +50,7 @@ fn assert_estimate_matches(o: &Outcome, truth: f64, what: &str) {
 /// Distance of a solve's coordinates from the regularized reference at rtol 1e-12 on the
 /// same nodes, last two nodes excluded.
 fn reference_error(scene: &Scene, o: &Outcome) -> f64 {
-    let opts = ReferenceOptions { rtol: 1e-12, atol: 1e-12 };
+    let opts = ReferenceOptions { rtol: 1e-12, atol: 1e-12, ..Default::default() };
     let r = reference::regularized(scene, &o.trajectory.t, &opts).unwrap();
     let table = |tr| Table { columns: trajectory_header(scene), comments: Vec::new(), rows: trajectory_rows(tr) };
     let cmp = check::compare(
@@ -128,7 +128,7 @@ fn a_block_with_friction_comes_to_rest_against_a_stop_on_every_grid() {
     // reproduce it to 1 cm.
     let scene = common::load_test_scene("block_into_stop", &Overrides::default());
     let times: Vec<f64> = (0..=300).map(|k| 0.01 * k as f64).collect();
-    let r = reference::regularized(&scene, &times, &ReferenceOptions { rtol: 1e-12, atol: 1e-12 }).unwrap();
+    let r = reference::regularized(&scene, &times, &ReferenceOptions { rtol: 1e-12, atol: 1e-12, ..Default::default() }).unwrap();
     let s: Vec<f64> = r.trajectory.q[250..].iter().map(|q| q[0]).collect();
     let (lo, hi) = s.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| (lo.min(x), hi.max(x)));
     assert!(lo > 0.0 && hi < 0.2 && hi - lo < 2.5e-3, "s in [{lo}, {hi}] over the last half second");
@@ -228,7 +228,7 @@ fn a_wall_thinner_than_a_step_is_not_stepped_over_by_the_verification() {
     let (scene, o) = solve("thin_wall", &Overrides::default());
     assert!(o.converged() && !o.trusted(), "{}", o.verification.reason);
     let truth = |t: f64| vec![t.min(2.0 - t)];
-    let r = reference::regularized(&scene, &o.trajectory.t, &ReferenceOptions { rtol: 1e-10, atol: 1e-12 }).unwrap();
+    let r = reference::regularized(&scene, &o.trajectory.t, &ReferenceOptions { rtol: 1e-10, atol: 1e-12, ..Default::default() }).unwrap();
     for (t, q) in r.trajectory.t.iter().zip(&r.trajectory.q) {
         assert!((q[0] - truth(*t)[0]).abs() < 1e-3, "reference x({t}) = {} (truth {})", q[0], truth(*t)[0]);
     }
@@ -300,7 +300,7 @@ fn the_final_state_is_verified() {
     let (scene, o) = solve("contact_at_the_end", &Overrides::default());
     assert!(o.converged() && !o.trusted(), "{}", o.verification.reason);
     assert_eq!(o.verification.skip_last, 0);
-    let r = reference::regularized(&scene, &o.trajectory.t, &ReferenceOptions { rtol: 1e-12, atol: 1e-12 }).unwrap();
+    let r = reference::regularized(&scene, &o.trajectory.t, &ReferenceOptions { rtol: 1e-12, atol: 1e-12, ..Default::default() }).unwrap();
     let n = o.trajectory.t.len();
     let error_at = |k: usize| (o.trajectory.q[k][0] - r.trajectory.q[k][0]).abs();
     let tol = o.verification.tolerance.unwrap();

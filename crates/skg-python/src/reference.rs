@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use skg_core::output;
-use skg_core::scene::{Overrides, Scene};
+use skg_core::scene::{Overrides, Scene, Stepper};
 use skg_core::solve;
 use skg_core::stepping::reference::{self, Reference, ReferenceOptions};
 
@@ -66,7 +66,7 @@ impl NativeReference {
 
 /// Integrate a scene (a file or a [`NativeScene`]) as `skg-solve reference` does (without writing the CSV).
 #[pyfunction]
-#[pyo3(signature = (path, *, nodes=None, set=None, hard_walls=false, rtol=1e-12, atol=None, times=None))]
+#[pyo3(signature = (path, *, nodes=None, set=None, hard_walls=false, rtol=1e-12, atol=None, times=None, stepper=None))]
 #[pyo3(name = "reference")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn integrate_reference(
@@ -78,14 +78,16 @@ pub(crate) fn integrate_reference(
     rtol: f64,
     atol: Option<f64>,
     times: Option<Vec<f64>>,
+    stepper: Option<&str>,
 ) -> PyResult<NativeReference> {
     if !(rtol > 0.0 && rtol.is_finite()) {
         return Err(PyValueError::new_err(format!("rtol must be a positive number, got {rtol}")));
     }
-    let ov = Overrides { set: assignments(set)?, nodes, ..Overrides::default() };
+    let stepper = stepper.map(|s| s.parse::<Stepper>().map_err(|e| PyValueError::new_err(format!("stepper: {e}")))).transpose()?;
+    let ov = Overrides { set: assignments(set)?, nodes, stepper, ..Overrides::default() };
     let scene = load(py, &path, &ov)?;
     let times = times.unwrap_or_else(|| solve::grid(&scene).0);
-    let opts = ReferenceOptions { rtol, atol: atol.unwrap_or(rtol) };
+    let opts = ReferenceOptions { rtol, atol: atol.unwrap_or(rtol), stepper: scene.verify.stepper };
     let r = py
         .detach(|| if hard_walls { reference::hard_wall(&scene, &times, &opts) } else { reference::regularized(&scene, &times, &opts) })
         .map_err(|e| reference_err(py, &e))?;

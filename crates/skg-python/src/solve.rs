@@ -77,7 +77,7 @@ impl NativeSolution {
 #[pyfunction]
 #[pyo3(signature = (path, *, out=None, nodes=None, set=None, operator=None, formulation=None, initial_velocity=None,
     hessian=None, max_iter=None, backend=None, window=None, overlap=None, verify_tol=None, no_verify=false, no_fallback=false,
-    refine=false, max_nodes=None, time_limit=None))]
+    refine=false, max_nodes=None, time_limit=None, stepper=None))]
 #[pyo3(name = "solve")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_scene(
@@ -100,6 +100,7 @@ pub(crate) fn solve_scene(
     refine: bool,
     max_nodes: Option<usize>,
     time_limit: Option<f64>,
+    stepper: Option<&str>,
 ) -> PyResult<NativeSolution> {
     let mut ov = Overrides {
         nodes,
@@ -114,7 +115,7 @@ pub(crate) fn solve_scene(
         time_limit,
         ..Overrides::default()
     };
-    parse_choices(&mut ov, Choices { operator, formulation, initial_velocity, hessian, backend })?;
+    parse_choices(&mut ov, Choices { operator, formulation, initial_velocity, hessian, backend, stepper })?;
     ov.set = assignments(set)?;
     let mut scene = load(py, &path, &ov)?;
     let state = run(py, &mut scene, out)?;
@@ -128,6 +129,7 @@ struct Choices<'a> {
     initial_velocity: Option<&'a str>,
     hessian: Option<&'a str>,
     backend: Option<&'a str>,
+    stepper: Option<&'a str>,
 }
 
 /// Set the overrides given as text (`operator="auto"` asks for the operator predicted to
@@ -155,6 +157,7 @@ fn parse_choices(ov: &mut Overrides, text: Choices<'_>) -> PyResult<()> {
         Some(other) => return Err(PyValueError::new_err(format!("hessian: expected \"zero\" or \"exact\", got \"{other}\""))),
     };
     ov.backend = parsed("backend", text.backend)?;
+    ov.stepper = parsed("stepper", text.stepper)?;
     Ok(())
 }
 

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use skg_core::output;
 use skg_core::sbp::ParseOperatorKindError;
-use skg_core::scene::{Location, ParseBackendError, ParseFormulationError, ParseInitialVelocityError, SceneError};
+use skg_core::scene::{Location, ParseBackendError, ParseFormulationError, ParseInitialVelocityError, ParseStepperError, SceneError};
 
 use crate::shards;
 use crate::{SchemaError, UnknownStatus, CONFIRM_ABOVE};
@@ -268,6 +268,9 @@ pub enum AxisError {
     /// An unknown backend.
     #[error(transparent)]
     Backend(#[from] ParseBackendError),
+    /// An unknown stepper.
+    #[error(transparent)]
+    Stepper(#[from] ParseStepperError),
 }
 
 /// `SIGTERM`, `SIGINT` or `signal N`.

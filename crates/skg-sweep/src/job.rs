@@ -227,7 +227,7 @@ fn record_outcome(rec: &mut Record, outcome: &Outcome) {
 /// into `rec`.
 fn step_point(scene: &Scene, rtol: f64, rec: &mut Record, start: Instant) -> Result<Trajectory, PointError> {
     let (times, _) = skg_core::solve::grid(scene);
-    let opts = skg_core::stepping::reference::ReferenceOptions { rtol, atol: rtol };
+    let opts = skg_core::stepping::reference::ReferenceOptions { rtol, atol: rtol, stepper: scene.verify.stepper };
     let r = skg_core::stepping::reference::regularized(scene, &times, &opts)?;
     rec.wall_s = Some(start.elapsed().as_secs_f64());
     rec.status = PointStatus::Converged;

@@ -28,7 +28,7 @@ use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 
 use skg_core::sbp::OperatorKind;
-use skg_core::scene::{Backend, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneFile};
+use skg_core::scene::{Backend, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneFile, Stepper};
 
 /// Exit code of a solve that ran but did not converge.
 pub const EXIT_NOT_CONVERGED: u8 = 3;
@@ -87,6 +87,12 @@ pub struct SceneArgs {
     /// 1e-7 × the largest one].
     #[arg(long, value_name = "TOL", allow_negative_numbers = true, value_parser = positive)]
     pub verify_tol: Option<f64>,
+    /// Time stepping of the verification, the initial guess and the refinement's
+    /// predictions: `auto` (default: DOP853, and Radau IIA from where the scene turns out
+    /// stiff), `dop853` (explicit only) or `implicit` (Radau IIA throughout).
+    /// Overrides `[verify] stepper`.
+    #[arg(long, value_name = "NAME", value_parser = stepper_parser())]
+    pub stepper: Option<Stepper>,
     /// Skip the comparison with time stepping (the result is still checked for
     /// non-finite numbers and a positive-definite kinetic matrix); a converged solve
     /// then exits 0 unless one of those checks fails.
@@ -138,6 +144,7 @@ impl SceneArgs {
             window: self.window,
             overlap: self.overlap,
             verify_tol: self.verify_tol,
+            stepper: self.stepper,
             no_verify: self.no_verify,
             no_fallback: self.no_fallback,
             ..Overrides::default()
@@ -179,7 +186,7 @@ pub enum ArgError {
     Size(String),
 }
 
-/// The value parser of a setting that skg-core names (`--hessian`): one of `names` (the
+/// The value parser of a setting that skg-core names (`--hessian`, `--stepper`): one of `names` (the
 /// core's, listed as the possible values in `--help` and in clap's message for any other
 /// value), read by the core's `FromStr`, so that the command line and a scene file accept
 /// the same words.
@@ -189,6 +196,11 @@ where
     T::Err: std::error::Error + Send + Sync + 'static,
 {
     PossibleValuesParser::new(names).try_map(|name| name.parse::<T>())
+}
+
+/// The value parser of `--stepper`: `auto`, `dop853` or `implicit`.
+pub(crate) fn stepper_parser() -> impl TypedValueParser<Value = Stepper> {
+    by_name::<Stepper>(Stepper::ALL.map(Stepper::name))
 }
 
 /// A command-line number that must be finite and positive (a usage error otherwise).

@@ -8,7 +8,7 @@ use clap::Args;
 
 use skg_core::check::Table;
 use skg_core::output;
-use skg_core::scene::{readable_number, Overrides};
+use skg_core::scene::{readable_number, Overrides, Stepper};
 use skg_core::solve;
 use skg_core::stepping::reference::{self, ReferenceError, ReferenceOptions};
 
@@ -30,6 +30,12 @@ pub struct ReferenceArgs {
     /// Absolute tolerance of the integrator [default: the relative tolerance].
     #[arg(long, allow_negative_numbers = true, value_name = "ATOL")]
     pub atol: Option<f64>,
+    /// The integrator: `auto` (default, or the scene's `[verify] stepper`: DOP853, and
+    /// Radau IIA from where the scene turns out stiff), `dop853` or `implicit` (Radau IIA
+    /// throughout; not with --hard-walls, whose impacts are located on DOP853's dense
+    /// output).
+    #[arg(long, value_name = "NAME", value_parser = super::stepper_parser())]
+    pub stepper: Option<Stepper>,
     /// Ideal elastic walls (event location at h = 0, specular reflection) instead of the
     /// scene's Gaussian walls: the reference for the model error.
     #[arg(long)]
@@ -50,7 +56,7 @@ pub fn run(args: ReferenceArgs, quiet: bool) -> Result<ExitCode> {
     for a in &args.set {
         set.push(Overrides::parse_assignment(a)?);
     }
-    let ov = Overrides { set, nodes: args.nodes, ..Overrides::default() };
+    let ov = Overrides { set, nodes: args.nodes, stepper: args.stepper, ..Overrides::default() };
     let scene = load(&args.scenario, &ov)?;
     let times = match &args.grid_from {
         Some(p) => Table::read(p)?.times(),
@@ -63,7 +69,7 @@ pub fn run(args: ReferenceArgs, quiet: bool) -> Result<ExitCode> {
     if !(atol >= 0.0 && atol.is_finite()) {
         anyhow::bail!("--atol must be a number ≥ 0, got {}", readable_number(atol));
     }
-    let opts = ReferenceOptions { rtol: args.rtol, atol };
+    let opts = ReferenceOptions { rtol: args.rtol, atol, stepper: scene.verify.stepper };
     let r = if args.hard_walls { reference::hard_wall(&scene, &times, &opts) } else { reference::regularized(&scene, &times, &opts) };
     // A scene error names its file and line already; any other names the scene file here.
     let r = r.map_err(|e| match e {

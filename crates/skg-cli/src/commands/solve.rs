@@ -68,6 +68,9 @@ pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
         PathBuf::from("out").join(stem)
     });
     let (outcome, written) = solve_with_progress(&dir, &mut scene, quiet)?;
+    for n in &outcome.notes {
+        note!("note: {n}");
+    }
     for w in &outcome.warnings {
         note!("warning: {w}");
     }

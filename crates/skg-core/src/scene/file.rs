@@ -14,7 +14,7 @@ use toml::Spanned;
 use super::emit::write_toml;
 use super::error::SceneError;
 use super::location::{parse_origin, parse_toml, read_toml, Location, Origin};
-use super::settings::{Backend, Formulation, HessianMode, InitialVelocity};
+use super::settings::{Backend, Formulation, HessianMode, InitialVelocity, Stepper};
 
 /// A number or an expression of the scene's parameters, e.g. `0.5` or `"pi/6"`.
 /// (Deserialized by hand rather than as an untagged enum, so that a value of another
@@ -157,6 +157,10 @@ pub struct VerifySpec {
     /// The largest grid refinement may use (default: what the memory allows, at most 2²⁰).
     #[serde(default)]
     pub max_nodes: Option<Spanned<i64>>,
+    /// Which integrator steps the verification, the guess and the predictions
+    /// (`auto`, `dop853` or `implicit`; default `auto`).
+    #[serde(default)]
+    pub stepper: Option<Stepper>,
 }
 
 /// The `[discretization]` table.

@@ -70,6 +70,6 @@ pub use parameters::eval_constant;
 pub use resolved::{Constraint, ConstraintKind, Scene, SolverSettings, VerifySettings, Wall, Windows};
 pub use settings::{
     Backend, Formulation, HessianMode, InitialVelocity, ParseBackendError, ParseFormulationError, ParseHessianModeError,
-    ParseInitialVelocityError,
+    ParseInitialVelocityError, ParseStepperError, Stepper,
 };
 pub use time::{TimeResolutionError, MAX_NODES};

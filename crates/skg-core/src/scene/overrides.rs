@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 use super::error::SceneError;
-use super::settings::{Backend, Formulation, HessianMode, InitialVelocity};
+use super::settings::{Backend, Formulation, HessianMode, InitialVelocity, Stepper};
 use crate::sbp::OperatorKind;
 
 /// Command-line and sweep overrides applied on top of a scene file.
@@ -45,6 +45,8 @@ pub struct Overrides {
     pub max_nodes: Option<usize>,
     /// Seconds the whole solve may take (`--time-limit`).
     pub time_limit: Option<f64>,
+    /// The time stepper of the verification, guess and predictions (`--stepper`).
+    pub stepper: Option<Stepper>,
 }
 
 impl Overrides {

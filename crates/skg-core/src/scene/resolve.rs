@@ -33,7 +33,8 @@ impl SceneFile {
         let verify = self.resolve_verify(ov, &params)?;
         // A refinement chooses the operator too unless one is named.
         let choose_operator = grid.auto_operator || (verify.refine && !grid.operator_named);
-        let choose_initial_velocity = choose_operator && ov.initial_velocity.is_none() && self.discretization.initial_velocity.is_none();
+        let initial_velocity_named = ov.initial_velocity.is_some() || self.discretization.initial_velocity.is_some();
+        let choose_initial_velocity = choose_operator && !initial_velocity_named;
         Ok(Scene {
             name: self.scene.name.clone(),
             parameters: params,
@@ -48,6 +49,7 @@ impl SceneFile {
             operator: grid.operator,
             choose_operator,
             choose_initial_velocity,
+            initial_velocity_named,
             formulation,
             initial_velocity,
             solver,

@@ -7,7 +7,7 @@ use indexmap::IndexMap;
 use serde::Serialize;
 
 use super::file::{IpoptValue, SceneFile};
-use super::settings::{Backend, Formulation, HessianMode, InitialVelocity};
+use super::settings::{Backend, Formulation, HessianMode, InitialVelocity, Stepper};
 use crate::sbp::OperatorKind;
 
 /// Settings of the solve, resolved.
@@ -69,6 +69,9 @@ pub struct VerifySettings {
     /// The largest grid refinement may use, if given (`[verify] max_nodes`,
     /// `--max-nodes`).
     pub max_nodes: Option<usize>,
+    /// Which integrator steps the verification, the initial guess and the refinement's
+    /// predictions (`[verify] stepper`, `--stepper`; default `auto`).
+    pub stepper: Stepper,
 }
 
 /// A wall, resolved to numbers (its `h` and friction direction expressions are parsed
@@ -141,6 +144,9 @@ pub struct Scene {
     /// The solve chooses the initial-velocity condition too (it chooses the operator,
     /// and no condition is named).
     pub choose_initial_velocity: bool,
+    /// Whether the scene or the command line names the initial-velocity condition (else
+    /// the solve may choose the natural one for a fast initial layer).
+    pub initial_velocity_named: bool,
     /// The formulation.
     pub formulation: Formulation,
     /// How the initial velocity is imposed.

@@ -1,5 +1,6 @@
 //! The settings a scene file (or the command line) chooses by name: the formulation,
-//! the initial velocity condition, the Hessian given to Ipopt and the backend. Each
+//! the initial velocity condition, the Hessian given to Ipopt, the backend and the time
+//! stepper. Each
 //! parses case-insensitively from its name, in a scene file as on the command line and
 //! in a sweep's grid (`backend = "Newton"` is `newton` everywhere), and displays as it.
 
@@ -20,7 +21,7 @@ macro_rules! deserialize_by_name {
     )*};
 }
 
-deserialize_by_name!(Formulation, InitialVelocity, HessianMode, Backend);
+deserialize_by_name!(Formulation, InitialVelocity, HessianMode, Backend, Stepper);
 
 /// How the discrete action is posed to Ipopt (docs/mathematics.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
@@ -205,5 +206,61 @@ impl fmt::Display for Backend {
             Backend::Ipopt => "ipopt",
             Backend::Newton => "newton",
         })
+    }
+}
+
+/// Which integrator steps the equations of motion in time: the verification, the
+/// references, the initial guess and the refinement's predictions
+/// (docs/trust.md#which-stepper-verifies).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Stepper {
+    /// DOP853, explicit, of order 8: cheap where the step is limited by accuracy.
+    Dop853,
+    /// Radau IIA, implicit and L-stable, of order 5 ([`radau`](crate::stepping::radau)): where the
+    /// step of an explicit method is limited by stability (stiff equations).
+    Implicit,
+    /// DOP853 until it finds the equation stiff (Hairer's test: `h·λ` above 6.1 in 15
+    /// steps in a row), runs out of steps or its step underflows; then Radau IIA from
+    /// where it stopped.
+    #[default]
+    Auto,
+}
+
+impl Stepper {
+    /// Every stepper, in the order of its names.
+    pub const ALL: [Stepper; 3] = [Stepper::Auto, Stepper::Dop853, Stepper::Implicit];
+
+    /// The stepper's name: `auto`, `dop853` or `implicit`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stepper::Auto => "auto",
+            Stepper::Dop853 => "dop853",
+            Stepper::Implicit => "implicit",
+        }
+    }
+}
+
+impl fmt::Display for Stepper {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Error of parsing a [`Stepper`] from a string.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown stepper `{input}` (expected auto, dop853 or implicit)")]
+pub struct ParseStepperError {
+    /// The text that named no stepper.
+    pub input: String,
+}
+
+impl std::str::FromStr for Stepper {
+    type Err = ParseStepperError;
+
+    /// Case-insensitive: `auto`, `dop853` or `implicit`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let lower = s.to_ascii_lowercase();
+        Stepper::ALL.into_iter().find(|k| k.name() == lower).ok_or_else(|| ParseStepperError { input: s.to_string() })
     }
 }

@@ -137,7 +137,13 @@ impl SceneFile {
             }
             (None, None) => None,
         };
-        Ok(VerifySettings { enabled: !ov.no_verify, tol, refine: ov.refine || self.verify.refine.unwrap_or(false), max_nodes })
+        Ok(VerifySettings {
+            enabled: !ov.no_verify,
+            tol,
+            refine: ov.refine || self.verify.refine.unwrap_or(false),
+            max_nodes,
+            stepper: ov.stepper.or(self.verify.stepper).unwrap_or_default(),
+        })
     }
 
     /// `[solver] time_limit` or `--time-limit`: a positive number of seconds.

@@ -32,7 +32,8 @@ use std::time::{Duration, Instant};
 use crate::discrete::Discretization;
 use crate::memory;
 use crate::model::Model;
-use crate::scene::Scene;
+use crate::scene::{InitialVelocity, Scene};
+use crate::stepping::layer::initial_layer;
 
 pub mod choice;
 pub mod ladder;
@@ -71,10 +72,31 @@ pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) 
         memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
     }
     let model = Arc::new(Model::build(scene)?);
-    if chooses {
-        return refine::refine(scene, &model, deadline, progress);
+    let (own, note) = own_discretization(scene, &model);
+    let mut outcome = if chooses {
+        refine::refine(scene, &model, &own, deadline, progress)?
+    } else {
+        ladder::climb(scene, &model, &own, &Guess::TimeStepping, ladder::Rungs::All, deadline, progress)?
+    };
+    outcome.notes.extend(note);
+    Ok(outcome)
+}
+
+/// The discretization the scene asks for, with the natural initial-velocity condition in
+/// place of the default strong one when the scene names none and its motion starts with
+/// a fast layer the grid does not resolve ([`initial_layer`]); the note that says so.
+fn own_discretization(scene: &Scene, model: &Model) -> (Discretization, Option<String>) {
+    let mut own = Discretization::of(scene);
+    if scene.initial_velocity_named || own.initial_velocity == InitialVelocity::Natural {
+        return (own, None);
     }
-    ladder::climb(scene, &model, &Discretization::of(scene), &Guess::TimeStepping, ladder::Rungs::All, deadline, progress)
+    let Some(layer) = initial_layer(scene, model, own.spacing(scene)) else { return (own, None) };
+    own.initial_velocity = InitialVelocity::Natural;
+    let note = format!(
+        "the initial velocity is imposed by the natural condition (as --initial-velocity natural): the motion starts with {layer}, \
+         which a strong condition would carry into the first node (--initial-velocity strong keeps it)"
+    );
+    (own, Some(note))
 }
 
 /// The moment a solve limited to `seconds` must end, if any: none for a limit beyond

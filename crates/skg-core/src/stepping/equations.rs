@@ -4,8 +4,9 @@
 //!
 //! The equations are integrated index-reduced: at each state (t, q, v) the accelerations
 //! and multipliers solve `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v − ∂p/∂t; −(∂g/∂q) v − ∂g/∂t]`
-//! ([`Model::accelerations`]), and the state `y = (q, v)` is advanced by the DOP853 of
-//! [`ode`] and sampled at the requested times from its dense output. Times are
+//! ([`Model::accelerations`]), and the state `y = (q, v)` is advanced by the stepper the
+//! options name ([`integrate_with`]: DOP853, Radau IIA, or DOP853 until the equations
+//! turn out stiff and Radau IIA from there) and sampled at the requested times. Times are
 //! absolute: the model is evaluated at the integrator's time, so an explicitly
 //! time-dependent scene can be integrated from any start time. The constraints `g = 0`
 //! (and a position constraint's `h = 0`) then hold only up to the integrator's drift.
@@ -19,7 +20,8 @@
 
 use crate::discrete::trajectory::States;
 use crate::model::{DynamicsError, Model, WallModel, Workspace};
-use crate::stepping::ode::{self, OdeError, OdeOptions, OdeStats, RhsError};
+use crate::stepping::integrate::integrate_with;
+use crate::stepping::ode::{OdeError, OdeOptions, OdeStats, RhsError};
 
 /// Step attempts per node allowed to the time stepping of the initial guess and of the
 /// verification ([`step_budget`]). On the shipped scenes these take one to two steps per
@@ -43,12 +45,24 @@ pub fn min_spacing(times: &[f64]) -> Option<f64> {
     times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).reduce(f64::min)
 }
 
+/// What a time stepping found at the requested times, its work and what ran.
+#[derive(Debug, Clone)]
+pub struct Stepped<S> {
+    /// The states at the requested times.
+    pub states: S,
+    /// The steppers' work.
+    pub stats: OdeStats,
+    /// The method that ran, in words (both, when the automatic choice went on
+    /// implicitly).
+    pub method: String,
+}
+
 /// Integrate the index-reduced Lagrange–d'Alembert equations of `model` from the state
 /// `(q0, v0)` at the absolute time `times[0]` and sample `(q, v, λ)` at `times`
 /// (increasing).
-pub fn integrate_model(model: &Model, q0: &[f64], v0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<(States, OdeStats), OdeError> {
-    let (states, stats) = integrate_states(model, q0, v0, times, opts)?;
-    Ok((split_states(model, &states, times, &mut model.workspace())?, stats))
+pub fn integrate_model(model: &Model, q0: &[f64], v0: &[f64], times: &[f64], opts: &OdeOptions) -> Result<Stepped<States>, OdeError> {
+    let Stepped { states, stats, method } = integrate_states(model, q0, v0, times, opts)?;
+    Ok(Stepped { states: split_states(model, &states, times, &mut model.workspace())?, stats, method })
 }
 
 /// [`integrate_model`] without the multipliers: the integrator's states `(q, v)` at
@@ -59,7 +73,7 @@ pub fn integrate_states(
     v0: &[f64],
     times: &[f64],
     opts: &OdeOptions,
-) -> Result<(Vec<Vec<f64>>, OdeStats), OdeError> {
+) -> Result<Stepped<Vec<Vec<f64>>>, OdeError> {
     let y0: Vec<f64> = q0.iter().chain(v0).copied().collect();
     let d = model.layout.d;
     let regularized_walls = model.wall_model == WallModel::Gaussian && !model.walls.is_empty();
@@ -78,8 +92,9 @@ pub fn integrate_states(
         last_end = Some(if ok { (t_new, after) } else { (t, before) });
         ok
     };
-    let sol = ode::integrate_checked(rhs(model, &mut model.workspace()), &y0, times, opts, accept)?;
-    Ok((sol.states, sol.stats))
+    let integrated = integrate_with(rhs(model, &mut model.workspace()), None, &y0, times, opts, accept)?;
+    let method = integrated.method();
+    Ok(Stepped { states: integrated.solution.states, stats: integrated.solution.stats, method })
 }
 
 /// Fraction of `|h| + σ` by which one step may change a wall's gap `h`.

@@ -5,6 +5,10 @@
 //!   coefficients in `ode/tableau.rs`, its tests in `ode/tests.rs`).
 //! * [`radau`]: the implicit Radau IIA integrator of order 5 for stiff equations, with
 //!   the same contract (its coefficients in `radau/coefficients.rs`).
+//! * [`integrate`](mod@integrate): the stepper the options name, or the automatic choice:
+//!   DOP853 until the equation is found stiff, then Radau IIA.
+//! * [`layer`]: whether a motion starts with a fast layer the grid does not resolve
+//!   (then the natural initial-velocity condition is the accurate one).
 //! * [`equations`]: the index-reduced Lagrange–d'Alembert equations of a model
 //!   integrated by it and sampled at given times ([`integrate_model`]).
 //! * [`verify`]: a trajectory compared with time stepping of the same scene at its nodes,
@@ -19,6 +23,8 @@
 //! with [`integrate_model`].
 
 pub mod equations;
+pub mod integrate;
+pub mod layer;
 pub mod ode;
 pub mod radau;
 pub mod reference;

@@ -49,8 +49,9 @@ use std::fmt;
 
 use crate::discrete::trajectory::Trajectory;
 use crate::model::{Model, Workspace, ON_WALL_TOLERANCE};
+use crate::scene::Stepper;
 use crate::scene::{ConstraintKind, Location, Scene, SceneError};
-use crate::stepping::equations::{integrate_model, min_spacing, rhs, split_states};
+use crate::stepping::equations::{integrate_model, min_spacing, rhs, split_states, Stepped};
 use crate::stepping::ode::{self, EventHit, OdeOptions, OdeSolution, OdeStats, RhsError};
 
 /// Errors of building a reference. The message of a wrapped error is part of the
@@ -69,6 +70,12 @@ pub enum ReferenceError {
     /// The sample times are unusable.
     #[error("bad sample times: {0}")]
     Times(TimesError),
+    /// The hard-wall reference was asked of the implicit stepper.
+    #[error(
+        "the hard-wall reference locates its impacts on DOP853's dense output and cannot step implicitly: \
+         use --stepper auto or dop853 with --hard-walls"
+    )]
+    ImplicitHardWall,
 }
 
 impl From<ode::OdeError> for ReferenceError {
@@ -207,11 +214,15 @@ pub struct ReferenceOptions {
     pub rtol: f64,
     /// Absolute tolerance of the integrator (default 1e-12).
     pub atol: f64,
+    /// The integrator of a regularized reference (default `auto`: DOP853, and Radau IIA
+    /// from where the scene turns out stiff). A hard-wall reference locates its impacts
+    /// on DOP853's dense output and refuses `implicit`.
+    pub stepper: Stepper,
 }
 
 impl Default for ReferenceOptions {
     fn default() -> Self {
-        ReferenceOptions { rtol: 1e-12, atol: 1e-12 }
+        ReferenceOptions { rtol: 1e-12, atol: 1e-12, stepper: Stepper::Auto }
     }
 }
 
@@ -219,7 +230,14 @@ impl ReferenceOptions {
     /// Integrator options for sampling at `times`: the step is capped at the smallest
     /// sample spacing, so no wall narrower than the grid can be stepped over unseen.
     fn ode(&self, times: &[f64]) -> OdeOptions {
-        OdeOptions { rtol: self.rtol, atol: self.atol, max_steps: 20_000_000, initial_step: None, max_step: min_spacing(times) }
+        OdeOptions {
+            rtol: self.rtol,
+            atol: self.atol,
+            max_steps: 20_000_000,
+            initial_step: None,
+            max_step: min_spacing(times),
+            stepper: self.stepper,
+        }
     }
 }
 
@@ -276,6 +294,8 @@ pub struct Reference {
     pub options: ReferenceOptions,
     /// The integrator's work.
     pub stats: OdeStats,
+    /// The method that ran, in words.
+    pub method: String,
     /// Impacts (hard-wall reference only).
     pub impacts: Vec<Impact>,
     /// Phases of sustained contact (hard-wall reference only).
@@ -317,7 +337,7 @@ fn drifts(tr: &Trajectory) -> (f64, f64, f64) {
 pub fn regularized(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Result<Reference, ReferenceError> {
     check_times(scene, times)?;
     let model = Model::build(scene)?;
-    let (states, stats) = integrate_model(&model, &scene.initial_q, &scene.initial_v, times, &opts.ode(times))?;
+    let Stepped { states, stats, method } = integrate_model(&model, &scene.initial_q, &scene.initial_v, times, &opts.ode(times))?;
     let tr = Trajectory::with_physical_columns(&model, times, states);
     let (constraint_drift, position_drift, energy_drift) = drifts(&tr);
     Ok(Reference {
@@ -325,6 +345,7 @@ pub fn regularized(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Res
         kind: ReferenceKind::Regularized,
         options: *opts,
         stats,
+        method,
         impacts: vec![],
         contacts: vec![],
         constraint_drift,
@@ -500,6 +521,9 @@ const MAX_IMPACTS: usize = 10_000;
 /// The hard-wall reference of `scene` sampled at `times` (see the module documentation).
 pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Result<Reference, ReferenceError> {
     check_times(scene, times)?;
+    if opts.stepper == Stepper::Implicit {
+        return Err(ReferenceError::ImplicitHardWall);
+    }
     let model = hard_wall_model(scene)?;
     let d = scene.coordinates.len();
     let ode_opts = opts.ode(times);
@@ -551,6 +575,7 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
         kind: ReferenceKind::HardWall,
         options: *opts,
         stats,
+        method: ode::METHOD.to_string(),
         impacts,
         contacts,
         constraint_drift,
@@ -645,7 +670,7 @@ pub fn provenance(scene: &Scene, scene_path: &str, r: &Reference) -> String {
         r.kind,
         scene_path,
         scene.name,
-        ode::METHOD,
+        r.method,
         r.options.rtol,
         r.options.atol,
         r.trajectory.t.len(),

@@ -48,7 +48,7 @@ use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::Scene;
-use crate::stepping::equations::{integrate_model, min_spacing, step_budget, STEPS_PER_NODE};
+use crate::stepping::equations::{integrate_model, min_spacing, step_budget, Stepped, STEPS_PER_NODE};
 use crate::stepping::ode::{OdeError, OdeOptions, OdeStats};
 
 /// Relative tolerance of the time-stepping reference.
@@ -183,7 +183,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorK
     }
     let (integrated, reference) = time_stepping_at_nodes(scene, model, tr);
     match integrated {
-        Ok((states, steps)) => {
+        Ok(Stepped { states, stats: steps, .. }) => {
             let reference_trajectory = Trajectory::with_physical_columns(model, &tr.t, states);
             Verification { reference, steps, ..compare_with_reference(scene, model, tr, operator, reference_trajectory, base) }
         }
@@ -220,26 +220,33 @@ fn not_compared(scene: &Scene, tr: &Trajectory) -> Verification {
 /// tolerance is judged on the motion's size as the solve found it; the default ones,
 /// relative to the ranges, only once the reference has them (then a second pass, whose
 /// work adds to the first's, if they are tight).
-fn time_stepping_at_nodes(scene: &Scene, model: &Model, tr: &Trajectory) -> (Result<(States, OdeStats), OdeError>, String) {
+fn time_stepping_at_nodes(scene: &Scene, model: &Model, tr: &Trajectory) -> (Result<Stepped<States>, OdeError>, String) {
+    let stepper = scene.verify.stepper;
     let integrate = |rtol: f64, atol: f64| {
-        let opts = OdeOptions { rtol, atol, max_step: min_spacing(&tr.t), max_steps: step_budget(tr.t.len()), ..OdeOptions::default() };
+        let opts =
+            OdeOptions { rtol, atol, max_step: min_spacing(&tr.t), max_steps: step_budget(tr.t.len()), stepper, ..OdeOptions::default() };
+        let integrated = integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts);
+        let method = match &integrated {
+            Ok(stepped) => stepped.method.clone(),
+            Err(_) => format!("stepper {stepper}"),
+        };
         let reference = format!(
-            "time stepping of the same scene (DOP853, rtol {rtol:e}, atol {atol:e}, step at most the node spacing) at the solve's nodes"
+            "time stepping of the same scene ({method}; rtol {rtol:e}, atol {atol:e}, step at most the node spacing) at the solve's nodes"
         );
-        (integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts), reference)
+        (integrated, reference)
     };
     let first_rtol = match scene.verify.tol {
         Some(tol) => reference_rtol(&[tol], &tr.q),
         None => REFERENCE_RTOL,
     };
     let (mut integrated, mut reference) = integrate(first_rtol, first_rtol * (REFERENCE_ATOL / REFERENCE_RTOL));
-    if let Ok((states, steps)) = &integrated {
-        let rtol = reference_rtol(&tolerances(scene, &states.q).0, &states.q);
+    if let Ok(stepped) = &integrated {
+        let rtol = reference_rtol(&tolerances(scene, &stepped.states.q).0, &stepped.states.q);
         if rtol < 0.5 * first_rtol {
-            let first = *steps;
+            let first = stepped.stats;
             (integrated, reference) = integrate(rtol, rtol * (REFERENCE_ATOL / REFERENCE_RTOL));
-            if let Ok((_, steps)) = &mut integrated {
-                steps.add(&first);
+            if let Ok(stepped) = &mut integrated {
+                stepped.stats.add(&first);
             }
         }
     }
@@ -251,8 +258,8 @@ fn time_stepping_failure(e: &OdeError) -> String {
     match e {
         OdeError::MaxSteps { .. } => format!(
             "time stepping of the same scene failed, so the solve could not be checked: {e} (more than {} steps per \
-             node: the motion is far finer than the grid, or the scene is stiff, e.g. strongly damped, so that \
-             explicit time stepping needs steps far shorter than the motion; refine N or shorten the span)",
+             node: the motion is far finer than the grid, or, with --stepper dop853, the scene is stiff and explicit \
+             steps are far shorter than the motion; refine N, shorten the span, or step implicitly: --stepper auto)",
             STEPS_PER_NODE
         ),
         e => format!("time stepping of the same scene failed, so the solve could not be checked: {e}"),

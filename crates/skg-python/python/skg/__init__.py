@@ -126,6 +126,7 @@ def solve(
     refine: bool = False,
     max_nodes: Optional[int] = None,
     time_limit: Optional[float] = None,
+    stepper: Optional[str] = None,
 ) -> Solution:
     """Solve a scene file (or a :class:`Scene`, or a mapping that makes one) as
     ``skg-solve SCENE`` does; without ``out``, no file is written.
@@ -148,7 +149,10 @@ def solve(
     ``no_fallback``, ``refine`` (``--refine``: solve again on finer, predicted grids
     until the verification passes at the tolerance; the grids tried are in
     ``summary["refinement"]``), ``max_nodes`` (``--max-nodes``, the refinement's
-    budget) and ``time_limit`` (``--time-limit``, seconds for the whole solve).
+    budget), ``time_limit`` (``--time-limit``, seconds for the whole solve) and
+    ``stepper`` (``--stepper``: ``"auto"``, the default, steps the verification, the
+    initial guess and the predictions with DOP853 and goes on with the implicit Radau IIA
+    where the scene turns out stiff; ``"dop853"`` or ``"implicit"`` choose one).
 
     Every solve is verified against time stepping and may use the fallback ladder, as on
     the command line. A solve that does not converge or verify is returned, not raised:
@@ -175,6 +179,7 @@ def solve(
         refine=refine,
         max_nodes=max_nodes,
         time_limit=time_limit,
+        stepper=stepper,
     )
     sol = Solution(native)
     for w in sol.warnings:
@@ -191,9 +196,12 @@ def reference(
     rtol: float = 1e-12,
     atol: Optional[float] = None,
     times: Optional[Any] = None,
+    stepper: Optional[str] = None,
 ) -> Reference:
-    """Integrate a scene file (or a :class:`Scene`) as ``skg-solve reference`` does
-    (DOP853), without writing the CSV.
+    """Integrate a scene file (or a :class:`Scene`) as ``skg-solve reference`` does,
+    without writing the CSV: by ``stepper`` (``"auto"``, the default: DOP853, and the
+    implicit Radau IIA from where the scene turns out stiff; ``"dop853"``;
+    ``"implicit"``, not with ``hard_walls``).
 
     Sampled on the scene's grid (``nodes`` overrides its N) or at ``times`` (an array
     starting at the scene's start time, like ``--grid-from``). ``hard_walls=True`` makes
@@ -202,6 +210,7 @@ def reference(
     """
     t = None if times is None else [float(x) for x in np.asarray(times, dtype=float).ravel()]
     native = _skg.reference(
-        _scene_arg(scene), nodes=nodes, set=_set_dict(set), hard_walls=hard_walls, rtol=rtol, atol=atol, times=t
+        _scene_arg(scene), nodes=nodes, set=_set_dict(set), hard_walls=hard_walls, rtol=rtol, atol=atol, times=t,
+        stepper=stepper,
     )
     return Reference(native)

@@ -39,7 +39,7 @@ use crate::sbp::{OperatorKind, SbpOperator};
 use crate::scene::{InitialVelocity, Scene};
 use crate::solve::linalg::band::solve_banded;
 use crate::solve::run::error::SolveError;
-use crate::stepping::equations::{integrate_states, min_spacing, step_budget};
+use crate::stepping::equations::{integrate_states, min_spacing, step_budget, Stepped};
 use crate::stepping::ode::{OdeOptions, OdeStats};
 use crate::stepping::verify::{self, REFERENCE_ATOL, REFERENCE_RTOL};
 
@@ -181,9 +181,10 @@ impl<'a> Predictor<'a> {
             atol: rtol * (REFERENCE_ATOL / REFERENCE_RTOL),
             max_step: if self.model.walls.is_empty() { None } else { min_spacing(&times(self.scene, self.scene.nodes)) },
             max_steps: step_budget(nodes.max(self.scene.nodes)),
+            stepper: self.scene.verify.stepper,
             ..OdeOptions::default()
         };
-        let (states, steps) = integrate_states(self.model, &self.scene.initial_q, &self.scene.initial_v, &t, &opts)
+        let Stepped { states, stats: steps, .. } = integrate_states(self.model, &self.scene.initial_q, &self.scene.initial_v, &t, &opts)
             .map_err(|e| SolveError::Prediction(format!("time stepping of the scene failed: {e}")))?;
         self.steps.add(&steps);
         let d = self.scene.coordinates.len();

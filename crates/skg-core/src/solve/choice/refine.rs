@@ -81,16 +81,20 @@ const PROXY_MAX_NODES: usize = FINE_NODES;
 pub(crate) fn refine(
     scene: &Scene,
     model: &Arc<Model>,
+    own: &Discretization,
     deadline: Option<Instant>,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Outcome, SolveError> {
-    Refiner::new(scene, model, deadline)?.run(progress)
+    Refiner::new(scene, model, own, deadline)?.run(progress)
 }
 
 /// The state of a refinement.
 struct Refiner<'a> {
     scene: &'a Scene,
     model: &'a Arc<Model>,
+    /// The scene's own discretization (with the natural initial-velocity condition when
+    /// the front door chose it for a fast initial layer).
+    own: Discretization,
     deadline: Option<Instant>,
     /// The predictor, unless its reference could not be computed (then: why not).
     predictor: Result<Predictor<'a>, String>,
@@ -115,18 +119,21 @@ struct Refiner<'a> {
 }
 
 impl<'a> Refiner<'a> {
-    fn new(scene: &'a Scene, model: &'a Arc<Model>, deadline: Option<Instant>) -> Result<Refiner<'a>, SolveError> {
+    fn new(scene: &'a Scene, model: &'a Arc<Model>, own: &Discretization, deadline: Option<Instant>) -> Result<Refiner<'a>, SolveError> {
         let t = Instant::now();
         let predictor = Predictor::new(scene, model).map_err(|e| e.to_string());
+        // A condition the front door chose (for an initial layer) is kept, as a named one.
+        let iv_chosen = scene.choose_initial_velocity && own.initial_velocity == scene.initial_velocity;
         let candidates: Vec<Candidate> = if scene.choose_operator {
-            Candidate::all().into_iter().filter(|c| scene.choose_initial_velocity || c.initial_velocity == scene.initial_velocity).collect()
+            Candidate::all().into_iter().filter(|c| iv_chosen || c.initial_velocity == own.initial_velocity).collect()
         } else {
-            vec![Candidate { operator: scene.operator, initial_velocity: scene.initial_velocity }]
+            vec![Candidate { operator: own.operator, initial_velocity: own.initial_velocity }]
         };
         let (max_nodes, max_nodes_source) = budget(scene);
         let mut r = Refiner {
             scene,
             model,
+            own: *own,
             deadline,
             predictor,
             candidates,
@@ -276,7 +283,7 @@ impl<'a> Refiner<'a> {
     /// most accurate there).
     fn first_choice(&mut self) -> (Candidate, usize, Option<f64>) {
         let nodes = self.scene.nodes;
-        let own = Candidate { operator: self.scene.operator, initial_velocity: self.scene.initial_velocity };
+        let own = Candidate { operator: self.own.operator, initial_velocity: self.own.initial_velocity };
         if !self.scene.choose_operator {
             let p = self.predicted(own, nodes);
             return (own, nodes, p);

@@ -69,6 +69,7 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
         work,
         diagnostics,
         warnings,
+        notes: Vec::new(),
         attempts: Vec::new(),
         remedy: None,
         refinement: None,

@@ -302,6 +302,9 @@ pub struct Outcome {
     pub diagnostics: Diagnostics,
     /// Suspicions about the solution (spurious critical point, residual too large, …).
     pub warnings: Vec<String>,
+    /// What the solve chose by itself and why (the natural initial-velocity condition
+    /// for a fast initial layer).
+    pub notes: Vec<String>,
     /// Every run tried by the fallback ladder: the scene's own, then the fallbacks; the
     /// one reported is marked `chosen`.
     pub attempts: Vec<Attempt>,

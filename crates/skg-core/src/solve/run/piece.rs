@@ -27,9 +27,9 @@ use crate::model::{Model, Physical};
 use crate::sbp::SbpOperator;
 #[cfg(feature = "ipopt")]
 use crate::scene::IpoptValue;
-use crate::scene::{Formulation, Scene, SceneError};
+use crate::scene::{Formulation, Scene, SceneError, Stepper};
 use crate::solve::linalg::IterationStat;
-use crate::stepping::equations::{integrate_model, min_spacing, step_budget};
+use crate::stepping::equations::{integrate_model, min_spacing, step_budget, Stepped};
 use crate::stepping::ode::{OdeOptions, OdeStats};
 #[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
@@ -112,7 +112,7 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     // guess, on a second thread (its time is the solver's, `analysis_s`).
     let (made, guess_s, analysed) = std::thread::scope(|s| {
         let analysing = solver.needs_analysis(action).then(|| s.spawn(|| solver.analyse(action)));
-        let made = initial_guess(action, times, guess, &mut warnings);
+        let made = initial_guess(action, times, guess, scene.verify.stepper, &mut warnings);
         let guess_s = t_guess.elapsed().as_secs_f64();
         (made, guess_s, analysing.map(|a| a.join().expect("the LU analysis panicked")))
     });
@@ -173,6 +173,7 @@ fn initial_guess(
     action: &Action,
     times: &[f64],
     guess: &Guess,
+    stepper: Stepper,
     warnings: &mut Vec<String>,
 ) -> (Vec<f64>, String, Option<NodeSeries>, OdeStats) {
     let (d, n) = (action.layout.d, action.layout.n);
@@ -186,10 +187,11 @@ fn initial_guess(
             // uncapped one a tenth, with the same Newton iterations on every shipped
             // scene (docs/benchmarks.md#the-initial-guess).
             let max_step = if action.model.walls.is_empty() { None } else { min_spacing(times) };
-            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps: step_budget(times.len()), ..OdeOptions::default() };
+            let opts =
+                OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps: step_budget(times.len()), stepper, ..OdeOptions::default() };
             let (q0, v0) = (action.q0(), action.v0());
             match integrate_model(&action.model, q0, v0, times, &opts) {
-                Ok((States { q, lambda, .. }, steps)) => (
+                Ok(Stepped { states: States { q, lambda, .. }, stats: steps, .. }) => (
                     q.clone(),
                     lambda,
                     "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),

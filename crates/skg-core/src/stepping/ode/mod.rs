@@ -53,6 +53,7 @@
 mod stepper;
 mod tableau;
 
+pub use crate::scene::Stepper;
 use stepper::{Dop853, Rejection, Stage};
 
 /// Name of the method reported in [`OdeSolution::method`].
@@ -74,11 +75,16 @@ pub struct OdeOptions {
     /// (a parabola, integrated exactly) the step grows until it jumps across a thin
     /// Gaussian wall. Callers that sample on a grid cap the step at the grid spacing.
     pub max_step: Option<f64>,
+    /// Which integrator steps ([`Stepper`]; [`integrate_with`](super::integrate::integrate_with)
+    /// chooses by it). For DOP853 itself, `Auto` means: stop where the problem has become
+    /// stiff, and say so ([`OdeSolution::stopped`]), rather than step on at the limit of
+    /// stability. Default `Auto`.
+    pub stepper: Stepper,
 }
 
 impl Default for OdeOptions {
     fn default() -> Self {
-        OdeOptions { rtol: 1e-10, atol: 1e-12, max_steps: 1_000_000, initial_step: None, max_step: None }
+        OdeOptions { rtol: 1e-10, atol: 1e-12, max_steps: 1_000_000, initial_step: None, max_step: None, stepper: Stepper::Auto }
     }
 }
 
@@ -97,6 +103,8 @@ pub struct OdeStats {
     /// LU factorizations of the implicit stepping's iteration matrices (one real and one
     /// complex each).
     pub factorizations: usize,
+    /// Of the accepted steps, those of the implicit stepping (Radau IIA).
+    pub implicit_accepted: usize,
 }
 
 impl OdeStats {
@@ -108,6 +116,7 @@ impl OdeStats {
         self.rhs_evals += other.rhs_evals;
         self.jacobian_evals += other.jacobian_evals;
         self.factorizations += other.factorizations;
+        self.implicit_accepted += other.implicit_accepted;
     }
 }
 
@@ -170,8 +179,22 @@ pub struct OdeSolution {
     pub states: Vec<Vec<f64>>,
     /// Work statistics.
     pub stats: OdeStats,
-    /// The method used ([`METHOD`]).
+    /// The method used ([`METHOD`], or [`radau::METHOD`](super::radau::METHOD)).
     pub method: &'static str,
+    /// Where DOP853 stopped before the end, with [`Stepper::Auto`]: `states` holds the
+    /// requested times before it, and the integration is to go on implicitly from it.
+    pub stopped: Option<Stopped>,
+}
+
+/// Where and why DOP853 stopped before the end of an integration with [`Stepper::Auto`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stopped {
+    /// The time of the last accepted state.
+    pub t: f64,
+    /// That state.
+    pub y: Vec<f64>,
+    /// Why, in words ("stiff: h·λ = 12.3 in 15 steps in a row", "the steps ran out").
+    pub reason: String,
 }
 
 /// Integrate `y' = f(t, y)` from `times[0]` with `y(times[0]) = y0` and return the state
@@ -275,8 +298,19 @@ where
     let mut t = t0;
     s.eval(t, Stage::Y, 0).map_err(|error| OdeError::Rhs { t, error })?;
     let mut control = Controller::new(&mut s, t0, t_end, opts);
+    // With `Stepper::Auto` (and no event to locate) the integration stops where it has
+    // become stiff, or where its steps ran out or underflowed, for the implicit stepper to
+    // go on from there.
+    let mut stiffness = (opts.stepper == Stepper::Auto && event.is_none()).then(Stiffness::default);
     loop {
-        let (h, t_new) = control.next_step(t)?;
+        let (h, t_new) = match control.next_step(t) {
+            Ok(step) => step,
+            Err(e @ (OdeError::MaxSteps { .. } | OdeError::StepTooSmall { .. })) if stiffness.is_some() => {
+                let reason = e.to_string();
+                return Ok((samples.stopped(s.stats, Stopped { t, y: s.state().to_vec(), reason }), None));
+            }
+            Err(e) => return Err(e),
+        };
         // The dense output is needed when a requested time or the event's samples lie inside.
         let dense_wanted = samples.next_time() < t_new || event.is_some();
         let fac11 = match s.attempt(t, h, t_new, dense_wanted, &mut accept) {
@@ -297,6 +331,9 @@ where
         t = t_new;
         if samples.done() {
             break;
+        }
+        if let Some(reason) = stiffness.as_mut().and_then(|st| st.after_step(s.h_lambda)) {
+            return Ok((samples.stopped(s.stats, Stopped { t, y: s.state().to_vec(), reason }), None));
         }
         control.accepted(fac11);
     }
@@ -350,7 +387,51 @@ impl<'a> Samples<'a> {
 
     /// The solution at the times filled so far, with the integration's statistics.
     fn solution(self, stats: OdeStats) -> OdeSolution {
-        OdeSolution { times: self.times.to_vec(), states: self.states, stats, method: METHOD }
+        OdeSolution { times: self.times.to_vec(), states: self.states, stats, method: METHOD, stopped: None }
+    }
+
+    /// The solution at the times filled so far of an integration that stopped before
+    /// the end (`Stepper::Auto`).
+    fn stopped(self, stats: OdeStats, stopped: Stopped) -> OdeSolution {
+        OdeSolution { stopped: Some(stopped), ..self.solution(stats) }
+    }
+}
+
+/// `h·λ` above which a DOP853 step is taken as limited by stability (its stability region
+/// reaches about 6.1 along the negative real axis).
+const STIFF_H_LAMBDA: f64 = 6.1;
+/// Steps in a row at [`STIFF_H_LAMBDA`] that make an equation stiff.
+const STIFF_STEPS: usize = 15;
+/// Steps in a row below it that clear the count.
+const NONSTIFF_STEPS: usize = 6;
+
+/// Hairer's stiffness test of DOP853 (`dop853.f`), after every accepted step: stiff once
+/// [`STIFF_STEPS`] steps in a row had `h·λ` above [`STIFF_H_LAMBDA`], the count cleared
+/// by [`NONSTIFF_STEPS`] steps in a row below it.
+#[derive(Default)]
+struct Stiffness {
+    stiff: usize,
+    nonstiff: usize,
+}
+
+impl Stiffness {
+    /// Count a step with `h_lambda`; the reason to stop when the equation is stiff.
+    fn after_step(&mut self, h_lambda: f64) -> Option<String> {
+        if h_lambda > STIFF_H_LAMBDA {
+            self.nonstiff = 0;
+            self.stiff += 1;
+            if self.stiff >= STIFF_STEPS {
+                return Some(format!(
+                    "stiff: the steps were limited by stability (h·λ = {h_lambda:.1} > {STIFF_H_LAMBDA} in {STIFF_STEPS} steps in a row)"
+                ));
+            }
+        } else {
+            self.nonstiff += 1;
+            if self.nonstiff >= NONSTIFF_STEPS {
+                self.stiff = 0;
+            }
+        }
+        None
     }
 }
 

@@ -51,6 +51,10 @@ pub(super) struct Dop853<F> {
     /// Coefficients of the dense output polynomial of the current step.
     rcont: Vec<Vec<f64>>,
     pub(super) stats: OdeStats,
+    /// `h·λ` of the last accepted step: the step times an estimate of the Jacobian's
+    /// largest eigenvalue along the step's end, from the two stages at `t + h`
+    /// (Hairer and Wanner, *Solving ODEs II*, IV.2). DOP853 is stable up to about 6.1.
+    pub(super) h_lambda: f64,
 }
 
 impl<F> Dop853<F>
@@ -71,6 +75,7 @@ where
             bk: vec![0.0; n],
             rcont: vec![vec![0.0; n]; 8],
             stats: OdeStats::default(),
+            h_lambda: 0.0,
         }
     }
 
@@ -142,6 +147,7 @@ where
                 return Err(Rejection::Refused);
             }
             self.eval(t_new, Stage::YNew, 12).map_err(|error| Rejection::Failed((t_new, error)))?;
+            self.h_lambda = self.h_lambda(h);
             if dense_wanted {
                 self.dense_stages(t, h).map_err(Rejection::Failed)?;
             }
@@ -149,6 +155,27 @@ where
         } else {
             Err(Rejection::TooLarge { fac11 })
         }
+    }
+
+    /// `h·λ` of the step just taken: `h ‖f(t+h, y_new) − f(t+h, Y₁₁)‖ / ‖y_new − Y₁₁‖` with
+    /// `Y₁₁` the last main stage's state, also at `t + h` (in `tmp` until the dense
+    /// output's stages overwrite it).
+    fn h_lambda(&self, h: f64) -> f64 {
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..self.n {
+            num += (self.k[12][i] - self.k[11][i]).powi(2);
+            den += (self.ynew[i] - self.tmp[i]).powi(2);
+        }
+        if den > 0.0 {
+            h.abs() * (num / den).sqrt()
+        } else {
+            0.0
+        }
+    }
+
+    /// The current accepted state.
+    pub(super) fn state(&self) -> &[f64] {
+        &self.y
     }
 
     /// The first upward zero crossing of `event` in the accepted step from `(t, y)` of

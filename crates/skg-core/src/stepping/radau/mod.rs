@@ -336,6 +336,7 @@ impl<'o> Stepper<'o> {
                 next += 1;
             }
             stats.accepted += 1;
+            stats.implicit_accepted += 1;
             last_failure = None;
             self.advance(t_new, y_new, f_new, step);
         }
@@ -343,7 +344,7 @@ impl<'o> Stepper<'o> {
             states.push(self.y.clone());
             next += 1;
         }
-        Ok(OdeSolution { times: times.to_vec(), states, stats, method: METHOD })
+        Ok(OdeSolution { times: times.to_vec(), states, stats, method: METHOD, stopped: None })
     }
 
     /// The next step size, within `max_step`, ending exactly at the next requested time
