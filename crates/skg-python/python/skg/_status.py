@@ -32,7 +32,10 @@ class SolveStatus(_StrEnum):
 
     CONVERGED = "converged"
     """The backend succeeded and the residual is at most 1e-8 (or at every equation's own
-    round-off level after a round-off stop)."""
+    round-off level)."""
+    CONVERGED_BY_RESIDUAL = "converged_by_residual"
+    """The backend stopped without success (``Solution.solver_status`` keeps its word), but
+    the residual is at most 1e-8 or at every equation's own round-off level: converged."""
     RESIDUAL_TOO_LARGE = "residual_too_large"
     """The backend reported success, but the unscaled residual is too large."""
     NOT_CONVERGED = "not_converged"

@@ -174,7 +174,8 @@ class Solution(Trajectory):
 
     @property
     def converged(self) -> bool:
-        """Whether the solve converged (``status`` is :attr:`SolveStatus.CONVERGED`)."""
+        """Whether the solve converged (``status`` is :attr:`SolveStatus.CONVERGED` or
+        :attr:`SolveStatus.CONVERGED_BY_RESIDUAL`)."""
         return bool(self._native.converged)
 
     @property

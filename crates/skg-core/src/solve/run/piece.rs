@@ -137,9 +137,9 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     let max_minus_variable = (scene.formulation == Formulation::Full)
         .then(|| lay.qm.iter().chain(&lay.lm).map(|&i| z[i as usize].abs()).fold(0.0_f64, f64::max));
     let max_residual = solution.max_residual;
-    // Only a round-off stop above CONVERGED_RESIDUAL needs the equation-by-equation test.
+    // Only a residual above CONVERGED_RESIDUAL needs the equation-by-equation test.
     let at_round_off =
-        solution.status.is_round_off() && max_residual > CONVERGED_RESIDUAL && solver.equations_at_round_off(action, z, CONVERGED_RESIDUAL);
+        max_residual.is_finite() && max_residual > CONVERGED_RESIDUAL && solver.equations_at_round_off(action, z, CONVERGED_RESIDUAL);
     Ok(Piece {
         work: Work::of_system(&solution.report, guess_steps),
         status: SolveStatus::classify(solution.status, max_residual, at_round_off),

@@ -69,18 +69,6 @@ pub enum SolverStatus {
 }
 
 impl SolverStatus {
-    /// Whether the backend stopped at the residual's round-off level above the tolerance
-    /// (`Ipopt_Converged_To_Round_Off`, `Newton_Converged_To_Round_Off`).
-    pub fn is_round_off(&self) -> bool {
-        match self {
-            #[cfg(feature = "ipopt")]
-            SolverStatus::IpoptConvergedToRoundOff => true,
-            SolverStatus::Newton(s) => *s == NewtonStatus::ConvergedToRoundOff,
-            #[cfg(feature = "ipopt")]
-            SolverStatus::Ipopt(_) => false,
-        }
-    }
-
     /// Whether the backend reports success (Ipopt: [`ipopt::Status::is_success`]).
     pub fn is_success(&self) -> bool {
         match self {
