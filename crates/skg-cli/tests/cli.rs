@@ -85,7 +85,7 @@ fn summary_carries_provenance_and_per_wall_entries_by_name() {
 fn non_converged_solve_exits_3_and_marks_the_summary() {
     let dir = tempfile::tempdir().unwrap();
     let scene = common::scenario("rolling_disk");
-    let o = common::skg(&[scene.to_str().unwrap(), "-o", "res", "--max-iter", "1"], dir.path());
+    let o = common::skg(&[scene.to_str().unwrap(), "-o", "res", "--max-iter", "0"], dir.path());
     assert_eq!(o.status.code(), Some(3), "{}", common::text(&o));
     assert!(common::text(&o).contains("did not converge"), "{}", common::text(&o));
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("res/summary.json")).unwrap()).unwrap();

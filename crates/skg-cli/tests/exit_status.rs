@@ -43,7 +43,7 @@ fn exit_status_says_converged_and_verified() {
     assert!(!dir.path().join("unchecked/reference.csv").exists());
 
     let tumbler = common::scenario("tumbler");
-    let o = run(&[tumbler.to_str().unwrap(), "-o", "short", "--max-iter", "1", "--no-fallback"]);
+    let o = run(&[tumbler.to_str().unwrap(), "-o", "short", "--max-iter", "0", "--no-fallback"]);
     assert_eq!(o.status.code(), Some(3), "{}", common::text(&o));
     // An option value out of range is a usage error.
     let o = run(&[damped, "-o", "x", "--verify-tol", "0"]);

@@ -183,8 +183,8 @@ fn a_second_sweep_into_a_locked_directory_is_refused() {
 #[test]
 fn retry_failed_runs_crashed_and_failed_points_again() {
     let dir = tempfile::tempdir().unwrap();
-    // max_iter = 1 cannot converge the tumbler; max_iter = 100 does (and verifies at N = 256).
-    let sweep = common::sweep_file(dir.path(), &common::scenario("tumbler"), "[[grid]]\nnodes = [256]\nmax_iter = [1, 100]\n");
+    // max_iter = 0 cannot converge the tumbler; max_iter = 100 does (and verifies at N = 256).
+    let sweep = common::sweep_file(dir.path(), &common::scenario("tumbler"), "[[grid]]\nnodes = [256]\nmax_iter = [0, 100]\n");
     let out = dir.path().join("out");
     let (code, t) = run(&["sweep", s(&sweep), "-o", s(&out), "-q"], Path::new("."));
     assert_eq!(code, Some(0), "{t}");

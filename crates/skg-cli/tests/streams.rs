@@ -93,7 +93,7 @@ fn a_closed_stderr_ends_quietly_with_the_commands_status() {
     let o = run(&["--no-such-option"], dir.path(), None, Some(closed_pipe()));
     assert_eq!(o.status.code(), Some(2));
     let tumbler = common::scenario("tumbler");
-    let args = [tumbler.to_str().unwrap(), "-o", "short", "--max-iter", "1", "--no-fallback"];
+    let args = [tumbler.to_str().unwrap(), "-o", "short", "--max-iter", "0", "--no-fallback"];
     let o = run(&args, dir.path(), Some(closed_pipe()), Some(closed_pipe()));
     assert_eq!(o.status.code(), Some(3));
 }

@@ -182,8 +182,8 @@ fn killed_sweep_resumes_without_lost_or_duplicated_rows() {
 #[test]
 fn failed_points_are_recorded_and_the_sweep_goes_on() {
     let dir = tempfile::tempdir().unwrap();
-    // max_iter = 1 cannot converge the tumbler; the other point does.
-    let p = sweep_file(dir.path(), "tumbler", "[[grid]]\nnodes = [256]\nmax_iter = [1, 100]\n");
+    // max_iter = 0 cannot converge the tumbler; the other point does.
+    let p = sweep_file(dir.path(), "tumbler", "[[grid]]\nnodes = [256]\nmax_iter = [0, 100]\n");
     let out = dir.path().join("out");
     let o = common::skg(&["sweep", p.to_str().unwrap(), "-o", out.to_str().unwrap()], Path::new("."));
     assert!(o.status.success(), "{}", common::text(&o));

@@ -47,7 +47,7 @@ use crate::discrete::interpolate::{hermite, linear};
 use crate::discrete::Discretization;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
-use crate::scene::{Scene, Windows};
+use crate::scene::{Scene, Stepper, Windows};
 use crate::stepping::verify::VerifyStatus;
 
 /// Windows of fewer nodes than this are not tried by the ladder.
@@ -420,9 +420,11 @@ fn remedy(scene: &Scene, disc: &Discretization, o: &Outcome, fallback_used: bool
     }
     let v = &o.verification;
     match v.status {
-        VerifyStatus::Unverified => {
-            format!("the reference could not be computed ({}); if you trust the solve regardless, --no-verify accepts it", v.reason)
-        }
+        VerifyStatus::Unverified if scene.verify.stepper == Stepper::Dop853 => "let the time stepping go on implicitly where the \
+             scene is stiff (--stepper auto, the default, or --stepper implicit); or, if you trust the solve regardless, --no-verify \
+             accepts it"
+            .to_string(),
+        VerifyStatus::Unverified => "if you trust the solve regardless, --no-verify accepts it".to_string(),
         _ if v.max_error.is_none() => "fix the scene so that every quantity stays finite along the motion".to_string(),
         _ => {
             // A dissipative operator damps the mode: its odd-even amplitude is a smooth

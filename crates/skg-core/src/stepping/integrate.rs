@@ -34,14 +34,18 @@ where
             Ok(Integrated { solution, switched: None })
         }
         Stepper::Dop853 | Stepper::Auto => {
-            let mut solution = ode::integrate_checked(&mut f, y0, times, opts, &mut accept)?;
+            let mut solution = if opts.stepper == Stepper::Auto {
+                ode::integrate_until_stiff(&mut f, y0, times, opts, &mut accept)?
+            } else {
+                ode::integrate_checked(&mut f, y0, times, opts, &mut accept)?
+            };
             let Some(stop) = solution.stopped.take() else { return Ok(Integrated { solution, switched: None }) };
             // Implicitly on from the last accepted state, over the times not reached.
             let done = solution.states.len();
             let rest: Vec<f64> = std::iter::once(stop.t).chain(times[done..].iter().copied()).collect();
-            let used = solution.stats.accepted + solution.stats.rejected;
-            let remaining = OdeOptions { max_steps: opts.max_steps.saturating_sub(used).max(1), ..*opts };
-            let implicit = radau::integrate(&mut f, jacobian, &stop.y, &rest, &remaining, &mut accept)?;
+            // The implicit stepper has a budget of its own: running out of explicit steps
+            // is one of the reasons to switch.
+            let implicit = radau::integrate(&mut f, jacobian, &stop.y, &rest, opts, &mut accept)?;
             solution.states.extend(implicit.states.into_iter().skip(1));
             solution.stats.add(&implicit.stats);
             Ok(Integrated { solution, switched: Some(Switch { t: stop.t, reason: stop.reason }) })

@@ -150,7 +150,7 @@ mod tests {
         assert!(ok.is_converged());
         assert_eq!((ok.name(), ok.to_string().as_str()), ("converged", "solved to the requested tolerance"));
 
-        let loose = SolveStatus::classify(SolverStatus::Ipopt(Status::SolvedToAcceptableLevel), 2e-5, true);
+        let loose = SolveStatus::classify(SolverStatus::Ipopt(Status::SolvedToAcceptableLevel), 2e-5, false);
         assert!(!loose.is_converged());
         assert_eq!(loose.solver(), SolverStatus::Ipopt(Status::SolvedToAcceptableLevel));
         assert_eq!(loose.name(), "residual_too_large");

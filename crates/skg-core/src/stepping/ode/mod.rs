@@ -75,10 +75,9 @@ pub struct OdeOptions {
     /// (a parabola, integrated exactly) the step grows until it jumps across a thin
     /// Gaussian wall. Callers that sample on a grid cap the step at the grid spacing.
     pub max_step: Option<f64>,
-    /// Which integrator steps ([`Stepper`]; [`integrate_with`](super::integrate::integrate_with)
-    /// chooses by it). For DOP853 itself, `Auto` means: stop where the problem has become
-    /// stiff, and say so ([`OdeSolution::stopped`]), rather than step on at the limit of
-    /// stability. Default `Auto`.
+    /// Which integrator steps ([`Stepper`]), for
+    /// [`integrate_with`](super::integrate::integrate_with), which chooses by it; the
+    /// DOP853 functions of this module step with DOP853 whatever it says. Default `Auto`.
     pub stepper: Stepper,
 }
 
@@ -181,12 +180,13 @@ pub struct OdeSolution {
     pub stats: OdeStats,
     /// The method used ([`METHOD`], or [`radau::METHOD`](super::radau::METHOD)).
     pub method: &'static str,
-    /// Where DOP853 stopped before the end, with [`Stepper::Auto`]: `states` holds the
-    /// requested times before it, and the integration is to go on implicitly from it.
+    /// Where DOP853 stopped before the end ([`integrate_until_stiff`] only): `states`
+    /// holds the requested times before it, and the integration is to go on implicitly
+    /// from it.
     pub stopped: Option<Stopped>,
 }
 
-/// Where and why DOP853 stopped before the end of an integration with [`Stepper::Auto`].
+/// Where and why DOP853 stopped before the end ([`integrate_until_stiff`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stopped {
     /// The time of the last accepted state.
@@ -225,7 +225,19 @@ where
     F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
     C: FnMut(f64, &[f64], f64, &[f64]) -> bool,
 {
-    run(f, y0, times, opts, None::<fn(f64, &[f64]) -> f64>, accept).map(|(sol, _)| sol)
+    run(f, y0, times, opts, None::<fn(f64, &[f64]) -> f64>, accept, false).map(|(sol, _)| sol)
+}
+
+/// Like [`integrate_checked`], but where the problem has become stiff (Hairer's test of
+/// `h·λ`, module `stepper`), or the steps run out or underflow, the integration stops
+/// instead of failing and says where and why ([`OdeSolution::stopped`]), for an
+/// implicit stepper to go on from there ([`integrate_with`](super::integrate::integrate_with)).
+pub fn integrate_until_stiff<F, C>(f: F, y0: &[f64], times: &[f64], opts: &OdeOptions, accept: C) -> Result<OdeSolution, OdeError>
+where
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
+    C: FnMut(f64, &[f64], f64, &[f64]) -> bool,
+{
+    run(f, y0, times, opts, None::<fn(f64, &[f64]) -> f64>, accept, true).map(|(sol, _)| sol)
 }
 
 /// A terminal event located by [`integrate_to_event`].
@@ -264,14 +276,15 @@ where
     F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
     E: FnMut(f64, &[f64]) -> f64,
 {
-    run(f, y0, times, opts, Some(event), |_, _, _, _| true)
+    run(f, y0, times, opts, Some(event), |_, _, _, _| true, false)
 }
 
 /// The integration behind [`integrate`], [`integrate_checked`] and
 /// [`integrate_to_event`]: attempts of steps ([`Dop853::attempt`]) under Hairer's
 /// step-size control ([`Controller`]), the requested times filled from each accepted
 /// step, and the integration stopped at the first crossing of `event`
-/// ([`Dop853::first_crossing`]).
+/// ([`Dop853::first_crossing`]), or, when `until_stiff`, where the problem has become
+/// stiff or the steps run out or underflow.
 fn run<F, E, C>(
     f: F,
     y0: &[f64],
@@ -279,6 +292,7 @@ fn run<F, E, C>(
     opts: &OdeOptions,
     mut event: Option<E>,
     mut accept: C,
+    until_stiff: bool,
 ) -> Result<(OdeSolution, Option<EventHit>), OdeError>
 where
     F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>,
@@ -298,10 +312,7 @@ where
     let mut t = t0;
     s.eval(t, Stage::Y, 0).map_err(|error| OdeError::Rhs { t, error })?;
     let mut control = Controller::new(&mut s, t0, t_end, opts);
-    // With `Stepper::Auto` (and no event to locate) the integration stops where it has
-    // become stiff, or where its steps ran out or underflowed, for the implicit stepper to
-    // go on from there.
-    let mut stiffness = (opts.stepper == Stepper::Auto && event.is_none()).then(Stiffness::default);
+    let mut stiffness = until_stiff.then(Stiffness::default);
     loop {
         let (h, t_new) = match control.next_step(t) {
             Ok(step) => step,
@@ -391,7 +402,7 @@ impl<'a> Samples<'a> {
     }
 
     /// The solution at the times filled so far of an integration that stopped before
-    /// the end (`Stepper::Auto`).
+    /// the end ([`integrate_until_stiff`]).
     fn stopped(self, stats: OdeStats, stopped: Stopped) -> OdeSolution {
         OdeSolution { stopped: Some(stopped), ..self.solution(stats) }
     }
