@@ -165,3 +165,25 @@ fn the_time_limit_stops_the_ladder() {
     assert_eq!(o.attempts.len(), 1, "{:?}", o.attempts);
     assert!(o.warnings.iter().any(|w| w.contains("stopped at the time limit")), "{:?}", o.warnings);
 }
+
+/// A refinement ends at once, after its first grid, where more nodes would not cure the
+/// failure: a solver tolerance so loose that the backend stops at the time-stepping
+/// guess (residual about 1e-3, above the 1e-8 a converged solve needs), and a
+/// verification that cannot run (the stiff test scene with the explicit stepper only,
+/// whose steps run out). Before, both went on through grid after grid.
+#[test]
+fn a_failure_more_nodes_cannot_cure_ends_the_refinement_at_once() {
+    let loose = UNDERDAMPED.replace("[time]", "[solver]\ntol = 2\n[time]");
+    let o = solve::solve_scene(&resolve(&loose, &refined(1e-4))).unwrap();
+    let r = o.refinement.as_ref().unwrap();
+    assert_eq!(r.grids.len(), 1, "{:?}", r.grids);
+    assert!(r.result.contains("[solver] tol") && r.result.contains("more nodes would not change that"), "{}", r.result);
+    assert!(!o.trusted());
+
+    let ov = Overrides { refine: true, stepper: Some(skg_core::scene::Stepper::Dop853), ..Overrides::default() };
+    let o = solve::solve_scene(&common::load_test_scene("stiff_overdamped", &ov)).unwrap();
+    let r = o.refinement.as_ref().unwrap();
+    assert_eq!(r.grids.len(), 1, "{:?}", r.grids);
+    assert!(r.result.contains("its verification could not run"), "{}", r.result);
+    assert!(o.converged() && !o.trusted());
+}

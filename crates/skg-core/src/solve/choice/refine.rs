@@ -30,8 +30,14 @@
 //! prediction is made and each grid doubles.
 //!
 //! The refinement stops at a verified solve, at the budget (`--max-nodes`; by default
-//! the largest grid the memory estimate allows, at most [`MAX_NODES_DEFAULT`]) or at the
-//! time limit. Every discretization solved is listed in `summary.json` (`refinement`);
+//! the largest grid the memory estimate allows, at most [`MAX_NODES_DEFAULT`]), before a
+//! grid whose solve would end past the time limit (`--time-limit`; by default
+//! [`REFINE_COST_FACTOR`] times the first grid's solve or [`REFINE_FLOOR_S`] seconds,
+//! whichever is longer; the next grid's time estimated from the last one's, in
+//! proportion to the nodes), and at once on a grid that failed for a reason more nodes
+//! will not cure (`Refiner::incurable`): a verification that could not run, a backend
+//! that stopped above the residual a converged solve needs, or an error that did not
+//! fall on a finer grid. Every discretization solved is listed in `summary.json` (`refinement`);
 //! the reported solution is the verified one, else the most accurate converged one.
 
 use std::sync::Arc;
@@ -45,12 +51,19 @@ use crate::discrete::Discretization;
 use crate::memory;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
-use crate::scene::Scene;
+use crate::scene::{readable_number, Scene};
 use crate::solve::ladder::{self, Rungs};
 use crate::solve::run::error::SolveError;
 use crate::solve::run::outcome::{Outcome, RefinedGrid, Refinement, Work};
 use crate::solve::run::piece::Guess;
+use crate::solve::run::status::SolveStatus;
 use crate::stepping::verify::VerifyStatus;
+
+/// A refinement without `--time-limit` may take this many times its first grid's solve
+/// (or [`REFINE_FLOOR_S`], whichever is longer).
+pub const REFINE_COST_FACTOR: f64 = 30.0;
+/// The least time a refinement without `--time-limit` may take, seconds.
+pub const REFINE_FLOOR_S: f64 = 60.0;
 
 /// The fraction of the tolerance the next grid aims at.
 pub const AIM: f64 = 0.5;
@@ -96,6 +109,8 @@ struct Refiner<'a> {
     /// the front door chose it for a fast initial layer).
     own: Discretization,
     deadline: Option<Instant>,
+    /// When the refinement started.
+    started: Instant,
     /// The predictor, unless its reference could not be computed (then: why not).
     predictor: Result<Predictor<'a>, String>,
     candidates: Vec<Candidate>,
@@ -135,6 +150,7 @@ impl<'a> Refiner<'a> {
             model,
             own: *own,
             deadline,
+            started: t,
             predictor,
             candidates,
             calibration: Vec::new(),
@@ -329,12 +345,18 @@ impl<'a> Refiner<'a> {
             if !self.scene.verify.refine {
                 break format!("the operator was chosen for the scene's grid of {nodes} nodes; --refine would refine it");
             }
+            if let Some(reason) = self.incurable(&outcome) {
+                break format!("stopped after grid {number} ({what}): {reason}; more nodes would not change that");
+            }
             if self.deadline.is_some_and(|d| Instant::now() >= d) {
                 break format!("stopped at the time limit after {}", counted_grids(self.grids.len()));
             }
             let Some(next) = self.next() else {
                 break self.out_of_budget();
             };
+            if let Some(reason) = self.beyond_time(next.1) {
+                break format!("stopped before grid {} ({} on {} nodes): {reason}", number + 1, next.0.describe(), next.1);
+            }
             (c, nodes, predicted) = next;
         };
         Ok(self.finish(result))
@@ -424,6 +446,60 @@ impl<'a> Refiner<'a> {
         if let Some(m) = measured {
             if self.best.as_ref().is_none_or(|(o, b)| outcome.trusted() && !o.trusted() || m < *b) {
                 self.best = Some((outcome.clone(), m));
+            }
+        }
+    }
+
+    /// Why the grid just solved (`outcome`, the last of `grids`) failed for a reason more
+    /// nodes will not cure, if it did: its verification could not run; the backend
+    /// stopped above the residual a converged solve needs (a loose `[solver] tol`); or its
+    /// error relative to the tolerance did not fall from the grid before it with the same
+    /// candidate. (A grid that did not converge may converge on a finer one: a wall's
+    /// contacts can need it.)
+    fn incurable(&self, outcome: &Outcome) -> Option<String> {
+        if outcome.converged() && outcome.verification.status == VerifyStatus::Unverified {
+            return Some("its verification could not run".to_string());
+        }
+        if let SolveStatus::ResidualTooLarge { residual, .. } = outcome.status {
+            return Some(format!(
+                "the solver stopped at its tolerance ([solver] tol) with a residual of {residual:.1e}, above the 1e-8 a converged solve needs"
+            ));
+        }
+        let [.., before, last] = self.grids.as_slice() else { return None };
+        let same_candidate = before.operator == last.operator && before.initial_velocity == last.initial_velocity;
+        match (before.measured, last.measured) {
+            (Some(b), Some(l)) if same_candidate && last.nodes > before.nodes && l >= b => Some(format!(
+                "its error did not fall from {} to {} nodes ({} and {} of the tolerance)",
+                before.nodes,
+                last.nodes,
+                readable_number(b),
+                readable_number(l)
+            )),
+            _ => None,
+        }
+    }
+
+    /// Why the next grid, of `nodes` nodes, would end past the time limit (or, without
+    /// one, the refinement's budget), if it would: its time is estimated from the last
+    /// grid's, in proportion to the nodes.
+    fn beyond_time(&self, nodes: usize) -> Option<String> {
+        let last = self.grids.last()?;
+        let estimate = last.wall_s * nodes as f64 / last.nodes as f64;
+        let elapsed = self.started.elapsed().as_secs_f64();
+        match self.deadline {
+            Some(d) => {
+                let left = d.saturating_duration_since(Instant::now()).as_secs_f64();
+                (estimate > left).then(|| format!("it would take about {estimate:.1} s, and the time limit leaves {left:.1} s"))
+            }
+            None => {
+                let first = self.grids[0].wall_s;
+                let bound = (REFINE_COST_FACTOR * first).max(REFINE_FLOOR_S);
+                (elapsed + estimate > bound).then(|| {
+                    format!(
+                        "it would take about {estimate:.1} s more, beyond the refinement's budget of {bound:.0} s ({REFINE_COST_FACTOR}× \
+                         the first grid's solve or {REFINE_FLOOR_S} s, whichever is longer; --time-limit sets another)"
+                    )
+                })
             }
         }
     }
