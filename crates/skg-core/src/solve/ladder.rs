@@ -454,6 +454,12 @@ fn remedy(scene: &Scene, disc: &Discretization, o: &Outcome, fallback_used: bool
             // The refinement does all of the above by itself, at the least predicted cost.
             let auto = if scene.verify.refine {
                 String::new()
+            } else if v.steps.implicit_accepted > 0 {
+                // The verification went on implicitly: the scene is stiff.
+                "the scene is stiff (its verification went on with the implicit stepper): --refine --operator auto chooses \
+                 the grid, the operator (a dissipative one damps what a stiff force excites) and the initial-velocity condition \
+                 (the natural one where the motion starts with a fast layer) predicted to meet the tolerance at the least cost; or "
+                    .to_string()
             } else {
                 "let the tool choose: --refine solves on finer grids (and, unless --operator names one, with the operator) \
                  predicted to meet the tolerance at the least cost; or "

@@ -51,7 +51,7 @@ use crate::discrete::Discretization;
 use crate::memory;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
-use crate::scene::{readable_number, Scene};
+use crate::scene::Scene;
 use crate::solve::ladder::{self, Rungs};
 use crate::solve::run::error::SolveError;
 use crate::solve::run::outcome::{Outcome, RefinedGrid, Refinement, Work};
@@ -64,6 +64,9 @@ use crate::stepping::verify::VerifyStatus;
 pub const REFINE_COST_FACTOR: f64 = 30.0;
 /// The least time a refinement without `--time-limit` may take, seconds.
 pub const REFINE_FLOOR_S: f64 = 60.0;
+
+/// What to do when the refinement stopped at its time limit.
+const LONGER: &str = "a longer --time-limit lets the refinement go on to finer grids";
 
 /// The fraction of the tolerance the next grid aims at.
 pub const AIM: f64 = 0.5;
@@ -325,7 +328,9 @@ impl<'a> Refiner<'a> {
         let first = self.first_choice();
         let skip_first = self.scene.verify.refine && first.2.is_some_and(|r| r > HOPELESS || (self.scene.choose_operator && r > AIM));
         let (mut c, mut nodes, mut predicted) = if skip_first { self.next().unwrap_or(first) } else { first };
-        let result = loop {
+        // The result in words, and what to do about it when it is not a verified solve
+        // (`None`: the remedy of the reported grid's own solve).
+        let (result, advice): (String, Option<String>) = loop {
             let number = self.grids.len() + 1;
             let what = format!("{} on {nodes} nodes", c.describe());
             // A grid beyond the memory ends the refinement, unless it is the first.
@@ -333,33 +338,34 @@ impl<'a> Refiner<'a> {
                 if self.grids.is_empty() {
                     return Err(e.into());
                 }
-                break format!("stopped before grid {number} ({what}): {e}");
+                break (format!("stopped before grid {number} ({what}): {e}"), Some("loosen the tolerance".to_string()));
             }
             progress(&format!("grid {number}: {what}"));
             let outcome = self.solve_on(c, nodes, predicted, &mut |step: &str| progress(&format!("grid {number} ({what}), {step}")))?;
             let trusted = outcome.trusted();
             self.record(c, nodes, predicted, &outcome);
             if trusted {
-                break format!("verified on grid {number}: {what}");
+                break (format!("verified on grid {number}: {what}"), None);
             }
             if !self.scene.verify.refine {
-                break format!("the operator was chosen for the scene's grid of {nodes} nodes; --refine would refine it");
+                break (format!("the operator was chosen for the scene's grid of {nodes} nodes; --refine would refine it"), None);
             }
-            if let Some(reason) = self.incurable(&outcome) {
-                break format!("stopped after grid {number} ({what}): {reason}; more nodes would not change that");
+            if let Some((reason, advice)) = self.incurable(&outcome) {
+                break (format!("stopped after grid {number} ({what}): {reason}; more nodes would not change that"), advice);
             }
             if self.deadline.is_some_and(|d| Instant::now() >= d) {
-                break format!("stopped at the time limit after {}", counted_grids(self.grids.len()));
+                break (format!("stopped at the time limit after {}", counted_grids(self.grids.len())), Some(LONGER.to_string()));
             }
             let Some(next) = self.next() else {
                 break self.out_of_budget();
             };
             if let Some(reason) = self.beyond_time(next.1) {
-                break format!("stopped before grid {} ({} on {} nodes): {reason}", number + 1, next.0.describe(), next.1);
+                let result = format!("stopped before grid {} ({} on {} nodes): {reason}", number + 1, next.0.describe(), next.1);
+                break (result, Some(LONGER.to_string()));
             }
             (c, nodes, predicted) = next;
         };
-        Ok(self.finish(result))
+        Ok(self.finish(result, advice))
     }
 
     /// Solve `c` on `nodes` nodes: the first grid with every rung of the ladder, later
@@ -456,24 +462,29 @@ impl<'a> Refiner<'a> {
     /// error relative to the tolerance did not fall from the grid before it with the same
     /// candidate. (A grid that did not converge may converge on a finer one: a wall's
     /// contacts can need it.)
-    fn incurable(&self, outcome: &Outcome) -> Option<String> {
+    /// With the reason, what to do (`None`: the grid's own remedy).
+    fn incurable(&self, outcome: &Outcome) -> Option<(String, Option<String>)> {
         if outcome.converged() && outcome.verification.status == VerifyStatus::Unverified {
-            return Some("its verification could not run".to_string());
+            return Some(("its verification could not run".to_string(), None));
         }
         if let SolveStatus::ResidualTooLarge { residual, .. } = outcome.status {
-            return Some(format!(
+            let reason = format!(
                 "the solver stopped at its tolerance ([solver] tol) with a residual of {residual:.1e}, above the 1e-8 a converged solve needs"
-            ));
+            );
+            return Some((reason, Some("tighten `[solver] tol` (the default is 1e-11)".to_string())));
         }
         let [.., before, last] = self.grids.as_slice() else { return None };
         let same_candidate = before.operator == last.operator && before.initial_velocity == last.initial_velocity;
         match (before.measured, last.measured) {
-            (Some(b), Some(l)) if same_candidate && last.nodes > before.nodes && l >= b => Some(format!(
-                "its error did not fall from {} to {} nodes ({} and {} of the tolerance)",
-                before.nodes,
-                last.nodes,
-                readable_number(b),
-                readable_number(l)
+            (Some(b), Some(l)) if same_candidate && last.nodes > before.nodes && l >= b => Some((
+                format!(
+                    "its error did not fall from {} to {} nodes ({} and {} times the tolerance)",
+                    before.nodes,
+                    last.nodes,
+                    ratio_text(b),
+                    ratio_text(l)
+                ),
+                Some("let `--operator auto` choose another operator, or loosen the tolerance".to_string()),
             )),
             _ => None,
         }
@@ -505,35 +516,47 @@ impl<'a> Refiner<'a> {
     }
 
     /// Why the refinement stopped without a verified solve at the budget.
-    fn out_of_budget(&mut self) -> String {
+    fn out_of_budget(&mut self) -> (String, Option<String>) {
         let budget = format!("the budget of {} nodes ({})", self.max_nodes, self.max_nodes_source);
-        match &self.predictor {
-            Err(why) => format!("no finer grid within {budget}; the error could not be predicted ({why})"),
-            Ok(_) => {
-                let c = self.candidates.first().copied();
-                let beyond = c.and_then(|c| {
-                    let n = self.max_nodes;
-                    self.predicted(c, n).map(|r| (c, r))
-                });
-                match beyond {
-                    Some((c, r)) if r.is_finite() => format!(
-                        "no discretization is predicted to meet the tolerance within {budget}: {} there is predicted at {:.1}× \
-                         the tolerance; raise --max-nodes, choose a higher-order operator, or loosen the tolerance",
-                        c.describe(),
-                        r
-                    ),
-                    _ => format!(
-                        "no discretization is predicted to meet the tolerance within {budget}: the predicted error stops \
-                         decreasing (round-off or the reference's own accuracy); loosen the tolerance"
-                    ),
-                }
-            }
+        let finer = "raise --max-nodes, choose a higher-order operator, or loosen the tolerance".to_string();
+        let Ok(_) = &self.predictor else {
+            let why = self.predictor.as_ref().err().cloned().unwrap_or_default();
+            return (format!("no finer grid within {budget}; the error could not be predicted ({why})"), None);
+        };
+        let c = self.candidates.first().copied();
+        let beyond = c.and_then(|c| self.predicted(c, self.max_nodes).map(|r| (c, r)));
+        match beyond {
+            Some((c, r)) if r.is_finite() && r <= 1.0 => (
+                format!(
+                    "no discretization within {budget} is predicted to meet the tolerance with the margin the refinement \
+                     aims at ({AIM} of it): {} there is predicted at {} of the tolerance",
+                    c.describe(),
+                    ratio_text(r)
+                ),
+                Some(finer),
+            ),
+            Some((c, r)) if r.is_finite() => (
+                format!(
+                    "no discretization is predicted to meet the tolerance within {budget}: {} there is predicted at {} times \
+                     the tolerance",
+                    c.describe(),
+                    ratio_text(r)
+                ),
+                Some(finer),
+            ),
+            _ => (
+                format!(
+                    "no discretization is predicted to meet the tolerance within {budget}: the predicted error stops \
+                     decreasing (round-off or the reference's own accuracy)"
+                ),
+                Some("loosen the tolerance".to_string()),
+            ),
         }
     }
 
     /// The reported outcome: the verified one, else the most accurate converged one,
     /// else the first grid's; with the refinement's record.
-    fn finish(self, result: String) -> Outcome {
+    fn finish(self, result: String, advice: Option<String>) -> Outcome {
         let tolerance = match &self.predictor {
             Ok(p) => p.tolerance_source.clone(),
             Err(_) => "the verification's (no prediction)".to_string(),
@@ -549,8 +572,8 @@ impl<'a> Refiner<'a> {
         let own_s: f64 = outcome.attempts.iter().map(|a| a.wall_s).sum();
         outcome.timings.other_attempts_s += (all_s - own_s).max(0.0) + self.prediction_s;
         outcome.work = self.work;
-        if !outcome.trusted() {
-            outcome.remedy = Some(format!("{result}; {}", outcome.remedy.take().unwrap_or_default()));
+        if !outcome.trusted() && advice.is_some() {
+            outcome.remedy = advice;
         }
         outcome.refinement = Some(Refinement {
             refine: self.scene.verify.refine,
@@ -593,6 +616,16 @@ fn calibration(measured: &[(Candidate, f64)], c: Candidate) -> f64 {
         other.max(1.0)
     } else {
         1.0
+    }
+}
+
+/// An error relative to the tolerance in words: three significant digits, in exponent
+/// form when it is huge or tiny.
+fn ratio_text(r: f64) -> String {
+    if (1e-3..1e4).contains(&r.abs()) {
+        format!("{r:.3}")
+    } else {
+        format!("{r:.2e}")
     }
 }
 
