@@ -47,7 +47,7 @@ use crate::discrete::contact::{self, WallResolution};
 use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::model::Model;
 use crate::sbp::OperatorKind;
-use crate::scene::Scene;
+use crate::scene::{Scene, Stepper};
 use crate::stepping::equations::{integrate_model, min_spacing, step_budget, Stepped, STEPS_PER_NODE};
 use crate::stepping::ode::{OdeError, OdeOptions, OdeStats};
 
@@ -187,7 +187,9 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorK
             let reference_trajectory = Trajectory::with_physical_columns(model, &tr.t, states);
             Verification { reference, steps, ..compare_with_reference(scene, model, tr, operator, reference_trajectory, base) }
         }
-        Err(e) => Verification { status: VerifyStatus::Unverified, reference, reason: time_stepping_failure(&e), ..base },
+        Err(e) => {
+            Verification { status: VerifyStatus::Unverified, reference, reason: time_stepping_failure(&e, scene.verify.stepper), ..base }
+        }
     }
 }
 
@@ -253,16 +255,20 @@ fn time_stepping_at_nodes(scene: &Scene, model: &Model, tr: &Trajectory) -> (Res
     (integrated, reference)
 }
 
-/// Why a solve could not be checked when the time stepping failed with `e`.
-fn time_stepping_failure(e: &OdeError) -> String {
+/// Why a solve could not be checked when the time stepping by `stepper` failed with `e`.
+fn time_stepping_failure(e: &OdeError, stepper: Stepper) -> String {
+    let failed = format!("time stepping of the same scene failed, so the solve could not be checked: {e}");
     match e {
-        OdeError::MaxSteps { .. } => format!(
-            "time stepping of the same scene failed, so the solve could not be checked: {e} (more than {} steps per \
-             node: the motion is far finer than the grid, or, with --stepper dop853, the scene is stiff and explicit \
-             steps are far shorter than the motion; refine N, shorten the span, or step implicitly: --stepper auto)",
-            STEPS_PER_NODE
+        OdeError::MaxSteps { .. } if stepper == Stepper::Dop853 => format!(
+            "{failed} (more than {STEPS_PER_NODE} steps per node: the motion is far finer than the grid, or the scene is \
+             stiff and explicit steps are far shorter than the motion; refine N, shorten the span, or let the stepping go on \
+             implicitly: --stepper auto)"
         ),
-        e => format!("time stepping of the same scene failed, so the solve could not be checked: {e}"),
+        OdeError::MaxSteps { .. } => format!(
+            "{failed} (more than {STEPS_PER_NODE} steps per node: the motion is far finer than the grid; refine N or \
+             shorten the span)"
+        ),
+        _ => failed,
     }
 }
 

@@ -185,7 +185,9 @@ impl<'a> Refiner<'a> {
         if !fewest.is_finite() || fewest >= MIN_STEPS {
             return 0;
         }
-        ((nodes - 1) as f64 * MIN_STEPS / fewest).ceil() as usize + 1
+        // A contact of almost no steps asks for more nodes than any budget (and than a
+        // usize holds): the budget then decides.
+        ((nodes - 1) as f64 * MIN_STEPS / fewest).ceil().min(MAX_NODES_DEFAULT as f64 * 1024.0) as usize + 1
     }
 
     fn calibration_of(&self, c: Candidate) -> f64 {
