@@ -189,3 +189,13 @@ fn a_failure_more_nodes_cannot_cure_ends_the_refinement_at_once() {
     assert!(r.result.contains("its verification could not run"), "{}", r.result);
     assert!(o.converged() && !o.trusted());
 }
+
+/// A contact of almost no grid steps (the tumbler with g = 2³² on 40 nodes, found by the
+/// fuzz run) asks for more nodes than a usize holds: the refinement takes the budget's
+/// word instead of overflowing.
+#[test]
+fn a_contact_of_almost_no_steps_does_not_overflow_the_nodes_it_asks_for() {
+    let ov = Overrides { nodes: Some(40), refine: true, set: vec![("g".into(), "4294967296".into())], ..Overrides::default() };
+    let o = solve::solve_scene(&common::load("tumbler", &ov)).unwrap();
+    assert!(o.refinement.is_some());
+}
