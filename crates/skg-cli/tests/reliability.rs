@@ -534,3 +534,47 @@ fn a_solve_beyond_the_address_space_limit_is_refused_naming_it() {
     assert!(t.contains("needs an estimated") && t.contains("address-space limit (ulimit -v)"), "{t}");
     assert!(t.contains(&format!("free_fall.toml:{}:", line_of(&scene, "nodes ="))), "{t}");
 }
+
+/// Symbolic links placed inside an output directory are not followed: a link where the
+/// log's directory, a sweep's `points/` or the lock file would be is refused (exit 1,
+/// naming the link) and nothing is written where it points.
+#[test]
+fn symbolic_links_inside_output_directories_are_not_followed() {
+    use std::os::unix::fs::symlink;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let elsewhere = d.join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    let refused = |args: &[&str], link: &str| {
+        let (code, t) = run(args, d);
+        assert_eq!(code, Some(1), "{args:?}: {t}");
+        assert!(t.contains(&format!("{link} is a symbolic link")), "{args:?}: {t}");
+        assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 0, "{args:?} wrote through {link}");
+    };
+    // `log_file = "logs/ipopt.log"` with OUT/logs a link to another directory.
+    let scene = common::variant(d, "free_fall", "log.toml", &[("[verify]", "[solver]\nlog_file = \"logs/ipopt.log\"\n\n[verify]")]);
+    std::fs::create_dir(d.join("out")).unwrap();
+    symlink(&elsewhere, d.join("out/logs")).unwrap();
+    refused(&[s(&scene), "-o", "out"], "out/logs");
+    // OUT/.skg-lock a link to a file that does not exist yet: it is not created.
+    std::fs::create_dir(d.join("locked")).unwrap();
+    symlink(elsewhere.join("victim"), d.join("locked/.skg-lock")).unwrap();
+    refused(&[s(&common::scenario("free_fall")), "-o", "locked"], "locked/.skg-lock");
+    // A sweep that keeps its trajectories, with DIR/points a link.
+    let sweep = free_fall_sweep(d, 2, "keep_trajectories = true\n");
+    std::fs::create_dir(d.join("sweep")).unwrap();
+    symlink(&elsewhere, d.join("sweep/points")).unwrap();
+    refused(&["sweep", s(&sweep), "-o", "sweep", "-q"], "sweep/points");
+    // A link at a point's own directory DIR/points/<id> fails that point (its row says
+    // why); the ids are those of the same sweep run without links.
+    let (code, t) = run(&["sweep", s(&sweep), "-o", "plain", "-q"], d);
+    assert_eq!(code, Some(0), "{t}");
+    std::fs::create_dir_all(d.join("linked/points")).unwrap();
+    for id in ids(&d.join("plain")).keys() {
+        symlink(&elsewhere, d.join("linked/points").join(id)).unwrap();
+    }
+    let (_, t) = run(&["sweep", s(&sweep), "-o", "linked", "-q"], d);
+    assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 0, "{t}");
+    let results = std::fs::read_to_string(d.join("linked/results.csv")).unwrap();
+    assert!(results.contains("is a symbolic link"), "{results}");
+}

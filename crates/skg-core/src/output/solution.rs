@@ -145,6 +145,12 @@ pub fn solve_into_with_progress(
 ) -> Result<(Outcome, Written), SolveIntoError> {
     refuse_log_over_run_files(scene)?;
     let out = OutputDir::lock(dir)?;
+    if let Some(parent) = scene.solver.log_file.as_ref().and_then(|name| name.parent()) {
+        if let Err(e) = super::refuse_links(dir, parent) {
+            out.abandon();
+            return Err(e.into());
+        }
+    }
     let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
     scene.solver.ipopt_log = log.as_ref().map(|(_, staged)| staged.clone());
     let outcome = solve::solve_scene_with_progress(scene, progress);
