@@ -578,3 +578,119 @@ fn symbolic_links_inside_output_directories_are_not_followed() {
     let results = std::fs::read_to_string(d.join("linked/results.csv")).unwrap();
     assert!(results.contains("is a symbolic link"), "{results}");
 }
+
+/// Fake Slurm commands in `bin` (each a shell script with the given body), for
+/// `sweep --slurm` without a cluster.
+fn fake_slurm(bin: &Path, commands: &[(&str, &str)]) {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::create_dir_all(bin).unwrap();
+    for (name, body) in commands {
+        let path = bin.join(name);
+        std::fs::write(&path, format!("#!/bin/sh\n{body}\n")).unwrap();
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+}
+
+/// `skg-solve args` with the fake Slurm commands of `bin` first on PATH and every Slurm
+/// command limited to `timeout` seconds; killed (and the test failed) after 60 s.
+fn run_with_slurm(args: &[&str], dir: &Path, bin: &Path, timeout: &str) -> (Option<i32>, String) {
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_skg-solve"))
+        .args(args)
+        .current_dir(dir)
+        .env("PATH", path)
+        .env("SKG_SLURM_TIMEOUT", timeout)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("{args:?} still running after 60 s: a hanging Slurm command hangs skg-solve");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let o = child.wait_with_output().unwrap();
+    let t = common::text(&o);
+    assert!(!t.contains("panicked"), "{t}");
+    (o.status.code(), t)
+}
+
+/// A hanging sbatch or squeue ends `sweep --slurm` (and `--wait`) with exit 1 after the
+/// commands' time limit; a submission whose job id cannot be read is recorded in
+/// jobs.json and its error says how to find the job; an array whose merge job's id
+/// cannot be read is cancelled.
+#[test]
+fn slurm_commands_that_hang_or_print_no_job_id_end_in_exit_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sweep = free_fall_sweep(d, 4, "");
+    let jobs = |out: &str| std::fs::read_to_string(d.join(out).join("slurm/jobs.json")).unwrap_or_default();
+    // sbatch hangs.
+    let bin = d.join("hang");
+    fake_slurm(&bin, &[("sbatch", "exec sleep 600"), ("squeue", "exit 0"), ("scancel", "exit 0")]);
+    let (code, t) = run_with_slurm(&["sweep", s(&sweep), "--slurm", "-o", "a"], d, &bin, "1");
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("did not finish within 1 s") && t.contains("SKG_SLURM_TIMEOUT"), "{t}");
+    assert!(jobs("a").contains("unconfirmed"), "the submission is recorded: {}", jobs("a"));
+    // squeue hangs under --wait: tolerated for ten time limits, then exit 1.
+    let bin = d.join("squeue");
+    fake_slurm(&bin, &[("sbatch", "echo 4242"), ("squeue", "exec sleep 600"), ("scancel", "exit 0")]);
+    let (code, t) = run_with_slurm(&["sweep", s(&sweep), "--slurm", "--wait", "-o", "b"], d, &bin, "0.5");
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("squeue") && t.contains("did not finish within 0.5 s"), "{t}");
+    // sbatch prints no job id for the array.
+    let bin = d.join("garbage");
+    fake_slurm(&bin, &[("sbatch", "echo 'queue is busy, try later'"), ("squeue", "exit 0"), ("scancel", "exit 0")]);
+    let (code, t) = run_with_slurm(&["sweep", s(&sweep), "--slurm", "-o", "c"], d, &bin, "5");
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("printed no job id") && t.contains("squeue --me --name=skg-"), "{t}");
+    assert!(jobs("c").contains("queue is busy"), "{}", jobs("c"));
+    // sbatch gives the array's id but none for the merge: the array is cancelled, and
+    // both are recorded.
+    let bin = d.join("merge");
+    let log = d.join("scancel.log");
+    let script = format!("case \"$*\" in *merge.sh*) echo oops ;; *) echo 'Submitted batch job 777' ;; esac");
+    fake_slurm(&bin, &[("sbatch", &script), ("squeue", "exit 0"), ("scancel", &format!("echo \"$@\" >> {}", log.display()))]);
+    let (code, t) = run_with_slurm(&["sweep", s(&sweep), "--slurm", "-o", "e"], d, &bin, "5");
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("array job 777") && t.contains("cancelled"), "{t}");
+    assert_eq!(std::fs::read_to_string(&log).unwrap().trim(), "777");
+    assert!(jobs("e").contains("\"777\"") && jobs("e").contains("unconfirmed"), "{}", jobs("e"));
+}
+
+/// A shard whose sweep.json was removed is incomplete for `status`, for the
+/// resubmission and for the merge alike; running it again completes it without running
+/// its points again.
+#[test]
+fn a_shard_without_its_sweep_json_is_incomplete_everywhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sweep = free_fall_sweep(d, 4, "");
+    let (code, t) = run(&["sweep", s(&sweep), "--slurm", "--dry-run", "--shards", "2", "-o", "sh"], d);
+    assert_eq!(code, Some(0), "{t}");
+    let shard = |k: usize| run(&["sweep", s(&sweep), "--shard", &format!("{k}/2"), "-o", &format!("sh/shards/{k}"), "-q"], d);
+    for k in [1, 2] {
+        assert_eq!(shard(k).0, Some(0));
+    }
+    std::fs::remove_file(d.join("sh/shards/2/sweep.json")).unwrap();
+    // status: shard 2's points are missing.
+    let (code, t) = run(&["status", "sh"], d);
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("2 missing") || t.lines().any(|l| l.split_whitespace().collect::<Vec<_>>() == ["2", "2", "0", "0", "2"]), "{t}");
+    // The resubmission would submit shard 2.
+    let (_, t) = run(&["sweep", s(&sweep), "--slurm", "--dry-run", "-o", "sh"], d);
+    assert!(t.contains("--array=2 "), "{t}");
+    // The merge names it (it said "incomplete shards: ;").
+    let (code, t) = run(&["sweep-merge", "sh"], d);
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("2 (2 of 2 missing)"), "{t}");
+    // Run again, the shard writes its sweep.json and runs nothing; then the merge is complete.
+    let (code, t) = run(&["sweep", s(&sweep), "--shard", "2/2", "-o", "sh/shards/2"], d);
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("2 already done"), "{t}");
+    let (code, t) = run(&["sweep-merge", "sh"], d);
+    assert_eq!(code, Some(0), "{t}");
+}
