@@ -694,3 +694,24 @@ fn a_shard_without_its_sweep_json_is_incomplete_everywhere() {
     let (code, t) = run(&["sweep-merge", "sh"], d);
     assert_eq!(code, Some(0), "{t}");
 }
+
+/// A time limit beyond what the clock can count (`1e300` s, the largest float) means no
+/// limit: on the command line, in the scene file, with the refinement; it overflowed a
+/// `Duration` (a panic, exit 101).
+#[test]
+fn a_time_limit_beyond_the_clock_is_no_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = common::scenario("free_fall");
+    for limit in ["1e300", "1.7976931348623157e308"] {
+        for refine in [&[][..], &["--refine"]] {
+            let mut args = vec![s(&scene), "--time-limit", limit, "-o", "out", "-q"];
+            args.extend(refine);
+            let (code, t) = run(&args, d);
+            assert_eq!(code, Some(0), "{args:?}: {t}");
+        }
+    }
+    let file = common::variant(d, "free_fall", "limit.toml", &[("[verify]", "[solver]\ntime_limit = 1e300\n\n[verify]")]);
+    let (code, t) = run(&[s(&file), "-o", "file", "-q"], d);
+    assert_eq!(code, Some(0), "{t}");
+}
