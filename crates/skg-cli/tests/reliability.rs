@@ -652,8 +652,8 @@ fn slurm_commands_that_hang_or_print_no_job_id_end_in_exit_1() {
     // both are recorded.
     let bin = d.join("merge");
     let log = d.join("scancel.log");
-    let script = format!("case \"$*\" in *merge.sh*) echo oops ;; *) echo 'Submitted batch job 777' ;; esac");
-    fake_slurm(&bin, &[("sbatch", &script), ("squeue", "exit 0"), ("scancel", &format!("echo \"$@\" >> {}", log.display()))]);
+    let script = "case \"$*\" in *merge.sh*) echo oops ;; *) echo 'Submitted batch job 777' ;; esac";
+    fake_slurm(&bin, &[("sbatch", script), ("squeue", "exit 0"), ("scancel", &format!("echo \"$@\" >> {}", log.display()))]);
     let (code, t) = run_with_slurm(&["sweep", s(&sweep), "--slurm", "-o", "e"], d, &bin, "5");
     assert_eq!(code, Some(1), "{t}");
     assert!(t.contains("array job 777") && t.contains("cancelled"), "{t}");
