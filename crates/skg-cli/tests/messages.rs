@@ -362,6 +362,12 @@ fn hostile_settings_are_refused_at_their_line_in_words() {
     let (code, t) = run(&[s(&scene), "-o", "e"], d);
     assert_eq!(code, Some(1), "{t:.2000}");
     assert!(t.contains("unknown symbol `q`") && t.len() < 2000, "{} bytes: {t:.2000}", t.len());
+    // A note about a key says where the key is.
+    let scene = common::variant(d, "free_fall", "w.toml", &[("nodes = 32", "nodes = 32\nwindow = 30")]);
+    let (code, t) = run(&[s(&scene), "-o", "w"], d);
+    assert_eq!(code, Some(0), "{t}");
+    let line = std::fs::read_to_string(&scene).unwrap().lines().position(|l| l == "window = 30").unwrap() + 1;
+    assert!(t.contains(&format!("note: {}:{line}:10: time.window = 30 s is not shorter", s(&scene))), "{t}");
     // A grid axis of the wrong shape says what an axis is.
     let sweep = common::sweep_file(d, &common::scenario("free_fall"), "[[grid]]\nnodes = [[16], 32]\n");
     let (code, t) = run(&["sweep", s(&sweep), "-o", "sw"], d);

@@ -61,7 +61,7 @@ pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
     let path = args.scenario.clone().expect("clap requires the scenario");
     let mut scene = load(&path, &overrides(&args)?)?;
     for n in &scene.notes {
-        note!("note: {}: {n}", path.display());
+        note!("note: {n}");
     }
     let dir = args.output.unwrap_or_else(|| {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());

@@ -175,7 +175,7 @@ fn refuse_log_over_run_files(scene: &Scene) -> Result<(), SolveError> {
     let (Some(name), Some(spanned)) = (&scene.solver.log_file, &scene.file.solver.log_file) else { return Ok(()) };
     let Some(first) = name.components().next().map(|c| Path::new(c.as_os_str())) else { return Ok(()) };
     if [TRAJECTORY_FILE, REFERENCE_FILE, SUMMARY_FILE].iter().any(|f| first == Path::new(f)) {
-        let message = format!("solver.log_file may not be {} or lie inside it: the solve itself writes that file", first.display());
+        let message = format!("solver.log_file may not be {}, which the solve itself writes, nor lie inside it", first.display());
         return Err(SceneError::Invalid { location: scene.file.origin.locate_in(spanned, None), message }.into());
     }
     Ok(())
