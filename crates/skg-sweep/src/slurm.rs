@@ -43,7 +43,7 @@ const QUERY_TIMEOUT: Duration = Duration::from_secs(60);
 /// restarting), in multiples of the query timeout (10 minutes by default).
 const QUERY_FAILURES_FOR: u32 = 10;
 /// The environment variable that sets, in seconds, how long every Slurm command may take
-/// (instead of [`SBATCH_TIMEOUT`] and [`QUERY_TIMEOUT`]).
+/// (instead of 120 s for sbatch, 60 s for squeue and scancel).
 pub const TIMEOUT_VAR: &str = "SKG_SLURM_TIMEOUT";
 
 /// How long a Slurm command may take: [`TIMEOUT_VAR`] if it holds a positive number of
