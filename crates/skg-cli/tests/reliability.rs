@@ -715,3 +715,22 @@ fn a_time_limit_beyond_the_clock_is_no_limit() {
     let (code, t) = run(&[s(&file), "-o", "file", "-q"], d);
     assert_eq!(code, Some(0), "{t}");
 }
+
+/// Sweep workers whose files cannot be written (a file-size limit with SIGXFSZ ignored:
+/// EFBIG, as a full disk gives ENOSPC) record the point as an error in the system's
+/// words; none exits 101 ("failed printing to stdout", "worker exited … without a
+/// result").
+#[test]
+fn sweep_workers_that_cannot_write_record_an_error_not_a_crash() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let body = "keep_trajectories = true\n[[grid]]\nnodes = [100, 1200, 1600, 2000]\n";
+    let sweep = common::sweep_file(d, &common::scenario("free_fall"), body);
+    let script = format!("trap '' XFSZ; ulimit -f 40; exec \"$0\" sweep {} -o out -j 2", s(&sweep));
+    let o = Command::new("sh").args(["-c", &script, env!("CARGO_BIN_EXE_skg-solve")]).current_dir(d).output().unwrap();
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let results = std::fs::read_to_string(d.join("out/results.csv")).unwrap();
+    assert!(results.contains("File too large"), "{results}");
+    assert!(!results.contains("crashed") && !results.contains("status: 101") && !t.contains("panicked"), "{results}\n{t}");
+}
