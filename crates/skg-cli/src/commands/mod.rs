@@ -89,7 +89,8 @@ pub struct SceneArgs {
     pub verify_tol: Option<f64>,
     /// Skip the comparison with time stepping (the result is still checked for
     /// non-finite numbers and a positive-definite kinetic matrix); a converged solve
-    /// then exits 0 unless one of those checks fails.
+    /// then exits 0 unless one of those checks fails. A scene's `[verify] refine` is
+    /// then off, and --refine with it is refused (the refinement needs the verification).
     #[arg(long)]
     pub no_verify: bool,
     /// Report the scene's own solve even if it fails, without trying the fallback ladder
