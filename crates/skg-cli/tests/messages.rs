@@ -299,3 +299,78 @@ fn a_sweep_of_a_million_points_is_refused_at_once() {
     assert!(t.contains("20000 points in shard 7/50 of 1000000 as listed"), "{t}");
     assert!(!dir.path().join("out").exists());
 }
+
+/// `scenarios/free_fall.toml` with `extra` inserted before its `[verify]` table, as
+/// `dir/name`; the 1-based line of the first inserted line.
+fn free_fall_with(dir: &Path, name: &str, extra: &str) -> (std::path::PathBuf, usize) {
+    let text = std::fs::read_to_string(common::scenario("free_fall")).unwrap();
+    let line = text.lines().position(|l| l == "[verify]").unwrap() + 1;
+    let path = dir.join(name);
+    std::fs::write(&path, text.replacen("\n[verify]", &format!("\n{extra}\n\n[verify]"), 1)).unwrap();
+    (path, line)
+}
+
+/// Small message fixes of the third hostile-input round, each at the line of the key it
+/// is about and before any work: `max_iter` beyond Ipopt's `int`; `log_file` names
+/// that only failed after the solve (naming a temporary file); `--refine --no-verify`;
+/// clap's tip for a negative number; `-o` at a link; an expression echoed whole; serde's
+/// "did not match any variant of untagged enum" in a sweep file.
+#[test]
+fn hostile_settings_are_refused_at_their_line_in_words() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // max_iter beyond i32 (Ipopt's wrapper refused it without a line, Newton took it).
+    for backend in ["ipopt", "newton"] {
+        let (scene, line) = free_fall_with(d, "m.toml", &format!("[solver]\nbackend = \"{backend}\"\nmax_iter = 2147483648"));
+        let (code, t) = run(&[s(&scene), "-o", "m"], d);
+        assert_eq!(code, Some(1), "{t}");
+        assert!(t.contains(&format!("m.toml:{}:", line + 2)) && t.contains("from 0 to 2147483647"), "{t}");
+        assert!(!d.join("m").exists(), "{t}");
+    }
+    let (code, t) = run(&[s(&common::scenario("free_fall")), "--max-iter", "2147483648"], d);
+    assert_eq!(code, Some(2), "{t}");
+    // log_file names that pass a check of components but not the file system.
+    let long = "x".repeat(300);
+    for name in ["a/.", "summary.json/x", "a//b", long.as_str()] {
+        let (scene, line) = free_fall_with(d, "l.toml", &format!("[solver]\nlog_file = \"{name}\""));
+        let (code, t) = run(&[s(&scene), "-o", "l"], d);
+        assert_eq!(code, Some(1), "{name}: {t}");
+        assert!(t.contains(&format!("l.toml:{}:", line + 1)) && t.contains("solver.log_file"), "{name}: {t}");
+        assert!(!t.contains(".skg-tmp") && t.len() < 1000, "{name}: {t}");
+        assert!(!d.join("l/summary.json").exists(), "{name}: refused before the solve");
+    }
+    // --refine with --no-verify contradict each other.
+    let (code, t) = run(&[s(&common::scenario("free_fall")), "--refine", "--no-verify", "-o", "r"], d);
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("--refine with --no-verify") && !d.join("r").exists(), "{t}");
+    // A negative number is a value, not an option: no tip to write `-- -1`.
+    for option in ["--max-nodes", "--nodes", "--max-iter", "--time-limit"] {
+        let (code, t) = run(&[s(&common::scenario("free_fall")), option, "-1"], d);
+        assert_eq!(code, Some(2), "{option}: {t}");
+        assert!(t.contains("'-1'") && !t.contains("-- -1") && !t.contains("unexpected argument"), "{option}: {t}");
+    }
+    // -o at a link to nothing says so, not "File exists".
+    std::os::unix::fs::symlink(d.join("nowhere"), d.join("link")).unwrap();
+    let (code, t) = run(&[s(&common::scenario("free_fall")), "-o", "link"], d);
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("symbolic link to") && t.contains("does not exist") && !t.contains("File exists"), "{t}");
+    // A 400 kB expression with an unknown name is quoted around the error only.
+    let huge = format!("1/2*m*x_dot^2 - m*g*x{}", " + 0*x".repeat(70_000) + " + q");
+    let (scene, _) = free_fall_with(d, "e.toml", "");
+    let text = std::fs::read_to_string(&scene).unwrap().replace("\"1/2*m*x_dot^2 - m*g*x\"", &format!("\"{huge}\""));
+    std::fs::write(&scene, text).unwrap();
+    let (code, t) = run(&[s(&scene), "-o", "e"], d);
+    assert_eq!(code, Some(1), "{t:.2000}");
+    assert!(t.contains("unknown symbol `q`") && t.len() < 2000, "{} bytes: {t:.2000}", t.len());
+    // A note about a key says where the key is.
+    let scene = common::variant(d, "free_fall", "w.toml", &[("nodes = 32", "nodes = 32\nwindow = 30")]);
+    let (code, t) = run(&[s(&scene), "-o", "w"], d);
+    assert_eq!(code, Some(0), "{t}");
+    let line = std::fs::read_to_string(&scene).unwrap().lines().position(|l| l == "window = 30").unwrap() + 1;
+    assert!(t.contains(&format!("note: {}:{line}:10: time.window = 30 s is not shorter", s(&scene))), "{t}");
+    // A grid axis of the wrong shape says what an axis is.
+    let sweep = common::sweep_file(d, &common::scenario("free_fall"), "[[grid]]\nnodes = [[16], 32]\n");
+    let (code, t) = run(&["sweep", s(&sweep), "-o", "sw"], d);
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("sweep.toml:4:") && t.contains("a grid axis is a value") && !t.contains("untagged enum"), "{t}");
+}

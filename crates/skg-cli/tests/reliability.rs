@@ -273,7 +273,7 @@ fn huge_node_counts_are_refused_with_the_estimate_and_the_limit() {
     // Within the structural limit but beyond memory: the estimate and the limit are stated.
     let (code, t) = run(&[s(&scene), "--nodes", "100000000"], dir.path());
     assert_eq!(code, Some(1), "{t}");
-    assert!(t.contains("needs an estimated") && t.contains(" TB of memory, more than the") && t.contains("GB available"), "{t}");
+    assert!(t.contains("needs an estimated") && t.contains(" TB of memory, more than the") && t.contains(" GB "), "{t}");
     assert!(t.contains("rolling_disk.toml:") && !dir.path().join("out").exists(), "{t}");
     // In a scene file, and as a sweep point.
     let big = common::variant(dir.path(), "free_fall", "big.toml", &[("nodes = 32", "nodes = 9223372036854775807")]);
@@ -517,4 +517,220 @@ fn negative_or_nan_numeric_options_are_input_errors_before_any_work() {
         assert!(t.contains(needle) && !t.contains("converged"), "{args:?}: {t}");
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written");
+}
+
+/// Under an address-space limit (`ulimit -v`, as a batch system sets it) a solve that
+/// does not fit is refused with the limit named, instead of aborting on an allocation
+/// (SIGABRT) after the machine's available memory let it start.
+#[test]
+fn a_solve_beyond_the_address_space_limit_is_refused_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scenario("free_fall");
+    // The estimate of 3·10⁶ nodes on Newton is about 6.4 GB; the limit is 4 GB.
+    let script = format!("ulimit -v 4000000 && exec \"$0\" {} --nodes 3000000 --no-verify --backend newton -o out", s(&scene));
+    let o = Command::new("bash").args(["-c", &script, env!("CARGO_BIN_EXE_skg-solve")]).current_dir(dir.path()).output().unwrap();
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("needs an estimated") && t.contains("address-space limit (ulimit -v)"), "{t}");
+    assert!(t.contains(&format!("free_fall.toml:{}:", line_of(&scene, "nodes ="))), "{t}");
+}
+
+/// Symbolic links placed inside an output directory are not followed: a link where the
+/// log's directory, a sweep's `points/` or the lock file would be is refused (exit 1,
+/// naming the link) and nothing is written where it points.
+#[test]
+fn symbolic_links_inside_output_directories_are_not_followed() {
+    use std::os::unix::fs::symlink;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let elsewhere = d.join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    let refused = |args: &[&str], link: &str| {
+        let (code, t) = run(args, d);
+        assert_eq!(code, Some(1), "{args:?}: {t}");
+        assert!(t.contains(&format!("{link} is a symbolic link")), "{args:?}: {t}");
+        assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 0, "{args:?} wrote through {link}");
+    };
+    // `log_file = "logs/ipopt.log"` with OUT/logs a link to another directory.
+    let scene = common::variant(d, "free_fall", "log.toml", &[("[verify]", "[solver]\nlog_file = \"logs/ipopt.log\"\n\n[verify]")]);
+    std::fs::create_dir(d.join("out")).unwrap();
+    symlink(&elsewhere, d.join("out/logs")).unwrap();
+    refused(&[s(&scene), "-o", "out"], "out/logs");
+    // OUT/.skg-lock a link to a file that does not exist yet: it is not created.
+    std::fs::create_dir(d.join("locked")).unwrap();
+    symlink(elsewhere.join("victim"), d.join("locked/.skg-lock")).unwrap();
+    refused(&[s(&common::scenario("free_fall")), "-o", "locked"], "locked/.skg-lock");
+    // A sweep that keeps its trajectories, with DIR/points a link.
+    let sweep = free_fall_sweep(d, 2, "keep_trajectories = true\n");
+    std::fs::create_dir(d.join("sweep")).unwrap();
+    symlink(&elsewhere, d.join("sweep/points")).unwrap();
+    refused(&["sweep", s(&sweep), "-o", "sweep", "-q"], "sweep/points");
+    // A link at a point's own directory DIR/points/<id> fails that point (its row says
+    // why); the ids are those of the same sweep run without links.
+    let (code, t) = run(&["sweep", s(&sweep), "-o", "plain", "-q"], d);
+    assert_eq!(code, Some(0), "{t}");
+    std::fs::create_dir_all(d.join("linked/points")).unwrap();
+    for id in ids(&d.join("plain")).keys() {
+        symlink(&elsewhere, d.join("linked/points").join(id)).unwrap();
+    }
+    let (_, t) = run(&["sweep", s(&sweep), "-o", "linked", "-q"], d);
+    assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 0, "{t}");
+    let results = std::fs::read_to_string(d.join("linked/results.csv")).unwrap();
+    assert!(results.contains("is a symbolic link"), "{results}");
+}
+
+/// Fake Slurm commands in `bin` (each a shell script with the given body), for
+/// `sweep --slurm` without a cluster.
+fn fake_slurm(bin: &Path, commands: &[(&str, &str)]) {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::create_dir_all(bin).unwrap();
+    for (name, body) in commands {
+        let path = bin.join(name);
+        std::fs::write(&path, format!("#!/bin/sh\n{body}\n")).unwrap();
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+}
+
+/// `skg-solve args` with the fake Slurm commands of `bin` first on PATH and every Slurm
+/// command limited to `timeout` seconds; killed (and the test failed) after 60 s.
+fn run_with_slurm(args: &[&str], dir: &Path, bin: &Path, timeout: &str) -> (Option<i32>, String) {
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_skg-solve"))
+        .args(args)
+        .current_dir(dir)
+        .env("PATH", path)
+        .env("SKG_SLURM_TIMEOUT", timeout)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("{args:?} still running after 60 s: a hanging Slurm command hangs skg-solve");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let o = child.wait_with_output().unwrap();
+    let t = common::text(&o);
+    assert!(!t.contains("panicked"), "{t}");
+    (o.status.code(), t)
+}
+
+/// A hanging sbatch or squeue ends `sweep --slurm` (and `--wait`) with exit 1 after the
+/// commands' time limit; a submission whose job id cannot be read is recorded in
+/// jobs.json and its error says how to find the job; an array whose merge job's id
+/// cannot be read is cancelled.
+#[test]
+fn slurm_commands_that_hang_or_print_no_job_id_end_in_exit_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sweep = free_fall_sweep(d, 4, "");
+    let jobs = |out: &str| std::fs::read_to_string(d.join(out).join("slurm/jobs.json")).unwrap_or_default();
+    // sbatch hangs.
+    let bin = d.join("hang");
+    fake_slurm(&bin, &[("sbatch", "exec sleep 600"), ("squeue", "exit 0"), ("scancel", "exit 0")]);
+    let (code, t) = run_with_slurm(&["sweep", s(&sweep), "--slurm", "-o", "a"], d, &bin, "1");
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("did not finish within 1 s") && t.contains("SKG_SLURM_TIMEOUT"), "{t}");
+    assert!(jobs("a").contains("unconfirmed"), "the submission is recorded: {}", jobs("a"));
+    // squeue hangs under --wait: tolerated for ten time limits, then exit 1.
+    let bin = d.join("squeue");
+    fake_slurm(&bin, &[("sbatch", "echo 4242"), ("squeue", "exec sleep 600"), ("scancel", "exit 0")]);
+    let (code, t) = run_with_slurm(&["sweep", s(&sweep), "--slurm", "--wait", "-o", "b"], d, &bin, "0.5");
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("squeue") && t.contains("did not finish within 0.5 s"), "{t}");
+    // sbatch prints no job id for the array.
+    let bin = d.join("garbage");
+    fake_slurm(&bin, &[("sbatch", "echo 'queue is busy, try later'"), ("squeue", "exit 0"), ("scancel", "exit 0")]);
+    let (code, t) = run_with_slurm(&["sweep", s(&sweep), "--slurm", "-o", "c"], d, &bin, "5");
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("printed no job id") && t.contains("squeue --me --name=skg-"), "{t}");
+    assert!(jobs("c").contains("queue is busy"), "{}", jobs("c"));
+    // sbatch gives the array's id but none for the merge: the array is cancelled, and
+    // both are recorded.
+    let bin = d.join("merge");
+    let log = d.join("scancel.log");
+    let script = "case \"$*\" in *merge.sh*) echo oops ;; *) echo 'Submitted batch job 777' ;; esac";
+    fake_slurm(&bin, &[("sbatch", script), ("squeue", "exit 0"), ("scancel", &format!("echo \"$@\" >> {}", log.display()))]);
+    let (code, t) = run_with_slurm(&["sweep", s(&sweep), "--slurm", "-o", "e"], d, &bin, "5");
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("array job 777") && t.contains("cancelled"), "{t}");
+    assert_eq!(std::fs::read_to_string(&log).unwrap().trim(), "777");
+    assert!(jobs("e").contains("\"777\"") && jobs("e").contains("unconfirmed"), "{}", jobs("e"));
+}
+
+/// A shard whose sweep.json was removed is incomplete for `status`, for the
+/// resubmission and for the merge alike; running it again completes it without running
+/// its points again.
+#[test]
+fn a_shard_without_its_sweep_json_is_incomplete_everywhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sweep = free_fall_sweep(d, 4, "");
+    let (code, t) = run(&["sweep", s(&sweep), "--slurm", "--dry-run", "--shards", "2", "-o", "sh"], d);
+    assert_eq!(code, Some(0), "{t}");
+    let shard = |k: usize| run(&["sweep", s(&sweep), "--shard", &format!("{k}/2"), "-o", &format!("sh/shards/{k}"), "-q"], d);
+    for k in [1, 2] {
+        assert_eq!(shard(k).0, Some(0));
+    }
+    std::fs::remove_file(d.join("sh/shards/2/sweep.json")).unwrap();
+    // status: shard 2's points are missing.
+    let (code, t) = run(&["status", "sh"], d);
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("2 missing") || t.lines().any(|l| l.split_whitespace().collect::<Vec<_>>() == ["2", "2", "0", "0", "2"]), "{t}");
+    // The resubmission would submit shard 2.
+    let (_, t) = run(&["sweep", s(&sweep), "--slurm", "--dry-run", "-o", "sh"], d);
+    assert!(t.contains("--array=2 "), "{t}");
+    // The merge names it (it said "incomplete shards: ;").
+    let (code, t) = run(&["sweep-merge", "sh"], d);
+    assert_eq!(code, Some(1), "{t}");
+    assert!(t.contains("2 (2 of 2 missing)"), "{t}");
+    // Run again, the shard writes its sweep.json and runs nothing; then the merge is complete.
+    let (code, t) = run(&["sweep", s(&sweep), "--shard", "2/2", "-o", "sh/shards/2"], d);
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("2 already done"), "{t}");
+    let (code, t) = run(&["sweep-merge", "sh"], d);
+    assert_eq!(code, Some(0), "{t}");
+}
+
+/// A time limit beyond what the clock can count (`1e300` s, the largest float) means no
+/// limit: on the command line, in the scene file, with the refinement; it overflowed a
+/// `Duration` (a panic, exit 101).
+#[test]
+fn a_time_limit_beyond_the_clock_is_no_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = common::scenario("free_fall");
+    for limit in ["1e300", "1.7976931348623157e308"] {
+        for refine in [&[][..], &["--refine"]] {
+            let mut args = vec![s(&scene), "--time-limit", limit, "-o", "out", "-q"];
+            args.extend(refine);
+            let (code, t) = run(&args, d);
+            assert_eq!(code, Some(0), "{args:?}: {t}");
+        }
+    }
+    let file = common::variant(d, "free_fall", "limit.toml", &[("[verify]", "[solver]\ntime_limit = 1e300\n\n[verify]")]);
+    let (code, t) = run(&[s(&file), "-o", "file", "-q"], d);
+    assert_eq!(code, Some(0), "{t}");
+}
+
+/// Sweep workers whose files cannot be written (a file-size limit with SIGXFSZ ignored:
+/// EFBIG, as a full disk gives ENOSPC) record the point as an error in the system's
+/// words; none exits 101 ("failed printing to stdout", "worker exited … without a
+/// result").
+#[test]
+fn sweep_workers_that_cannot_write_record_an_error_not_a_crash() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let body = "keep_trajectories = true\n[[grid]]\nnodes = [100, 1200, 1600, 2000]\n";
+    let sweep = common::sweep_file(d, &common::scenario("free_fall"), body);
+    let script = format!("trap '' XFSZ; ulimit -f 40; exec \"$0\" sweep {} -o out -j 2", s(&sweep));
+    let o = Command::new("sh").args(["-c", &script, env!("CARGO_BIN_EXE_skg-solve")]).current_dir(d).output().unwrap();
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let results = std::fs::read_to_string(d.join("out/results.csv")).unwrap();
+    assert!(results.contains("File too large"), "{results}");
+    assert!(!results.contains("crashed") && !results.contains("status: 101") && !t.contains("panicked"), "{results}\n{t}");
 }

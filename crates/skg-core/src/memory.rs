@@ -33,14 +33,21 @@
 //! reference needs half the base and, per sample, [`REFERENCE_BYTES_PER_SAMPLE`],
 //! [`REFERENCE_BYTES_PER_CELL`] per CSV column and [`REFERENCE_BYTES_PER_PAIR`] per
 //! pair of coordinates (measured: 0.75 kB per sample for the free fall, 104 kB for a
-//! chain of 32 links). The limit is the memory the kernel reports as available
-//! (`MemAvailable` in `/proc/meminfo`); where that cannot be read, nothing is refused.
-//! Reading one line of `/proc/meminfo` needs no crate (`sysinfo` would bring a large
-//! dependency for it).
+//! chain of 32 links). The limit ([`memory_limit`]) is the least of three: the memory
+//! the kernel reports as available (`MemAvailable` in `/proc/meminfo`), what the
+//! address-space limit (`RLIMIT_AS`, `ulimit -v`) leaves beside the process's current
+//! virtual size, and what the memory limit of the process's cgroup and of each of its
+//! ancestors (cgroup v2 `memory.max`, v1 `memory.limit_in_bytes`: a batch job's memory
+//! on a cluster, a container's) leaves beside the group's use less its reclaimable page
+//! cache. Where none can be read, nothing is refused. Reading these few files of
+//! `/proc` and `/sys/fs/cgroup` needs no crate (`sysinfo` would bring a large dependency
+//! for it).
 //!
 //! **Place in the flow.** Right after the scene: it uses only [`sbp`](crate::sbp) and
 //! [`scene`](crate::scene) (an estimate needs the resolved scene, nothing built from
 //! it), so that whatever allocates later can ask it first.
+
+use std::path::Path;
 
 use crate::sbp::OperatorKind;
 use crate::scene::{Backend, Formulation, Location, Scene, SceneError};
@@ -121,30 +128,122 @@ pub fn reference_bytes(scene: &Scene, samples: usize) -> f64 {
     BASE_BYTES / 2.0 + samples as f64 * per_sample
 }
 
-/// The memory available to this run in bytes (`MemAvailable`), if the system says.
+/// A limit on the memory of this process: how many bytes it may still allocate, and
+/// which limit says so.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MemoryLimit {
+    /// The bytes left.
+    pub bytes: f64,
+    /// Which limit: `available` (`MemAvailable`), `left under the address-space limit
+    /// (ulimit -v)`, `left under the memory limit of the cgroup /sys/fs/cgroup/…`.
+    pub source: String,
+}
+
+/// The memory available to this run in bytes ([`memory_limit`]), if the system says.
 pub fn available_bytes() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024.0)
+    memory_limit().map(|l| l.bytes)
+}
+
+/// The least of the limits on this process's memory (see the module documentation), if
+/// any can be read.
+pub fn memory_limit() -> Option<MemoryLimit> {
+    let proc_cgroups = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
+    [mem_available(), address_space_left(), cgroup_left(Path::new("/sys/fs/cgroup"), &proc_cgroups)]
+        .into_iter()
+        .flatten()
+        .min_by(|a, b| a.bytes.total_cmp(&b.bytes))
+}
+
+/// `MemAvailable` of `/proc/meminfo`.
+fn mem_available() -> Option<MemoryLimit> {
+    let kib = kib_field(&std::fs::read_to_string("/proc/meminfo").ok()?, "MemAvailable:")?;
+    Some(MemoryLimit { bytes: kib * 1024.0, source: "available".into() })
+}
+
+/// The number of kB on the line of `text` that starts with `key` (`/proc` files).
+fn kib_field(text: &str, key: &str) -> Option<f64> {
+    text.lines().find(|l| l.starts_with(key))?.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// What the soft `RLIMIT_AS` (`Max address space` of `/proc/self/limits`) leaves beside
+/// the process's virtual size (`VmSize`): under `ulimit -v` an allocation beyond it fails
+/// and the process aborts.
+fn address_space_left() -> Option<MemoryLimit> {
+    let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let soft: f64 = limits.lines().find(|l| l.starts_with("Max address space"))?.split_whitespace().nth(3)?.parse().ok()?;
+    let used = kib_field(&std::fs::read_to_string("/proc/self/status").ok()?, "VmSize:")? * 1024.0;
+    Some(MemoryLimit { bytes: (soft - used).max(0.0), source: "left under the address-space limit (ulimit -v)".into() })
+}
+
+/// Values of a cgroup v1 limit at or above this mean no limit (the kernel writes
+/// `PAGE_COUNTER_MAX`, about 9.2·10¹⁸).
+const CGROUP_V1_UNLIMITED: f64 = 4.6e18;
+
+/// What the memory limits of the process's cgroup and its ancestors leave, the least of
+/// them: `proc_cgroups` is `/proc/self/cgroup`, `root` where the hierarchies are mounted
+/// (`/sys/fs/cgroup`: v2 there or in `unified/`, v1's memory controller in `memory/`).
+/// A group's path that does not exist under the mount (a container that sees only its
+/// own group, mounted at the root) is read at the mount's root.
+fn cgroup_left(root: &Path, proc_cgroups: &str) -> Option<MemoryLimit> {
+    let mut found = Vec::new();
+    for line in proc_cgroups.lines() {
+        let mut fields = line.splitn(3, ':');
+        let (Some(_), Some(controllers), Some(path)) = (fields.next(), fields.next(), fields.next()) else { continue };
+        let path = path.trim_start_matches('/');
+        if controllers.is_empty() {
+            for mount in [root.to_path_buf(), root.join("unified")] {
+                found.extend(cgroup_levels(&mount, path, "memory.max", "memory.current", "inactive_file"));
+            }
+        } else if controllers.split(',').any(|c| c == "memory") {
+            let mount = root.join("memory");
+            found.extend(cgroup_levels(&mount, path, "memory.limit_in_bytes", "memory.usage_in_bytes", "total_inactive_file"));
+        }
+    }
+    found.into_iter().min_by(|a, b| a.bytes.total_cmp(&b.bytes))
+}
+
+/// The least of what the limits of the group `path` under `mount` and of its ancestors
+/// up to the mount leave: `limit` less the group's `usage` less its reclaimable page
+/// cache (`inactive` in `memory.stat`).
+fn cgroup_levels(mount: &Path, path: &str, limit: &str, usage: &str, inactive: &str) -> Option<MemoryLimit> {
+    let group = Some(mount.join(path)).filter(|g| g.is_dir()).unwrap_or_else(|| mount.to_path_buf());
+    let read = |dir: &Path, name: &str| std::fs::read_to_string(dir.join(name)).ok();
+    let mut least: Option<MemoryLimit> = None;
+    for dir in group.ancestors().take_while(|d| d.starts_with(mount)) {
+        let Some(max) = read(dir, limit).and_then(|t| t.trim().parse::<f64>().ok()) else { continue };
+        if max >= CGROUP_V1_UNLIMITED {
+            continue;
+        }
+        let used = read(dir, usage).and_then(|t| t.trim().parse::<f64>().ok()).unwrap_or(0.0);
+        let cache = read(dir, "memory.stat")
+            .and_then(|t| t.lines().find_map(|l| l.strip_prefix(inactive)?.strip_prefix(' ')?.trim().parse::<f64>().ok()))
+            .unwrap_or(0.0);
+        let left = (max - (used - cache).max(0.0)).max(0.0);
+        if least.as_ref().is_none_or(|l| left < l.bytes) {
+            least = Some(MemoryLimit { bytes: left, source: format!("left under the memory limit of the cgroup {}", dir.display()) });
+        }
+    }
+    least
 }
 
 /// Refuse `what` (e.g. "the solve") of `scene` on `nodes` nodes when its estimate
-/// `bytes` exceeds the available memory; the error stands at the scene's `time.nodes`.
+/// `bytes` exceeds the memory this process may use ([`memory_limit`]); the error
+/// stands at the scene's `time.nodes`.
 pub fn check(scene: &Scene, what: &str, nodes: usize, bytes: f64) -> Result<(), SceneError> {
-    check_against(scene, what, nodes, bytes, available_bytes())
+    check_against(scene, what, nodes, bytes, memory_limit().as_ref())
 }
 
 /// [`check`] against a given limit (`None`: nothing is refused), for a caller that
-/// checks many scenes against one reading of the available memory (a sweep's points).
-pub fn check_against(scene: &Scene, what: &str, nodes: usize, bytes: f64, limit: Option<f64>) -> Result<(), SceneError> {
+/// checks many scenes against one reading of the limit (a sweep's points).
+pub fn check_against(scene: &Scene, what: &str, nodes: usize, bytes: f64, limit: Option<&MemoryLimit>) -> Result<(), SceneError> {
     match limit {
-        Some(limit) if bytes > limit => Err(SceneError::Invalid {
+        Some(limit) if bytes > limit.bytes => Err(SceneError::Invalid {
             location: nodes_location(scene),
             message: format!(
-                "{what} on N = {nodes} nodes needs an estimated {} of memory, more than the {} available: use fewer nodes",
+                "{what} on N = {nodes} nodes needs an estimated {} of memory, more than the {} {}: use fewer nodes",
                 bytes_text(bytes),
-                bytes_text(limit)
+                bytes_text(limit.bytes),
+                limit.source
             ),
         }),
         _ => Ok(()),
@@ -176,5 +275,65 @@ mod tests {
         assert_eq!(bytes_text(2.5e10), "25.0 GB");
         assert_eq!(bytes_text(3.2e6), "3.2 MB");
         assert_eq!(bytes_text(1.5e13), "15.0 TB");
+    }
+
+    /// Write `files` (path relative to `root`, content) into a fake cgroup tree.
+    fn tree(root: &Path, files: &[(&str, &str)]) {
+        for (path, text) in files {
+            let path = root.join(path);
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(path, text).unwrap();
+        }
+    }
+
+    #[test]
+    fn a_cgroup_v2_limit_counts_on_the_group_and_its_ancestors() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path();
+        // A Slurm job's group limited to 4 GB (1 GB used, 0.25 GB of it reclaimable
+        // cache), its step below it unlimited, the root without a limit file.
+        tree(
+            root,
+            &[
+                ("job_1/memory.max", "4000000000\n"),
+                ("job_1/memory.current", "1000000000\n"),
+                ("job_1/memory.stat", "anon 750000000\ninactive_file 250000000\nactive_file 0\n"),
+                ("job_1/step_0/memory.max", "max\n"),
+                ("job_1/step_0/memory.current", "900000000\n"),
+            ],
+        );
+        let limit = cgroup_left(root, "0::/job_1/step_0\n").unwrap();
+        assert_eq!(limit.bytes, 3.25e9);
+        assert!(limit.source.contains("job_1") && !limit.source.contains("step_0"), "{}", limit.source);
+        // The same tree mounted at unified/ (a hybrid system) is found too.
+        let hybrid = tempfile::tempdir().unwrap();
+        tree(&hybrid.path().join("unified"), &[("a/memory.max", "2000000000"), ("a/memory.current", "500000000")]);
+        assert_eq!(cgroup_left(hybrid.path(), "0::/a").unwrap().bytes, 1.5e9);
+        // No limit anywhere: none.
+        assert!(cgroup_left(root, "0::/").is_none());
+    }
+
+    #[test]
+    fn a_cgroup_v1_memory_limit_counts_and_its_unlimited_value_does_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path();
+        tree(
+            root,
+            &[
+                ("memory/memory.limit_in_bytes", "9223372036854771712"),
+                ("memory/docker/abc/memory.limit_in_bytes", "2147483648"),
+                ("memory/docker/abc/memory.usage_in_bytes", "147483648"),
+                ("memory/docker/abc/memory.stat", "cache 0\ntotal_inactive_file 47483648\n"),
+            ],
+        );
+        let text = "4:memory:/docker/abc\n3:cpu,cpuacct:/docker/abc\n";
+        assert_eq!(cgroup_left(root, text).unwrap().bytes, 2147483648.0 - 100000000.0);
+        // A container that sees its own group at the mount's root (the path of
+        // /proc/self/cgroup does not exist under the mount).
+        let inside = tempfile::tempdir().unwrap();
+        tree(inside.path(), &[("memory/memory.limit_in_bytes", "1000000000"), ("memory/memory.usage_in_bytes", "0")]);
+        assert_eq!(cgroup_left(inside.path(), "4:memory:/docker/abc").unwrap().bytes, 1e9);
+        // Only the memory controller's line counts.
+        assert!(cgroup_left(inside.path(), "3:cpu:/docker/abc").is_none());
     }
 }

@@ -33,7 +33,7 @@ pub enum ParseErrorKind {
 
 /// An error in an expression string, with the character position where it was found.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{message} at position {position} in `{source_text}`{}", .hint.as_ref().map(|h| format!("; {h}")).unwrap_or_default())]
+#[error("{message} at position {position} in `{}`{}", self.excerpt().0, .hint.as_ref().map(|h| format!("; {h}")).unwrap_or_default())]
 pub struct ParseError {
     /// The whole expression string.
     pub source_text: String,
@@ -66,12 +66,31 @@ impl ParseError {
     /// x + * y
     ///     ^
     /// ```
+    ///
+    /// A long source is shown as the 60 characters on either side of the position, with
+    /// `…` where it is cut (a message never echoes a whole generated expression).
     pub fn caret_line(&self) -> String {
-        let pad: String = self.source_text.chars().take(self.position).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
-        let extra = self.position.saturating_sub(self.source_text.chars().count());
-        format!("{}\n{}{}^", self.source_text, pad, " ".repeat(extra))
+        let (shown, at) = self.excerpt();
+        let pad: String = shown.chars().take(at).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
+        let extra = at.saturating_sub(shown.chars().count());
+        format!("{shown}\n{pad}{}^", " ".repeat(extra))
+    }
+
+    /// The part of the source that messages show (all of it unless it is long: see
+    /// [`ParseError::caret_line`]) and the position in it, in characters.
+    fn excerpt(&self) -> (String, usize) {
+        let count = self.source_text.chars().count();
+        let start = self.position.saturating_sub(EXCERPT_CHARS).min(count);
+        let end = self.position.saturating_add(EXCERPT_CHARS).min(count);
+        let body: String = self.source_text.chars().skip(start).take(end - start).collect();
+        let head = if start > 0 { "…" } else { "" };
+        let tail = if end < count { "…" } else { "" };
+        (format!("{head}{body}{tail}"), self.position - start + head.chars().count())
     }
 }
+
+/// Characters of the source shown on either side of an error's position.
+const EXCERPT_CHARS: usize = 60;
 
 /// Deepest nesting of parentheses, signs and exponents accepted, so that hostile input
 /// cannot overflow the stack.

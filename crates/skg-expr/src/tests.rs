@@ -196,6 +196,14 @@ fn error_display_caret_and_hint() {
     assert!(err.message.contains("position 3"), "{}", err.message);
     let err = parse_err("foo(x)");
     assert!(err.message.contains("unknown function `foo`"), "{}", err.message);
+    // A long expression is cut around the position, in the message and the caret line.
+    let long = format!("{}q{}", "x + ".repeat(10_000), " + x".repeat(10_000));
+    let err = parse_err(&long);
+    assert_eq!(err.position, 40_000);
+    // 60 characters before the position, and 60 from it (the `q` and 59 after).
+    let window = format!("…{}q{}…", &"x + ".repeat(15), &" + x".repeat(15)[..59]);
+    assert_eq!(err.to_string(), format!("unknown symbol `q` at position 40000 in `{window}`"));
+    assert_eq!(err.caret_line(), format!("{window}\n{}^", " ".repeat(61)));
 }
 
 #[test]

@@ -41,6 +41,7 @@ fn _skg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep::plan_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::plan_shards, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::merge_shards, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_name_problem, m)?)?;
     m.add_function(wrap_pyfunction!(readers::read_results, m)?)?;
     m.add_function(wrap_pyfunction!(readers::read_table, m)?)?;
     m.add_function(wrap_pyfunction!(toml_values::toml_text, m)?)?;

@@ -72,7 +72,7 @@ impl NativeReference {
 pub(crate) fn integrate_reference(
     py: Python<'_>,
     path: SceneArg,
-    nodes: Option<usize>,
+    nodes: Option<&Bound<'_, PyAny>>,
     set: Option<&Bound<'_, PyDict>>,
     hard_walls: bool,
     rtol: f64,
@@ -84,7 +84,7 @@ pub(crate) fn integrate_reference(
         return Err(PyValueError::new_err(format!("rtol must be a positive number, got {rtol}")));
     }
     let stepper = stepper.map(|s| s.parse::<Stepper>().map_err(|e| PyValueError::new_err(format!("stepper: {e}")))).transpose()?;
-    let ov = Overrides { set: assignments(set)?, nodes, stepper, ..Overrides::default() };
+    let ov = Overrides { set: assignments(set)?, nodes: crate::solve::node_count(py, "nodes", nodes)?, stepper, ..Overrides::default() };
     let scene = load(py, &path, &ov)?;
     let times = times.unwrap_or_else(|| solve::grid(&scene).0);
     let opts = ReferenceOptions { rtol, atol: atol.unwrap_or(rtol), stepper: scene.verify.stepper };

@@ -10,11 +10,11 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use skg_core::output;
-use skg_core::scene::{HessianMode, Overrides, Scene};
+use skg_core::scene::{HessianMode, Overrides, Scene, MAX_NODES};
 use skg_core::solve::{self, Outcome};
 
 use crate::arrays::trajectory_dict;
-use crate::errors::{output_err, solve_err, solve_into_err};
+use crate::errors::{int_keyword, output_err, solve_err, solve_into_err};
 use crate::scene::{assignments, load, SceneArg};
 
 /// The result of [`solve`]: the outcome, the scene it solved and the files last written,
@@ -84,13 +84,13 @@ pub(crate) fn solve_scene(
     py: Python<'_>,
     path: SceneArg,
     out: Option<PathBuf>,
-    nodes: Option<usize>,
+    nodes: Option<&Bound<'_, PyAny>>,
     set: Option<&Bound<'_, PyDict>>,
     operator: Option<&str>,
     formulation: Option<&str>,
     initial_velocity: Option<&str>,
     hessian: Option<&str>,
-    max_iter: Option<u32>,
+    max_iter: Option<&Bound<'_, PyAny>>,
     backend: Option<&str>,
     window: Option<f64>,
     overlap: Option<f64>,
@@ -98,20 +98,20 @@ pub(crate) fn solve_scene(
     no_verify: bool,
     no_fallback: bool,
     refine: bool,
-    max_nodes: Option<usize>,
+    max_nodes: Option<&Bound<'_, PyAny>>,
     time_limit: Option<f64>,
     stepper: Option<&str>,
 ) -> PyResult<NativeSolution> {
     let mut ov = Overrides {
-        nodes,
-        max_iter,
+        nodes: node_count(py, "nodes", nodes)?,
+        max_iter: int_keyword(py, "max_iter", max_iter, (0, i32::MAX as u64), i32::MAX as u64)?.map(|n| n as u32),
         window,
         overlap,
         verify_tol,
         no_verify,
         no_fallback,
         refine,
-        max_nodes,
+        max_nodes: node_count(py, "max_nodes", max_nodes)?,
         time_limit,
         ..Overrides::default()
     };
@@ -120,6 +120,13 @@ pub(crate) fn solve_scene(
     let mut scene = load(py, &path, &ov)?;
     let state = run(py, &mut scene, out)?;
     Ok(NativeSolution { scene, state: std::sync::Mutex::new(state) })
+}
+
+/// A node count given as the keyword `name` (`nodes`, `max_nodes`): any count that fits
+/// goes to the scene's own check of its range; one that does not fit (negative, beyond
+/// 64 bits) is refused here, naming the keyword.
+pub(crate) fn node_count(py: Python<'_>, name: &str, value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
+    Ok(int_keyword(py, name, value, (2, MAX_NODES as u64), usize::MAX as u64)?.map(|n| n as usize))
 }
 
 /// The options of [`solve_scene`] given as text, parsed as the command line parses them.

@@ -52,6 +52,13 @@ impl NativeSweepPlan {
 /// Load and expand a sweep file as `skg-solve sweep` does before it starts
 /// ([`sweep::plan`]): its points run in worker processes of the `skg-solve` executable
 /// `exe`.
+/// Why `name` cannot name a sweep, if it cannot ([`sweep::name_problem`]): the command
+/// line's check, for a sweep given as a mapping before its files are written.
+#[pyfunction]
+pub(crate) fn sweep_name_problem(name: &str) -> Option<&'static str> {
+    sweep::name_problem(name)
+}
+
 #[pyfunction]
 #[pyo3(signature = (path, *, exe, out=None, jobs=None, shard=None, retry_failed=false, new_results=false, yes=false, progress=true))]
 #[allow(clippy::too_many_arguments)]

@@ -19,11 +19,19 @@ fn key_path(path: &str, key: &str) -> String {
     }
 }
 
+/// The deepest nesting of dicts and lists accepted in a mapping (a scene needs 3, a
+/// sweep 4): deeper input is refused rather than recursed into until the stack
+/// overflows.
+const MAX_DEPTH: usize = 32;
+
 /// A Python value as a TOML value: dict (string keys; a key whose value is None is left
 /// out), list or tuple, str, bool, int, float (NumPy's scalars too). `path` names the
-/// value in errors.
-fn toml_value(v: &Bound<'_, PyAny>, path: &str) -> Result<Option<toml::Value>, String> {
+/// value in errors; `depth` is its nesting, at most [`MAX_DEPTH`].
+fn toml_value(v: &Bound<'_, PyAny>, path: &str, depth: usize) -> Result<Option<toml::Value>, String> {
     let at = |what: String| format!("{PYTHON_ORIGIN}: {}: {what}", if path.is_empty() { "the scene" } else { path });
+    if depth > MAX_DEPTH {
+        return Err(at(format!("dicts and lists are nested more than {MAX_DEPTH} deep, deeper than any scene or sweep")));
+    }
     if v.is_none() {
         return Ok(None);
     }
@@ -39,7 +47,7 @@ fn toml_value(v: &Bound<'_, PyAny>, path: &str) -> Result<Option<toml::Value>, S
             let key: String = k
                 .extract()
                 .map_err(|_| at(format!("keys must be strings, got {}", k.repr().map_or_else(|_| "?".into(), |r| r.to_string()))))?;
-            if let Some(value) = toml_value(&item, &key_path(path, &key))? {
+            if let Some(value) = toml_value(&item, &key_path(path, &key), depth + 1)? {
                 table.insert(key, value);
             }
         }
@@ -50,7 +58,7 @@ fn toml_value(v: &Bound<'_, PyAny>, path: &str) -> Result<Option<toml::Value>, S
         for (i, item) in v.try_iter().map_err(|e| at(e.to_string()))?.enumerate() {
             let item = item.map_err(|e| at(e.to_string()))?;
             let p = format!("{path}[{i}]");
-            match toml_value(&item, &p)? {
+            match toml_value(&item, &p, depth + 1)? {
                 Some(value) => items.push(value),
                 None => return Err(format!("{PYTHON_ORIGIN}: {p}: None is not a value (TOML has no null)")),
             }
@@ -96,7 +104,7 @@ pub(crate) fn py_value<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<
 
 /// A mapping as a TOML table ([`toml_value`]), or the error `SceneError` names.
 pub(crate) fn toml_table(py: Python<'_>, mapping: &Bound<'_, PyAny>) -> PyResult<toml::Table> {
-    match toml_value(mapping, "") {
+    match toml_value(mapping, "", 0) {
         Ok(Some(toml::Value::Table(t))) => Ok(t),
         Ok(_) => Err(raise_text(py, "SceneError", format!("{PYTHON_ORIGIN}: a scene is a dict of its tables, got {}", mapping.get_type()))),
         Err(message) => Err(raise_text(py, "SceneError", message)),

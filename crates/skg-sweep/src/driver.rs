@@ -116,6 +116,9 @@ pub fn run_sweep(file: &SweepFile, expanded: &Expanded, opts: &SweepOptions) -> 
     let dir = &opts.out_dir;
     let _lock = output::OutputDir::lock(dir)?;
     refuse_sharded_dir(dir)?;
+    if file.sweep.keep_trajectories {
+        output::refuse_links(dir, Path::new("points"))?;
+    }
     let superseded = if opts.new_results { supersede_results(dir)? } else { None };
     let settings = file.row_settings();
     check_row_settings(dir, &settings)?;

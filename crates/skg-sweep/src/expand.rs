@@ -278,13 +278,13 @@ fn check_axis(base: &SceneFile, name: &str) -> Result<(), String> {
 /// Number the listed points, check each against the base scene ([`resolve_point`]) and
 /// drop the later copies of identical points.
 fn check_points(base: &SceneFile, listed: Vec<Listed>) -> Result<Checked, SweepError> {
-    // The available memory, read once for all points (not once per point).
-    let limit = memory::available_bytes();
+    // The memory limit, read once for all points (not once per point).
+    let limit = memory::memory_limit();
     let mut checked = Checked::default();
     let mut seen = HashSet::new();
     for Listed { values, method, location } in listed {
         let mut p = Point { index: checked.points.len(), values, evaluated: Vec::new(), method };
-        let scene = resolve_point(base, &p, &location, limit)?;
+        let scene = resolve_point(base, &p, &location, limit.as_ref())?;
         if seen.insert(p.id()) {
             p.evaluated = evaluated_parameters(&p, &scene);
             checked.costs.push(estimated_cost(&scene, &p.method));
@@ -298,8 +298,8 @@ fn check_points(base: &SceneFile, listed: Vec<Listed>) -> Result<Checked, SweepE
 }
 
 /// The scene of a point, resolved from the base scene with the point's overrides (cheap:
-/// no model is built), and its memory estimate checked against `limit` bytes.
-fn resolve_point(base: &SceneFile, p: &Point, location: &Location, limit: Option<f64>) -> Result<Scene, SweepError> {
+/// no model is built), and its memory estimate checked against `limit`.
+fn resolve_point(base: &SceneFile, p: &Point, location: &Location, limit: Option<&memory::MemoryLimit>) -> Result<Scene, SweepError> {
     let ov = p.overrides().map_err(|error| SweepError::Axis { location: location.clone(), error })?;
     let scene_of_point = |e| SweepError::scene(location.clone(), SceneOf::Point(p.canonical()), e);
     let scene = base.clone().resolve(&ov).map_err(scene_of_point)?;

@@ -4,7 +4,7 @@
 //! [`Record`], the columns of its row in results.csv. A point that cannot be computed is
 //! a record with status `error` and the error's text, never an error of the worker.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -170,6 +170,7 @@ fn compute_point(job: &Job) -> Result<Record, PointError> {
         record_reference_errors(&mut rec, reference_errors(&scene, r, &solution, &compare_cols, job.skip_last));
     }
     if let (Some(dir), Some(comment)) = (&job.keep_dir, ode_csv) {
+        refuse_linked_keep_dir(dir)?;
         output::write_csv(&dir.join("trajectory.csv"), Some(&comment), &solution.columns, &solution.rows)?;
     }
     Ok(rec)
@@ -193,6 +194,7 @@ fn solve_point(job: &Job, scene: &mut Scene, rec: &mut Record, start: Instant) -
     }
     record_outcome(rec, &outcome);
     if let Some(dir) = &job.keep_dir {
+        refuse_linked_keep_dir(dir)?;
         output::write_outcome(dir, &mut outcome, scene)?;
     }
     Ok(outcome.trajectory)
@@ -276,4 +278,12 @@ fn reference_errors(
     };
     let opts = CheckOptions { skip_last, columns: Some(columns.to_vec()) };
     Ok(check::compare(solution, &reference, &opts)?)
+}
+
+/// Refuse a symbolic link at a kept point's directory `DIR/points/<id>` or at
+/// `DIR/points`: the point's files would be written wherever it points.
+fn refuse_linked_keep_dir(dir: &Path) -> Result<(), output::OutputError> {
+    let (Some(points), Some(id)) = (dir.parent(), dir.file_name()) else { return Ok(()) };
+    let (Some(sweep_dir), Some(name)) = (points.parent(), points.file_name()) else { return Ok(()) };
+    output::refuse_links(sweep_dir, &Path::new(name).join(id))
 }

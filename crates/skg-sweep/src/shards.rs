@@ -161,12 +161,18 @@ fn count_rows(dir: &Path, state: &mut ShardState) -> Result<(), SweepError> {
 }
 
 /// Every shard's state, from its files alone (`DIR/shards/<k>/results.csv`; a missing
-/// directory is a shard with every point missing).
+/// directory is a shard with every point missing). A shard without its `sweep.json`
+/// counts as having no rows: the merge cannot check its rows against the sweep, and
+/// running the shard again writes it (its rows are kept and not run again), so that
+/// `status`, the resubmission and the merge agree that it is incomplete.
 pub fn shard_states(dir: &Path, layout: &ShardLayout) -> Result<Vec<ShardState>, SweepError> {
     (1..=layout.shards)
         .map(|k| {
             let mut state = ShardState { k, points: layout.points_in(k), ..ShardState::default() };
-            count_rows(&shard_dir(dir, k), &mut state)?;
+            let shard = shard_dir(dir, k);
+            if shard.join("sweep.json").is_file() {
+                count_rows(&shard, &mut state)?;
+            }
             state.missing = state.points.saturating_sub(state.converged + state.failed);
             Ok(state)
         })

@@ -39,8 +39,23 @@ use crate::{Expanded, SweepError, SweepFile};
 const SBATCH_TIMEOUT: Duration = Duration::from_secs(120);
 /// How long squeue and scancel may take.
 const QUERY_TIMEOUT: Duration = Duration::from_secs(60);
-/// How long [`wait_for_merge`] keeps polling while squeue fails (a controller restarting).
-const QUERY_FAILURES_FOR: Duration = Duration::from_secs(600);
+/// How long [`wait_for_merge`] keeps polling while squeue fails (a controller
+/// restarting), in multiples of the query timeout (10 minutes by default).
+const QUERY_FAILURES_FOR: u32 = 10;
+/// The environment variable that sets, in seconds, how long every Slurm command may take
+/// (instead of 120 s for sbatch, 60 s for squeue and scancel).
+pub const TIMEOUT_VAR: &str = "SKG_SLURM_TIMEOUT";
+
+/// How long a Slurm command may take: [`TIMEOUT_VAR`] if it holds a positive number of
+/// seconds, else `default`.
+fn timeout(default: Duration) -> Duration {
+    std::env::var(TIMEOUT_VAR)
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|s| *s > 0.0)
+        .and_then(|s| Duration::try_from_secs_f64(s).ok())
+        .unwrap_or(default)
+}
 
 /// Options of sbatch that skg-solve sets itself (an `--sbatch-arg` with one of them is
 /// refused): long names, and their short forms.
@@ -103,20 +118,26 @@ pub enum SlurmError {
         message: String,
     },
     /// A Slurm command did not finish in time (it was killed).
-    #[error("`{command}` did not finish within {seconds} s (is the Slurm controller reachable?)")]
+    #[error("`{command}` did not finish within {seconds} s (is the Slurm controller reachable? {TIMEOUT_VAR} sets the limit)")]
     TimedOut {
         /// The command line.
         command: String,
         /// The limit.
-        seconds: u64,
+        seconds: f64,
     },
-    /// sbatch succeeded but printed no job id.
-    #[error("`{command}` printed no job id: {stdout:?}")]
+    /// sbatch succeeded but printed no job id; the submission is recorded in jobs.json
+    /// with what it printed.
+    #[error(
+        "`{command}` printed no job id ({stdout:?}): a job named {job_name} may have been submitted; find it \
+         (squeue --me --name={job_name}) and cancel it (scancel) before running the command again"
+    )]
     NoJobId {
         /// The command line.
         command: String,
-        /// What it printed.
+        /// What it printed (at most 200 characters).
         stdout: String,
+        /// The job's name (`--job-name`).
+        job_name: String,
     },
     /// Jobs of an earlier submission into the directory still run or wait.
     #[error(
@@ -192,6 +213,10 @@ pub struct Submission {
     pub merge_job: Option<String>,
     /// The `--sbatch-arg` arguments given.
     pub sbatch_args: Vec<String>,
+    /// Why a job of this submission is not known by its id although sbatch may have
+    /// submitted it (sbatch printed no job id, or did not finish in time).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unconfirmed: Option<String>,
 }
 
 impl Submission {
@@ -295,7 +320,7 @@ fn run(program: &str, args: &[String], timeout: Duration) -> Result<String, Slur
             Ok(None) => {
                 let _ = child.kill();
                 let _ = child.wait();
-                return Err(SlurmError::TimedOut { command, seconds: timeout.as_secs() });
+                return Err(SlurmError::TimedOut { command, seconds: timeout.as_secs_f64() });
             }
             Err(error) => return Err(SlurmError::Run { command, error }),
         }
@@ -316,7 +341,7 @@ pub fn job_states(ids: &[String]) -> Result<Vec<JobState>, SlurmError> {
         return Ok(Vec::new());
     }
     let args: Vec<String> = ["-h", "-r", "-t", "all", "-j", &ids.join(","), "-o", "%i|%T|%r"].map(String::from).to_vec();
-    let out = match run("squeue", &args, QUERY_TIMEOUT) {
+    let out = match run("squeue", &args, timeout(QUERY_TIMEOUT)) {
         Ok(out) => out,
         // Every id unknown (finished and forgotten): squeue says so and exits 1.
         Err(SlurmError::Failed { message, .. }) if message.contains("Invalid job id") => return Ok(Vec::new()),
@@ -492,15 +517,26 @@ pub fn submit(file: &SweepFile, expanded: &Expanded, dir: &Path, opts: &SubmitOp
         shards: report.submitted.clone(),
         merge_job: None,
         sbatch_args: opts.sbatch_args.clone(),
+        unconfirmed: None,
     };
     if let Some(args) = &sbatch.array {
         report.commands.push(command_text("sbatch", args));
-        submission.array_job = Some(sbatch_job_id(args)?);
+        match sbatch_job_id(args, &sbatch.job_name) {
+            Ok(id) => submission.array_job = Some(id),
+            Err(e) => {
+                // The array may exist without its id: recorded, and the error says how to find it.
+                submission.unconfirmed = unconfirmed(&e);
+                jobs.submissions.push(submission);
+                output::write_json(&JobsFile::path(&dir), &jobs)?;
+                return Err(e);
+            }
+        }
     }
     let args = sbatch.merge(submission.array_job.as_deref());
     report.commands.push(command_text("sbatch", &args));
-    let merge = sbatch_job_id(&args);
+    let merge = sbatch_job_id(&args, &format!("{}-merge", sbatch.job_name));
     submission.merge_job = merge.as_ref().ok().cloned();
+    submission.unconfirmed = merge.as_ref().err().and_then(unconfirmed);
     jobs.submissions.push(submission.clone());
     output::write_json(&JobsFile::path(&dir), &jobs)?;
     drop(lock);
@@ -598,22 +634,38 @@ impl SbatchArgs {
     }
 }
 
-/// Submit a job with `sbatch args`; its id.
-fn sbatch_job_id(args: &[String]) -> Result<String, SlurmError> {
-    let out = run("sbatch", args, SBATCH_TIMEOUT)?;
-    // `N`, or `N;cluster` on a federation.
-    let id = out.trim().split(';').next().unwrap_or("").trim().to_string();
-    if id.is_empty() || !id.bytes().all(|b| b.is_ascii_digit()) {
-        return Err(SlurmError::NoJobId { command: command_text("sbatch", args), stdout: out });
-    }
-    Ok(id)
+/// What to record of a failed sbatch that may have submitted its job all the same: one
+/// that printed no job id, or did not finish in time.
+fn unconfirmed(e: &SlurmError) -> Option<String> {
+    matches!(e, SlurmError::NoJobId { .. } | SlurmError::TimedOut { .. }).then(|| e.to_string())
+}
+
+/// Submit a job named `job_name` with `sbatch args`; its id.
+fn sbatch_job_id(args: &[String], job_name: &str) -> Result<String, SlurmError> {
+    let out = run("sbatch", args, timeout(SBATCH_TIMEOUT))?;
+    parse_job_id(&out).ok_or_else(|| SlurmError::NoJobId {
+        command: command_text("sbatch", args),
+        stdout: out.trim().chars().take(200).collect(),
+        job_name: job_name.to_string(),
+    })
+}
+
+/// The job id sbatch printed: `N`, or `N;cluster` on a federation, on the last line that
+/// holds one (a site's wrapper may print other lines; one that ignores `--parsable`
+/// prints `Submitted batch job N`).
+fn parse_job_id(out: &str) -> Option<String> {
+    out.lines().rev().find_map(|line| {
+        let line = line.trim();
+        let id = line.strip_prefix("Submitted batch job ").unwrap_or(line).split(';').next()?.trim();
+        (!id.is_empty() && id.bytes().all(|b| b.is_ascii_digit())).then(|| id.to_string())
+    })
 }
 
 /// The error of a merge job that could not be submitted (`error`): after an array job,
 /// that job is cancelled, so that no shard runs without its merge.
 fn merge_not_submitted(error: SlurmError, array: Option<String>) -> SlurmError {
     let Some(array) = array else { return error };
-    let cancelled = match run("scancel", std::slice::from_ref(&array), QUERY_TIMEOUT) {
+    let cancelled = match run("scancel", std::slice::from_ref(&array), timeout(QUERY_TIMEOUT)) {
         Ok(_) => format!("cancelled array job {array}; run the command again"),
         Err(c) => format!("cancelling array job {array} failed too ({c}): cancel it yourself (scancel {array})"),
     };
@@ -656,7 +708,7 @@ pub fn wait_for_merge(array: Option<&str>, merge: &str, mut progress: impl FnMut
             }
             Err(e) => {
                 let since = *failing_since.get_or_insert_with(Instant::now);
-                if since.elapsed() > QUERY_FAILURES_FOR {
+                if since.elapsed() > timeout(QUERY_TIMEOUT) * QUERY_FAILURES_FOR {
                     return Err(e);
                 }
                 progress(&format!("squeue failed ({e}); trying again"));
@@ -744,5 +796,16 @@ mod tests {
         assert_eq!(s.task_of("1"), None);
         assert!(s.active());
         assert!(!JobState { state: "CANCELLED".into(), ..s }.active());
+    }
+
+    #[test]
+    fn job_ids_are_read_from_what_sbatch_prints() {
+        assert_eq!(parse_job_id("4242\n").as_deref(), Some("4242"));
+        assert_eq!(parse_job_id("4242;cluster2\n").as_deref(), Some("4242"));
+        assert_eq!(parse_job_id("Submitted batch job 777\n").as_deref(), Some("777"));
+        assert_eq!(parse_job_id("note: using partition short\n4243\n").as_deref(), Some("4243"));
+        for garbage in ["", "\n", "queue is busy", "12a", "-1", ";cluster"] {
+            assert_eq!(parse_job_id(garbage), None, "{garbage:?}");
+        }
     }
 }

@@ -20,7 +20,7 @@ use crate::SweepError;
 /// One value in a grid: a number, an integer or a string (an expression, an operator
 /// or formulation name).
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a grid value is a number or a string in quotes (an expression, an operator's name)")]
 pub enum AxisValue {
     /// A whole number (`nodes = 64`).
     Int(i64),
@@ -42,7 +42,11 @@ impl fmt::Display for AxisValue {
 
 /// A grid axis: one value or a list of values.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "a grid axis is a value (a number, or a string in quotes) or an array of them, like nodes = [64, 128] or \
+                 sigma = \"1/110\""
+)]
 pub enum AxisValues {
     /// A single value (`sigma = "1/110"`).
     One(AxisValue),

@@ -65,8 +65,8 @@ pub struct SceneArgs {
     /// not depend on it) or `exact` (reduced formulation only).
     #[arg(long, value_name = "MODE", value_parser = by_name::<HessianMode>(HessianMode::ALL.map(HessianMode::name)))]
     pub hessian: Option<HessianMode>,
-    /// Maximum number of iterations (Ipopt's, or Newton's).
-    #[arg(long, value_name = "N")]
+    /// Maximum number of iterations (Ipopt's, or Newton's), at most 2147483647.
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(0..=i32::MAX as i64))]
     pub max_iter: Option<u32>,
     /// Solver of the square system: `ipopt` (default; Ipopt with MUMPS) or `newton`
     /// (Newton's method with a sparse LU of the Jacobian and a line search on the
@@ -95,7 +95,8 @@ pub struct SceneArgs {
     pub stepper: Option<Stepper>,
     /// Skip the comparison with time stepping (the result is still checked for
     /// non-finite numbers and a positive-definite kinetic matrix); a converged solve
-    /// then exits 0 unless one of those checks fails.
+    /// then exits 0 unless one of those checks fails. A scene's `[verify] refine` is
+    /// then off, and --refine with it is refused (the refinement needs the verification).
     #[arg(long)]
     pub no_verify: bool,
     /// Report the scene's own solve even if it fails, without trying the fallback ladder

@@ -27,7 +27,7 @@ pub struct SolveArgs {
     #[arg(short, long, value_name = "DIR")]
     pub output: Option<PathBuf>,
     /// Number of time nodes N (overrides the scene's time.nodes).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub nodes: Option<usize>,
     #[command(flatten)]
     pub scene: SceneArgs,
@@ -39,11 +39,11 @@ pub struct SolveArgs {
     pub refine: bool,
     /// The largest grid --refine may use [default: the scene's [verify] max_nodes, else
     /// the largest the available memory allows, at most 1048576].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(2..=100_000_000))]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = clap::value_parser!(u64).range(2..=100_000_000))]
     pub max_nodes: Option<u64>,
     /// Seconds the whole solve may take (fallback ladder and refinement included),
     /// checked between attempts: the best attempt so far is then reported.
-    #[arg(long, value_name = "SECONDS", value_parser = super::positive)]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = super::positive)]
     pub time_limit: Option<f64>,
 }
 
@@ -61,7 +61,7 @@ pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
     let path = args.scenario.clone().expect("clap requires the scenario");
     let mut scene = load(&path, &overrides(&args)?)?;
     for n in &scene.notes {
-        note!("note: {}: {n}", path.display());
+        note!("note: {n}");
     }
     let dir = args.output.unwrap_or_else(|| {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
@@ -236,7 +236,11 @@ fn print_refinement(outcome: &solve::Outcome, quiet: bool) {
     };
     note!("note: {what} for the tolerance ({}):", r.tolerance);
     for (i, g) in r.grids.iter().enumerate() {
-        let ratio = |x: Option<f64>| x.map_or("–".to_string(), |x| format!("{x:.2}"));
+        // Two decimals up to 10⁴, in exponent form beyond (a far-off grid's ratio has
+        // hundreds of digits).
+        let ratio = |x: Option<f64>| {
+            x.map_or("–".to_string(), |x| if x.abs() < 1e4 || !x.is_finite() { format!("{x:.2}") } else { format!("{x:.2e}") })
+        };
         note!(
             "  {}. {} ({}) on {} nodes: {} (error/tolerance {}, predicted {}) ({:.2} s)",
             i + 1,

@@ -7,6 +7,32 @@ use std::path::{Path, PathBuf};
 use super::atomic::{remove_stale_temporaries, temp_prefix};
 use super::{io_err, OutputError, LOCK_FILE};
 
+/// Why `dir`, which exists, cannot be an output directory (the system's "File exists"
+/// says neither): a file, or a symbolic link to a file or to nothing.
+fn not_a_directory(dir: &Path) -> Option<std::io::Error> {
+    let meta = std::fs::symlink_metadata(dir).ok()?;
+    let why = if meta.file_type().is_symlink() {
+        let target = std::fs::read_link(dir).ok()?;
+        let what = if target.exists() || dir.exists() { "not a directory" } else { "does not exist" };
+        format!("it is a symbolic link to {}, which {what}", target.display())
+    } else if !meta.is_dir() {
+        "it exists and is not a directory".into()
+    } else {
+        return None;
+    };
+    Some(std::io::Error::other(why))
+}
+
+/// Open (or create) the lock file without following a symbolic link in its place.
+fn open_lock_file(lock_path: &Path) -> Result<std::fs::File, OutputError> {
+    use std::os::unix::fs::OpenOptionsExt;
+    let opened = std::fs::OpenOptions::new().create(true).truncate(false).write(true).custom_flags(libc::O_NOFOLLOW).open(lock_path);
+    match opened {
+        Err(e) if e.raw_os_error() == Some(libc::ELOOP) => Err(OutputError::Symlink { path: lock_path.to_path_buf() }),
+        other => other.map_err(io_err(lock_path)),
+    }
+}
+
 /// An output directory locked by this process for as long as the value lives.
 #[derive(Debug)]
 pub struct OutputDir {
@@ -21,9 +47,9 @@ impl OutputDir {
     /// Create `dir` if needed and take its lock (or fail with [`OutputError::Busy`]).
     pub fn lock(dir: &Path) -> Result<OutputDir, OutputError> {
         let created = dir.ancestors().take_while(|a| !a.as_os_str().is_empty() && !a.exists()).last().map(Path::to_path_buf);
-        std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+        std::fs::create_dir_all(dir).map_err(|e| io_err(dir)(not_a_directory(dir).unwrap_or(e)))?;
         let lock_path = dir.join(LOCK_FILE);
-        let file = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(&lock_path).map_err(io_err(&lock_path))?;
+        let file = open_lock_file(&lock_path)?;
         match file.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => return Err(OutputError::Busy { dir: dir.to_path_buf() }),
@@ -59,6 +85,9 @@ impl OutputDir {
     pub fn commit(&self, staged: &Path, target: &Path) -> Result<(), OutputError> {
         if !staged.exists() {
             return Ok(());
+        }
+        if let Ok(relative) = target.strip_prefix(&self.path) {
+            super::refuse_links(&self.path, relative.parent().unwrap_or(Path::new("")))?;
         }
         if let Some(parent) = target.parent() {
             std::fs::create_dir_all(parent).map_err(io_err(parent))?;

@@ -28,7 +28,11 @@
 //! file for as long as it writes; a second skg-solve writing into the same directory is
 //! refused with a message. The lock is `std::fs::File::try_lock` (an advisory `flock`
 //! on Unix, released by the kernel when the process dies, so a killed run never leaves
-//! a stale lock).
+//! a stale lock). Symbolic links inside an output directory are not followed: the lock
+//! file is opened with `O_NOFOLLOW`, and a link where a log's directory or a sweep's
+//! `points/` would be is refused ([`refuse_links`]), so that a link placed there cannot
+//! make a run write elsewhere. (Files that are written by a rename replace a link of
+//! their name.)
 //!
 //! **What it holds**, one part per file: `atomic.rs` (atomic writes, temporary files),
 //! `pairing.rs` (the pairing rule's check), `lock.rs` (locked output directories),
@@ -79,6 +83,17 @@ pub enum OutputError {
         /// The output directory.
         dir: PathBuf,
     },
+    /// A symbolic link where a command would write inside its output directory (a
+    /// directory of `log_file`, a sweep's `points/`, the lock file): following it would
+    /// write wherever it points.
+    #[error(
+        "{path} is a symbolic link: skg-solve does not follow links inside an output directory (it would write \
+         wherever the link points); remove it, or choose another output directory"
+    )]
+    Symlink {
+        /// The link.
+        path: PathBuf,
+    },
     /// A data file does not belong to the `summary.json` beside it (the pairing rule).
     #[error("{file}: {message}")]
     Unpaired {
@@ -100,6 +115,22 @@ pub const TRAJECTORY_FILE: &str = "trajectory.csv";
 pub const REFERENCE_FILE: &str = "reference.csv";
 /// A solve's summary, written last ([the pairing rule](self)).
 pub const SUMMARY_FILE: &str = "summary.json";
+
+/// Refuse a symbolic link at any of the paths `base/a`, `base/a/b`, … of `relative`'s
+/// components ([`OutputError::Symlink`]); paths that do not exist yet are fine. `base`
+/// itself may be a link: the user chose it.
+pub fn refuse_links(base: &Path, relative: &Path) -> Result<(), OutputError> {
+    let mut path = base.to_path_buf();
+    for part in relative.components() {
+        path.push(part);
+        match std::fs::symlink_metadata(&path) {
+            Ok(m) if m.file_type().is_symlink() => return Err(OutputError::Symlink { path }),
+            Ok(_) => {}
+            Err(_) => break,
+        }
+    }
+    Ok(())
+}
 
 pub(super) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
     move |error| OutputError::Io { path: path.to_path_buf(), error }

@@ -145,6 +145,12 @@ pub fn solve_into_with_progress(
 ) -> Result<(Outcome, Written), SolveIntoError> {
     refuse_log_over_run_files(scene)?;
     let out = OutputDir::lock(dir)?;
+    if let Some(parent) = scene.solver.log_file.as_ref().and_then(|name| name.parent()) {
+        if let Err(e) = super::refuse_links(dir, parent) {
+            out.abandon();
+            return Err(e.into());
+        }
+    }
     let log = scene.solver.log_file.as_ref().map(|name| (dir.join(name), out.staged(name)));
     scene.solver.ipopt_log = log.as_ref().map(|(_, staged)| staged.clone());
     let outcome = solve::solve_scene_with_progress(scene, progress);
@@ -164,11 +170,12 @@ pub fn solve_into_with_progress(
 }
 
 /// A scene's `log_file` may not name one of the files the solve itself writes in the
-/// output directory (the resolution of the scene already confined it to that directory).
+/// output directory, nor a path inside one (`summary.json/x`) (the resolution of the scene already confined it to that directory).
 fn refuse_log_over_run_files(scene: &Scene) -> Result<(), SolveError> {
     let (Some(name), Some(spanned)) = (&scene.solver.log_file, &scene.file.solver.log_file) else { return Ok(()) };
-    if [TRAJECTORY_FILE, REFERENCE_FILE, SUMMARY_FILE].iter().any(|f| name == Path::new(f)) {
-        let message = format!("solver.log_file may not be {}, which the solve itself writes", name.display());
+    let Some(first) = name.components().next().map(|c| Path::new(c.as_os_str())) else { return Ok(()) };
+    if [TRAJECTORY_FILE, REFERENCE_FILE, SUMMARY_FILE].iter().any(|f| first == Path::new(f)) {
+        let message = format!("solver.log_file may not be {}, which the solve itself writes, nor lie inside it", first.display());
         return Err(SceneError::Invalid { location: scene.file.origin.locate_in(spanned, None), message }.into());
     }
     Ok(())

@@ -85,3 +85,13 @@ pub fn readable_number(x: f64) -> String {
         format!("{x:e}")
     }
 }
+
+/// A text as a message quotes it (`"…"`, escapes for control characters), its first 60
+/// characters only when it is longer, with its length: a message never echoes a huge
+/// value whole.
+pub(crate) fn quoted_excerpt(text: &str) -> String {
+    match text.char_indices().nth(60) {
+        Some((cut, _)) => format!("{:?}… ({} characters)", &text[..cut], text.chars().count()),
+        None => format!("{text:?}"),
+    }
+}

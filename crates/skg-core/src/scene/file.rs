@@ -186,8 +186,8 @@ pub struct SolverSpec {
     pub backend: Option<Backend>,
     /// Ipopt's `tol` and `constr_viol_tol` (default 1e-11).
     pub tol: Option<Spanned<f64>>,
-    /// Ipopt's `max_iter` (default 100).
-    pub max_iter: Option<u32>,
+    /// Ipopt's `max_iter` (default 100), at most [`MAX_ITER`](crate::scene::MAX_ITER).
+    pub max_iter: Option<Spanned<u32>>,
     /// Ipopt's console `print_level` (default 0: silent).
     pub print_level: Option<Spanned<i32>>,
     /// Ipopt's `linear_solver` (default: Ipopt's).

@@ -72,4 +72,5 @@ pub use settings::{
     Backend, Formulation, HessianMode, InitialVelocity, ParseBackendError, ParseFormulationError, ParseHessianModeError,
     ParseInitialVelocityError, ParseStepperError, Stepper,
 };
+pub use solver::{MAX_ITER, MAX_LOG_NAME_BYTES};
 pub use time::{TimeResolutionError, MAX_NODES};

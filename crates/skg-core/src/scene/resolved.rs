@@ -159,7 +159,8 @@ pub struct Scene {
     pub verify: VerifySettings,
     /// What the user should know about how the scene was read, though nothing is wrong
     /// (a window not shorter than the span, which makes the solve one piece); the
-    /// command line prints them as notes.
+    /// command line prints them as notes. Each starts with where its setting is
+    /// (`file:line:column: ` or the command-line option).
     pub notes: Vec<String>,
 }
 

@@ -1,12 +1,12 @@
 //! The solver's settings of a scene (`[solver]`) and its verification settings
 //! (`[verify]`), with the command line's overrides.
 
-use std::path::{Component, Path, PathBuf};
+use std::path::PathBuf;
 
 use indexmap::IndexMap;
 use toml::Spanned;
 
-use super::error::{readable_number, SceneError};
+use super::error::{quoted_excerpt, readable_number, SceneError};
 use super::file::{IpoptValue, SceneFile};
 use super::overrides::Overrides;
 use super::resolved::{SolverSettings, VerifySettings};
@@ -14,6 +14,13 @@ use super::resolved::{SolverSettings, VerifySettings};
 use super::settings::Backend;
 use super::settings::{Formulation, HessianMode};
 use super::time::MAX_NODES;
+
+/// The largest `max_iter` (Ipopt's `int`).
+pub const MAX_ITER: u32 = i32::MAX as u32;
+
+/// The longest part of a `log_file` path, in bytes: the staged log's name adds a prefix
+/// of about 40 bytes, and a file name may have 255.
+pub const MAX_LOG_NAME_BYTES: usize = 200;
 
 impl SceneFile {
     /// `[solver]` with the command line's overrides: a positive tolerance, an exact
@@ -52,7 +59,7 @@ impl SceneFile {
         Ok(SolverSettings {
             backend,
             tol,
-            max_iter: ov.max_iter.or(s.max_iter).unwrap_or(100),
+            max_iter: self.resolve_max_iter(ov)?,
             print_level,
             linear_solver: s.linear_solver.as_ref().map(|l| l.get_ref().clone()),
             hessian,
@@ -66,22 +73,38 @@ impl SceneFile {
 
     /// `[solver] log_file` as a path relative to the output directory, refused unless it
     /// stays inside it: a scene file is shared and downloaded, and must not be able to
-    /// write anywhere else. Only plain names are allowed (no `..`, no root, no `.`), none
-    /// of them hidden (the directory's lock and temporary files start with a dot).
+    /// write anywhere else. Only plain names are allowed (no `..`, no root, no `.`, no
+    /// empty part), none of them hidden (the directory's lock and temporary files start
+    /// with a dot) or longer than [`MAX_LOG_NAME_BYTES`] (the staged log adds a prefix
+    /// to the name, and a file name may have 255 bytes).
     fn confined_log_file(&self, name: &Spanned<String>) -> Result<PathBuf, SceneError> {
         let text = name.get_ref();
-        let path = Path::new(text);
-        let plain = |c: Component| matches!(c, Component::Normal(n) if !n.to_string_lossy().starts_with('.'));
-        if text.is_empty() || text.ends_with('/') || !path.components().all(plain) {
+        let plain = |part: &str| !part.is_empty() && part != "." && !part.starts_with('.') && part.len() <= MAX_LOG_NAME_BYTES;
+        if !text.split('/').all(plain) || text.chars().any(char::is_control) {
             return Err(self.invalid(
                 name,
                 format!(
                     "solver.log_file must be a file name inside the output directory (like \"ipopt.log\" or \"logs/ipopt.log\": \
-                     no absolute path, no `..`, no name starting with a dot), got {text:?}"
+                     no absolute path, no `..` or `.`, no empty part, no name starting with a dot or longer than \
+                     {MAX_LOG_NAME_BYTES} bytes, no control character), got {}",
+                    quoted_excerpt(text)
                 ),
             ));
         }
-        Ok(path.to_path_buf())
+        Ok(PathBuf::from(text))
+    }
+
+    /// `[solver] max_iter` or `--max-iter` (default 100), at most [`MAX_ITER`]: both
+    /// backends count iterations in Ipopt's range (a C `int`).
+    fn resolve_max_iter(&self, ov: &Overrides) -> Result<u32, SceneError> {
+        let message = |n: u32| format!("must be a whole number from 0 to {MAX_ITER} (Ipopt's range), got {n}");
+        match (ov.max_iter, &self.solver.max_iter) {
+            (Some(n), _) if n > MAX_ITER => Err(SceneError::Setting { setting: format!("--max-iter {n}"), message: message(n) }),
+            (Some(n), _) => Ok(n),
+            (None, Some(n)) if *n.get_ref() > MAX_ITER => Err(self.invalid(n, format!("solver.max_iter {}", message(*n.get_ref())))),
+            (None, Some(n)) => Ok(*n.get_ref()),
+            (None, None) => Ok(100),
+        }
     }
 
     /// `[solver.ipopt]`, passed to Ipopt verbatim once checked: no option that names a
@@ -137,13 +160,18 @@ impl SceneFile {
             }
             (None, None) => None,
         };
-        Ok(VerifySettings {
-            enabled: !ov.no_verify,
-            tol,
-            refine: ov.refine || self.verify.refine.unwrap_or(false),
-            max_nodes,
-            stepper: ov.stepper.or(self.verify.stepper).unwrap_or_default(),
-        })
+        // The refinement solves until the verification passes: without the verification
+        // there is nothing to refine to. Both asked for at once is refused; a scene's
+        // `refine = true` under `--no-verify` is off.
+        if ov.refine && ov.no_verify {
+            return Err(SceneError::Setting {
+                setting: "--refine with --no-verify".into(),
+                message: "the refinement solves until the verification passes, so it needs the verification: leave out one of them".into(),
+            });
+        }
+        let refine = ov.refine || (!ov.no_verify && self.verify.refine.unwrap_or(false));
+        let stepper = ov.stepper.or(self.verify.stepper).unwrap_or_default();
+        Ok(VerifySettings { enabled: !ov.no_verify, tol, refine, max_nodes, stepper })
     }
 
     /// `[solver] time_limit` or `--time-limit`: a positive number of seconds.

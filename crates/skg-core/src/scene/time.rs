@@ -185,7 +185,8 @@ impl SceneFile {
                 readable_number(length),
                 readable_number(span)
             );
-            return Ok((None, Some(note)));
+            // Said where the window is set: `file:line:column: …` or `--window 30: …`.
+            return Ok((None, Some(self.setting_error(&self.time.window, ov.window, "--window", note).to_string())));
         }
         self.check_window_nodes(ov, grid, length, overlap)?;
         Ok((Some(Windows { length, overlap }), None))

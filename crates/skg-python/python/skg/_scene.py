@@ -134,10 +134,18 @@ def _field(path: str, key: Any) -> str:
     return f"{path}.{key}" if path else str(key)
 
 
-def plain(value: Any, path: str = "") -> Any:
+#: The deepest nesting of mappings and lists accepted (a scene needs 3, a sweep 4); the
+#: native conversion refuses the same depth.
+MAX_DEPTH = 32
+
+
+def plain(value: Any, path: str = "", depth: int = 0) -> Any:
     """``value`` with every SymPy object replaced: by its text (:func:`sympy_text`), or by
     int or float for a SymPy integer or float where a number may stand; mappings become
-    dicts and tuples lists. ``path`` names the value in errors."""
+    dicts and tuples lists. ``path`` names the value in errors; nesting deeper than
+    :data:`MAX_DEPTH` is a :class:`SceneError`."""
+    if depth > MAX_DEPTH:
+        raise _refuse(path or "the scene", f"dicts and lists are nested more than {MAX_DEPTH} deep, deeper than any scene or sweep")
     if isinstance(value, Scene):
         raise _refuse(path or "the scene", "a Scene cannot be nested in a scene")
     if is_sympy(value):
@@ -150,9 +158,9 @@ def plain(value: Any, path: str = "") -> Any:
     if isinstance(value, Mapping):
         # a SymPy symbol as a key (``forces={x: -c*x_dot}``) stands for its name
         keys = [k.name if is_sympy(k) and hasattr(k, "name") else k for k in value]
-        return {k: plain(v, _field(path, k)) for k, v in zip(keys, value.values())}
+        return {k: plain(v, _field(path, k), depth + 1) for k, v in zip(keys, value.values())}
     if isinstance(value, (list, tuple)):
-        return [plain(v, f"{path}[{i}]") for i, v in enumerate(value)]
+        return [plain(v, f"{path}[{i}]", depth + 1) for i, v in enumerate(value)]
     return value
 
 
@@ -299,6 +307,19 @@ def _digest(text: str) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
 
+def _check_sweep_name(name: Any, given: bool) -> None:
+    """Raise SweepError for a sweep name that the command line refuses (not a plain,
+    printable file name); ``given``: it is ``sweep.name``, not the output directory's."""
+    problem = _skg.sweep_name_problem(name) if isinstance(name, str) else "is not a string"
+    if problem is None:
+        return
+    where = "sweep.name: " if given else "the sweep's name is the output directory's (out=): "
+    raise SweepError(
+        f"{where}the sweep's name {name!r} {problem}; it must be a plain file name of printable characters: "
+        "it names the output directory out/sweeps/<name>"
+    )
+
+
 def sweep_file_of(mapping: Mapping[str, Any], out: Optional[PathLike]) -> "tuple[Path, Path]":
     """Write a sweep given as a mapping (the sweep file's structure) into the output
     directory and return ``(sweep file, output directory)``.
@@ -322,6 +343,9 @@ def sweep_file_of(mapping: Mapping[str, Any], out: Optional[PathLike]) -> "tuple
         out_dir = Path("out/sweeps") / name
     else:
         out_dir = Path(out)
+    # The name is checked as the command line checks it, before anything is written: a
+    # name such as "../../x" or "/tmp/x" would put the input files outside out/sweeps.
+    _check_sweep_name(name if name is not None else out_dir.name, given=name is not None)
     inputs = out_dir / "inputs"
     inputs.mkdir(parents=True, exist_ok=True)
     scene = table.get("scene")

@@ -127,9 +127,9 @@ fn suspicions(diagnostics: &Diagnostics, ts_q: Option<&[Vec<f64>]>, status: Solv
         let scale = verify::coordinate_scale(ts);
         if dist > FAR_FROM_TIME_STEPPING * scale {
             warnings.push(format!(
-                "the solution is {dist:.3e} away from time stepping of the same scene ({:.0} % of the coordinates' range): \
+                "the solution is {dist:.3e} away from time stepping of the same scene ({} % of the coordinates' range): \
                  a spurious critical point, an odd-even mode of the operator, or a grid too coarse (refine N or change the operator)",
-                100.0 * dist / scale
+                crate::scene::readable_number((100.0 * dist / scale).round())
             ));
         }
     }
