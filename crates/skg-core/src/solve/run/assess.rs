@@ -86,10 +86,13 @@ pub fn factorization_note(ipopt: &IpoptReport) -> Option<String> {
     let speedup = per_iteration / lu_s.max(1e-6);
     (speedup >= NOTE_MIN_SPEEDUP).then(|| {
         format!(
-            "Ipopt's own work (mostly MUMPS's factorizations of its KKT matrix) took {:.1} s of this solve, {per_iteration:.2} s per iteration ({} iterations); \
+            "Ipopt's own work (mostly MUMPS's factorizations of its KKT matrix) took {:.1} s of this solve, {per_iteration:.2} s per iteration ({} {}); \
              one factorization of the same Jacobian by the sparse LU of --backend newton, timed after this solve, took {lu_s:.3} s, {:.0}× less \
              (docs/solver.md#the-newton-backend)",
-            ipopt.internal_s, ipopt.iterations, speedup
+            ipopt.internal_s,
+            ipopt.iterations,
+            if ipopt.iterations == 1 { "iteration" } else { "iterations" },
+            speedup
         )
     })
 }
