@@ -260,6 +260,22 @@ impl SystemSolver {
         self.lu.pattern().nonzeros()
     }
 
+    /// Seconds of one numeric LU factorization, in double precision, of `system`'s
+    /// Jacobian at `x` on this solver's analysis: what a Newton step pays for its
+    /// factorization, for comparing with another solver's. `None` when the system does
+    /// not fit this solver or its Jacobian cannot be evaluated or factored.
+    pub fn time_factorization<S: SquareSystem + ?Sized>(&mut self, system: &mut S, x: &[f64]) -> Option<f64> {
+        if !self.fits(system.size(), system.jacobian_structure()) || x.len() != self.n {
+            return None;
+        }
+        let mut entries = vec![0.0; self.structure.len()];
+        system.jacobian_values(x, &mut entries).ok()?;
+        let mut values = vec![0.0; self.lu.pattern().nonzeros()];
+        self.lu.pattern().gather(&entries, &mut values);
+        let start = Instant::now();
+        self.lu.factor(&values, false, &mut LuStats::default()).then(|| start.elapsed().as_secs_f64())
+    }
+
     /// Solve `system`'s `F(x) = 0` from `x0` by Newton's method with the line search and
     /// the chord steps of the module documentation. Errors only when the system does not
     /// fit this solver (size, structure); a failed iteration is a [`NewtonSolution`]

@@ -63,6 +63,8 @@ pub(super) fn solve<S: SquareSystem + ?Sized>(
             residual_evaluations: calls(sol.eval.constraints),
             jacobian_evaluations: calls(sol.eval.jacobian),
             hessian_evaluations: calls(sol.eval.hessian),
+            internal_s: sol.ipopt_seconds,
+            newton_lu_s: None,
         },
     })
 }
@@ -162,18 +164,30 @@ fn iteration_stat(s: &ipopt::IterationStat) -> IterationStat {
     }
 }
 
-/// MUMPS's options for a scene's KKT matrices: scaling off and the AMF ordering, and,
-/// for a scene with position constraints, QAMD (6) with MUMPS's permutation and scaling
-/// option 6 and its scaling 7 instead. Measured on Debian's MUMPS, release build, no
-/// verification, CPU seconds: a chain of 8 rods (Cartesian coordinates) at N = 1024
-/// 10.7 s → 0.7 s, at N = 4096 over 150 s → 2.3 s (41 s without the scaling), a chain
-/// of 16 rods at N = 1024 27 s → 3.3 s, the pendulum at N = 8192 over 5 minutes
-/// → 0.2 s (11.7 s without the scaling); without position constraints QAMD is not a
-/// gain (the knife edge at N = 4096 0.13 s → 0.50 s). Each is deterministic (SCOTCH,
-/// MUMPS's automatic choice, was not).
+/// MUMPS's options for a scene's KKT matrices, chosen by the scene's constraints:
+///
+/// * **position constraints**: QAMD (6) with MUMPS's permutation and scaling option 6
+///   and its scaling 7. Measured on Debian's MUMPS, release build, no verification, CPU
+///   seconds: a chain of 8 rods (Cartesian coordinates) at N = 1024 10.7 s → 0.7 s, at
+///   N = 4096 over 150 s → 2.3 s (41 s without the scaling), a chain of 16 rods at
+///   N = 1024 27 s → 3.3 s, the pendulum at N = 8192 over 5 minutes → 0.2 s (11.7 s
+///   without the scaling); without position constraints QAMD is not a gain (the knife
+///   edge at N = 4096 0.13 s → 0.50 s).
+/// * **velocity constraints only**: AMF (2) with MUMPS's scaling 7. Unscaled, MUMPS's
+///   threshold pivoting on these KKT matrices (zero diagonal blocks) delayed more pivots
+///   the larger N, and the factor grew faster than N: the knife edge had 290, 553, 696,
+///   828 and 1183 factor entries per node at N = 4096, 8192, 16384, 32768 and 65536.
+///   Scaled (rows and columns equilibrated), it has 288 at every N from 16384 to 10⁵,
+///   and the solve at N = 65536 takes 4.3 s instead of 28 s.
+/// * **no constraints**: AMF and no scaling.
+///
+/// Each is deterministic (SCOTCH, MUMPS's automatic choice, was not).
 pub fn mumps_options(scene: &Scene) -> Vec<(&'static str, i32)> {
-    if scene.constraints.iter().any(|c| c.kind == ConstraintKind::Position) {
+    let has = |kind: ConstraintKind| scene.constraints.iter().any(|c| c.kind == kind);
+    if has(ConstraintKind::Position) {
         vec![("mumps_scaling", 7), ("mumps_pivot_order", 6), ("mumps_permuting_scaling", 6)]
+    } else if has(ConstraintKind::Velocity) {
+        vec![("mumps_scaling", 7), ("mumps_pivot_order", 2)]
     } else {
         vec![("mumps_scaling", 0), ("mumps_pivot_order", 2)]
     }
@@ -204,9 +218,53 @@ pub(super) fn options(scene: &Scene) -> ipopt::Options {
         // solve gave different trajectories (in the last digits) and, on hard wall
         // scenes, different iteration counts and exit codes from run to run. AMF (2) is
         // deterministic and was faster on every scene without position constraints
-        // measured; with them, see [`mumps_options`] (docs/solver.md, "Posing the
+        // measured; with constraints, see [`mumps_options`] (docs/solver.md, "Posing the
         // system"). The scene's own [solver.ipopt] options come after and override these.
         extra: mumps_options(scene).into_iter().map(|(k, v)| (k.to_string(), ipopt::OptionValue::Int(v))).chain(pass_through).collect(),
         ..ipopt::Options::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::scene::{Overrides, SceneFile};
+
+    /// A shipped scene of `scenarios/`.
+    fn shipped(name: &str) -> Scene {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(name);
+        SceneFile::load(&path).unwrap().resolve(&Overrides::default()).unwrap()
+    }
+
+    /// The value of MUMPS option `name` among `options`, the last one if repeated (as
+    /// Ipopt sets them in order).
+    fn last(options: &[(String, ipopt::OptionValue)], name: &str) -> Option<ipopt::OptionValue> {
+        options.iter().rev().find(|(k, _)| k == name).map(|(_, v)| v.clone())
+    }
+
+    #[test]
+    fn mumps_options_follow_the_scene_s_constraints() {
+        let chosen = |name: &str| {
+            let o = mumps_options(&shipped(name));
+            let get = |key: &str| o.iter().find(|(k, _)| *k == key).map(|&(_, v)| v);
+            (get("mumps_scaling"), get("mumps_pivot_order"), get("mumps_permuting_scaling"))
+        };
+        // Velocity constraints only (a blade; a rolling contact): scaled, AMF.
+        assert_eq!(chosen("knife_edge.toml"), (Some(7), Some(2), None));
+        assert_eq!(chosen("rolling_disk.toml"), (Some(7), Some(2), None));
+        // A position constraint: scaled, QAMD with the permutation and scaling 6.
+        assert_eq!(chosen("pendulum.toml"), (Some(7), Some(6), Some(6)));
+        // No constraints: unscaled, AMF.
+        assert_eq!(chosen("free_fall.toml"), (Some(0), Some(2), None));
+    }
+
+    #[test]
+    fn a_scene_s_own_mumps_options_override_the_chosen_ones() {
+        let mut scene = shipped("knife_edge.toml");
+        assert_eq!(last(&options(&scene).extra, "mumps_scaling"), Some(ipopt::OptionValue::Int(7)));
+        scene.solver.ipopt.insert("mumps_scaling".into(), IpoptValue::Int(0));
+        assert_eq!(last(&options(&scene).extra, "mumps_scaling"), Some(ipopt::OptionValue::Int(0)));
     }
 }

@@ -150,7 +150,7 @@ impl NewtonReport {
 
 /// What Ipopt did in a solve (with `backend = "ipopt"`, or after Newton handed over):
 /// its iterations and the evaluations of our callbacks it asked for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct IpoptReport {
     /// Ipopt's iterations.
     pub iterations: usize,
@@ -161,7 +161,24 @@ pub struct IpoptReport {
     pub jacobian_evaluations: usize,
     /// Evaluations of the Hessian's values (0 unless the exact Hessian is given).
     pub hessian_evaluations: usize,
+    /// Seconds of Ipopt's own work (its linear algebra, mostly MUMPS's factorizations of
+    /// the KKT matrix): the solve's time outside our callbacks.
+    pub internal_s: f64,
+    /// Seconds of one numeric factorization of the same Jacobian by the Newton backend's
+    /// sparse LU, timed at Ipopt's last point after the solve; only when Ipopt was asked
+    /// for and its own work took most of a long solve ([`NEWTON_LU_TIMED_FROM_S`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub newton_lu_s: Option<f64>,
 }
+
+/// Ipopt's own work, in seconds, from which a solve also times the Newton backend's
+/// factorization of the same Jacobian ([`IpoptReport::newton_lu_s`]), when that work is
+/// at least [`NEWTON_LU_TIMED_SHARE`] of the solve: the comparison is then worth its
+/// cost (one analysis and one factorization, a small fraction of Ipopt's time).
+pub const NEWTON_LU_TIMED_FROM_S: f64 = 1.0;
+
+/// See [`NEWTON_LU_TIMED_FROM_S`].
+pub const NEWTON_LU_TIMED_SHARE: f64 = 0.75;
 
 /// Which backend ran, and how.
 #[derive(Debug, Clone, Serialize)]
@@ -460,7 +477,12 @@ fn solve_by_ipopt<S: SquareSystem>(
     x0: &[f64],
 ) -> Result<SystemSolution, BackendError> {
     let sol = ipopt_square::solve(system, x0, &settings.ipopt)?;
-    report.ipopt = Some(sol.report);
+    let mut ipopt_report = sol.report;
+    let internal_s = ipopt_report.internal_s;
+    if report.requested == Backend::Ipopt && internal_s >= NEWTON_LU_TIMED_FROM_S && internal_s >= NEWTON_LU_TIMED_SHARE * sol.total_s {
+        ipopt_report.newton_lu_s = time_newton_lu(system, &sol.x);
+    }
+    report.ipopt = Some(ipopt_report);
     Ok(SystemSolution {
         status: sol.status,
         max_residual: sol.max_residual,
@@ -471,6 +493,14 @@ fn solve_by_ipopt<S: SquareSystem>(
         z: sol.x,
         report,
     })
+}
+
+/// Seconds of one numeric factorization of `system`'s Jacobian at `x` by the Newton
+/// backend's sparse LU (its analysis made first, not counted); `None` when it fails.
+#[cfg(feature = "ipopt")]
+fn time_newton_lu<S: SquareSystem>(system: &mut S, x: &[f64]) -> Option<f64> {
+    let mut lu = SystemSolver::new(system.size(), system.jacobian_structure()).ok()?;
+    lu.time_factorization(system, x)
 }
 
 /// Without Ipopt every solve is Newton's (the scene's backend is checked when it is
