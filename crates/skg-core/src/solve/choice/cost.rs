@@ -57,36 +57,6 @@ pub fn relative_cost(operator: OperatorKind, backend: Backend, nodes: usize) -> 
     relative_cost_per_node(operator, backend) * nodes as f64
 }
 
-/// How much faster the Newton backend solved the same systems as Ipopt, measured by
-/// unknowns per grid node (whole process, no verification, release build, OpenBLAS,
-/// CPU seconds; see docs/benchmarks.md#many-body-scenes): the rolling disk (6 per node,
-/// N = 4096), chains of 8 and 16 rods (24 and 48, N = 1024) and of 32 rods (96, N = 512),
-/// the chains with the sparse LU's settings, the chord step and the factorization in
-/// single precision.
-const NEWTON_SPEEDUP: [(usize, f64); 4] = [(6, 2.6), (24, 4.5), (48, 8.0), (96, 10.9)];
-
-/// The measured speed-up of `--backend newton` over Ipopt nearest to `per_node`
-/// unknowns per node.
-pub fn newton_speedup(per_node: usize) -> f64 {
-    let distance = |n: usize| (n as f64 / per_node.max(1) as f64).ln().abs();
-    NEWTON_SPEEDUP.iter().min_by(|a, b| distance(a.0).total_cmp(&distance(b.0))).map_or(1.0, |p| p.1)
-}
-
-/// The note of an Ipopt solve whose time went mostly to Ipopt's own linear algebra
-/// (at least one second and three quarters of the backend's time): the measured
-/// speed-up of the Newton backend on systems of its size. `None` otherwise.
-pub fn factorization_note(backend: Backend, solver_s: f64, solver_internal_s: f64, unknowns: usize, nodes: usize) -> Option<String> {
-    if backend != Backend::Ipopt || solver_internal_s < 1.0 || solver_internal_s < 0.75 * solver_s {
-        return None;
-    }
-    let per_node = unknowns / nodes.max(1);
-    Some(format!(
-        "Ipopt's own work (mostly MUMPS's factorizations) took {solver_internal_s:.1} s of this solve; on systems of about {per_node} unknowns per node, \
-         --backend newton solved the same systems {:.0}× faster (docs/benchmarks.md#many-body-scenes)",
-        newton_speedup(per_node)
-    ))
-}
-
 /// Seconds of a whole solve per unit of [`relative_cost`] on `backend`, for estimates of
 /// wall time (a sweep's plan), not for choosing: the wall time per node of an `SBP242`
 /// solve as [`solve_scene`](crate::solve::solve_scene) runs it (setup, guess, solve and
@@ -101,19 +71,3 @@ pub fn seconds_per_cost(backend: Backend) -> f64 {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_note_names_newton_only_when_ipopt_factorizations_dominate() {
-        assert_eq!(newton_speedup(24), 4.5);
-        assert_eq!(newton_speedup(5), 2.6);
-        assert_eq!(newton_speedup(60), 8.0);
-        let note = factorization_note(Backend::Ipopt, 10.9, 10.5, 49216, 1024).unwrap();
-        assert!(note.contains("--backend newton") && note.contains("48 unknowns per node") && note.contains("8×"), "{note}");
-        assert!(factorization_note(Backend::Newton, 10.9, 10.5, 49216, 1024).is_none());
-        assert!(factorization_note(Backend::Ipopt, 0.5, 0.45, 49216, 1024).is_none(), "under a second");
-        assert!(factorization_note(Backend::Ipopt, 10.0, 4.0, 49216, 1024).is_none(), "the callbacks dominate");
-    }
-}
