@@ -72,6 +72,8 @@ fn cases() -> Vec<(String, Vec<String>)> {
         (incline.to_string(), free.into_iter().map(String::from).collect()),
         ("rolling_disk".to_string(), ["alpha", "IS", "g"].map(String::from).to_vec()),
         ("pendulum".to_string(), ["theta0", "l", "g"].map(String::from).to_vec()),
+        // Friction against the velocity (no declared direction).
+        (std::fs::read_to_string(common::test_scene("friction_stop")).unwrap(), ["mu", "A"].map(String::from).to_vec()),
     ]
 }
 

@@ -89,10 +89,15 @@ pub enum FitHessian {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum FitStart {
+    /// [`FitStart::Data`] for a scene without constraints, [`FitStart::Solve`] for one
+    /// with constraints: the data put in place of some coordinates violate the
+    /// constraints that tie them to the others, and Ipopt then starts far from
+    /// feasibility.
+    #[default]
+    Auto,
     /// The data themselves where they observe a coordinate (interpolated at the nodes
     /// between its first and last observation), the solve at the starting values
     /// elsewhere.
-    #[default]
     Data,
     /// The solve at the starting values everywhere.
     Solve,
@@ -137,6 +142,7 @@ impl FitStart {
     /// The setting's name.
     pub fn name(self) -> &'static str {
         match self {
+            FitStart::Auto => "auto",
             FitStart::Data => "data",
             FitStart::Solve => "solve",
         }
@@ -147,9 +153,10 @@ impl FromStr for FitStart {
     type Err = ParseFitSettingError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(FitStart::Auto),
             "data" => Ok(FitStart::Data),
             "solve" => Ok(FitStart::Solve),
-            _ => Err(ParseFitSettingError { given: s.to_string(), expected: "data, solve" }),
+            _ => Err(ParseFitSettingError { given: s.to_string(), expected: "auto, data, solve" }),
         }
     }
 }
@@ -180,11 +187,15 @@ pub struct FitSettings {
 /// left the noise-free fits of the tests at 1e-7 of the parameters' values).
 pub const DEFAULT_TOL: f64 = 1e-10;
 
+/// Ipopt's `acceptable_iter` for a fit: the iterations at its acceptable level after
+/// which it stops (its default is 15).
+pub const ACCEPTABLE_ITER: i32 = 5;
+
 /// Ipopt's iteration limit for a fit unless the scene or the caller gives one.
 pub const DEFAULT_MAX_ITER: u32 = 200;
 
 impl FitSettings {
-    /// The defaults for these free parameters: exact Hessian, start at the data,
+    /// The defaults for these free parameters: exact Hessian, [`FitStart::Auto`],
     /// [`DEFAULT_TOL`], [`DEFAULT_MAX_ITER`].
     pub fn new(free: Vec<FreeParameter>) -> FitSettings {
         FitSettings { free, hessian: FitHessian::Exact, start: FitStart::Data, tol: DEFAULT_TOL, max_iter: DEFAULT_MAX_ITER }
@@ -284,7 +295,12 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
             .push(format!("the solve at the starting values did not converge ({}); the fit starts from time stepping", start.description));
     }
     let mut q = start.q.clone();
-    if settings.start == FitStart::Data {
+    let start_from_data = match settings.start {
+        FitStart::Auto => scene.constraints.is_empty(),
+        FitStart::Data => true,
+        FitStart::Solve => false,
+    };
+    if start_from_data {
         put_data(&mut q, &times, data);
     }
     let mut x0 = point_from_states(&action, &q, &start.lambda)[..action.layout.n_p].to_vec();
@@ -552,12 +568,16 @@ fn fitted_scene(scene: &Scene, overrides: &Overrides, names: &[String], theta: &
 
 /// Ipopt's options for a fit of `scene`: the scene's linear solver, print level and
 /// MUMPS settings as for a solve, the fit's tolerance and iteration limit, the
-/// constraints held to the scene's `[solver] tol`, the Hessian, then the scene's
+/// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], the Hessian, then the scene's
 /// `[solver.ipopt]` options.
 fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     let solver = &scene.solver;
     let mut extra: Vec<(String, ipopt::OptionValue)> =
         mumps_options(scene).into_iter().map(|(k, v)| (k.to_string(), ipopt::OptionValue::Int(v))).collect();
+    // The constraints of a long or stiff scene stall at a round-off floor above the
+    // fit's tol: stop after a few iterations at Ipopt's acceptable level (with a warning)
+    // instead of line-searching at that floor up to the iteration limit.
+    extra.push(("acceptable_iter".into(), ipopt::OptionValue::Int(ACCEPTABLE_ITER)));
     if settings.hessian == FitHessian::LimitedMemory {
         extra.push(("hessian_approximation".into(), ipopt::OptionValue::Str("limited-memory".into())));
     }
