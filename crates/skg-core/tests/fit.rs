@@ -265,3 +265,49 @@ fn bad_data_files_are_refused_with_their_line() {
     assert!(missing.contains("absent.csv: cannot read the data file"), "{missing}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Seeded standard normal numbers (xorshift64 and Box–Muller).
+struct Normal(u64);
+impl Normal {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn next(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * PI * v).cos()
+    }
+}
+
+/// Repeated fits of noisy data: the estimates scatter around the truth as the standard
+/// errors say (inside three of them, and the errors within 30 % of the observed spread;
+/// with 40 fits the spread itself is known to about 11 %).
+#[test]
+fn standard_errors_describe_the_scatter_of_repeated_noisy_fits() {
+    let ov = Overrides::default();
+    let scene = scene_of(OSCILLATOR, &ov);
+    let (k, c, sigma) = (4.0, 0.3, 0.01);
+    let mut rng = Normal(0x5eed_f17);
+    let (mut estimates, mut errors) = (vec![], vec![]);
+    for _ in 0..40 {
+        let mut text = String::from("t,x,sigma_x\n");
+        for t in oscillator_times() {
+            text += &format!("{t:?},{:?},{sigma}\n", oscillator(t, 1.0, k, c, 1.0, 0.0) + sigma * rng.next());
+        }
+        let f = run(&scene, &ov, &text, &free(&["k", "c"])).unwrap();
+        assert!(f.report.converged, "{} (constraint violation {:e})", f.report.status, f.report.max_constraint_violation);
+        let p = &f.report.parameters;
+        estimates.push([p["k"].value, p["c"].value]);
+        errors.push([p["k"].std_error.unwrap(), p["c"].std_error.unwrap()]);
+    }
+    for (j, truth) in [k, c].into_iter().enumerate() {
+        let inside = estimates.iter().zip(&errors).filter(|(e, s)| (e[j] - truth).abs() <= 3.0 * s[j]).count();
+        assert!(inside >= 38, "parameter {j}: {inside} of 40 inside three standard errors");
+        let mean = estimates.iter().map(|e| e[j]).sum::<f64>() / 40.0;
+        let spread = (estimates.iter().map(|e| (e[j] - mean).powi(2)).sum::<f64>() / 39.0).sqrt();
+        let se = errors.iter().map(|s| s[j]).sum::<f64>() / 40.0;
+        assert!((se / spread - 1.0).abs() < 0.3, "parameter {j}: standard error {se:e}, Monte-Carlo spread {spread:e}");
+    }
+}

@@ -63,7 +63,8 @@ pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
     let data = Data::read(&args.data, &scene)?;
     let dir = args.output.clone().unwrap_or_else(|| default_dir(&args.scenario));
     let (fitted, written) = fit::fit_into(&dir, &mut scene, &ov, &data, &settings)?;
-    for w in fitted.report.warnings.iter().chain(&fitted.outcome.warnings) {
+    let fit_warnings = &fitted.report.warnings;
+    for w in fit_warnings.iter().chain(fitted.outcome.warnings.iter().filter(|w| !fit_warnings.contains(w))) {
         note!("warning: {w}");
     }
     if let Some(code) = report_untrusted(&fitted, &written) {

@@ -315,10 +315,7 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
         ipopt::solve(&mut problem, &x0, &options)?
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
-    let converged = matches!(solution.status, ipopt::Status::SolveSucceeded | ipopt::Status::SolvedToAcceptableLevel);
-    if solution.status == ipopt::Status::SolvedToAcceptableLevel {
-        warnings.push("Ipopt stopped at its acceptable level (Solved_To_Acceptable_Level), not at the requested tolerance".into());
-    }
+    let converged = converged(&solution, scene.solver.tol, &mut warnings);
 
     // The statistics at the solution.
     let t_stat = Instant::now();
@@ -416,6 +413,29 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
     let data_table = report::data_table(scene, data, &outcome.trajectory);
     Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
+}
+
+/// Whether Ipopt's fit converged: `Solve_Succeeded`; or, with a warning, its acceptable
+/// level, or a search direction too small to make progress (the misfit of noisy data
+/// stalls there short of the tight default `tol`) with the constraints held to 1e-8 or
+/// the scene's `tol` (the solve at the fitted values then solves them to `tol`).
+fn converged(solution: &ipopt::Solution, tol: f64, warnings: &mut Vec<String>) -> bool {
+    match solution.status {
+        ipopt::Status::SolveSucceeded => true,
+        ipopt::Status::SolvedToAcceptableLevel => {
+            warnings.push("Ipopt stopped at its acceptable level (Solved_To_Acceptable_Level), not at the requested tolerance".into());
+            true
+        }
+        ipopt::Status::SearchDirectionBecomesTooSmall if solution.max_constraint_violation <= tol.max(1e-8) => {
+            warnings.push(format!(
+                "Ipopt stopped because its search direction became too small (Search_Direction_Becomes_Too_Small) with the \
+                 equations of motion held to {:.1e}: the misfit cannot decrease further at this precision",
+                solution.max_constraint_violation
+            ));
+            true
+        }
+        _ => false,
+    }
 }
 
 /// The checks of the settings against the scene; the notes on what the fit does not
