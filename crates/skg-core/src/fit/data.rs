@@ -95,6 +95,10 @@ impl fmt::Display for DataError {
     }
 }
 
+/// An observed coordinate's columns: the coordinate, its values' column, its standard
+/// deviations' column if any.
+type ValueColumns = (usize, usize, Option<usize>);
+
 /// A cell of the table: a number, or empty (not observed).
 type Cell = Option<f64>;
 
@@ -210,7 +214,7 @@ impl RawTable {
     }
 
     /// The columns' meaning: `t`, a coordinate's values, or its standard deviations.
-    fn classify(&self, scene: &Scene) -> Result<(usize, Vec<(usize, usize, Option<usize>)>), DataError> {
+    fn classify(&self, scene: &Scene) -> Result<(usize, Vec<ValueColumns>), DataError> {
         let place = || self.header_place.clone();
         let mut t = None;
         let mut seen: Vec<&str> = Vec::new();

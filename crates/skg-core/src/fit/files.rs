@@ -59,7 +59,7 @@ pub fn write_fit(dir: &Path, fit: &mut Fit) -> Result<FitWritten, OutputError> {
     let report =
         serde_json::to_value(&fit.report).map_err(|e| OutputError::Format { path: dir.join(SUMMARY_FILE), message: e.to_string() })?;
     let extras = RunExtras {
-        csv: vec![(DATA_FILE, fit.data_table.0.clone(), fit.data_table.1.clone())],
+        csv: vec![(DATA_FILE, fit.data_table.clone())],
         texts: vec![(FITTED_SCENE_FILE, fit.fitted_toml.clone())],
         fields: [("fit".to_string(), report)].into_iter().collect(),
     };

@@ -67,7 +67,7 @@ impl FreeParameter {
         let lower = lower.filter(|x| *x > f64::NEG_INFINITY);
         let upper = upper.filter(|x| *x < f64::INFINITY);
         if let (Some(lo), Some(hi)) = (lower, upper) {
-            if !(lo < hi) {
+            if lo >= hi {
                 return Err(err(&format!("the lower bound {} is not below the upper bound {}", readable_number(lo), readable_number(hi))));
             }
         }

@@ -484,7 +484,7 @@ fn check_settings(scene: &Scene, overrides: &Overrides, settings: &FitSettings) 
     if scene.formulation == crate::scene::Formulation::Full {
         notes.push("the fit's constraints are the reduced system: the full formulation is not used".into());
     }
-    if !(settings.tol > 0.0) || settings.max_iter == 0 {
+    if settings.tol.is_nan() || settings.tol <= 0.0 || settings.max_iter == 0 {
         return Err(FitError::Settings(format!("the fit's tol ({}) and max_iter ({}) must be positive", settings.tol, settings.max_iter)));
     }
     Ok(notes)

@@ -278,7 +278,7 @@ pub(super) fn parameters(
 /// largest (0 when a diagonal entry vanishes).
 pub(super) fn scaled_condition(f: &DMatrix<f64>) -> f64 {
     let n = f.nrows();
-    if (0..n).any(|j| !(f[(j, j)] > 0.0)) {
+    if (0..n).any(|j| f[(j, j)].is_nan() || f[(j, j)] <= 0.0) {
         return 0.0;
     }
     let c = DMatrix::from_fn(n, n, |i, j| f[(i, j)] / (f[(i, i)] * f[(j, j)]).sqrt());

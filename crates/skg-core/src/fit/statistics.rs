@@ -100,7 +100,8 @@ pub fn undetermined(f: &DMatrix<f64>, names: &[String], values: &[f64]) -> Optio
     let u = eig.eigenvectors.column(imin);
     let change: Vec<f64> = (0..n).map(|j| u[j] / d[j] / if values[j] != 0.0 { values[j].abs() } else { 1.0 }).collect();
     let top = change.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-    let sign = if change.iter().find(|x| x.abs() == top).is_some_and(|x| *x < 0.0) { -1.0 } else { 1.0 };
+    // The first of the largest changes (to rounding) positive, whatever the eigenvector's sign.
+    let sign = if change.iter().find(|x| x.abs() >= top * (1.0 - 1e-9)).is_some_and(|x| *x < 0.0) { -1.0 } else { 1.0 };
     let parts: Vec<(usize, f64)> = change.iter().enumerate().map(|(j, x)| (j, sign * x / top)).filter(|(_, x)| x.abs() >= 1e-3).collect();
     let term = |&(j, x): &(usize, f64)| {
         let name = &names[j];

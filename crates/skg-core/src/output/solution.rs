@@ -40,13 +40,16 @@ struct Summary<'a> {
     extra: &'a serde_json::Map<String, serde_json::Value>,
 }
 
+/// A CSV table: its header and its rows.
+pub type CsvTable = (Vec<String>, Vec<Vec<f64>>);
+
 /// What a run writes beyond a solve's files (a fit's): further CSV data files, listed in
 /// `summary.json`'s `files` like the trajectory; further text files, written before the
 /// summary; further top-level fields of the summary.
 #[derive(Debug, Clone, Default)]
 pub struct RunExtras {
     /// CSV files: name, header, rows.
-    pub csv: Vec<(&'static str, Vec<String>, Vec<Vec<f64>>)>,
+    pub csv: Vec<(&'static str, CsvTable)>,
     /// Text files: name, text.
     pub texts: Vec<(&'static str, String)>,
     /// Fields of the summary, after the outcome's.
@@ -143,7 +146,7 @@ pub fn write_outcome_with(dir: &Path, outcome: &mut Outcome, scene: &Scene, extr
             None
         }
     };
-    for (name, header, rows) in &extras.csv {
+    for (name, (header, rows)) in &extras.csv {
         files.insert(name, write_csv(&dir.join(name), None, header, rows)?);
     }
     for (name, text) in &extras.texts {
