@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use commands::{animate, bench, check, gallery, plot, reference, solve, status, sweep, tune};
+use commands::{animate, bench, check, fit, gallery, plot, reference, solve, status, sweep, tune};
 
 #[derive(Parser)]
 #[command(
@@ -87,6 +87,12 @@ enum Command {
     /// Integrate the Lagrange–d'Alembert equations of a scene with a tight-tolerance
     /// adaptive integrator (DOP853) and write a reference CSV with the solver's columns.
     Reference(reference::ReferenceArgs),
+    /// Fit scene parameters and initial data to measured motion (Ipopt minimizes the
+    /// weighted least-squares misfit under the discrete equations of motion); writes the
+    /// fitted motion, data.csv, fitted.toml and summary.json with a `fit` object
+    /// (docs/fitting.md). Exit status 0 only when the fit converged and the fitted motion
+    /// verified; 3 not converged; 4 not verified.
+    Fit(fit::FitArgs),
     /// Compare a trajectory CSV with a reference CSV column by column (exit status 4 when
     /// a tolerance is exceeded).
     Check(check::CheckArgs),
@@ -117,6 +123,7 @@ fn run() -> ExitCode {
         Some(Command::SweepWorker { work }) => sweep::run_worker(&work),
         Some(Command::Reference(a)) => reference::run(a, quiet),
         Some(Command::Check(a)) => check::run(a, quiet),
+        Some(Command::Fit(a)) => fit::run(a, quiet),
         None => solve::run(cli.solve, quiet),
     };
     match result {

@@ -10,7 +10,7 @@
 //! ([`output`]). Each stage is a module that uses only the stages before it:
 //!
 //! ```text
-//! convergence, sbp → scene → memory → model → discrete → stepping → solve → output → check, tune
+//! convergence, sbp → scene → memory → model → discrete → stepping → solve → output → check, tune, fit
 //! ```
 //!
 //! 1. [`convergence`]: observed orders of a refinement study; [`sbp`]: the
@@ -30,7 +30,8 @@
 //! 7. [`output`]: writes what a solve and a reference produced (CSV, JSON), atomically,
 //!    by the pairing rule, into locked directories.
 //! 8. Consumers of results: [`check`] (a trajectory against a reference) and [`tune`]
-//!    (the wall width σ).
+//!    (the wall width σ); `fit` (with the `ipopt` feature): parameters and initial data
+//!    estimated from measured motion, with Ipopt as the optimizer.
 //!
 //! # Example
 //!
@@ -96,6 +97,8 @@ pub mod solve;
 pub mod output;
 
 pub mod check;
+#[cfg(feature = "ipopt")]
+pub mod fit;
 pub mod tune;
 
 pub use discrete::Trajectory;

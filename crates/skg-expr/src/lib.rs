@@ -62,7 +62,8 @@
 //! * `pi` is built in. Every other name is the caller's business: the parser asks the
 //!   caller's resolver what it means (a variable of the problem, such as a coordinate
 //!   `x` or a velocity `x_dot` — whatever velocity syntax the caller has chosen — or the
-//!   time `t`, or a named constant such as a mass `M`, which is folded in as a number). A name the
+//!   time `t`, or a named constant such as a mass `M`, which is folded in as a number, or
+//!   an expression already in the graph, [`Symbol::Expr`]). A name the
 //!   resolver does not know is a [`ParseError`] at that name's position, to which the
 //!   caller can attach a hint listing the valid names ([`ParseError::with_hint`]).
 //! * Whitespace is ignored. Positions in errors count characters (not bytes) from 0.
@@ -115,4 +116,9 @@ pub enum Symbol {
     Var(usize),
     /// A named constant, folded into the expression as a number.
     Const(f64),
+    /// A name that stands for an expression already in the graph being parsed into
+    /// (for instance a named quantity defined by another expression of the variables):
+    /// the parse uses that node as it is. An id the graph does not hold is an error at
+    /// the name's position.
+    Expr(ExprId),
 }

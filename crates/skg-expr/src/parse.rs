@@ -409,6 +409,12 @@ impl Parser<'_, '_> {
         }
         match (self.resolve)(name) {
             Some(Symbol::Const(c)) => Ok(self.graph.constant(c)),
+            Some(Symbol::Expr(e)) if e.index() < self.graph.len() => Ok(e),
+            Some(Symbol::Expr(e)) => Err(self.err(
+                pos,
+                ParseErrorKind::UnknownSymbol,
+                format!("symbol `{name}` resolves to expression {}, which this graph does not hold", e.index()),
+            )),
             Some(Symbol::Var(i)) => match u32::try_from(i) {
                 Ok(_) => Ok(self.graph.var(i)),
                 Err(_) => Err(self.err(

@@ -1,11 +1,13 @@
 //! The simplifying builders of the operations: [`Graph::add`], [`Graph::sub`],
 //! [`Graph::mul`], [`Graph::div`], [`Graph::neg`], [`Graph::powi`], [`Graph::pow`],
-//! [`Graph::func`] and the functions by name, [`Graph::atan2`], [`Graph::sum`]. Each folds
+//! [`Graph::func`] and the functions by name, [`Graph::atan2`], [`Graph::sum`], and
+//! [`Graph::substitute`], which rebuilds an expression through them. Each folds
 //! constants and applies identities (listed in the crate documentation) before it interns
 //! the node. The order in which a builder creates nodes fixes their ids, and with them
 //! the canonical order of operands and the tapes' arithmetic, so it must not change.
 
 use crate::graph::{ExprId, Graph};
+use crate::hash::FxMap;
 use crate::node::{powi, Func, Node};
 
 impl Graph {
@@ -293,5 +295,31 @@ impl Graph {
             acc = self.add(acc, t);
         }
         acc
+    }
+
+    /// `e` with each variable `v` of `substitutions` (pairs `(v, expression)`) replaced
+    /// by its expression, rebuilt through the simplifying builders (so constants that
+    /// meet are folded). Variables not listed stay. Iterative, however deep `e` is.
+    pub fn substitute(&mut self, e: ExprId, substitutions: &[(usize, ExprId)]) -> ExprId {
+        let replace: FxMap<u32, ExprId> = substitutions.iter().filter_map(|&(v, x)| Some((u32::try_from(v).ok()?, x))).collect();
+        let mut new: FxMap<ExprId, ExprId> = FxMap::default();
+        for n in self.reachable(&[e]) {
+            let get = |x: ExprId| new[&x];
+            let built = match self.node(n) {
+                Node::Const(_) => n,
+                Node::Var(v) => replace.get(&v).copied().unwrap_or(n),
+                Node::Add(a, b) => self.add(get(a), get(b)),
+                Node::Sub(a, b) => self.sub(get(a), get(b)),
+                Node::Mul(a, b) => self.mul(get(a), get(b)),
+                Node::Div(a, b) => self.div(get(a), get(b)),
+                Node::Neg(a) => self.neg(get(a)),
+                Node::Powi(a, k) => self.powi(get(a), k),
+                Node::Pow(a, b) => self.pow(get(a), get(b)),
+                Node::Func(f, a) => self.func(f, get(a)),
+                Node::Atan2(y, x) => self.atan2(get(y), get(x)),
+            };
+            new.insert(n, built);
+        }
+        new[&e]
     }
 }

@@ -662,3 +662,48 @@ fn tape_performance() {
         report(&format!("{name} + third derivatives"), outs, &g);
     }
 }
+
+/// A name bound to an expression of the graph stands for that expression: `r2 = x^2 + y^2`
+/// used in `sqrt(r2)*z` is `sqrt(x^2 + y^2)*z`, one node with the direct parse, so its
+/// derivatives are those of the expanded expression.
+#[test]
+fn a_name_bound_to_an_expression_parses_as_that_expression() {
+    let mut g = Graph::new();
+    let r2 = parse(&mut g, "x^2 + y^2");
+    let mut named = |name: &str| if name == "r2" { Some(Symbol::Expr(r2)) } else { resolver(name) };
+    let e = g.parse("sqrt(r2)*z", &mut named).unwrap();
+    assert_eq!(e, parse(&mut g, "sqrt(x^2 + y^2)*z"));
+    let dx = g.diff(e, 0);
+    // d/dx sqrt(x² + y²) z = x z / sqrt(x² + y²) at (3, 4, 2): 6/5.
+    assert!((g.eval(dx, &[3.0, 4.0, 2.0, 0.0]) - 1.2).abs() < 1e-15);
+    // An id beyond the graph is an unknown symbol at the name's position, not a panic.
+    let mut stale = |name: &str| if name == "r2" { Some(Symbol::Expr(ExprId(u32::MAX))) } else { resolver(name) };
+    let err = g.parse("x + r2", &mut stale).unwrap_err();
+    assert_eq!((err.kind, err.position), (ParseErrorKind::UnknownSymbol, 4));
+}
+
+/// Substitution agrees with evaluating the outer expression at the inner ones' values,
+/// for every kind of node, and folds what becomes constant.
+#[test]
+fn substitution_is_composition() {
+    let mut g = Graph::new();
+    let outer = parse(&mut g, "sin(x)*y^3 - exp(x/y) + atan2(y, x)^z + abs(x) + -tanh(w) - x^(1/3)");
+    let (a, b) = (parse(&mut g, "z*w + 1"), parse(&mut g, "cos(z) + 2"));
+    let composed = g.substitute(outer, &[(0, a), (1, b)]);
+    let mut rng = Rng(7);
+    for _ in 0..20 {
+        let (z, w) = (rng.uniform(0.1, 1.0), rng.uniform(0.1, 1.0));
+        let inner = [g.eval(a, &[0.0, 0.0, z, w]), g.eval(b, &[0.0, 0.0, z, w])];
+        let direct = g.eval(outer, &[inner[0], inner[1], z, w]);
+        let got = g.eval(composed, &[0.0, 0.0, z, w]);
+        assert!((got - direct).abs() <= 1e-14 * direct.abs().max(1.0), "{got} vs {direct}");
+    }
+    assert!(!g.variables(composed).iter().any(|&v| v < 2), "x and y are gone");
+    // Substituting constants folds the expression to a constant.
+    let two = g.constant(2.0);
+    let square = parse(&mut g, "x*x + 1");
+    let folded = g.substitute(square, &[(0, two)]);
+    assert_eq!(g.as_constant(folded), Some(5.0));
+    // No substitution, no change.
+    assert_eq!(g.substitute(outer, &[]), outer);
+}

@@ -15,7 +15,7 @@
 //! Its modules: `errors` raises the exceptions; `arrays` makes the NumPy arrays and the
 //! trajectory's dict; `toml_values` converts Python values to TOML and back (a scene or a
 //! sweep built from a mapping); `scene` holds `NativeScene`, the `set=` overrides and the
-//! loading of a scene argument; `solve`, `reference` and `sweep` the functions of those
+//! loading of a scene argument; `solve`, `fit`, `reference` and `sweep` the functions of those
 //! names with their result classes; `readers` reads the files skg-solve writes.
 
 #![warn(missing_docs)]
@@ -26,6 +26,7 @@ use skg_core::scene::provenance;
 
 mod arrays;
 mod errors;
+mod fit;
 mod readers;
 mod reference;
 mod scene;
@@ -37,6 +38,7 @@ mod toml_values;
 #[pymodule]
 fn _skg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve::solve_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::fit_scene, m)?)?;
     m.add_function(wrap_pyfunction!(reference::integrate_reference, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::plan_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::plan_shards, m)?)?;
@@ -47,6 +49,7 @@ fn _skg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(toml_values::toml_text, m)?)?;
     m.add_class::<scene::NativeScene>()?;
     m.add_class::<solve::NativeSolution>()?;
+    m.add_class::<fit::NativeFit>()?;
     m.add_class::<reference::NativeReference>()?;
     m.add_class::<sweep::NativeSweepPlan>()?;
     m.add("VERSION", provenance::VERSION)?;

@@ -25,6 +25,13 @@ pub(crate) struct NativeSolution {
     state: std::sync::Mutex<(Outcome, Option<output::Written>)>,
 }
 
+impl NativeSolution {
+    /// A solution of `scene` (a fit's fitted motion), with the files it was written to.
+    pub(crate) fn new(scene: Scene, outcome: Outcome, written: Option<output::Written>) -> NativeSolution {
+        NativeSolution { scene, state: std::sync::Mutex::new((outcome, written)) }
+    }
+}
+
 #[pymethods]
 impl NativeSolution {
     /// The trajectory as a dict of arrays ([`trajectory_dict`]).

@@ -12,6 +12,7 @@
 pub mod animate;
 pub mod bench;
 pub mod check;
+pub mod fit;
 pub mod gallery;
 pub mod plot;
 pub mod reference;

@@ -384,6 +384,15 @@ impl Action {
         self.update_initial_momentum();
     }
 
+    /// Set the initial state and the initial momentum together, as a fit's free
+    /// parameters give them ([`Action::set_parameters`]); `p0` is used by the natural
+    /// initial velocity only (zeros with the strong one).
+    pub(super) fn set_boundary_data(&mut self, q0: Vec<f64>, v0: Vec<f64>, p0: Vec<f64>) {
+        let d = self.layout.d;
+        assert_eq!((q0.len(), v0.len(), p0.len()), (d, d, d), "initial data of the wrong size");
+        (self.q0, self.v0, self.p0) = (q0, v0, p0);
+    }
+
     /// Move the grid to start at `t0` (same node count and spacing).
     pub fn set_start_time(&mut self, t0: f64) {
         self.t0 = t0;
@@ -409,14 +418,17 @@ impl Action {
         x.chain(velocity)
     }
 
-    fn entries(&self, k: usize, a: usize) -> &[(u32, f64)] {
+    /// The entries `(z, coefficient)` of local variable `a` of node `k` in Z (the node
+    /// map `T`).
+    pub(super) fn entries(&self, k: usize, a: usize) -> &[(u32, f64)] {
         let m = self.model.layout.len();
         let i = k * m + a;
         &self.map[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
 
-    /// The tape inputs of node k: its local variables from Z and its time.
-    fn gather(&self, k: usize, z: &[f64], u: &mut [f64]) {
+    /// The tape inputs of node k: its local variables from Z and its time (a fit's free
+    /// parameters are left as they are).
+    pub(super) fn gather(&self, k: usize, z: &[f64], u: &mut [f64]) {
         let m = self.model.layout.len();
         for (a, ua) in u[..m].iter_mut().enumerate() {
             *ua = self.entries(k, a).iter().map(|&(i, c)| c * z[i as usize]).sum();

@@ -52,6 +52,12 @@ impl Hermite {
     pub fn eval(&self, y0: f64, dy0: f64, y1: f64, dy1: f64) -> f64 {
         self.h00 * y0 + self.h10 * self.h * dy0 + self.h01 * y1 + self.h11 * self.h * dy1
     }
+
+    /// The weights of `y0`, `dy0`, `y1` and `dy1` in [`Hermite::eval`]: the value is
+    /// linear in them (a fit's observations are rows of these weights).
+    pub fn weights(&self) -> [f64; 4] {
+        [self.h00, self.h10 * self.h, self.h01, self.h11 * self.h]
+    }
 }
 
 /// The index `k` of the interval `[t[k], t[k+1]]` that holds `x`, clamped to the first

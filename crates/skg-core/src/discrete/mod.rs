@@ -12,6 +12,9 @@
 //! * [`interpolate`]: a trajectory between its nodes — cubic Hermite interpolation of
 //!   the coordinates with their velocities as slopes, linear interpolation of any node
 //!   series.
+//! * [`parameters`]: the action's derivatives in the free parameters of a fit's model —
+//!   the residual's Jacobian in them and the Hessian blocks they add
+//!   ([`ParameterPlan`]).
 //! * [`contact`]: when a node is in contact with a wall, contact episodes, and how
 //!   finely the nodes of a trajectory resolve a wall's contacts. It sits here rather than
 //!   with the model because it is about nodes: it measures trajectories.
@@ -25,8 +28,10 @@ pub mod action;
 pub mod contact;
 pub mod discretization;
 pub mod interpolate;
+pub mod parameters;
 pub mod trajectory;
 
 pub use action::Action;
 pub use discretization::Discretization;
+pub use parameters::ParameterPlan;
 pub use trajectory::{trajectory_header, trajectory_rows, NodeSeries, States, Trajectory};

@@ -1,33 +1,76 @@
 //! The scene's expressions parsed into one graph: the Lagrangian, the constraints (a
 //! position constraint as its time derivative), the declared forces and the walls' gaps,
 //! gradients and friction directions, each parsed once, with its errors located in the
-//! scene file.
+//! scene file. In a fit's model the numbers of the scene that depend on a free parameter
+//! (a wall's strength, width and friction, the initial state) are expressions too
+//! ([`Number`]).
 
-use skg_expr::{ExprId, Graph};
+use indexmap::IndexMap;
+use skg_expr::{ExprId, Graph, Symbol};
 use toml::Spanned;
 
 use super::layout::LocalLayout;
-use crate::scene::{ConstraintKind, ExpressionNames, Scene, SceneError, Wall, WallSpec};
+use crate::scene::{ConstraintKind, ExpressionNames, NumOrExpr, Scene, SceneError, Wall, WallSpec};
+
+/// A number of the scene: its resolved value, or, in a fit's model where it depends on a
+/// free parameter, its expression of the free parameters.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Number {
+    /// The resolved value.
+    Value(f64),
+    /// An expression of the free parameters.
+    Expr(ExprId),
+}
+
+impl Number {
+    /// The number as a node of the graph.
+    pub(super) fn expr(self, g: &mut Graph) -> ExprId {
+        match self {
+            Number::Value(x) => g.constant(x),
+            Number::Expr(e) => e,
+        }
+    }
+}
 
 /// Parses a scene's expression strings into one graph: a coordinate name is the local
-/// variable q_i, `<name>_dot` the velocity v_i, `t` the time input, a parameter its value.
+/// variable q_i, `<name>_dot` the velocity v_i, `t` the time input, a parameter its value
+/// (or, in a fit's model, the expression `symbols` binds it to).
 pub(super) struct ExpressionParser<'s> {
     scene: &'s Scene,
     layout: LocalLayout,
     graph: Graph,
+    symbols: Option<&'s IndexMap<String, ExprId>>,
 }
 
 impl<'s> ExpressionParser<'s> {
-    fn new(scene: &'s Scene, layout: LocalLayout) -> Self {
-        ExpressionParser { scene, layout, graph: Graph::new() }
+    fn new(scene: &'s Scene, layout: LocalLayout, graph: Graph, symbols: Option<&'s IndexMap<String, ExprId>>) -> Self {
+        ExpressionParser { scene, layout, graph, symbols }
     }
 
     /// Parse the spanned string at `key`; an error carries its position in the file and,
     /// for an unknown name, the list of known ones.
     pub(super) fn parse(&mut self, src: &Spanned<String>, key: &str) -> Result<ExprId, SceneError> {
         // ExpressionNames numbers q_i as i and v_i as d + i, as LocalLayout does.
-        let names = ExpressionNames { coordinates: &self.scene.coordinates, parameters: &self.scene.parameters, time: self.layout.time() };
+        let names = ExpressionNames {
+            coordinates: &self.scene.coordinates,
+            parameters: &self.scene.parameters,
+            time: self.layout.time(),
+            symbols: self.symbols,
+        };
         self.scene.file.parse_expression(&mut self.graph, src, key, &names)
+    }
+
+    /// The number-or-expression `v` at `key`, whose resolved value is `value`: that value
+    /// unless it depends on a free parameter (a fit's model), then its expression.
+    fn number(&mut self, v: &Spanned<NumOrExpr>, key: &str, value: f64) -> Result<Number, SceneError> {
+        let (Some(symbols), NumOrExpr::Expr(text)) = (self.symbols, v.get_ref()) else { return Ok(Number::Value(value)) };
+        let params = &self.scene.parameters;
+        let parsed = self.graph.parse(text, &mut |name| match symbols.get(name) {
+            Some(&e) => Some(Symbol::Expr(e)),
+            None => params.get(name).map(|&x| Symbol::Const(x)),
+        });
+        let e = parsed.map_err(|err| self.scene.file.expression_error(&Spanned::new(v.span(), text.clone()), key, err))?;
+        Ok(if self.graph.as_constant(e).is_some() { Number::Value(value) } else { Number::Expr(e) })
     }
 
     /// `∇h·v + ∂h/∂t`: the total time derivative of `h(q, t)`.
@@ -53,6 +96,10 @@ pub(super) struct Expressions {
     pub(super) constraints: Vec<ExprId>,
     /// `h(q, t)` of each position constraint.
     pub(super) positions: Vec<ExprId>,
+    /// The initial coordinates and velocities (expressions in a fit's model where they
+    /// depend on a free parameter).
+    pub(super) initial_q: Vec<Number>,
+    pub(super) initial_v: Vec<Number>,
     /// The declared generalized force on each coordinate (0 where none is declared).
     pub(super) forces: Vec<ExprId>,
     pub(super) walls: Vec<WallExprs>,
@@ -60,6 +107,12 @@ pub(super) struct Expressions {
 
 /// One wall's expressions.
 pub(super) struct WallExprs {
+    /// The strength A, the width σ, the friction coefficient μ and the friction velocity
+    /// ε (expressions in a fit's model where they depend on a free parameter).
+    pub(super) strength: Number,
+    pub(super) width: Number,
+    pub(super) friction: Number,
+    pub(super) friction_velocity: Number,
     /// The gap h(q).
     pub(super) h: ExprId,
     /// ∇h.
@@ -70,10 +123,16 @@ pub(super) struct WallExprs {
 
 impl Expressions {
     /// Parse the Lagrangian, the constraints, the declared forces and the walls of a
-    /// resolved scene. Expression errors carry their file position.
-    pub(super) fn parse(scene: &Scene, lay: LocalLayout) -> Result<Expressions, SceneError> {
+    /// resolved scene into `graph`, where the names `symbols` binds stand for expressions
+    /// (a fit's model; `None` otherwise). Expression errors carry their file position.
+    pub(super) fn parse(
+        scene: &Scene,
+        lay: LocalLayout,
+        graph: Graph,
+        symbols: Option<&IndexMap<String, ExprId>>,
+    ) -> Result<Expressions, SceneError> {
         let file = &scene.file;
-        let mut p = ExpressionParser::new(scene, lay);
+        let mut p = ExpressionParser::new(scene, lay, graph, symbols);
         let lagrangian = p.parse(&file.scene.lagrangian, "scene.lagrangian")?;
         let mut constraints = Vec::new();
         let mut positions = Vec::new();
@@ -96,7 +155,13 @@ impl Expressions {
         for (spec, wall) in file.walls.iter().zip(&scene.walls) {
             walls.push(Self::parse_wall(&mut p, spec, wall)?);
         }
-        Ok(Expressions { graph: p.graph, lagrangian, constraints, positions, forces, walls })
+        let (mut initial_q, mut initial_v) = (Vec::new(), Vec::new());
+        for (i, c) in file.coordinates.iter().enumerate() {
+            let name = c.name.get_ref();
+            initial_q.push(p.number(&c.initial, &format!("coordinates.{name}.initial"), scene.initial_q[i])?);
+            initial_v.push(p.number(&c.velocity, &format!("coordinates.{name}.velocity"), scene.initial_v[i])?);
+        }
+        Ok(Expressions { graph: p.graph, lagrangian, constraints, positions, initial_q, initial_v, forces, walls })
     }
 
     /// A wall's gap (a function of the coordinates and the time, not of the
@@ -104,7 +169,16 @@ impl Expressions {
     /// direction.
     fn parse_wall(p: &mut ExpressionParser, spec: &WallSpec, wall: &Wall) -> Result<WallExprs, SceneError> {
         let lay = p.layout;
-        let h = p.parse(&spec.h, &format!("walls.{}.h", wall.name))?;
+        let key = |what: &str| format!("walls.{}.{what}", wall.name);
+        let strength = p.number(&spec.strength, &key("strength"), wall.strength)?;
+        let width = p.number(&spec.width, &key("width"), wall.width)?;
+        let optional = |p: &mut ExpressionParser, v: &Option<Spanned<NumOrExpr>>, what: &str, value: f64| match v {
+            Some(v) => p.number(v, &key(what), value),
+            None => Ok(Number::Value(value)),
+        };
+        let friction = optional(p, &spec.friction, "friction", wall.friction)?;
+        let friction_velocity = optional(p, &spec.friction_velocity, "friction_velocity", wall.friction_velocity)?;
+        let h = p.parse(&spec.h, &key("h"))?;
         let vars = p.graph.variables(h);
         let refuse = |message: String| SceneError::Invalid { location: p.scene.file.origin.locate_in(&spec.h, None), message };
         if vars.iter().any(|&k| (lay.d..2 * lay.d).contains(&k)) {
@@ -121,7 +195,7 @@ impl Expressions {
         }
         let grad = (0..lay.d).map(|i| p.graph.diff(h, lay.q(i))).collect();
         let friction_direction = match &spec.friction_direction {
-            Some(dir) if wall.friction > 0.0 => {
+            Some(dir) if has_friction(wall, friction) => {
                 let mut comps = Vec::new();
                 for (i, src) in dir.iter().enumerate() {
                     comps.push(p.parse(src, &format!("walls.{}.friction_direction[{i}]", wall.name))?);
@@ -130,6 +204,12 @@ impl Expressions {
             }
             _ => None,
         };
-        Ok(WallExprs { h, grad, friction_direction })
+        Ok(WallExprs { strength, width, friction, friction_velocity, h, grad, friction_direction })
     }
+}
+
+/// Whether a wall has a friction term: a positive coefficient, or, in a fit's model, one
+/// that depends on a free parameter (whatever its starting value).
+pub(super) fn has_friction(wall: &Wall, friction: Number) -> bool {
+    wall.friction > 0.0 || matches!(friction, Number::Expr(_))
 }

@@ -1,15 +1,20 @@
 //! The walls' forces as expressions: the Gaussian normal force and kinetic friction,
-//! added to the generalized forces of a model with regularized walls.
+//! added to the generalized forces of a model with regularized walls. A wall's numbers
+//! (strength, width, friction coefficient and velocity) are constants folded into the
+//! expressions, or, in a fit's model where they depend on a free parameter, expressions
+//! of it ([`Number`]).
 
 use skg_expr::{ExprId, Graph};
 
-use super::expressions::WallExprs;
+use super::expressions::{Number, WallExprs};
 use super::layout::LocalLayout;
-use crate::scene::Wall;
 
 /// `sqrt(floor² + Σ c_i²)`.
-fn norm(g: &mut Graph, comps: &[ExprId], floor: f64) -> ExprId {
-    let mut sq = g.constant(floor * floor);
+fn norm(g: &mut Graph, comps: &[ExprId], floor: Number) -> ExprId {
+    let mut sq = match floor {
+        Number::Value(floor) => g.constant(floor * floor),
+        Number::Expr(e) => g.powi(e, 2),
+    };
     for &c in comps {
         let t = g.powi(c, 2);
         sq = g.add(sq, t);
@@ -27,13 +32,39 @@ fn dot(g: &mut Graph, a: &[ExprId], b: &[ExprId]) -> ExprId {
     sum
 }
 
+/// The Gaussian's amplitude `A/√(2πσ²)`: a constant, or an expression where `A` or `σ`
+/// is one.
+fn amplitude(g: &mut Graph, strength: Number, width: Number) -> ExprId {
+    if let (Number::Value(strength), Number::Value(sigma)) = (strength, width) {
+        return g.constant(strength / (2.0 * std::f64::consts::PI * sigma * sigma).sqrt());
+    }
+    let (a, sigma) = (strength.expr(g), width.expr(g));
+    let sigma2 = g.powi(sigma, 2);
+    let two_pi = g.constant(2.0 * std::f64::consts::PI);
+    let variance = g.mul(two_pi, sigma2);
+    let root = g.sqrt(variance);
+    g.div(a, root)
+}
+
+/// The factor `−1/(2σ²)` of `h²` in the Gaussian's exponent.
+fn exponent_factor(g: &mut Graph, width: Number) -> ExprId {
+    match width {
+        Number::Value(sigma) => g.constant(-1.0 / (2.0 * sigma * sigma)),
+        Number::Expr(sigma) => {
+            let sigma2 = g.powi(sigma, 2);
+            let minus_half = g.constant(-0.5);
+            g.div(minus_half, sigma2)
+        }
+    }
+}
+
 /// A wall's Gaussian normal force `F_N = −A δ_σ(h) ∇h`, subtracted from `forces`.
 /// Returns `A δ_σ(h)` (≥ 0), which the friction force scales with.
-pub(super) fn add_normal_force(g: &mut Graph, wall: &Wall, w: &WallExprs, forces: &mut [ExprId]) -> ExprId {
-    let sigma = wall.width;
-    let amp = g.constant(wall.strength / (2.0 * std::f64::consts::PI * sigma * sigma).sqrt());
+pub(super) fn add_normal_force(g: &mut Graph, w: &WallExprs, forces: &mut [ExprId]) -> ExprId {
+    // In this order (the graph's node ids, and with them the tapes, depend on it).
+    let amp = amplitude(g, w.strength, w.width);
     let h2 = g.powi(w.h, 2);
-    let scale = g.constant(-1.0 / (2.0 * sigma * sigma));
+    let scale = exponent_factor(g, w.width);
     let arg = g.mul(scale, h2);
     let gauss = g.exp(arg);
     let delta = g.mul(amp, gauss);
@@ -48,14 +79,14 @@ pub(super) fn add_normal_force(g: &mut Graph, wall: &Wall, w: &WallExprs, forces
 /// normalized declared direction, or, without one, `−v∥ / sqrt(|v∥|² + ε²)` against the
 /// velocity along the wall (`v∥ = v − (v·n̂) n̂`, `n̂ = ∇h/|∇h|`, ε the wall's
 /// friction velocity), which keeps the force differentiable at rest.
-pub(super) fn add_friction_force(g: &mut Graph, lay: LocalLayout, wall: &Wall, w: &WallExprs, delta: ExprId, forces: &mut [ExprId]) {
-    let grad_norm = norm(g, &w.grad, 0.0);
+pub(super) fn add_friction_force(g: &mut Graph, lay: LocalLayout, w: &WallExprs, delta: ExprId, forces: &mut [ExprId]) {
+    let grad_norm = norm(g, &w.grad, Number::Value(0.0));
     let normal_force = g.mul(delta, grad_norm); // |F_N|
-    let mu = g.constant(wall.friction);
+    let mu = w.friction.expr(g);
     let magnitude = g.mul(mu, normal_force);
     let direction: Vec<ExprId> = match &w.friction_direction {
         Some(dir) => {
-            let n = norm(g, dir, 0.0);
+            let n = norm(g, dir, Number::Value(0.0));
             dir.iter().map(|&c| g.div(c, n)).collect()
         }
         None => {
@@ -70,7 +101,7 @@ pub(super) fn add_friction_force(g: &mut Graph, lay: LocalLayout, wall: &Wall, w
                     g.sub(vi, t)
                 })
                 .collect();
-            let speed = norm(g, &vpar, wall.friction_velocity);
+            let speed = norm(g, &vpar, w.friction_velocity);
             vpar.iter()
                 .map(|&c| {
                     let q = g.div(c, speed);

@@ -21,11 +21,14 @@ pub(super) struct WallGeometry {
     hess: Vec<Vec<ExprId>>,
     /// The declared friction direction of a wall with friction (of q, v and t).
     friction_direction: Vec<Option<Vec<ExprId>>>,
+    /// The values of a fit's free parameters (none for a solve's model).
+    theta: Vec<f64>,
 }
 
 impl WallGeometry {
-    /// Keep the graph with the walls' gaps, gradients, Hessians and friction directions.
-    pub(super) fn derive(mut graph: Graph, lay: LocalLayout, walls: Vec<WallExprs>) -> WallGeometry {
+    /// Keep the graph with the walls' gaps, gradients, Hessians and friction directions,
+    /// evaluated at the free parameters' values `theta` (a fit's model; empty otherwise).
+    pub(super) fn derive(mut graph: Graph, lay: LocalLayout, walls: Vec<WallExprs>, theta: Vec<f64>) -> WallGeometry {
         let mut hess = Vec::with_capacity(walls.len());
         for w in &walls {
             let mut hj = Vec::with_capacity(lay.d * lay.d);
@@ -36,7 +39,7 @@ impl WallGeometry {
             }
             hess.push(hj);
         }
-        let mut geometry = WallGeometry { graph, layout: lay, h: vec![], grad: vec![], hess, friction_direction: vec![] };
+        let mut geometry = WallGeometry { graph, layout: lay, h: vec![], grad: vec![], hess, friction_direction: vec![], theta };
         for w in walls {
             geometry.h.push(w.h);
             geometry.grad.push(w.grad);
@@ -52,6 +55,7 @@ impl WallGeometry {
         inputs[..lay.d].copy_from_slice(q);
         inputs[lay.d..lay.d + v.len()].copy_from_slice(v);
         inputs[lay.time()] = t;
+        inputs[lay.time() + 1..].copy_from_slice(&self.theta);
         self.graph.eval_many(exprs, &inputs)
     }
 }

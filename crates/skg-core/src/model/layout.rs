@@ -1,5 +1,6 @@
 //! The node-local variables `u = [q, v, λ, w, dw, μ]` of the density `s` and their
-//! index ranges ([`LocalLayout`]); the time `t` is a tape input after them.
+//! index ranges ([`LocalLayout`]); the time `t` is a tape input after them, and after
+//! it the free parameters `θ` of a fit's model (none otherwise).
 
 /// Index ranges of the node-local variable vector `u = [q, v, λ, w, dw, μ]`.
 #[derive(Debug, Clone, Copy)]
@@ -8,6 +9,9 @@ pub struct LocalLayout {
     pub d: usize,
     /// Number of velocity constraints.
     pub n: usize,
+    /// Number of free parameters `θ`: tape inputs after the time (a fit's model; 0
+    /// otherwise).
+    pub free: usize,
 }
 
 /// Which of the six blocks a local variable belongs to.
@@ -51,9 +55,15 @@ impl LocalLayout {
         self.len()
     }
 
-    /// Number of a tape's inputs: the local variables `u` and the time.
+    /// Number of a tape's inputs: the local variables `u`, the time and the free
+    /// parameters.
     pub fn inputs(&self) -> usize {
-        self.len() + 1
+        self.len() + 1 + self.free
+    }
+
+    /// Index of the free parameter `θ_j` in a tape's inputs: after the time.
+    pub fn theta(&self, j: usize) -> usize {
+        self.len() + 1 + j
     }
 
     /// Index of q_i.

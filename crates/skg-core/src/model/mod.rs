@@ -37,13 +37,19 @@
 //! friction direction) for the hard-wall reference, which builds the same model without
 //! wall forces ([`Model::with_hard_walls`]).
 //!
+//! **Free parameters.** A fit's model ([`Model::with_free_parameters`]) keeps chosen
+//! scene parameters symbolic: they are tape inputs after the time, and the model adds
+//! the tapes of the derivatives the fit needs in them ([`ParameterTapes`],
+//! `parameters.rs`). A solve's model has none, and is built exactly as before.
+//!
 //! **What it holds**, one part per file: [`Model`] and its construction here;
 //! `layout.rs`, the node-local variables ([`LocalLayout`]); `expressions.rs`, the scene's
 //! expressions parsed into one graph; `forces.rs`, the walls' normal and friction
 //! forces; `derivatives.rs`, the mechanics, the density `s` and its derivative tapes
 //! ([`PairTape`]); `physical.rs`, the physical quantities at a state ([`Physical`]) and
 //! the accelerations; `geometry.rs`, the walls' geometry; `initial.rs`, the checks of
-//! the initial state and of a solution's nodes.
+//! the initial state and of a solution's nodes; `parameters.rs`, a fit's free
+//! parameters.
 //!
 //! **Place in the flow.** After the scene: it uses [`scene`](crate::scene) (the resolved
 //! [`Scene`] and its errors) and the expression language, and nothing later. The
@@ -55,9 +61,10 @@ mod forces;
 mod geometry;
 mod initial;
 mod layout;
+mod parameters;
 mod physical;
 
-use skg_expr::Tape;
+use skg_expr::{Graph, Tape};
 
 use crate::scene::{Constraint, Scene, SceneError, Wall};
 use derivatives::{density, DerivativeTapes, Mechanics};
@@ -69,6 +76,7 @@ use physical::{physical_tape, PhysLayout};
 pub use derivatives::PairTape;
 pub use initial::{ON_WALL_TOLERANCE, POSITION_TOLERANCE};
 pub use layout::{LocalKind, LocalLayout};
+pub use parameters::{InitialTape, ParameterTapes};
 pub use physical::{DynamicsError, Physical};
 
 /// How a model's walls act.
@@ -110,6 +118,9 @@ pub struct Model {
     pub plus_plus: PairTape,
     /// Every nonzero second derivative: the full formulation's Jacobian density.
     pub all_pairs: PairTape,
+    /// A fit's free parameters and the tapes of the derivatives in them; `None` for a
+    /// solve's model.
+    pub parameters: Option<ParameterTapes>,
     phys: Tape,
     phys_layout: PhysLayout,
     geometry: WallGeometry,
@@ -117,7 +128,8 @@ pub struct Model {
 
 /// Scratch memory for evaluating tapes without allocation.
 pub struct Workspace {
-    /// A tape's inputs: the node-local variables `u`, then the time `t`.
+    /// A tape's inputs: the node-local variables `u`, then the time `t`, then a fit's
+    /// free parameters `θ` (set to the model's values when the workspace is made).
     pub u: Vec<f64>,
     /// A tape's registers.
     pub scratch: Vec<f64>,
@@ -129,27 +141,39 @@ impl Model {
     /// The model of a resolved scene with its regularized walls ([`WallModel::Gaussian`]).
     /// Expression errors carry their file position.
     pub fn build(scene: &Scene) -> Result<Model, SceneError> {
-        Self::build_with(scene, WallModel::Gaussian)
+        Self::build_with(scene, WallModel::Gaussian, &[])
     }
 
     /// The model of a resolved scene whose walls are ideal ([`WallModel::Hard`]): no
     /// wall force, the walls' geometry only.
     pub fn with_hard_walls(scene: &Scene) -> Result<Model, SceneError> {
-        Self::build_with(scene, WallModel::Hard)
+        Self::build_with(scene, WallModel::Hard, &[])
     }
 
-    /// Parse the scene's expressions, add the walls' forces as `wall_model` says, derive
-    /// the mechanics and the node density, compile the tapes, check the initial state.
-    fn build_with(scene: &Scene, wall_model: WallModel) -> Result<Model, SceneError> {
-        let lay = LocalLayout { d: scene.coordinates.len(), n: scene.constraints.len() };
-        let mut e = Expressions::parse(scene, lay)?;
+    /// A fit's model of a resolved scene (regularized walls): the parameters named in
+    /// `free` stay symbolic, tape inputs `θ` after the time (in that order), with the
+    /// tapes of the derivatives in them ([`ParameterTapes`]). Its workspaces hold the
+    /// scene's values of `θ`, so that its tapes evaluate as the scene's model does until
+    /// the caller sets others. A name that is not a parameter of the scene is an error.
+    pub fn with_free_parameters(scene: &Scene, free: &[String]) -> Result<Model, SceneError> {
+        Self::build_with(scene, WallModel::Gaussian, free)
+    }
+
+    /// Parse the scene's expressions (the parameters in `free` as variables), add the
+    /// walls' forces as `wall_model` says, derive the mechanics and the node density,
+    /// compile the tapes, check the initial state.
+    fn build_with(scene: &Scene, wall_model: WallModel, free: &[String]) -> Result<Model, SceneError> {
+        let lay = LocalLayout { d: scene.coordinates.len(), n: scene.constraints.len(), free: free.len() };
+        let mut graph = Graph::new();
+        let symbols = if free.is_empty() { None } else { Some(parameters::symbolic_parameters(&mut graph, scene, free, lay)?) };
+        let mut e = Expressions::parse(scene, lay, graph, symbols.as_ref())?;
         let mut g = std::mem::take(&mut e.graph);
         let mut forces = std::mem::take(&mut e.forces);
         if wall_model == WallModel::Gaussian {
             for (wall, w) in scene.walls.iter().zip(&e.walls) {
-                let delta = add_normal_force(&mut g, wall, w, &mut forces);
-                if wall.friction > 0.0 {
-                    add_friction_force(&mut g, lay, wall, w, delta, &mut forces);
+                let delta = add_normal_force(&mut g, w, &mut forces);
+                if expressions::has_friction(wall, w.friction) {
+                    add_friction_force(&mut g, lay, w, delta, &mut forces);
                 }
             }
         }
@@ -166,6 +190,8 @@ impl Model {
         let s = density(&mut g, lay, &mech, &e.constraints);
         let tapes = DerivativeTapes::compile(&mut g, lay, s);
         let (phys, phys_layout) = physical_tape(&mut g, lay, &e, &mech);
+        let parameters = (!free.is_empty()).then(|| ParameterTapes::compile(&mut g, lay, s, &e, &mech, scene, free));
+        let theta = parameters.as_ref().map_or(Vec::new(), |p| p.values.clone());
         let model = Model {
             layout: lay,
             coordinates: scene.coordinates.clone(),
@@ -179,9 +205,10 @@ impl Model {
             mixed: tapes.mixed,
             plus_plus: tapes.plus_plus,
             all_pairs: tapes.all_pairs,
+            parameters,
             phys,
             phys_layout,
-            geometry: WallGeometry::derive(g, lay, e.walls),
+            geometry: WallGeometry::derive(g, lay, e.walls, theta),
         };
         model.validate_initial_state(scene)?;
         Ok(model)
@@ -189,10 +216,22 @@ impl Model {
 
     /// A workspace large enough for every tape of this model.
     pub fn workspace(&self) -> Workspace {
-        let tapes =
-            [&self.density, &self.minus_gradient, &self.gradient, &self.mixed.tape, &self.plus_plus.tape, &self.all_pairs.tape, &self.phys];
+        let mut tapes = vec![
+            &self.density,
+            &self.minus_gradient,
+            &self.gradient,
+            &self.mixed.tape,
+            &self.plus_plus.tape,
+            &self.all_pairs.tape,
+            &self.phys,
+        ];
+        let mut u = vec![0.0; self.layout.inputs()];
+        if let Some(p) = &self.parameters {
+            tapes.extend([&p.minus.tape, &p.plus.tape, &p.theta.tape, &p.initial.tape]);
+            u[self.layout.theta(0)..].copy_from_slice(&p.values);
+        }
         Workspace {
-            u: vec![0.0; self.layout.inputs()],
+            u,
             scratch: vec![0.0; tapes.iter().map(|t| t.scratch_len()).max().unwrap_or(0)],
             out: vec![0.0; tapes.iter().map(|t| t.n_outputs()).max().unwrap_or(0)],
         }

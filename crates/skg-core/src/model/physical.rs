@@ -169,7 +169,8 @@ impl Model {
     /// Physical quantities at the state (q, v) at time t.
     pub fn physical(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace) -> Physical {
         let (d, n) = (self.layout.d, self.layout.n);
-        ws.u.iter_mut().for_each(|x| *x = 0.0);
+        // The local variables and the time; a fit's free parameters keep their values.
+        ws.u[..self.layout.inputs() - self.layout.free].iter_mut().for_each(|x| *x = 0.0);
         ws.u[..d].copy_from_slice(q);
         ws.u[d..2 * d].copy_from_slice(v);
         ws.u[self.layout.time()] = t;

@@ -54,7 +54,10 @@ use std::path::{Path, PathBuf};
 pub use atomic::{remove_stale_temporaries, temporary_beside, write_atomic, write_csv, write_json};
 pub use lock::OutputDir;
 pub use pairing::{verify_pairing, DataFile, Pairing};
-pub use solution::{solve_into, solve_into_with_progress, summary_json, write_outcome, write_reference, SolveIntoError, Written};
+pub use solution::{
+    solve_into, solve_into_with_progress, summary_json, write_outcome, write_outcome_with, write_reference, CsvTable, RunExtras,
+    SolveIntoError, Written,
+};
 
 /// Why an output file could not be written.
 #[derive(Debug, thiserror::Error)]

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use indexmap::IndexMap;
 use serde::Serialize;
 
-use super::atomic::{write_csv, write_json};
+use super::atomic::{write_atomic, write_csv, write_json};
 use super::lock::OutputDir;
 use super::pairing::DataFile;
 use super::{io_err, OutputError, REFERENCE_FILE, SUMMARY_FILE, TRAJECTORY_FILE};
@@ -35,7 +35,29 @@ struct Summary<'a> {
     files: IndexMap<&'static str, DataFile>,
     #[serde(flatten)]
     outcome: &'a Outcome,
+    /// Fields of a run beyond a solve's (a fit's `fit`), after the outcome's.
+    #[serde(flatten)]
+    extra: &'a serde_json::Map<String, serde_json::Value>,
 }
+
+/// A CSV table: its header and its rows.
+pub type CsvTable = (Vec<String>, Vec<Vec<f64>>);
+
+/// What a run writes beyond a solve's files (a fit's): further CSV data files, listed in
+/// `summary.json`'s `files` like the trajectory; further text files, written before the
+/// summary; further top-level fields of the summary.
+#[derive(Debug, Clone, Default)]
+pub struct RunExtras {
+    /// CSV files: name, header, rows.
+    pub csv: Vec<(&'static str, CsvTable)>,
+    /// Text files: name, text.
+    pub texts: Vec<(&'static str, String)>,
+    /// Fields of the summary, after the outcome's.
+    pub fields: serde_json::Map<String, serde_json::Value>,
+}
+
+/// No extra fields (a solve's summary).
+static NO_FIELDS: std::sync::LazyLock<serde_json::Map<String, serde_json::Value>> = std::sync::LazyLock::new(serde_json::Map::new);
 
 /// Remove a file if it exists.
 fn remove_if_present(path: &Path) -> Result<(), OutputError> {
@@ -66,7 +88,12 @@ impl Written {
     }
 }
 
-fn summary<'a>(outcome: &'a Outcome, scene: &Scene, files: IndexMap<&'static str, DataFile>) -> Summary<'a> {
+fn summary<'a>(
+    outcome: &'a Outcome,
+    scene: &Scene,
+    files: IndexMap<&'static str, DataFile>,
+    extra: &'a serde_json::Map<String, serde_json::Value>,
+) -> Summary<'a> {
     Summary {
         skg_solve_version: provenance::VERSION,
         schema_version: provenance::SCHEMA_VERSION,
@@ -74,13 +101,14 @@ fn summary<'a>(outcome: &'a Outcome, scene: &Scene, files: IndexMap<&'static str
         scene_file: scene.file.origin.path.clone(),
         files,
         outcome,
+        extra,
     }
 }
 
 /// The text of `summary.json` of a solve of `scene`: what [`write_outcome`] writes, with
 /// the `files` it wrote (an empty map for a solve not written).
 pub fn summary_json(outcome: &Outcome, scene: &Scene, written: Option<&Written>) -> Result<String, serde_json::Error> {
-    serde_json::to_string_pretty(&summary(outcome, scene, written.map(|w| w.files.clone()).unwrap_or_default()))
+    serde_json::to_string_pretty(&summary(outcome, scene, written.map(|w| w.files.clone()).unwrap_or_default(), &NO_FIELDS))
 }
 
 /// Write `trajectory.csv`, `reference.csv` (the verification's reference, when there is
@@ -88,6 +116,13 @@ pub fn summary_json(outcome: &Outcome, scene: &Scene, written: Option<&Written>)
 /// the pairing rule: the old summary is removed first, the summary is written last and
 /// lists the two data files.
 pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result<Written, OutputError> {
+    write_outcome_with(dir, outcome, scene, &RunExtras::default())
+}
+
+/// [`write_outcome`] with a run's further files and summary fields ([`RunExtras`]):
+/// the CSV files after the reference, listed in `files`, then the text files, then the
+/// summary with the further fields.
+pub fn write_outcome_with(dir: &Path, outcome: &mut Outcome, scene: &Scene, extras: &RunExtras) -> Result<Written, OutputError> {
     let t = std::time::Instant::now();
     let csv_path = dir.join(TRAJECTORY_FILE);
     let json_path = dir.join(SUMMARY_FILE);
@@ -111,8 +146,15 @@ pub fn write_outcome(dir: &Path, outcome: &mut Outcome, scene: &Scene) -> Result
             None
         }
     };
+    for (name, (header, rows)) in &extras.csv {
+        files.insert(name, write_csv(&dir.join(name), None, header, rows)?);
+    }
+    for (name, text) in &extras.texts {
+        let path = dir.join(name);
+        write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+    }
     outcome.timings.output_s = t.elapsed().as_secs_f64();
-    write_json(&json_path, &summary(outcome, scene, files.clone()))?;
+    write_json(&json_path, &summary(outcome, scene, files.clone(), &extras.fields))?;
     Ok(Written { trajectory: csv_path, reference, summary: json_path, files })
 }
 

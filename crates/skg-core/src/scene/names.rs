@@ -21,7 +21,8 @@ pub const TIME: &str = "t";
 
 /// What the names of a scene's model expressions mean: coordinate `i` is variable `i`,
 /// its velocity `<name>_dot` variable `d + i`, the time `t` variable `time`, and a
-/// parameter its value.
+/// parameter its value, or, in a fit's model, the expression `symbols` binds it to (a
+/// free parameter is a variable, a parameter defined through one an expression of it).
 #[derive(Debug, Clone, Copy)]
 pub struct ExpressionNames<'a> {
     /// Coordinate names, in order.
@@ -30,6 +31,9 @@ pub struct ExpressionNames<'a> {
     pub parameters: &'a IndexMap<String, f64>,
     /// The variable index of the time `t`.
     pub time: usize,
+    /// Parameters that stand for expressions of the graph parsed into (they take
+    /// precedence over `parameters`); `None` outside a fit.
+    pub symbols: Option<&'a IndexMap<String, ExprId>>,
 }
 
 impl ExpressionNames<'_> {
@@ -44,6 +48,9 @@ impl ExpressionNames<'_> {
         }
         if name == TIME {
             return Some(Symbol::Var(self.time));
+        }
+        if let Some(&e) = self.symbols.and_then(|s| s.get(name)) {
+            return Some(Symbol::Expr(e));
         }
         self.parameters.get(name).map(|v| Symbol::Const(*v))
     }

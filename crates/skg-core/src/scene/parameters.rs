@@ -10,6 +10,9 @@ use super::error::SceneError;
 use super::file::{NumOrExpr, SceneFile};
 use super::names::TIME;
 
+/// A scene's parameter values and their definitions (the file's, or an override's).
+pub(super) type ResolvedParameters = (IndexMap<String, f64>, IndexMap<String, NumOrExpr>);
+
 impl SceneFile {
     /// Evaluate a number-or-expression in terms of resolved parameters.
     pub fn eval_value(&self, v: &Spanned<NumOrExpr>, key: &str, params: &IndexMap<String, f64>) -> Result<f64, SceneError> {
@@ -27,8 +30,9 @@ impl SceneFile {
     }
 
     /// Evaluate parameters in dependency order (each may use the others); overrides
-    /// replace a declared parameter's definition.
-    pub(super) fn resolve_parameters(&self, set: &[(String, String)]) -> Result<IndexMap<String, f64>, SceneError> {
+    /// replace a declared parameter's definition. Returns the values and the definitions
+    /// they were evaluated from, both in declaration order.
+    pub(super) fn resolve_parameters(&self, set: &[(String, String)]) -> Result<ResolvedParameters, SceneError> {
         let mut defs: IndexMap<String, (NumOrExpr, Option<&Spanned<NumOrExpr>>)> =
             self.parameters.iter().map(|(k, v)| (k.clone(), (v.get_ref().clone(), Some(v)))).collect();
         for (name, value) in set {
@@ -101,7 +105,8 @@ impl SceneFile {
             pending = still;
         }
         // Keep the declaration order.
-        Ok(defs.keys().map(|k| (k.clone(), values[k])).collect())
+        let definitions = defs.iter().map(|(k, (def, _))| (k.clone(), def.clone())).collect();
+        Ok((defs.keys().map(|k| (k.clone(), values[k])).collect(), definitions))
     }
 
     fn param_error(&self, name: &str, spanned: &Option<&Spanned<NumOrExpr>>, message: String) -> SceneError {

@@ -18,10 +18,10 @@ use super::resolved::{Constraint, ConstraintKind, Scene, Wall};
 impl SceneFile {
     /// Resolve parameters, overrides and every number; check names and ranges.
     pub fn resolve(self, ov: &Overrides) -> Result<Scene, SceneError> {
-        let params = self.resolve_parameters(&ov.set)?;
+        let (params, definitions) = self.resolve_parameters(&ov.set)?;
         let coordinates = self.resolve_names(&params)?;
         let (initial_q, initial_v) = self.initial_state(&params)?;
-        let names = ExpressionNames { coordinates: &coordinates, parameters: &params, time: 2 * coordinates.len() };
+        let names = ExpressionNames { coordinates: &coordinates, parameters: &params, time: 2 * coordinates.len(), symbols: None };
         let constraints = self.resolve_constraints(&names)?;
         self.check_forces(&coordinates)?;
         let walls = self.resolve_walls(&coordinates, &params)?;
@@ -38,6 +38,7 @@ impl SceneFile {
         Ok(Scene {
             name: self.scene.name.clone(),
             parameters: params,
+            definitions,
             coordinates,
             initial_q,
             initial_v,

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use indexmap::IndexMap;
 use serde::Serialize;
 
-use super::file::{IpoptValue, SceneFile};
+use super::file::{IpoptValue, NumOrExpr, SceneFile};
 use super::settings::{Backend, Formulation, HessianMode, InitialVelocity, Stepper};
 use crate::sbp::OperatorKind;
 
@@ -120,6 +120,10 @@ pub struct Scene {
     pub name: String,
     /// Parameter values, in declaration order, overrides applied.
     pub parameters: IndexMap<String, f64>,
+    /// The definition each value was evaluated from: the file's, or the override's
+    /// (`--set`), in declaration order. A fit, whose free parameters are variables,
+    /// rebuilds the parameters that depend on them from these.
+    pub definitions: IndexMap<String, NumOrExpr>,
     /// Coordinate names, in order.
     pub coordinates: Vec<String>,
     /// Initial coordinates q(t_start).

@@ -49,7 +49,7 @@ pub use run::backend::SquareSolver;
 pub use run::error::{SolveError, WindowError};
 pub use run::global::{solve_global, Run};
 pub use run::outcome::{Attempt, Diagnostics, KineticLoss, Method, Outcome, RefinedGrid, Refinement, Settings, Sizes, Timings, Work};
-pub use run::piece::{action_on, build_action, grid, solve_piece, Guess, Piece};
+pub use run::piece::{action_on, build_action, grid, point_from_states, solve_piece, Guess, Piece};
 pub use run::status::{SolveStatus, CONVERGED_RESIDUAL};
 
 /// Solve a resolved scene: the solve the scene asks for (in one piece or in windows),

@@ -20,6 +20,9 @@ command line does, and errors carry its messages.
 * :func:`solve` returns a :class:`Solution`, :func:`reference` a :class:`Reference`,
   :func:`read_trajectory` a :class:`Trajectory` from a CSV; all three share the
   trajectory's arrays and column access.
+* :func:`fit` fits scene parameters and initial data to measured motion (a CSV path,
+  a DataFrame or a mapping of arrays) and returns a :class:`FitResult` with
+  ``parameters``, ``std_errors``, ``covariance``, ``solution`` and the fitted ``scene``.
 * :func:`sweep` runs a sweep file in worker processes of the ``skg-solve`` executable
   and returns a :class:`SweepResult`; with ``executor=`` its shards run as the tasks of
   any ``concurrent.futures.Executor`` (a process pool, Dask, a cluster's) and are merged.
@@ -45,6 +48,7 @@ import numpy as np
 from . import _skg
 from ._errors import (
     Error,
+    FitError,
     InputError,
     IntegrationError,
     NotConverged,
@@ -56,6 +60,7 @@ from ._errors import (
     SweepError,
     WorkerNotFound,
 )
+from ._fit import FitResult, fit
 from ._scene import Scene, plain as _plain, scene_arg as _scene_arg
 from ._status import PointStatus, ReferenceKind, SolverStatus, SolveStatus, VerifyStatus
 from ._sweep import SweepResult, find_skg_solve, read_results, sweep
@@ -64,6 +69,9 @@ from ._trajectory import Reference, Solution, Trajectory, read_trajectory
 __all__ = [
     "Scene",
     "solve",
+    "fit",
+    "FitResult",
+    "FitError",
     "reference",
     "sweep",
     "read_trajectory",

@@ -19,6 +19,12 @@ class SolveError(Error, RuntimeError):
     ``Solution.raise_for_status``."""
 
 
+class FitError(Error, ValueError):
+    """A fit cannot be attempted: a free parameter that is not one of the scene's, a
+    starting value outside its bounds, or data that do not determine the parameters (the
+    message says which combination is undetermined)."""
+
+
 class IntegrationError(Error, RuntimeError):
     """A reference could not be computed: the integrator failed, the hard-wall reference
     does not model the scene, or the sample times are unusable."""
@@ -34,7 +40,7 @@ class WorkerNotFound(SweepError, FileNotFoundError):
 
 
 class InputError(Error, ValueError):
-    """A CSV file (trajectory, reference) cannot be read."""
+    """A CSV file (trajectory, reference, a fit's data) cannot be read or used."""
 
 
 class OutputError(Error, OSError):

@@ -70,4 +70,3 @@ pub fn seconds_per_cost(backend: Backend) -> f64 {
         Backend::Ipopt => 81e-6,
     }
 }
-

@@ -9,7 +9,8 @@
 //!   its line search, the chord step, and their statuses and counts.
 //! * `lu.rs`: the sparse LU of one structure (faer's symbolic analysis kept for any
 //!   number of factorizations), in double precision or in single precision refined in
-//!   double; `pattern.rs`: the compressed-column pattern of a structure.
+//!   double, and [`SparseFactorization`], one factorization for several right-hand
+//!   sides; `pattern.rs`: the compressed-column pattern of a structure.
 //! * [`roundoff`]: the round-off level of a residual, the stopping test below the
 //!   tolerance that every backend shares.
 //! * [`band`]: Gaussian elimination of banded systems (the prediction's proxies).
@@ -25,7 +26,7 @@ pub mod roundoff;
 
 use serde::Serialize;
 
-pub use lu::LuStats;
+pub use lu::{LuStats, SparseFactorization};
 pub use newton::{NewtonError, NewtonOptions, NewtonSolution, NewtonStats, NewtonStatus, SystemSolver};
 
 /// A square system `F(x) = 0` of `size` unknowns and equations with a sparse Jacobian

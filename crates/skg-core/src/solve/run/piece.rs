@@ -288,8 +288,8 @@ fn unusable_option(scene: &Scene) -> SolveError {
 
 /// The unknown vector Z with the given coordinates and multipliers at the nodes, the
 /// minus variables at zero and the boundary multipliers at the values that make their
-/// rows vanish.
-fn point_from_states(action: &Action, q: &[Vec<f64>], lambda: &[Vec<f64>]) -> Vec<f64> {
+/// rows vanish (a solve's initial guess; a fit's starting point).
+pub fn point_from_states(action: &Action, q: &[Vec<f64>], lambda: &[Vec<f64>]) -> Vec<f64> {
     let lay = &action.layout;
     let (d, n) = (lay.d, lay.n);
     let mut z = vec![0.0; lay.len()];

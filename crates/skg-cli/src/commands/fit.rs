@@ -1,0 +1,160 @@
+//! `fit`: estimate a scene's parameters and initial data from measured motion, with
+//! Ipopt as the optimizer (docs/fitting.md), and write the fitted motion, the data beside
+//! it, the fitted scene and the summary with its `fit` object.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::Result;
+use clap::Args;
+
+use skg_core::fit::{self, Data, Fit, FitHessian, FitSettings, FitStart, FitWritten, FreeParameter};
+use skg_core::stepping::verify::VerifyStatus;
+
+use super::{load, SceneArgs, UsageError, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
+use crate::stdio::{note, out};
+
+#[derive(Args)]
+pub struct FitArgs {
+    /// Scene file (TOML) whose parameters are fitted; its values are the starting values.
+    #[arg(value_name = "SCENE.toml")]
+    pub scenario: PathBuf,
+    /// The measured motion (CSV): a column `t` and any of the scene's coordinates, named
+    /// as in trajectory.csv; optional columns sigma_<coordinate> give each value's
+    /// standard deviation (default: equal weights, the covariance scaled by the residual
+    /// variance as curve_fit does). An empty cell is a value not measured.
+    #[arg(long, value_name = "FILE.csv")]
+    pub data: PathBuf,
+    /// The scene parameters to fit, comma-separated, each optionally with bounds:
+    /// `NAME`, `NAME>=LO`, `NAME<=HI` or `NAME in [LO, HI]`, e.g. --free 'c>=0,mu in [0, 2]'
+    /// (repeatable). Initial positions and velocities are fitted by writing them as
+    /// parameters in the scene (velocity = "v0").
+    #[arg(long, value_name = "NAME[,NAME…]", required = true)]
+    pub free: Vec<String>,
+    /// Output directory [default: out/<scene file name without .toml>-fit].
+    #[arg(short, long, value_name = "DIR")]
+    pub output: Option<PathBuf>,
+    /// Number of time nodes N (overrides the scene's time.nodes).
+    #[arg(long, value_name = "N")]
+    pub nodes: Option<usize>,
+    /// Hessian of the Lagrangian given to Ipopt: `exact` (default; second derivatives of
+    /// the stationarity equations) or `limited-memory` (Ipopt's quasi-Newton approximation).
+    #[arg(long = "fit-hessian", value_name = "MODE", default_value = "exact", value_parser = super::by_name::<FitHessian>(["exact", "limited-memory"]))]
+    pub fit_hessian: FitHessian,
+    /// Where the trajectory starts: `data` (the data where they observe a coordinate, the
+    /// solve at the starting values elsewhere), `solve` (the solve everywhere) or `auto`
+    /// (default: `data` for a scene without constraints, `solve` for one with them).
+    #[arg(long, value_name = "FROM", default_value = "auto", value_parser = super::by_name::<FitStart>(["auto", "data", "solve"]))]
+    pub start: FitStart,
+    /// Ipopt's tolerance of the fit (its scaled optimality error).
+    #[arg(long, value_name = "TOL", default_value_t = fit::DEFAULT_TOL, value_parser = super::positive)]
+    pub tol: f64,
+    #[command(flatten)]
+    pub scene: SceneArgs,
+}
+
+pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
+    let ov = args.scene.overrides(args.nodes)?;
+    let mut scene = load(&args.scenario, &ov)?;
+    for n in &scene.notes {
+        note!("note: {}: {n}", args.scenario.display());
+    }
+    let settings = settings(&args)?;
+    let data = Data::read(&args.data, &scene)?;
+    let dir = args.output.clone().unwrap_or_else(|| default_dir(&args.scenario));
+    let (fitted, written) = fit::fit_into(&dir, &mut scene, &ov, &data, &settings)?;
+    let fit_warnings = &fitted.report.warnings;
+    for w in fit_warnings.iter().chain(fitted.outcome.warnings.iter().filter(|w| !fit_warnings.contains(w))) {
+        note!("warning: {w}");
+    }
+    if let Some(code) = report_untrusted(&fitted, &written) {
+        return Ok(code);
+    }
+    if !quiet {
+        print_report(&fitted, &written);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The fit's settings from the command line (a malformed `--free` is a usage error).
+fn settings(args: &FitArgs) -> Result<FitSettings> {
+    let free = args
+        .free
+        .iter()
+        .flat_map(|list| fit::split_list(list))
+        .map(|item| FreeParameter::parse(&item).map_err(|e| UsageError(format!("--free: {e}"))))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut settings = FitSettings::new(free);
+    settings.hessian = args.fit_hessian;
+    settings.start = args.start;
+    settings.tol = args.tol;
+    if let Some(n) = args.scene.max_iter {
+        settings.max_iter = n;
+    }
+    Ok(settings)
+}
+
+/// `out/<stem>-fit`.
+fn default_dir(scene: &Path) -> PathBuf {
+    let stem = scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    PathBuf::from("out").join(format!("{stem}-fit"))
+}
+
+/// For a fit that did not converge, or whose fitted motion did not converge or verify:
+/// say why and where the summary is, and give the exit status (3 or 4).
+fn report_untrusted(f: &Fit, written: &FitWritten) -> Option<ExitCode> {
+    let summary = written.written.summary.display();
+    let scene = &f.outcome.scene;
+    let code = if !f.report.converged {
+        note!(
+            "error: {scene}: the fit did not converge: {} ({} Ipopt iterations); summary in {summary}",
+            f.report.status_text,
+            f.report.iterations
+        );
+        EXIT_NOT_CONVERGED
+    } else if !f.outcome.converged() {
+        note!("error: {scene}: the solve at the fitted values did not converge: {}; summary in {summary}", f.outcome.status);
+        EXIT_NOT_CONVERGED
+    } else if !f.outcome.trusted() {
+        let verdict = if f.outcome.verification.status == VerifyStatus::Unverified { "could not run" } else { "failed" };
+        note!(
+            "error: {scene}: the fit converged but the verification of the fitted motion {verdict}: {}; summary in {summary}",
+            f.outcome.verification.reason
+        );
+        EXIT_NOT_VERIFIED
+    } else {
+        return None;
+    };
+    Some(ExitCode::from(code))
+}
+
+/// The report of a trusted fit on stdout: the iterations, each parameter with its
+/// standard error, the misfit, the verification and the files written.
+fn print_report(f: &Fit, written: &FitWritten) {
+    let r = &f.report;
+    out!(
+        "{}: fit converged in {} Ipopt iterations ({}), {} values, {:.3} s",
+        f.outcome.scene,
+        r.iterations,
+        r.status,
+        r.misfit.points,
+        r.timings.total_s
+    );
+    let width = r.parameters.keys().map(|n| n.chars().count()).max().unwrap_or(0);
+    for (name, p) in &r.parameters {
+        let se = p.std_error.map_or("(no standard error)".to_string(), |s| format!("± {s:.3e}"));
+        let bound = if p.at_bound { ", at its bound" } else { "" };
+        out!("  {name:<width$} = {:<22} {se} (from {}{bound})", format!("{:.10}", p.value), p.initial);
+    }
+    let m = &r.misfit;
+    out!(
+        "  misfit: rms residual {:.3e}, max |residual| {:.3e}, sum of squares {:.3e}",
+        m.rms_residual,
+        m.max_abs_residual,
+        m.sum_of_squares
+    );
+    out!("  verified: {} ({})", f.outcome.verification.status, f.outcome.verification.reason);
+    for path in written.paths() {
+        out!("  wrote {}", path.display());
+    }
+}

@@ -1,0 +1,44 @@
+//! `skg-solve fit` on the shipped example (examples/fit): the files it writes, the
+//! parameters against the values the data were made with, and its exit statuses (what
+//! the fits find is tested against closed forms in crates/skg-core/tests/fit.rs).
+
+mod common;
+
+#[test]
+fn the_example_fits_writes_its_files_and_exits_by_the_convention() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = common::root();
+    let scene = root.join("examples/fit/oscillator.toml");
+    let data = root.join("examples/fit/oscillator.csv");
+    let (scene, data) = (scene.to_str().unwrap(), data.to_str().unwrap());
+    let run = |args: &[&str]| common::skg(&[&["fit", scene, "--data", data][..], args].concat(), dir.path());
+
+    let o = run(&["--free", "k>=0,c>=0,x0,v0", "-o", "fit"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("fit/summary.json")).unwrap()).unwrap();
+    let fit = &summary["fit"];
+    // The data: k = 4, c = 0.3, x0 = 1.2, v0 = −0.5 with noise 0.01 (make_data.py).
+    for (name, truth) in [("k", 4.0), ("c", 0.3), ("x0", 1.2), ("v0", -0.5)] {
+        let p = &fit["parameters"][name];
+        let (value, se) = (p["value"].as_f64().unwrap(), p["std_error"].as_f64().unwrap());
+        assert!((value - truth).abs() < 3.0 * se, "{name} = {value} ± {se}");
+    }
+    for file in ["trajectory.csv", "reference.csv", "data.csv", "fitted.toml"] {
+        assert!(dir.path().join("fit").join(file).is_file(), "{file}");
+    }
+    assert!(std::fs::read_to_string(dir.path().join("fit/fitted.toml")).unwrap().starts_with("# Fitted by skg-solve"));
+
+    let o = run(&["--free", "m,k,c", "-o", "undetermined"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("`m`, `k`, `c` cannot all be determined from the data"), "{t}");
+
+    let o = run(&["--free", "k in [1", "-o", "usage"]);
+    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
+
+    let o = run(&["--free", "k", "--max-iter", "1", "-o", "short"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(3), "{t}");
+    assert!(t.contains("the fit did not converge"), "{t}");
+}

@@ -1,0 +1,627 @@
+//! Inverse problems: the parameters and initial data of a scene estimated from measured
+//! motion, with Ipopt as the optimizer ([`fit`]; docs/fitting.md).
+//!
+//! The discrete action turns a trajectory into the solution of one sparse system with
+//! exact derivatives. A fit optimizes the whole trajectory and the free parameters at
+//! once: unknowns `x = (P, θ)` (the plus block of the reduced system and the free
+//! parameters), constraints the stationarity of the action `R(P; θ) = 0` (the same
+//! equations and boundary conditions as a solve, with the exact sparse Jacobian in the
+//! trajectory and in the parameters), objective the weighted least-squares misfit between
+//! the trajectory at the data's times and the data, bounds on the parameters where the
+//! physics needs them, and the exact Hessian of the Lagrangian from the derivative tapes
+//! (or Ipopt's limited-memory approximation, as an option).
+//!
+//! In the order of a fit:
+//! 1. the settings are checked against the scene: the free parameters are parameters,
+//!    their starting values lie within their bounds, and they do not move the time grid
+//!    ([`FitSettings`], [`FreeParameter`], with `free.rs`);
+//! 2. the data are read and checked against the scene ([`Data`], `data.rs`) and become
+//!    rows of weights over the trajectory's unknowns, interpolated at the data's times
+//!    consistently with the operator (`observe.rs`);
+//! 3. the scene's model with the free parameters symbolic
+//!    ([`Model::with_free_parameters`]) is solved at the starting values, and the start
+//!    is that solve with the data in place of the coordinates they observe ([`FitStart`]);
+//! 4. Ipopt minimizes the misfit under the constraints (`problem.rs`);
+//! 5. at the solution the trajectory's sensitivities give the Gauss–Newton curvature,
+//!    the covariance and the standard errors, and tell whether the data determine the
+//!    parameters (`statistics.rs`; the same test runs on the start, so that a fit the
+//!    data cannot determine is refused before it is attempted);
+//! 6. the scene with the fitted values is solved from the fitted trajectory and verified
+//!    against time stepping like any solve: its [`Outcome`] is the fitted motion;
+//! 7. the report ([`FitReport`], the `fit` object of `summary.json`), the fitted scene's
+//!    text and the data beside the fitted values (`report.rs`).
+//!
+//! **Place in the flow.** After the solve and the output: it uses the scene, the model,
+//! the discrete action (its parameter derivatives, the interpolation), the time stepping
+//! (through the solve), the solve (a run, its outcome, the sparse LU) and the output (a
+//! fit's files, `files.rs`). Only the command line and Python call it. It needs Ipopt: the
+//! module is compiled with the `ipopt` feature only.
+
+mod data;
+mod files;
+mod free;
+mod observe;
+mod problem;
+mod report;
+mod statistics;
+
+use std::fmt;
+use std::str::FromStr;
+use std::sync::Arc;
+use std::time::Instant;
+
+use nalgebra::DMatrix;
+use serde::Serialize;
+use skg_ipopt as ipopt;
+
+use crate::discrete::action::Block;
+use crate::discrete::interpolate::{segment, Hermite};
+use crate::discrete::trajectory::NodeSeries;
+use crate::discrete::{Action, Discretization};
+use crate::model::Model;
+use crate::scene::{Overrides, Scene, SceneError};
+use crate::solve::backend::mumps_options;
+use crate::solve::{action_on, outcome, point_from_states, solve_global, Guess, Outcome, SolveError};
+use crate::stepping::equations::{integrate_model, Stepped};
+use crate::stepping::ode::OdeOptions;
+use observe::Observations;
+use problem::{FitProblem, Plans};
+
+pub use data::{Data, DataError, DataPlace, Observation, SIGMA_PREFIX};
+pub use files::{fit_into, write_fit, FitIntoError, FitWritten, DATA_FILE, FITTED_SCENE_FILE};
+pub use free::{split_list, FreeParameter, FreeParameterError};
+pub use report::{CovarianceReport, DataReport, FitReport, MisfitReport, ParameterReport};
+pub use statistics::{covariance, undetermined, SINGULAR};
+
+/// The Hessian of the Lagrangian given to Ipopt.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FitHessian {
+    /// Exact: second derivatives of the stationarity equations and of the misfit.
+    #[default]
+    Exact,
+    /// Ipopt's limited-memory quasi-Newton approximation (`hessian_approximation =
+    /// limited-memory`).
+    LimitedMemory,
+}
+
+/// Where the fit's trajectory starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FitStart {
+    /// [`FitStart::Data`] for a scene without constraints, [`FitStart::Solve`] for one
+    /// with constraints: the data put in place of some coordinates violate the
+    /// constraints that tie them to the others, and Ipopt then starts far from
+    /// feasibility.
+    #[default]
+    Auto,
+    /// The data themselves where they observe a coordinate (interpolated at the nodes
+    /// between its first and last observation), the solve at the starting values
+    /// elsewhere.
+    Data,
+    /// The solve at the starting values everywhere.
+    Solve,
+}
+
+/// An unknown name of a fit's setting.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("`{given}` is not one of {expected}")]
+pub struct ParseFitSettingError {
+    given: String,
+    expected: &'static str,
+}
+
+impl FitHessian {
+    /// The setting's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            FitHessian::Exact => "exact",
+            FitHessian::LimitedMemory => "limited-memory",
+        }
+    }
+}
+
+impl FromStr for FitHessian {
+    type Err = ParseFitSettingError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "exact" => Ok(FitHessian::Exact),
+            "limited-memory" => Ok(FitHessian::LimitedMemory),
+            _ => Err(ParseFitSettingError { given: s.to_string(), expected: "exact, limited-memory" }),
+        }
+    }
+}
+
+impl fmt::Display for FitHessian {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FitStart {
+    /// The setting's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            FitStart::Auto => "auto",
+            FitStart::Data => "data",
+            FitStart::Solve => "solve",
+        }
+    }
+}
+
+impl FromStr for FitStart {
+    type Err = ParseFitSettingError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(FitStart::Auto),
+            "data" => Ok(FitStart::Data),
+            "solve" => Ok(FitStart::Solve),
+            _ => Err(ParseFitSettingError { given: s.to_string(), expected: "auto, data, solve" }),
+        }
+    }
+}
+
+impl fmt::Display for FitStart {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// How to fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitSettings {
+    /// The free parameters and their bounds, in the order of the report.
+    pub free: Vec<FreeParameter>,
+    /// The Hessian given to Ipopt.
+    pub hessian: FitHessian,
+    /// Where the trajectory starts.
+    pub start: FitStart,
+    /// Ipopt's `tol` (its scaled optimality error); the constraints are held to the
+    /// scene's `[solver] tol` (Ipopt's `constr_viol_tol`).
+    pub tol: f64,
+    /// Ipopt's iteration limit.
+    pub max_iter: u32,
+}
+
+/// Ipopt's `tol` for a fit unless the scene or the caller gives one (its default, 1e-8,
+/// left the noise-free fits of the tests at 1e-7 of the parameters' values).
+pub const DEFAULT_TOL: f64 = 1e-10;
+
+/// Ipopt's `acceptable_iter` for a fit: the iterations at its acceptable level after
+/// which it stops (its default is 15).
+pub const ACCEPTABLE_ITER: i32 = 5;
+
+/// Ipopt's iteration limit for a fit unless the scene or the caller gives one.
+pub const DEFAULT_MAX_ITER: u32 = 200;
+
+impl FitSettings {
+    /// The defaults for these free parameters: exact Hessian, [`FitStart::Auto`],
+    /// [`DEFAULT_TOL`], [`DEFAULT_MAX_ITER`].
+    pub fn new(free: Vec<FreeParameter>) -> FitSettings {
+        FitSettings { free, hessian: FitHessian::Exact, start: FitStart::Data, tol: DEFAULT_TOL, max_iter: DEFAULT_MAX_ITER }
+    }
+
+    /// The names of the free parameters.
+    pub fn names(&self) -> Vec<String> {
+        self.free.iter().map(|p| p.name.clone()).collect()
+    }
+}
+
+/// Why a fit could not be attempted or completed (a fit that did not converge is not an
+/// error: its [`FitReport`] says so).
+#[derive(Debug, thiserror::Error)]
+pub enum FitError {
+    /// The scene, an override or the scene's `[fit]` table is invalid.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The data cannot be used.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// The settings do not fit the scene (a free parameter, a bound, the operator).
+    #[error("{0}")]
+    Settings(String),
+    /// A solve (at the starting values, or at the fitted ones) could not run.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    /// Ipopt could not run the fit.
+    #[error("the fit could not run: {0}")]
+    Ipopt(#[from] ipopt::SolveError),
+    /// The data do not determine the free parameters: which combination, in words.
+    #[error("{0}")]
+    NotIdentifiable(String),
+}
+
+/// A fit's result.
+#[derive(Debug, Clone)]
+pub struct Fit {
+    /// The solve of the scene with the fitted values, from the fitted trajectory, with
+    /// its verification: its trajectory is the fitted motion.
+    pub outcome: Outcome,
+    /// The scene with the fitted values.
+    pub fitted: Scene,
+    /// What the fit did and found (the `fit` object of `summary.json`).
+    pub report: FitReport,
+    /// The scene file's text with the fitted values (`fitted.toml`).
+    pub fitted_toml: String,
+    /// The data beside the fitted motion at the data's times: header and rows
+    /// (`data.csv`).
+    pub data_table: (Vec<String>, Vec<Vec<f64>>),
+}
+
+impl Fit {
+    /// The fit converged, and the solve at the fitted values converged and verified:
+    /// exit status 0.
+    pub fn trusted(&self) -> bool {
+        self.report.converged && self.outcome.trusted()
+    }
+
+    /// Converged: the fit and the solve at the fitted values.
+    pub fn converged(&self) -> bool {
+        self.report.converged && self.outcome.converged()
+    }
+}
+
+/// Fit the free parameters of `scene` (resolved from its file with `overrides`, at the
+/// starting values) to `data` (module documentation).
+pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSettings) -> Result<Fit, FitError> {
+    let started = Instant::now();
+    let mut warnings = check_settings(scene, overrides, settings)?;
+    let names = settings.names();
+    let initial: Vec<f64> = names.iter().map(|n| scene.parameters[n]).collect();
+    let model = Arc::new(Model::with_free_parameters(scene, &names)?);
+    let disc = Discretization::of(scene);
+    let (times, dt) = disc.grid(scene);
+    let mut action = action_on(&model, scene, &disc, disc.nodes, dt)?;
+    let plans = Plans {
+        jacobian: action.plan(Block::ReducedJacobian),
+        hessian: (settings.hessian == FitHessian::Exact).then(|| action.plan(Block::ReducedHessian)),
+        parameters: action.parameter_plan(),
+    };
+    let observations = Observations::new(&action, &times, data);
+
+    // The start: a solve at the starting values, refused if the data cannot determine
+    // the parameters there; then the data in place of what they observe.
+    let start = start_states(scene, &model, &disc, &times)?;
+    if let Some(z) = &start.solution {
+        let mut ws = model.workspace();
+        if let Some(s) = statistics::sensitivities(&action, &plans, z, &mut ws) {
+            let a = statistics::weighted_sensitivities(&observations, &s);
+            if let Some(message) = undetermined(&(a.transpose() * &a), &names, &initial) {
+                return Err(FitError::NotIdentifiable(format!("{message} (at the starting values)")));
+            }
+        }
+    } else {
+        warnings
+            .push(format!("the solve at the starting values did not converge ({}); the fit starts from time stepping", start.description));
+    }
+    let mut q = start.q.clone();
+    let start_from_data = match settings.start {
+        FitStart::Auto => scene.constraints.is_empty(),
+        FitStart::Data => true,
+        FitStart::Solve => false,
+    };
+    if start_from_data {
+        put_data(&mut q, &times, data);
+    }
+    let mut x0 = point_from_states(&action, &q, &start.lambda)[..action.layout.n_p].to_vec();
+    x0.extend(&initial);
+    let start_s = started.elapsed().as_secs_f64();
+
+    // The optimization.
+    let t_opt = Instant::now();
+    let options = ipopt_options(scene, settings);
+    let solution = {
+        let mut problem = FitProblem::new(&mut action, &plans, &observations, &settings.free);
+        ipopt::solve(&mut problem, &x0, &options)?
+    };
+    let optimization_s = t_opt.elapsed().as_secs_f64();
+    let converged = converged(&solution, scene.solver.tol, &mut warnings);
+
+    // The statistics at the solution.
+    let t_stat = Instant::now();
+    let n_p = action.layout.n_p;
+    let theta = solution.x[n_p..].to_vec();
+    let mut ws = model.workspace();
+    action.set_parameters(&theta, &mut ws);
+    let mut z = vec![0.0; action.layout.len()];
+    z[..n_p].copy_from_slice(&solution.x[..n_p]);
+    let residuals = observations.residuals(&solution.x);
+    let sens = statistics::sensitivities(&action, &plans, &z, &mut ws);
+    let curvature = sens.as_ref().map(|s| {
+        let a = statistics::weighted_sensitivities(&observations, s);
+        a.transpose() * &a
+    });
+    if converged {
+        if let Some(message) = curvature.as_ref().and_then(|f| undetermined(f, &names, &theta)) {
+            return Err(FitError::NotIdentifiable(message));
+        }
+    }
+    let misfit = report::misfit(&observations, &residuals, names.len(), data.sigma_given);
+    let cov = curvature.as_ref().and_then(|f| if misfit.defines_covariance() { covariance(f, misfit.residual_variance) } else { None });
+    if !misfit.defines_covariance() {
+        warnings.push(format!(
+            "{} values for {} parameters and no standard deviations: the residual variance, and with it the standard errors, is undefined",
+            observations.values.len(),
+            names.len()
+        ));
+    }
+    let statistics_s = t_stat.elapsed().as_secs_f64();
+
+    // The fitted scene, solved from the fitted trajectory and verified.
+    let t_verify = Instant::now();
+    let (fitted, fitted_overrides) = fitted_scene(scene, overrides, &names, &theta)?;
+    let fitted_model = Arc::new(Model::build(&fitted)?);
+    let (fq, flam) = states_of(&action, &z);
+    let guess = Guess::States { q: fq, lambda: flam, description: "the fit's trajectory".into() };
+    let run = solve_global(&fitted, &fitted_model, &disc, &guess)?;
+    let mut outcome = outcome(&fitted, &fitted_model, run);
+    outcome.warnings.extend(warnings.iter().cloned());
+    let verification_s = t_verify.elapsed().as_secs_f64();
+
+    let parameters = report::parameters(&settings.free, &theta, &initial, cov.as_ref());
+    for (name, p) in &parameters {
+        if p.at_bound {
+            warnings.push(format!(
+                "`{name}` ended on its bound ({}): its standard error describes the curvature there, not a symmetric interval",
+                p.value
+            ));
+        }
+    }
+    let report = FitReport {
+        converged,
+        status: solution.status.name().to_string(),
+        status_text: solution.status.to_string(),
+        iterations: solution.iterations,
+        hessian: settings.hessian,
+        start: settings.start,
+        start_solve: start.description.clone(),
+        parameters,
+        covariance: cov.map(|c| CovarianceReport::new(&names, &c)),
+        curvature_condition: curvature.as_ref().map(report::scaled_condition),
+        misfit,
+        data: DataReport::new(data, scene),
+        max_constraint_violation: solution.max_constraint_violation,
+        objective: solution.objective,
+        sizes: report::Sizes {
+            variables: n_p + names.len(),
+            constraints: action.layout.n_m,
+            jacobian_nonzeros: plans.jacobian.structure.len() + plans.parameters.jacobian.len(),
+            hessian_nonzeros: plans
+                .hessian
+                .as_ref()
+                .map_or(0, |h| h.structure.len() + observations.hessian.len() + plans.parameters.hessian.len()),
+            observations: observations.values.len(),
+        },
+        work: report::Work {
+            constraint_evaluations: solution.eval.constraints.calls as usize,
+            jacobian_evaluations: solution.eval.jacobian.calls as usize,
+            hessian_evaluations: solution.eval.hessian.calls as usize,
+            objective_evaluations: solution.eval.objective.calls as usize,
+        },
+        timings: report::Timings {
+            start_s,
+            optimization_s,
+            ipopt_internal_s: solution.ipopt_seconds,
+            statistics_s,
+            verification_s,
+            total_s: started.elapsed().as_secs_f64(),
+        },
+        history: solution.history.clone(),
+        warnings,
+        fitted_scene: None,
+    };
+    let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
+    let data_table = report::data_table(scene, data, &outcome.trajectory);
+    Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
+}
+
+/// Whether Ipopt's fit converged: `Solve_Succeeded`; or, with a warning, its acceptable
+/// level, or a search direction too small to make progress (the misfit of noisy data
+/// stalls there short of the tight default `tol`) with the constraints held to 1e-8 or
+/// the scene's `tol` (the solve at the fitted values then solves them to `tol`).
+fn converged(solution: &ipopt::Solution, tol: f64, warnings: &mut Vec<String>) -> bool {
+    match solution.status {
+        ipopt::Status::SolveSucceeded => true,
+        ipopt::Status::SolvedToAcceptableLevel => {
+            warnings.push("Ipopt stopped at its acceptable level (Solved_To_Acceptable_Level), not at the requested tolerance".into());
+            true
+        }
+        ipopt::Status::SearchDirectionBecomesTooSmall if solution.max_constraint_violation <= tol.max(1e-8) => {
+            warnings.push(format!(
+                "Ipopt stopped because its search direction became too small (Search_Direction_Becomes_Too_Small) with the \
+                 equations of motion held to {:.1e}: the misfit cannot decrease further at this precision",
+                solution.max_constraint_violation
+            ));
+            true
+        }
+        _ => false,
+    }
+}
+
+/// The checks of the settings against the scene; the notes on what the fit does not
+/// use of the scene.
+fn check_settings(scene: &Scene, overrides: &Overrides, settings: &FitSettings) -> Result<Vec<String>, FitError> {
+    let mut notes = Vec::new();
+    if settings.free.is_empty() {
+        return Err(FitError::Settings("no free parameter: name the parameters to fit (--free, or free = [...] in [fit])".into()));
+    }
+    let known = || scene.parameters.keys().map(String::as_str).collect::<Vec<_>>().join(", ");
+    for (j, p) in settings.free.iter().enumerate() {
+        let Some(&value) = scene.parameters.get(&p.name) else {
+            return Err(FitError::Settings(format!(
+                "free parameter `{}` is not a parameter of the scene (its parameters: {}); to fit an initial position or \
+                 velocity, write it as a parameter in the scene (velocity = \"v0\")",
+                p.name,
+                known()
+            )));
+        };
+        if settings.free[..j].iter().any(|q| q.name == p.name) {
+            return Err(FitError::Settings(format!("free parameter `{}` is named twice", p.name)));
+        }
+        if !p.admits(value) {
+            return Err(FitError::Settings(format!(
+                "the starting value of `{}` ({value}) is outside its bounds {}: start inside them (--set {}=…)",
+                p.name,
+                p.bounds_text(),
+                p.name
+            )));
+        }
+        if moves_the_grid(scene, overrides, &p.name, value) {
+            return Err(FitError::Settings(format!(
+                "`{}` sets the time span or the grid ([time]): a fit keeps the grid fixed, so it cannot be free",
+                p.name
+            )));
+        }
+    }
+    if scene.choose_operator || scene.verify.refine {
+        return Err(FitError::Settings(
+            "a fit solves one discretization: name the operator (not `auto`) and do not ask for a refinement".into(),
+        ));
+    }
+    if scene.windows.is_some() {
+        notes.push("the fit optimizes the whole span at once: the scene's [time] window is not used".into());
+    }
+    if scene.formulation == crate::scene::Formulation::Full {
+        notes.push("the fit's constraints are the reduced system: the full formulation is not used".into());
+    }
+    if settings.tol.is_nan() || settings.tol <= 0.0 || settings.max_iter == 0 {
+        return Err(FitError::Settings(format!("the fit's tol ({}) and max_iter ({}) must be positive", settings.tol, settings.max_iter)));
+    }
+    Ok(notes)
+}
+
+/// Whether changing parameter `name` from `value` changes the scene's time span or grid.
+fn moves_the_grid(scene: &Scene, overrides: &Overrides, name: &str, value: f64) -> bool {
+    let other = if value == 0.0 { 1e-3 } else { value * (1.0 + 1e-3) };
+    let mut ov = overrides.clone();
+    ov.set.retain(|(n, _)| n != name);
+    ov.set.push((name.to_string(), format!("{other:?}")));
+    match scene.file.clone().resolve(&ov) {
+        Ok(s) => (s.t_start, s.t_end, s.nodes) != (scene.t_start, scene.t_end, scene.nodes),
+        Err(_) => false,
+    }
+}
+
+/// The start of a fit: coordinates and multipliers at the nodes, how they were made,
+/// and the unknown vector of the discrete solution when the solve converged.
+struct Start {
+    q: NodeSeries,
+    lambda: NodeSeries,
+    description: String,
+    solution: Option<Vec<f64>>,
+}
+
+/// Solve the scene at its starting values (one global solve from time stepping); when
+/// that does not converge, the time stepping itself.
+fn start_states(scene: &Scene, model: &Arc<Model>, disc: &Discretization, times: &[f64]) -> Result<Start, FitError> {
+    let run = solve_global(scene, model, disc, &Guess::TimeStepping)?;
+    if run.solution.status.is_converged() {
+        let tr = &run.solution.trajectory;
+        let action = action_on(model, scene, disc, disc.nodes, disc.spacing(scene))?;
+        let z = point_from_states(&action, &tr.q, &tr.lambda);
+        let description = format!("the solve at the starting values ({} iterations)", run.solution.iterations);
+        return Ok(Start { q: tr.q.clone(), lambda: tr.lambda.clone(), description, solution: Some(z) });
+    }
+    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, stepper: scene.verify.stepper, ..OdeOptions::default() };
+    let Stepped { states, .. } = integrate_model(model, &scene.initial_q, &scene.initial_v, times, &opts).map_err(|e| {
+        FitError::Settings(format!(
+            "neither the solve nor time stepping at the starting values succeeded ({e}): choose other starting values"
+        ))
+    })?;
+    Ok(Start { q: states.q, lambda: states.lambda, description: run.solution.status.to_string(), solution: None })
+}
+
+/// Put the data in place of the coordinates they observe: at each node between a
+/// coordinate's first and last observation, the cubic Hermite polynomial through the
+/// neighbouring observations with finite-difference slopes (linear between two).
+fn put_data(q: &mut NodeSeries, times: &[f64], data: &Data) {
+    for &i in &data.coordinates {
+        let (ts, ys): (Vec<f64>, Vec<f64>) = data.observations.iter().filter(|o| o.coordinate == i).map(|o| (o.t, o.value)).unzip();
+        if ts.len() < 2 {
+            continue;
+        }
+        let slope = |k: usize| -> f64 {
+            if k == 0 {
+                (ys[1] - ys[0]) / (ts[1] - ts[0])
+            } else if k + 1 == ts.len() {
+                (ys[k] - ys[k - 1]) / (ts[k] - ts[k - 1])
+            } else {
+                // The derivative of the parabola through three neighbours.
+                let (h0, h1) = (ts[k] - ts[k - 1], ts[k + 1] - ts[k]);
+                let (d0, d1) = ((ys[k] - ys[k - 1]) / h0, (ys[k + 1] - ys[k]) / h1);
+                (h1 * d0 + h0 * d1) / (h0 + h1)
+            }
+        };
+        for (k, &t) in times.iter().enumerate() {
+            if t < ts[0] || t > ts[ts.len() - 1] {
+                continue;
+            }
+            let s = segment(&ts, t);
+            q[k][i] = if ts.len() == 2 {
+                ys[0] + (t - ts[0]) / (ts[1] - ts[0]) * (ys[1] - ys[0])
+            } else {
+                Hermite::new(ts[s], ts[s + 1], t).eval(ys[s], slope(s), ys[s + 1], slope(s + 1))
+            };
+        }
+    }
+}
+
+/// The coordinates and multipliers at the nodes of the unknown vector `z` (the pinned
+/// multipliers as 0).
+fn states_of(action: &Action, z: &[f64]) -> (NodeSeries, NodeSeries) {
+    let lay = &action.layout;
+    let q = lay.coordinates(z);
+    let lambda = (0..lay.nodes)
+        .map(|k| (0..lay.n).map(|a| if lay.lp[k * lay.n + a] == u32::MAX { 0.0 } else { z[lay.lp[k * lay.n + a] as usize] }).collect())
+        .collect();
+    (q, lambda)
+}
+
+/// The scene with the fitted values, and the overrides that resolve it.
+fn fitted_scene(scene: &Scene, overrides: &Overrides, names: &[String], theta: &[f64]) -> Result<(Scene, Overrides), FitError> {
+    let mut ov = overrides.clone();
+    ov.set.retain(|(n, _)| !names.contains(n));
+    ov.set.extend(names.iter().zip(theta).map(|(n, x)| (n.clone(), format!("{x:?}"))));
+    let fitted = scene.file.clone().resolve(&ov)?;
+    Ok((fitted, ov))
+}
+
+/// Ipopt's options for a fit of `scene`: the scene's linear solver, print level and
+/// MUMPS settings as for a solve, the fit's tolerance and iteration limit, the
+/// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], the Hessian, then the scene's
+/// `[solver.ipopt]` options.
+fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
+    let solver = &scene.solver;
+    let mut extra: Vec<(String, ipopt::OptionValue)> =
+        mumps_options(scene).into_iter().map(|(k, v)| (k.to_string(), ipopt::OptionValue::Int(v))).collect();
+    // The constraints of a long or stiff scene stall at a round-off floor above the
+    // fit's tol: stop after a few iterations at Ipopt's acceptable level (with a warning)
+    // instead of line-searching at that floor up to the iteration limit.
+    extra.push(("acceptable_iter".into(), ipopt::OptionValue::Int(ACCEPTABLE_ITER)));
+    if settings.hessian == FitHessian::LimitedMemory {
+        extra.push(("hessian_approximation".into(), ipopt::OptionValue::Str("limited-memory".into())));
+    }
+    extra.extend(solver.ipopt.iter().map(|(k, v)| {
+        let v = match v {
+            crate::scene::IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
+            crate::scene::IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
+            crate::scene::IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
+        };
+        (k.clone(), v)
+    }));
+    ipopt::Options {
+        tol: settings.tol,
+        constr_viol_tol: solver.tol,
+        max_iter: settings.max_iter,
+        print_level: solver.print_level,
+        linear_solver: solver.linear_solver.clone(),
+        output_file: solver.ipopt_log.clone(),
+        extra,
+        ..ipopt::Options::default()
+    }
+}
+
+/// The curvature's matrix of a fit as rows (for the report).
+fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows()).map(|i| m.row(i).iter().copied().collect()).collect()
+}

@@ -1,0 +1,313 @@
+//! Fits against independent truth: data generated from closed forms or tight-tolerance
+//! integrations with known parameters, fitted from other starting values (docs/fitting.md).
+#![cfg(feature = "ipopt")]
+
+mod common;
+
+use std::f64::consts::PI;
+
+use skg_core::fit::{fit, Data, Fit, FitError, FitSettings, FreeParameter};
+use skg_core::scene::{Overrides, Scene, SceneFile};
+
+/// A damped oscillator with its initial state as parameters.
+const OSCILLATOR: &str = r#"
+[scene]
+name = "damped oscillator"
+lagrangian = "1/2*m*x_dot^2 - 1/2*k*x^2"
+[parameters]
+m = 1
+k = 3.0
+c = 0.2
+x0 = 1
+v0 = 0
+[[coordinates]]
+name = "x"
+initial = "x0"
+velocity = "v0"
+[forces]
+x = "-c*x_dot"
+[time]
+start = 0
+end = 6
+nodes = 512
+[discretization]
+operator = "SBP484"
+"#;
+
+/// The underdamped oscillator `m x'' = −k x − c x'` from `x(0) = x0`, `x'(0) = v0`.
+fn oscillator(t: f64, m: f64, k: f64, c: f64, x0: f64, v0: f64) -> f64 {
+    let w0 = (k / m).sqrt();
+    let g = c / (2.0 * m);
+    let wd = (w0 * w0 - g * g).sqrt();
+    (-g * t).exp() * (x0 * (wd * t).cos() + (v0 + g * x0) / wd * (wd * t).sin())
+}
+
+/// A CSV text with a column `t` and one column per named function of time.
+fn csv(times: &[f64], columns: &[(&str, &dyn Fn(f64) -> f64)]) -> String {
+    let mut text = String::from("t");
+    for (name, _) in columns {
+        text += &format!(",{name}");
+    }
+    text.push('\n');
+    for &t in times {
+        text += &format!("{t:?}");
+        for (_, f) in columns {
+            text += &format!(",{:?}", f(t));
+        }
+        text.push('\n');
+    }
+    text
+}
+
+fn scene_of(text: &str, ov: &Overrides) -> Scene {
+    SceneFile::parse(text, "scene.toml").unwrap().resolve(ov).unwrap()
+}
+
+fn free(items: &[&str]) -> FitSettings {
+    FitSettings::new(items.iter().map(|t| FreeParameter::parse(t).unwrap()).collect())
+}
+
+fn run(scene: &Scene, ov: &Overrides, data_text: &str, settings: &FitSettings) -> Result<Fit, FitError> {
+    let data = Data::parse(data_text, "data.csv", scene)?;
+    fit(scene, ov, &data, settings)
+}
+
+fn assert_recovered(f: &Fit, truth: &[(&str, f64)], rel: f64) {
+    assert!(f.report.converged, "status {}", f.report.status);
+    for (name, value) in truth {
+        let got = f.report.parameters[*name].value;
+        assert!((got - value).abs() <= rel * value.abs().max(1e-3), "{name}: fitted {got}, truth {value}");
+    }
+}
+
+fn oscillator_times() -> Vec<f64> {
+    (0..40).map(|i| 0.07 + i as f64 * 0.147).collect()
+}
+
+#[test]
+fn an_oscillators_stiffness_damping_and_initial_state_are_recovered() {
+    let ov = Overrides::default();
+    let scene = scene_of(OSCILLATOR, &ov);
+    let (k, c, x0, v0) = (4.0, 0.3, 1.2, -0.5);
+    let data = csv(&oscillator_times(), &[("x", &|t| oscillator(t, 1.0, k, c, x0, v0))]);
+    let f = run(&scene, &ov, &data, &free(&["k", "c", "x0", "v0"])).unwrap();
+    assert_recovered(&f, &[("k", k), ("c", c), ("x0", x0), ("v0", v0)], 1e-6);
+    assert!(f.trusted(), "verification: {}", f.outcome.verification.reason);
+    assert!(f.report.parameters.values().all(|p| p.std_error.is_some_and(|s| s > 0.0)));
+    assert_eq!((f.report.misfit.points, f.report.misfit.dof), (40, 36));
+    assert!(f.report.iterations <= 30, "{} iterations", f.report.iterations);
+    // The fitted scene holds the fitted values.
+    for (name, value) in [("k", k), ("c", c)] {
+        assert!((f.fitted.parameters[name] - value).abs() < 1e-6 * value, "{name} in the fitted scene");
+    }
+    assert!(f.fitted_toml.starts_with("# Fitted by skg-solve"));
+    let refit = scene_of(&f.fitted_toml, &ov);
+    assert_eq!(refit.parameters["k"], f.report.parameters["k"].value);
+}
+
+#[test]
+fn the_limited_memory_hessian_reaches_the_same_values() {
+    let ov = Overrides::default();
+    let scene = scene_of(OSCILLATOR, &ov);
+    let data = csv(&oscillator_times(), &[("x", &|t| oscillator(t, 1.0, 4.0, 0.3, 1.0, 0.0))]);
+    let mut settings = free(&["k", "c"]);
+    settings.hessian = "limited-memory".parse().unwrap();
+    settings.max_iter = 1000;
+    let f = run(&scene, &ov, &data, &settings).unwrap();
+    assert_recovered(&f, &[("k", 4.0), ("c", 0.3)], 1e-5);
+}
+
+#[test]
+fn a_bound_the_data_push_against_holds_and_is_reported() {
+    let ov = Overrides { set: vec![("c".into(), "0.6".into())], ..Default::default() };
+    let scene = scene_of(OSCILLATOR, &ov);
+    let data = csv(&oscillator_times(), &[("x", &|t| oscillator(t, 1.0, 3.0, 0.3, 1.0, 0.0))]);
+    let f = run(&scene, &ov, &data, &free(&["k", "c>=0.5"])).unwrap();
+    let c = &f.report.parameters["c"];
+    assert!(f.report.converged, "{}", f.report.status);
+    assert!((c.value - 0.5).abs() < 1e-6, "c = {}", c.value);
+    assert!(c.at_bound && c.bound == [Some(0.5), None]);
+    assert!(f.report.warnings.iter().any(|w| w.contains("`c` ended on its bound")), "{:?}", f.report.warnings);
+    // A starting value outside the bounds is refused before the fit.
+    let e = run(&scene, &ov, &data, &free(&["c in [0, 0.4]"])).unwrap_err();
+    assert!(e.to_string().contains("the starting value of `c` (0.6) is outside its bounds [0, 0.4]"), "{e}");
+}
+
+#[test]
+fn a_mass_and_a_stiffness_together_are_refused_as_undetermined() {
+    let ov = Overrides::default();
+    let scene = scene_of(OSCILLATOR, &ov);
+    let data = csv(&oscillator_times(), &[("x", &|t| oscillator(t, 1.0, 4.0, 0.3, 1.0, 0.0))]);
+    // x'' = −(k/m) x − (c/m) x': only the ratios are determined.
+    let e = run(&scene, &ov, &data, &free(&["m", "k", "c"])).unwrap_err();
+    assert!(matches!(e, FitError::NotIdentifiable(_)), "{e}");
+    let text = e.to_string();
+    assert!(text.contains("`m`, `k`, `c` cannot all be determined from the data"), "{text}");
+    assert!(text.contains("δm/m = 1.000, δk/k = 1.000, δc/c = 1.000"), "{text}");
+    // A parameter the data do not see at all.
+    let unseen = OSCILLATOR.replace("v0 = 0\n", "v0 = 0\nunused = 2\n");
+    let scene = scene_of(&unseen, &ov);
+    let e = run(&scene, &ov, &data, &free(&["k", "unused"])).unwrap_err();
+    assert!(e.to_string().starts_with("`unused` cannot be determined from the data"), "{e}");
+}
+
+#[test]
+fn settings_that_do_not_fit_the_scene_are_refused() {
+    let ov = Overrides::default();
+    let scene = scene_of(OSCILLATOR, &ov);
+    let data = csv(&[0.5, 1.0, 2.0], &[("x", &|t| t)]);
+    for (items, expected) in [
+        (&["kk"][..], "free parameter `kk` is not a parameter of the scene (its parameters: m, k, c, x0, v0)"),
+        (&["k", "k"][..], "free parameter `k` is named twice"),
+        (&[][..], "no free parameter"),
+    ] {
+        let e = run(&scene, &ov, &data, &free(items)).unwrap_err();
+        assert!(e.to_string().contains(expected), "{items:?}: {e}");
+    }
+}
+
+/// The plane pendulum θ'' = −(g/l) sin θ released at rest from θ0, by RK4 with a step
+/// far below the fit's discretization error: (x, y) at `t`.
+fn pendulum_at(theta0: f64, t: f64) -> (f64, f64) {
+    let (g, l) = (common::G, 1.0);
+    let steps = 60_000;
+    let h = t / steps as f64;
+    let f = |s: [f64; 2]| [s[1], -(g / l) * s[0].sin()];
+    let mut s = [theta0, 0.0];
+    for _ in 0..steps {
+        let k1 = f(s);
+        let k2 = f([s[0] + h / 2.0 * k1[0], s[1] + h / 2.0 * k1[1]]);
+        let k3 = f([s[0] + h / 2.0 * k2[0], s[1] + h / 2.0 * k2[1]]);
+        let k4 = f([s[0] + h * k3[0], s[1] + h * k3[1]]);
+        for i in 0..2 {
+            s[i] += h / 6.0 * ([k1[i], k2[i], k3[i], k4[i]].iter().zip([1.0, 2.0, 2.0, 1.0]).map(|(k, w)| k * w).sum::<f64>());
+        }
+    }
+    (l * s[0].sin(), -l * s[0].cos())
+}
+
+#[test]
+fn the_release_angle_that_puts_a_pendulum_at_a_point_is_found() {
+    let text = std::fs::read_to_string(common::scenario("pendulum")).unwrap();
+    let ov = Overrides { nodes: Some(512), operator: Some("SBP484".parse().unwrap()), ..Default::default() };
+    let scene = scene_of(&text, &ov);
+    let truth = 1.15;
+    let (x, y) = pendulum_at(truth, 3.0);
+    let data = format!("t,x,y\n3,{x:?},{y:?}\n");
+    let f = run(&scene, &ov, &data, &free(&["theta0 in [0, 3]"])).unwrap();
+    assert_recovered(&f, &[("theta0", truth)], 1e-6);
+    assert!(f.trusted(), "verification: {}", f.outcome.verification.reason);
+}
+
+// Ignored: under the test profile (opt-level 2) this fit spends minutes in MUMPS's
+// factorizations, while `skg-solve fit` (dev profile) recovers both values to 2e-9 in 5 s
+// on the same scene and data files; not yet understood.
+#[test]
+#[ignore]
+fn a_rolling_disks_incline_and_speed_are_recovered_from_its_track() {
+    let text = std::fs::read_to_string(common::scenario("rolling_disk"))
+        .unwrap()
+        .replace("ID = 0.25\n", "ID = 0.25\nv0 = 4\n")
+        .replace("alpha = \"pi/6\"", "alpha = 0.4")
+        .replace("velocity = 5\n\n[[coordinates]]\nname = \"y\"", "velocity = \"v0\"\n\n[[coordinates]]\nname = \"y\"")
+        .replace("name = \"theta\"\ninitial = 0\nvelocity = 5", "name = \"theta\"\ninitial = 0\nvelocity = \"v0/R\"");
+    let ov = Overrides { nodes: Some(512), operator: Some("SBP484".parse().unwrap()), ..Default::default() };
+    let scene = scene_of(&text, &ov);
+    assert_eq!(scene.initial_v[0], 4.0, "the speed is a parameter");
+    // x'' etc. of the disk rolling with φ = t: k = g sin α M/(M + IS/R²).
+    let (alpha, v0) = (PI / 6.0, 5.0);
+    let k = common::G * alpha.sin() / 1.5;
+    let times: Vec<f64> = (1..=30).map(|i| i as f64 * 2.0 * PI / 30.0).collect();
+    let x = |t: f64| v0 * t.sin() + k * t.sin().powi(2) / 2.0;
+    let y = |t: f64| v0 * (1.0 - t.cos()) + k * (t / 2.0 - (2.0 * t).sin() / 4.0);
+    let data = csv(&times, &[("x", &x), ("y", &y)]);
+    // A scene with constraints starts from the solve at the starting values (FitStart::Auto).
+    let f = run(&scene, &ov, &data, &free(&["alpha in [0, 1.5]", "v0"])).unwrap();
+    assert_recovered(&f, &[("alpha", alpha), ("v0", v0)], 1e-6);
+}
+
+#[test]
+fn a_friction_coefficient_is_recovered_from_a_sliding_block() {
+    // The block of friction_stop observed while it slides (the span ends before it stops).
+    let text = std::fs::read_to_string(common::test_scene("friction_stop")).unwrap().replace("end = 1.5", "end = 0.5");
+    let ov = Overrides { set: vec![("mu".into(), "0.25".into())], ..Default::default() };
+    let scene = scene_of(&text, &ov);
+    // While it slides: x = v0 t − μ g t²/2 (it stops at v0/(μ g) = 0.58 s for μ = 0.35).
+    let mu = 0.35;
+    let times: Vec<f64> = (1..=20).map(|i| i as f64 * 0.025).collect();
+    let data = csv(&times, &[("x", &|t| 2.0 * t - mu * common::G * t * t / 2.0)]);
+    let f = run(&scene, &ov, &data, &free(&["mu in [0, 2]"])).unwrap();
+    // The regularized friction μ N v/√(v² + ε²) is μ N to (ε/v)²/2 ≤ 2e-5 while v ≥ 0.2.
+    assert_recovered(&f, &[("mu", mu)], 1e-4);
+}
+
+#[test]
+fn bad_data_files_are_refused_with_their_line() {
+    let ov = Overrides::default();
+    let scene = scene_of(OSCILLATOR, &ov);
+    let dir = std::env::temp_dir().join(format!("skg-fit-bad-data-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, text, expected) in [
+        ("no_t.csv", "x\n1\n", "no_t.csv:1: no column `t`"),
+        ("unknown.csv", "t,z\n0,1\n", "unknown.csv:1: column `z`: is not a coordinate of the scene"),
+        ("late.csv", "t,x\n1,1\n7,2\n", "late.csv:3: column `t`: t = 7 is outside the scene's span [0, 6]"),
+        ("nan.csv", "t,x\n1,1\n2,nan\n", "nan.csv:3: column `x`: nan is not a finite number"),
+        ("unsorted.csv", "# c\nt,x\n2,1\n1,2\n", "unsorted.csv:4: column `t`: t = 1 does not come after the previous row's 2"),
+        ("short.csv", "t,x\n1\n", "short.csv:2: 1 fields, the header has 2 columns"),
+        ("text.csv", "t,x\n1,abc\n", "text.csv:2: column `x`: `abc` is not a number"),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let e = Data::read(&path, &scene).unwrap_err().to_string();
+        assert!(e.starts_with(&path.display().to_string()) && e.contains(expected), "{name}: {e}");
+    }
+    let missing = Data::read(&dir.join("absent.csv"), &scene).unwrap_err().to_string();
+    assert!(missing.contains("absent.csv: cannot read the data file"), "{missing}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Seeded standard normal numbers (xorshift64 and Box–Muller).
+struct Normal(u64);
+impl Normal {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn next(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * PI * v).cos()
+    }
+}
+
+/// Repeated fits of noisy data: the estimates scatter around the truth as the standard
+/// errors say (inside three of them, and the errors within 30 % of the observed spread;
+/// with 40 fits the spread itself is known to about 11 %).
+#[test]
+fn standard_errors_describe_the_scatter_of_repeated_noisy_fits() {
+    let ov = Overrides::default();
+    let scene = scene_of(OSCILLATOR, &ov);
+    let (k, c, sigma) = (4.0, 0.3, 0.01);
+    let mut rng = Normal(0x05ee_df17);
+    let (mut estimates, mut errors) = (vec![], vec![]);
+    for _ in 0..40 {
+        let mut text = String::from("t,x,sigma_x\n");
+        for t in oscillator_times() {
+            text += &format!("{t:?},{:?},{sigma}\n", oscillator(t, 1.0, k, c, 1.0, 0.0) + sigma * rng.next());
+        }
+        let f = run(&scene, &ov, &text, &free(&["k", "c"])).unwrap();
+        assert!(f.report.converged, "{} (constraint violation {:e})", f.report.status, f.report.max_constraint_violation);
+        let p = &f.report.parameters;
+        estimates.push([p["k"].value, p["c"].value]);
+        errors.push([p["k"].std_error.unwrap(), p["c"].std_error.unwrap()]);
+    }
+    for (j, truth) in [k, c].into_iter().enumerate() {
+        let inside = estimates.iter().zip(&errors).filter(|(e, s)| (e[j] - truth).abs() <= 3.0 * s[j]).count();
+        assert!(inside >= 38, "parameter {j}: {inside} of 40 inside three standard errors");
+        let mean = estimates.iter().map(|e| e[j]).sum::<f64>() / 40.0;
+        let spread = (estimates.iter().map(|e| (e[j] - mean).powi(2)).sum::<f64>() / 39.0).sqrt();
+        let se = errors.iter().map(|s| s[j]).sum::<f64>() / 40.0;
+        assert!((se / spread - 1.0).abs() < 0.3, "parameter {j}: standard error {se:e}, Monte-Carlo spread {spread:e}");
+    }
+}

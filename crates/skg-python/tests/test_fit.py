@@ -1,0 +1,74 @@
+"""skg.fit against a closed form, and its data arguments and errors."""
+
+import numpy as np
+import pytest
+
+import skg
+
+OSCILLATOR = """
+[scene]
+name = "damped oscillator"
+lagrangian = "1/2*m*x_dot^2 - 1/2*k*x^2"
+[parameters]
+m = 1
+k = 3.0
+c = 0.2
+x0 = 1
+v0 = 0
+[[coordinates]]
+name = "x"
+initial = "x0"
+velocity = "v0"
+[forces]
+x = "-c*x_dot"
+[time]
+start = 0
+end = 6
+nodes = 512
+[discretization]
+operator = "SBP484"
+"""
+
+
+def oscillator(t, k, c, x0, v0):
+    """m x'' = -k x - c x' with m = 1, underdamped."""
+    g = c / 2
+    wd = np.sqrt(k - g * g)
+    return np.exp(-g * t) * (x0 * np.cos(wd * t) + (v0 + g * x0) / wd * np.sin(wd * t))
+
+
+T = 0.07 + 0.147 * np.arange(40)
+
+
+def test_a_mapping_of_arrays_is_fitted_to_the_closed_form():
+    scene = skg.Scene.from_toml(OSCILLATOR)
+    f = skg.fit(scene, {"t": T, "x": oscillator(T, 4.0, 0.3, 1.2, -0.5)}, ["k", "c", "x0", "v0"])
+    assert f.trusted
+    for name, truth in {"k": 4.0, "c": 0.3, "x0": 1.2, "v0": -0.5}.items():
+        assert f.parameters[name] == pytest.approx(truth, rel=1e-6)
+        assert f.std_errors[name] > 0
+    assert f.covariance.shape == (4, 4)
+    assert f.scene.to_dict()["parameters"]["k"] == f.parameters["k"]
+    np.testing.assert_allclose(f.solution.t[[0, -1]], [0, 6])
+
+
+def test_bounds_a_csv_file_and_files_written(tmp_path):
+    scene = skg.Scene.from_toml(OSCILLATOR)
+    path = tmp_path / "data.csv"
+    x = oscillator(T, 3.0, 0.3, 1.0, 0.0)
+    path.write_text("t,x\n" + "".join(f"{t!r},{v!r}\n" for t, v in zip(T, x)))
+    f = skg.fit(scene, path, "k, c", bounds={"c": (0.5, None)}, set={"c": 0.6}, out=tmp_path / "out")
+    assert f.parameters["c"] == pytest.approx(0.5, abs=1e-6)
+    assert f.report["parameters"]["c"]["at_bound"]
+    for name in ["trajectory.csv", "data.csv", "fitted.toml", "summary.json"]:
+        assert (tmp_path / "out" / name).is_file()
+
+
+def test_bad_data_and_undetermined_parameters_raise():
+    scene = skg.Scene.from_toml(OSCILLATOR)
+    with pytest.raises(skg.InputError, match=r"<python>: row 1: column `t`: t = 0.5 does not come after"):
+        skg.fit(scene, {"t": [1.0, 0.5], "x": [1.0, 2.0]}, ["k"])
+    with pytest.raises(skg.FitError, match=r"`m`, `k`, `c` cannot all be determined"):
+        skg.fit(scene, {"t": T, "x": oscillator(T, 4.0, 0.3, 1.0, 0.0)}, ["m", "k", "c"])
+    with pytest.raises(ValueError, match="bounds: q not among"):
+        skg.fit(scene, {"t": T, "x": T}, ["k"], bounds={"q": (0, 1)})

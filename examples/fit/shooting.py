@@ -1,0 +1,109 @@
+"""The fits of docs/benchmarks.md#fitting side by side with what a user writes today:
+scipy.optimize.least_squares around an integration of the same equations (single
+shooting, finite-difference Jacobian).
+
+    python examples/fit/shooting.py [path/to/skg-solve]
+
+Writes rolling_disk.csv (the closed-form track), runs both on each case and prints one
+table row per method: iterations (Ipopt's) or function evaluations (scipy's), wall time,
+the recovered values. Also times one verified solve of the fitted scene.
+"""
+
+import json
+import math
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import least_squares
+
+HERE = Path(__file__).resolve().parent
+G = 9.8
+
+
+def disk_track(t, alpha, v0):
+    """The rolling disk's closed form (docs/scenes.md): phi = t, u = v0 + k sin t."""
+    k = G * math.sin(alpha) / 1.5
+    return v0 * np.sin(t) + k * np.sin(t) ** 2 / 2, v0 * (1 - np.cos(t)) + k * (t / 2 - np.sin(2 * t) / 4)
+
+
+def disk_shoot(p, t):
+    """Hand-derived equations of the disk: u' = g sin(alpha) cos(phi)/1.5, phi' = 1,
+    x' = u cos(phi), y' = u sin(phi)."""
+    alpha, v0 = p
+
+    def rhs(_, s):
+        x, y, u, phi = s
+        return [u * math.cos(phi), u * math.sin(phi), G * math.sin(alpha) * math.cos(phi) / 1.5, 1.0]
+
+    sol = solve_ivp(rhs, (0, t[-1]), [0, 0, v0, 0], t_eval=t, rtol=1e-10, atol=1e-12, method="DOP853")
+    return np.concatenate([sol.y[0], sol.y[1]])
+
+
+def oscillator_shoot(p, t):
+    k, c, x0, v0 = p
+    sol = solve_ivp(lambda _, s: [s[1], -k * s[0] - c * s[1]], (0, t[-1]), [x0, v0], t_eval=t, rtol=1e-10, atol=1e-12, method="DOP853")
+    return sol.y[0]
+
+
+def scipy_fit(shoot, p0, t, data, sigma=None):
+    evals = [0]
+
+    def residual(p):
+        evals[0] += 1
+        r = shoot(p, t) - data
+        return r if sigma is None else r / sigma
+
+    start = time.perf_counter()
+    res = least_squares(residual, p0, method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    return res.x, evals[0], time.perf_counter() - start, 2 * res.cost
+
+
+def skg_fit(exe, scene, data, free):
+    with tempfile.TemporaryDirectory() as d:
+        start = time.perf_counter()
+        p = subprocess.run([exe, "fit", scene, "--data", data, "--free", free, "-o", d, "-q"], capture_output=True, text=True)
+        wall = time.perf_counter() - start
+        if p.returncode != 0:
+            raise SystemExit(f"skg-solve fit exited {p.returncode}: {p.stderr}")
+        fit = json.loads((Path(d) / "summary.json").read_text())["fit"]
+        start = time.perf_counter()
+        subprocess.run([exe, str(Path(d) / "fitted.toml"), "-o", str(Path(d) / "solve"), "-q"], check=True)
+        solve = time.perf_counter() - start
+    values = [p["value"] for p in fit["parameters"].values()]
+    return values, fit["iterations"], wall, solve, fit["misfit"]["sum_of_squares"]
+
+
+def row(case, method, work, wall, values, misfit):
+    vals = ", ".join(f"{v:.9g}" for v in values)
+    print(f"| {case} | {method} | {work} | {wall:.3f} | {vals} | {misfit:.3g} |")
+
+
+def main():
+    exe = sys.argv[1] if len(sys.argv) > 1 else "skg-solve"
+    t = np.arange(1, 31) * 2 * math.pi / 30
+    x, y = disk_track(t, math.pi / 6, 5.0)
+    (HERE / "rolling_disk.csv").write_text(
+        "# shooting.py: the closed form with alpha = pi/6, v0 = 5\nt,x,y\n" + "".join(f"{float(a)!r},{float(b)!r},{float(c)!r}\n" for a, b, c in zip(t, x, y))
+    )
+    print("| case | method | iterations / evaluations | wall s | values | misfit |")
+    print("|---|---|---:|---:|---|---:|")
+    values, it, wall, solve, misfit = skg_fit(exe, str(HERE / "rolling_disk.toml"), str(HERE / "rolling_disk.csv"), "alpha in [0, 1.5],v0")
+    row("rolling disk", f"skg-solve fit (one verified solve: {solve:.3f} s)", it, wall, values, misfit)
+    p, n, wall, misfit = scipy_fit(disk_shoot, [0.4, 4.0], t, np.concatenate([x, y]))
+    row("rolling disk", "least_squares + solve_ivp", n, wall, p, misfit)
+
+    lines = [l for l in (HERE / "oscillator.csv").read_text().splitlines() if not l.startswith("#")][1:]
+    arr = np.array([[float(v) for v in l.split(",")] for l in lines])
+    values, it, wall, solve, misfit = skg_fit(exe, str(HERE / "oscillator.toml"), str(HERE / "oscillator.csv"), "k>=0,c>=0,x0,v0")
+    row("oscillator", f"skg-solve fit (one verified solve: {solve:.3f} s)", it, wall, values, misfit)
+    p, n, wall, misfit = scipy_fit(oscillator_shoot, [3.0, 0.2, 1.0, 0.0], arr[:, 0], arr[:, 1], arr[:, 2])
+    row("oscillator", "least_squares + solve_ivp", n, wall, p, misfit)
+
+
+if __name__ == "__main__":
+    main()
