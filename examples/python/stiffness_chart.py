@@ -15,7 +15,7 @@ log-log chart (wall time, error), failed or timed-out points marked with an x.
 
     pip install numpy matplotlib
     cargo build --release -p skg-cli
-    python examples/python/stiffness_chart.py            # writes docs/img/stiffness.{csv,svg,png}
+    python examples/python/stiffness_chart.py            # writes docs/img/stiffness.csv, .svg and .png
 
 The binary is $SKG_SOLVE, default target/release/skg-solve. Run from the repository
 root. A method that timed out at one c is not run at larger c (its step count only
@@ -99,15 +99,16 @@ def measure(binary: list, method: str, c: float, tol: float, timeout: float, wor
 
 
 def chart(rows: list, path: str, tol: float) -> None:
-    import matplotlib
-
+    try:
+        import matplotlib
+    except ImportError:
+        sys.exit("matplotlib is needed for the chart: pip install matplotlib")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
     for m, colour in zip(METHODS, ["C0", "C1", "C2"]):
         rs = [r for r in rows if r["method"] == m and r["status"] != "skipped"]
-        ok = [r for r in rs if r["status"] == 0]
         bad = [r for r in rs if r["status"] != 0]
         x = [r["ratio"] for r in rs]
         a1.plot(x, [float(r["wall_s"]) for r in rs], "-o", color=colour, label=LABELS[m], ms=4)
@@ -115,7 +116,6 @@ def chart(rows: list, path: str, tol: float) -> None:
         re = [r for r in rs if r["error"] != ""]
         a2.plot([r["ratio"] for r in re], [max(float(r["error"]), 1e-17) for r in re], "-o", color=colour, label=LABELS[m], ms=4)
         a2.plot([r["ratio"] for r in bad if r["error"] != ""], [float(r["error"]) for r in bad if r["error"] != ""], "x", color="red", ms=10, mew=2)
-        del ok
     a2.axhline(tol, color="grey", ls="--", lw=1, label=f"tolerance {tol:g}")
     for a, yl in [(a1, "wall time [s] (x: failed, timed out)"), (a2, "max |x - x_exact| at the nodes")]:
         a.set_xscale("log")
@@ -150,6 +150,8 @@ def main() -> None:
         chart(rows, args.output, args.tol)
         return
     binary = [os.environ.get("SKG_SOLVE", "target/release/skg-solve")]
+    if not os.access(binary[0], os.X_OK):
+        sys.exit(f"{binary[0]} is not an executable: run `cargo build --release -p skg-cli` from the repository root, or set SKG_SOLVE")
     rows, gave_up = [], set()
     with tempfile.TemporaryDirectory() as work:
         for c in np.logspace(0, 4, args.points):
