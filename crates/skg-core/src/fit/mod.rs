@@ -50,6 +50,7 @@ use std::str::FromStr;
 use std::sync::Arc;
 use std::time::Instant;
 
+use indexmap::IndexMap;
 use nalgebra::DMatrix;
 use serde::Serialize;
 use skg_ipopt as ipopt;
@@ -262,7 +263,8 @@ impl Fit {
 }
 
 /// Fit the free parameters of `scene` (resolved from its file with `overrides`, at the
-/// starting values) to `data` (module documentation).
+/// starting values) to `data` (module documentation): the start, Ipopt's optimization,
+/// the statistics at its solution, and the fitted scene solved and verified.
 pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSettings) -> Result<Fit, FitError> {
     let started = Instant::now();
     let mut warnings = check_settings(scene, overrides, settings)?;
@@ -278,141 +280,229 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
         parameters: action.parameter_plan(),
     };
     let observations = Observations::new(&action, &times, data);
+    let problem = Problem { scene, model: &model, plans: &plans, observations: &observations, names: &names };
 
-    // The start: a solve at the starting values, refused if the data cannot determine
-    // the parameters there; then the data in place of what they observe.
-    let start = start_states(scene, &model, &disc, &times)?;
-    if let Some(z) = &start.solution {
-        let mut ws = model.workspace();
-        if let Some(s) = statistics::sensitivities(&action, &plans, z, &mut ws) {
-            let a = statistics::weighted_sensitivities(&observations, &s);
-            if let Some(message) = undetermined(&(a.transpose() * &a), &names, &initial) {
-                return Err(FitError::NotIdentifiable(format!("{message} (at the starting values)")));
-            }
-        }
-    } else {
-        warnings
-            .push(format!("the solve at the starting values did not converge ({}); the fit starts from time stepping", start.description));
-    }
-    let mut q = start.q.clone();
-    let start_from_data = match settings.start {
-        FitStart::Auto => scene.constraints.is_empty(),
-        FitStart::Data => true,
-        FitStart::Solve => false,
-    };
-    if start_from_data {
-        put_data(&mut q, &times, data);
-    }
-    let mut x0 = point_from_states(&action, &q, &start.lambda)[..action.layout.n_p].to_vec();
-    x0.extend(&initial);
+    let (x0, start) = problem.starting_point(&action, &disc, &times, data, settings, &initial, &mut warnings)?;
     let start_s = started.elapsed().as_secs_f64();
 
-    // The optimization.
     let t_opt = Instant::now();
-    let options = ipopt_options(scene, settings);
     let solution = {
-        let mut problem = FitProblem::new(&mut action, &plans, &observations, &settings.free);
-        ipopt::solve(&mut problem, &x0, &options)?
+        let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free);
+        ipopt::solve(&mut fit_problem, &x0, &ipopt_options(scene, settings))?
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
     let converged = converged(&solution, scene.solver.tol, &mut warnings);
 
-    // The statistics at the solution.
     let t_stat = Instant::now();
-    let n_p = action.layout.n_p;
-    let theta = solution.x[n_p..].to_vec();
-    let mut ws = model.workspace();
-    action.set_parameters(&theta, &mut ws);
-    let mut z = vec![0.0; action.layout.len()];
-    z[..n_p].copy_from_slice(&solution.x[..n_p]);
-    let residuals = observations.residuals(&solution.x);
-    let sens = statistics::sensitivities(&action, &plans, &z, &mut ws);
-    let curvature = sens.as_ref().map(|s| {
-        let a = statistics::weighted_sensitivities(&observations, s);
-        a.transpose() * &a
-    });
-    if converged {
-        if let Some(message) = curvature.as_ref().and_then(|f| undetermined(f, &names, &theta)) {
-            return Err(FitError::NotIdentifiable(message));
-        }
-    }
-    let misfit = report::misfit(&observations, &residuals, names.len(), data.sigma_given);
-    let cov = curvature.as_ref().and_then(|f| if misfit.defines_covariance() { covariance(f, misfit.residual_variance) } else { None });
-    if !misfit.defines_covariance() {
-        warnings.push(format!(
-            "{} values for {} parameters and no standard deviations: the residual variance, and with it the standard errors, is undefined",
-            observations.values.len(),
-            names.len()
-        ));
-    }
+    let at = problem.statistics_at(&mut action, &solution, converged, data, &mut warnings)?;
     let statistics_s = t_stat.elapsed().as_secs_f64();
 
-    // The fitted scene, solved from the fitted trajectory and verified.
     let t_verify = Instant::now();
-    let (fitted, fitted_overrides) = fitted_scene(scene, overrides, &names, &theta)?;
-    let fitted_model = Arc::new(Model::build(&fitted)?);
-    let (fq, flam) = states_of(&action, &z);
-    let guess = Guess::States { q: fq, lambda: flam, description: "the fit's trajectory".into() };
-    let run = solve_global(&fitted, &fitted_model, &disc, &guess)?;
-    let mut outcome = outcome(&fitted, &fitted_model, run);
+    let (fitted, fitted_overrides) = fitted_scene(scene, overrides, &names, &at.theta)?;
+    let mut outcome = solved_from_the_fit(&fitted, &action, &disc, &at.z)?;
     outcome.warnings.extend(warnings.iter().cloned());
     let verification_s = t_verify.elapsed().as_secs_f64();
 
-    let parameters = report::parameters(&settings.free, &theta, &initial, cov.as_ref());
-    for (name, p) in &parameters {
-        if p.at_bound {
-            warnings.push(format!(
-                "`{name}` ended on its bound ({}): its standard error describes the curvature there, not a symmetric interval",
-                p.value
-            ));
-        }
-    }
-    let report = FitReport {
-        converged,
-        status: solution.status.name().to_string(),
-        status_text: solution.status.to_string(),
-        iterations: solution.iterations,
-        hessian: settings.hessian,
-        start: settings.start,
-        start_solve: start.description.clone(),
-        parameters,
-        covariance: cov.map(|c| CovarianceReport::new(&names, &c)),
-        curvature_condition: curvature.as_ref().map(report::scaled_condition),
-        misfit,
-        data: DataReport::new(data, scene),
-        max_constraint_violation: solution.max_constraint_violation,
-        objective: solution.objective,
-        sizes: report::Sizes {
-            variables: n_p + names.len(),
-            constraints: action.layout.n_m,
-            jacobian_nonzeros: plans.jacobian.structure.len() + plans.parameters.jacobian.len(),
-            hessian_nonzeros: plans
-                .hessian
-                .as_ref()
-                .map_or(0, |h| h.structure.len() + observations.hessian.len() + plans.parameters.hessian.len()),
-            observations: observations.values.len(),
-        },
-        work: report::Work {
-            constraint_evaluations: solution.eval.constraints.calls as usize,
-            jacobian_evaluations: solution.eval.jacobian.calls as usize,
-            hessian_evaluations: solution.eval.hessian.calls as usize,
-            objective_evaluations: solution.eval.objective.calls as usize,
-        },
-        timings: report::Timings {
-            start_s,
-            optimization_s,
-            ipopt_internal_s: solution.ipopt_seconds,
-            statistics_s,
-            verification_s,
-            total_s: started.elapsed().as_secs_f64(),
-        },
-        history: solution.history.clone(),
-        warnings,
-        fitted_scene: None,
+    let parameters = report::parameters(&settings.free, &at.theta, &initial, at.covariance.as_ref());
+    warnings.extend(bound_warnings(&parameters));
+    let timings = report::Timings {
+        start_s,
+        optimization_s,
+        ipopt_internal_s: solution.ipopt_seconds,
+        statistics_s,
+        verification_s,
+        total_s: started.elapsed().as_secs_f64(),
     };
+    let report = problem.report(&action, &solution, converged, settings, start, parameters, at, data, timings, warnings);
     let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
     let data_table = report::data_table(scene, data, &outcome.trajectory);
     Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
+}
+
+/// What the steps of a fit share: the scene at the starting values, its model with the
+/// free parameters symbolic, the derivative plans, the observations and the free
+/// parameters' names.
+struct Problem<'a> {
+    scene: &'a Scene,
+    model: &'a Arc<Model>,
+    plans: &'a Plans,
+    observations: &'a Observations,
+    names: &'a [String],
+}
+
+/// The statistics at the fit's solution.
+struct AtSolution {
+    /// The fitted parameters.
+    theta: Vec<f64>,
+    /// The whole unknown vector of the action (the minus block zero).
+    z: Vec<f64>,
+    /// The curvature `AᵀA` of the misfit (Gauss–Newton), if the sensitivities exist.
+    curvature: Option<DMatrix<f64>>,
+    /// The parameters' covariance, where the misfit defines it.
+    covariance: Option<DMatrix<f64>>,
+    misfit: MisfitReport,
+}
+
+impl Problem<'_> {
+    /// The starting point of the optimization, the trajectory's unknowns and then the
+    /// parameters: a solve at the starting values (refused if the data cannot determine
+    /// the parameters there), with the data in place of what they observe where the
+    /// scene's start says so.
+    #[allow(clippy::too_many_arguments)]
+    fn starting_point(
+        &self,
+        action: &Action,
+        disc: &Discretization,
+        times: &[f64],
+        data: &Data,
+        settings: &FitSettings,
+        initial: &[f64],
+        warnings: &mut Vec<String>,
+    ) -> Result<(Vec<f64>, Start), FitError> {
+        let start = start_states(self.scene, self.model, disc, times)?;
+        match &start.solution {
+            Some(z) => {
+                let mut ws = self.model.workspace();
+                if let Some(s) = statistics::sensitivities(action, self.plans, z, &mut ws) {
+                    let a = statistics::weighted_sensitivities(self.observations, &s);
+                    if let Some(message) = undetermined(&(a.transpose() * &a), self.names, initial) {
+                        return Err(FitError::NotIdentifiable(format!("{message} (at the starting values)")));
+                    }
+                }
+            }
+            None => warnings.push(format!(
+                "the solve at the starting values did not converge ({}); the fit starts from time stepping",
+                start.description
+            )),
+        }
+        let mut q = start.q.clone();
+        let start_from_data = match settings.start {
+            FitStart::Auto => self.scene.constraints.is_empty(),
+            FitStart::Data => true,
+            FitStart::Solve => false,
+        };
+        if start_from_data {
+            put_data(&mut q, times, data);
+        }
+        let mut x0 = point_from_states(action, &q, &start.lambda)[..action.layout.n_p].to_vec();
+        x0.extend(initial);
+        Ok((x0, start))
+    }
+
+    /// The fitted parameters, the misfit, its curvature and the covariance at Ipopt's
+    /// `solution`; a converged fit whose curvature leaves a combination of parameters
+    /// undetermined is refused naming it.
+    fn statistics_at(
+        &self,
+        action: &mut Action,
+        solution: &ipopt::Solution,
+        converged: bool,
+        data: &Data,
+        warnings: &mut Vec<String>,
+    ) -> Result<AtSolution, FitError> {
+        let n_p = action.layout.n_p;
+        let theta = solution.x[n_p..].to_vec();
+        let mut ws = self.model.workspace();
+        action.set_parameters(&theta, &mut ws);
+        let mut z = vec![0.0; action.layout.len()];
+        z[..n_p].copy_from_slice(&solution.x[..n_p]);
+        let residuals = self.observations.residuals(&solution.x);
+        let curvature = statistics::sensitivities(action, self.plans, &z, &mut ws).map(|s| {
+            let a = statistics::weighted_sensitivities(self.observations, &s);
+            a.transpose() * &a
+        });
+        if converged {
+            if let Some(message) = curvature.as_ref().and_then(|f| undetermined(f, self.names, &theta)) {
+                return Err(FitError::NotIdentifiable(message));
+            }
+        }
+        let misfit = report::misfit(self.observations, &residuals, self.names.len(), data.sigma_given);
+        let covariance =
+            curvature.as_ref().and_then(|f| if misfit.defines_covariance() { covariance(f, misfit.residual_variance) } else { None });
+        if !misfit.defines_covariance() {
+            warnings.push(format!(
+                "{} values for {} parameters and no standard deviations: the residual variance, and with it the standard errors, is undefined",
+                self.observations.values.len(),
+                self.names.len()
+            ));
+        }
+        Ok(AtSolution { theta, z, curvature, covariance, misfit })
+    }
+
+    /// The fit's report.
+    #[allow(clippy::too_many_arguments)]
+    fn report(
+        &self,
+        action: &Action,
+        solution: &ipopt::Solution,
+        converged: bool,
+        settings: &FitSettings,
+        start: Start,
+        parameters: IndexMap<String, report::ParameterReport>,
+        at: AtSolution,
+        data: &Data,
+        timings: report::Timings,
+        warnings: Vec<String>,
+    ) -> FitReport {
+        let plans = self.plans;
+        FitReport {
+            converged,
+            status: solution.status.name().to_string(),
+            status_text: solution.status.to_string(),
+            iterations: solution.iterations,
+            hessian: settings.hessian,
+            start: settings.start,
+            start_solve: start.description,
+            parameters,
+            covariance: at.covariance.map(|c| CovarianceReport::new(self.names, &c)),
+            curvature_condition: at.curvature.as_ref().map(report::scaled_condition),
+            misfit: at.misfit,
+            data: DataReport::new(data, self.scene),
+            max_constraint_violation: solution.max_constraint_violation,
+            objective: solution.objective,
+            sizes: report::Sizes {
+                variables: action.layout.n_p + self.names.len(),
+                constraints: action.layout.n_m,
+                jacobian_nonzeros: plans.jacobian.structure.len() + plans.parameters.jacobian.len(),
+                hessian_nonzeros: plans
+                    .hessian
+                    .as_ref()
+                    .map_or(0, |h| h.structure.len() + self.observations.hessian.len() + plans.parameters.hessian.len()),
+                observations: self.observations.values.len(),
+            },
+            work: report::Work {
+                constraint_evaluations: solution.eval.constraints.calls as usize,
+                jacobian_evaluations: solution.eval.jacobian.calls as usize,
+                hessian_evaluations: solution.eval.hessian.calls as usize,
+                objective_evaluations: solution.eval.objective.calls as usize,
+            },
+            timings,
+            history: solution.history.clone(),
+            warnings,
+            fitted_scene: None,
+        }
+    }
+}
+
+/// The fitted scene solved from the fit's trajectory (`z`, on `action`'s grid) and
+/// verified like any solve.
+fn solved_from_the_fit(fitted: &Scene, action: &Action, disc: &Discretization, z: &[f64]) -> Result<Outcome, FitError> {
+    let fitted_model = Arc::new(Model::build(fitted)?);
+    let (q, lambda) = states_of(action, z);
+    let guess = Guess::States { q, lambda, description: "the fit's trajectory".into() };
+    let run = solve_global(fitted, &fitted_model, disc, &guess)?;
+    Ok(outcome(fitted, &fitted_model, run))
+}
+
+/// A warning for each parameter that ended on its bound.
+fn bound_warnings(parameters: &IndexMap<String, report::ParameterReport>) -> Vec<String> {
+    parameters
+        .iter()
+        .filter(|(_, p)| p.at_bound)
+        .map(|(name, p)| {
+            format!("`{name}` ended on its bound ({}): its standard error describes the curvature there, not a symmetric interval", p.value)
+        })
+        .collect()
 }
 
 /// Whether Ipopt's fit converged: `Solve_Succeeded`; or, with a warning, its acceptable

@@ -1,6 +1,5 @@
 //! The integration of `y' = f(t, y)` by the stepper the options name
-//! ([`Stepper`](super::ode::Stepper)): DOP853 ([`ode`](super::ode)), Radau IIA
-//! ([`radau`](super::radau)), or automatically — DOP853 until it finds the equation
+//! ([`Stepper`]): DOP853 ([`ode`]), Radau IIA ([`radau`]), or automatically — DOP853 until it finds the equation
 //! stiff (or its steps run out or underflow), then Radau IIA from where it stopped, for
 //! the rest of the requested times. Explicit stepping is far cheaper per step, and on
 //! smooth motion needs few steps; where the explicit step is limited by stability

@@ -10,7 +10,7 @@
 //! Sec. IV.8 (their code RADAU5): the stage equations `Z = h (A ⊗ I) F(y₀ + Z)` are
 //! solved by a simplified Newton iteration with one Jacobian `J = ∂f/∂y` per step (or
 //! fewer: it is kept while the iteration converges fast), transformed by the
-//! eigen-decomposition of `A⁻¹` ([`coefficients`]) into one real system with
+//! eigen-decomposition of `A⁻¹` (`coefficients.rs`) into one real system with
 //! `γ/h − J` and one complex system with `(α − iβ)/h − J`; the error is estimated by the
 //! embedded formula of order 3, filtered by `(γ/h − J)⁻¹` so that it stays bounded for
 //! stiff components; the step size follows the estimate with Gustafsson's predictive
