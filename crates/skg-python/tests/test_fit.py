@@ -56,7 +56,7 @@ def test_bounds_a_csv_file_and_files_written(tmp_path):
     scene = skg.Scene.from_toml(OSCILLATOR)
     path = tmp_path / "data.csv"
     x = oscillator(T, 3.0, 0.3, 1.0, 0.0)
-    path.write_text("t,x\n" + "".join(f"{t!r},{v!r}\n" for t, v in zip(T, x)))
+    path.write_text("t,x\n" + "".join(f"{float(t)!r},{float(v)!r}\n" for t, v in zip(T, x)))
     f = skg.fit(scene, path, "k, c", bounds={"c": (0.5, None)}, set={"c": 0.6}, out=tmp_path / "out")
     assert f.parameters["c"] == pytest.approx(0.5, abs=1e-6)
     assert f.report["parameters"]["c"]["at_bound"]

@@ -524,10 +524,13 @@ pub fn submit(file: &SweepFile, expanded: &Expanded, dir: &Path, opts: &SubmitOp
         match sbatch_job_id(args, &sbatch.job_name) {
             Ok(id) => submission.array_job = Some(id),
             Err(e) => {
-                // The array may exist without its id: recorded, and the error says how to find it.
+                // The array may exist without its id: recorded, and the error says how to
+                // find it. An sbatch that refused the job submitted nothing: nothing recorded.
                 submission.unconfirmed = unconfirmed(&e);
-                jobs.submissions.push(submission);
-                output::write_json(&JobsFile::path(&dir), &jobs)?;
+                if submission.unconfirmed.is_some() {
+                    jobs.submissions.push(submission);
+                    output::write_json(&JobsFile::path(&dir), &jobs)?;
+                }
                 return Err(e);
             }
         }
