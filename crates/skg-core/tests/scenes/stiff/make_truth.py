@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Independent truth for the stiff test scenes of this folder.
+"""Independent truth for the stiff test scenes of this folder (Python 3 with numpy and scipy).
 
-    /work/scratch/venv/bin/python make_truth.py              # every scene: writes <scene>.truth.csv, prints the cross-checks
-    /work/scratch/venv/bin/python make_truth.py van_der_pol  # one scene
-    /work/scratch/venv/bin/python make_truth.py --info       # rates, periods and other numbers quoted in the scenes' headers
+    python3 make_truth.py              # every scene: writes <scene>.truth.csv, prints the cross-checks
+    python3 make_truth.py van_der_pol  # one scene
+    python3 make_truth.py --info       # rates, periods and other numbers quoted in the scenes' headers
 
 Nothing here reads the scene files. The equations of motion are derived by hand from each
 scene's Lagrangian and forces (the derivation is in the comment above each right-hand
@@ -45,7 +45,7 @@ import scipy
 from scipy.integrate import quad, solve_ivp
 
 HERE = Path(__file__).resolve().parent
-GENERATED_BY = "/work/scratch/venv/bin/python make_truth.py"
+GENERATED_BY = "python3 make_truth.py"
 RTOL = ATOL = 1e-12
 UNIFORM = 1001
 
