@@ -9,30 +9,6 @@ use skg_core::discrete::action::{Action, Block};
 use skg_core::scene::{InitialVelocity, Overrides};
 use skg_core::solve::build_action;
 
-/// Deterministic pseudo-random numbers in [-1, 1) (xorshift), so failures reproduce.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
-
-/// A random point near the initial state: plus coordinates perturbed around the
-/// initial values, every other unknown random of order one.
-fn random_point(action: &Action, rng: &mut Rng) -> Vec<f64> {
-    let lay = &action.layout;
-    let mut z: Vec<f64> = (0..lay.len()).map(|_| rng.next()).collect();
-    for k in 0..lay.nodes {
-        for i in 0..lay.d {
-            z[lay.qp[k * lay.d + i] as usize] = action.q0()[i] + 0.05 * rng.next();
-        }
-    }
-    z
-}
-
 /// Dense matrix from a planned block.
 fn dense(action: &Action, block: Block, z: &[f64], rows: usize, cols: usize) -> DMatrix<f64> {
     let plan = action.plan(block);
@@ -85,9 +61,9 @@ fn gradient_matches_finite_differences_of_the_action() {
     for (name, iv) in common::SHIPPED.iter().flat_map(|n| INITIAL_VELOCITIES.map(|iv| (n, iv))) {
         let action = small_action(name, iv);
         let name = format!("{name} ({iv})");
-        let mut rng = Rng(0x9e3779b97f4a7c15);
+        let mut rng = common::Rng(0x9e3779b97f4a7c15);
         let mut ws = action.model.workspace();
-        let z = random_point(&action, &mut rng);
+        let z = common::random_point(&action, &mut rng);
         let mut grad = vec![0.0; z.len()];
         action.gradient(&z, false, &mut grad, &mut ws);
         let scale = grad.iter().fold(0.0_f64, |m, g| m.max(g.abs()));
@@ -114,9 +90,9 @@ fn jacobians_and_hessian_match_finite_differences_of_the_gradient() {
         let name = format!("{name} ({iv})");
         let lay = &action.layout;
         let (n_p, len) = (lay.n_p, lay.len());
-        let mut rng = Rng(0x2545f4914f6cdd1d);
+        let mut rng = common::Rng(0x2545f4914f6cdd1d);
         let mut ws = action.model.workspace();
-        let z = random_point(&action, &mut rng);
+        let z = common::random_point(&action, &mut rng);
         let full = dense(&action, Block::FullJacobian, &z, len, len);
         let mut fd = DMatrix::zeros(len, len);
         for j in 0..len {

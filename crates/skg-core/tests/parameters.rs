@@ -52,17 +52,6 @@ fn incline() -> (&'static str, Vec<&'static str>) {
     ("incline_friction", vec!["mu", "alpha", "sigma", "V0"])
 }
 
-/// Deterministic pseudo-random numbers in [-1, 1) (xorshift).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
-
 /// The scenes of the test: a scene (file or text), its free parameters.
 fn cases() -> Vec<(String, Vec<String>)> {
     let (incline, free) = incline();
@@ -96,18 +85,6 @@ fn fit_action(scene: &Scene, free: &[String]) -> Action {
     action_on(&model, scene, &disc, disc.nodes, disc.spacing(scene)).unwrap()
 }
 
-/// A point near the initial state (plus coordinates), every other unknown of order one.
-fn random_point(action: &Action, rng: &mut Rng) -> Vec<f64> {
-    let lay = &action.layout;
-    let mut z: Vec<f64> = (0..lay.len()).map(|_| rng.next()).collect();
-    for k in 0..lay.nodes {
-        for i in 0..lay.d {
-            z[lay.qp[k * lay.d + i] as usize] = action.q0()[i] + 0.05 * rng.next();
-        }
-    }
-    z
-}
-
 fn residual(action: &Action, z: &[f64], ws: &mut skg_core::model::Workspace) -> Vec<f64> {
     let mut r = vec![0.0; action.layout.n_m];
     action.gradient(z, true, &mut r, ws);
@@ -125,7 +102,7 @@ fn the_symbolic_model_at_other_values_is_the_scene_resolved_with_them() {
             let scene = load(&scene_text, &overrides(iv, vec![]));
             let mut action = fit_action(&scene, &free);
             let mut ws = action.model.workspace();
-            let z = random_point(&action, &mut Rng(0x9e3779b97f4a7c15));
+            let z = common::random_point(&action, &mut common::Rng(0x9e3779b97f4a7c15));
             // At the scene's own values the two models agree; so they do at other values.
             for scale in [1.0, 1.1, 0.93] {
                 let theta: Vec<f64> = free.iter().map(|n| scene.parameters[n] * scale).collect();
@@ -174,7 +151,7 @@ fn parameter_derivatives_match_finite_differences() {
             let mut ws = action.model.workspace();
             let lay = action.layout.clone();
             let (n_p, n_m, nt) = (lay.n_p, lay.n_m, free.len());
-            let z = random_point(&action, &mut Rng(0x2545f4914f6cdd1d));
+            let z = common::random_point(&action, &mut common::Rng(0x2545f4914f6cdd1d));
             let theta0: Vec<f64> = free.iter().map(|n| scene.parameters[n] * 1.05).collect();
             let plan = action.parameter_plan();
             let jac_plan = action.plan(Block::ReducedJacobian);

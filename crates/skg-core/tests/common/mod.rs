@@ -9,6 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
+use skg_core::discrete::action::Action;
 use skg_core::scene::{Overrides, Scene, SceneFile};
 use skg_core::solve::{self, Outcome};
 
@@ -140,4 +141,22 @@ impl Rng {
     pub fn uniform(&mut self) -> f64 {
         (self.next() >> 11) as f64 / (1u64 << 53) as f64
     }
+
+    /// Uniform in [-1, 1).
+    pub fn signed(&mut self) -> f64 {
+        2.0 * self.uniform() - 1.0
+    }
+}
+
+/// A random point near the initial state: plus coordinates perturbed around the
+/// initial values, every other unknown random of order one.
+pub fn random_point(action: &Action, rng: &mut Rng) -> Vec<f64> {
+    let lay = &action.layout;
+    let mut z: Vec<f64> = (0..lay.len()).map(|_| rng.signed()).collect();
+    for k in 0..lay.nodes {
+        for i in 0..lay.d {
+            z[lay.qp[k * lay.d + i] as usize] = action.q0()[i] + 0.05 * rng.signed();
+        }
+    }
+    z
 }
