@@ -20,7 +20,8 @@
 //!    consistently with the operator (`observe.rs`);
 //! 3. the scene's model with the free parameters symbolic
 //!    ([`Model::with_free_parameters`]) is solved at the starting values, and the start
-//!    is that solve with the data in place of the coordinates they observe ([`FitStart`]);
+//!    is that solve with the data in place of the coordinates they observe ([`FitStart`],
+//!    `start.rs`);
 //! 4. Ipopt minimizes the misfit under the constraints (`problem.rs`);
 //! 5. at the solution the trajectory's sensitivities give the Gauss–Newton curvature,
 //!    the covariance and the standard errors, and tell whether the data determine the
@@ -43,6 +44,7 @@ mod free;
 mod observe;
 mod problem;
 mod report;
+mod start;
 mod statistics;
 
 use std::fmt;
@@ -56,17 +58,15 @@ use serde::Serialize;
 use skg_ipopt as ipopt;
 
 use crate::discrete::action::Block;
-use crate::discrete::interpolate::{segment, Hermite};
 use crate::discrete::trajectory::NodeSeries;
 use crate::discrete::{Action, Discretization};
 use crate::model::Model;
 use crate::scene::{Overrides, Scene, SceneError};
 use crate::solve::backend::mumps_options;
 use crate::solve::{action_on, outcome, point_from_states, solve_global, Guess, Outcome, SolveError};
-use crate::stepping::equations::{integrate_model, Stepped};
-use crate::stepping::ode::OdeOptions;
 use observe::Observations;
 use problem::{FitProblem, Plans};
+use start::{put_data, start_states, Start};
 
 pub use data::{Data, DataError, DataPlace, Observation, SIGMA_PREFIX};
 pub use files::{fit_into, write_fit, FitIntoError, FitWritten, DATA_FILE, FITTED_SCENE_FILE};
@@ -589,70 +589,6 @@ fn moves_the_grid(scene: &Scene, overrides: &Overrides, name: &str, value: f64) 
     match scene.file.clone().resolve(&ov) {
         Ok(s) => (s.t_start, s.t_end, s.nodes) != (scene.t_start, scene.t_end, scene.nodes),
         Err(_) => false,
-    }
-}
-
-/// The start of a fit: coordinates and multipliers at the nodes, how they were made,
-/// and the unknown vector of the discrete solution when the solve converged.
-struct Start {
-    q: NodeSeries,
-    lambda: NodeSeries,
-    description: String,
-    solution: Option<Vec<f64>>,
-}
-
-/// Solve the scene at its starting values (one global solve from time stepping); when
-/// that does not converge, the time stepping itself.
-fn start_states(scene: &Scene, model: &Arc<Model>, disc: &Discretization, times: &[f64]) -> Result<Start, FitError> {
-    let run = solve_global(scene, model, disc, &Guess::TimeStepping)?;
-    if run.solution.status.is_converged() {
-        let tr = &run.solution.trajectory;
-        let action = action_on(model, scene, disc, disc.nodes, disc.spacing(scene))?;
-        let z = point_from_states(&action, &tr.q, &tr.lambda);
-        let description = format!("the solve at the starting values ({} iterations)", run.solution.iterations);
-        return Ok(Start { q: tr.q.clone(), lambda: tr.lambda.clone(), description, solution: Some(z) });
-    }
-    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, stepper: scene.verify.stepper, ..OdeOptions::default() };
-    let Stepped { states, .. } = integrate_model(model, &scene.initial_q, &scene.initial_v, times, &opts).map_err(|e| {
-        FitError::Settings(format!(
-            "neither the solve nor time stepping at the starting values succeeded ({e}): choose other starting values"
-        ))
-    })?;
-    Ok(Start { q: states.q, lambda: states.lambda, description: run.solution.status.to_string(), solution: None })
-}
-
-/// Put the data in place of the coordinates they observe: at each node between a
-/// coordinate's first and last observation, the cubic Hermite polynomial through the
-/// neighbouring observations with finite-difference slopes (linear between two).
-fn put_data(q: &mut NodeSeries, times: &[f64], data: &Data) {
-    for &i in &data.coordinates {
-        let (ts, ys): (Vec<f64>, Vec<f64>) = data.observations.iter().filter(|o| o.coordinate == i).map(|o| (o.t, o.value)).unzip();
-        if ts.len() < 2 {
-            continue;
-        }
-        let slope = |k: usize| -> f64 {
-            if k == 0 {
-                (ys[1] - ys[0]) / (ts[1] - ts[0])
-            } else if k + 1 == ts.len() {
-                (ys[k] - ys[k - 1]) / (ts[k] - ts[k - 1])
-            } else {
-                // The derivative of the parabola through three neighbours.
-                let (h0, h1) = (ts[k] - ts[k - 1], ts[k + 1] - ts[k]);
-                let (d0, d1) = ((ys[k] - ys[k - 1]) / h0, (ys[k + 1] - ys[k]) / h1);
-                (h1 * d0 + h0 * d1) / (h0 + h1)
-            }
-        };
-        for (k, &t) in times.iter().enumerate() {
-            if t < ts[0] || t > ts[ts.len() - 1] {
-                continue;
-            }
-            let s = segment(&ts, t);
-            q[k][i] = if ts.len() == 2 {
-                ys[0] + (t - ts[0]) / (ts[1] - ts[0]) * (ys[1] - ys[0])
-            } else {
-                Hermite::new(ts[s], ts[s + 1], t).eval(ys[s], slope(s), ys[s + 1], slope(s + 1))
-            };
-        }
     }
 }
 
