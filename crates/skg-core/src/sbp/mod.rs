@@ -1,4 +1,4 @@
-//! Summation-by-parts (SBP) first-derivative operators on a uniform time grid.
+//! Summation-by-parts (SBP) first-derivative operators on uniform and mapped time grids.
 //!
 //! The grid is `t_k = t_i + k·Δt`, `k = 0, …, N−1` (the paper counts from 1). An SBP
 //! operator is a pair of a diagonal norm `H` (quadrature weights, `∫ f g dt ≈ fᵀ H g`,
@@ -59,6 +59,14 @@
 //!
 //! [`OperatorKind::ALL`] lists all eight kinds (parsing, listings);
 //! [`OperatorKind::CENTRED`] the centred family, an order ladder from SBP121 to SBP484.
+//!
+//! # Mapped grids
+//!
+//! [`SbpOperator::on_times`] builds any kind on nodes `t_k = t(ξ_k)` of a smooth
+//! increasing map of a uniform grid in `ξ`: `D_t = J⁻¹ D_ξ` and `H_t = H_ξ J` with the
+//! stretch `J = diag(D_ξ t)`. `H_t D_t = H_ξ D_ξ`, so every identity above holds as on the
+//! uniform grid (Svärd & Nordström's coordinate transforms; SummationByPartsOperators.jl
+//! treats them the same way); the derivation is in docs/mathematics.md#mapped-time-grids.
 //!
 //! **Place in the flow.** The first stage: the operators are numbers on a grid and use
 //! nothing else of this crate (their tests fit observed orders with
@@ -349,6 +357,27 @@ pub enum SbpError {
     /// The time step is not finite and positive.
     #[error("the time step must be finite and positive, got {0}")]
     BadStep(f64),
+    /// A mapped grid's nodes are not finite and strictly increasing.
+    #[error("the grid's nodes must increase: node {node} is at t = {time}, after t = {previous}")]
+    NotIncreasing {
+        /// The node (from 0).
+        node: usize,
+        /// Its time.
+        time: f64,
+        /// The time of the node before it.
+        previous: f64,
+    },
+    /// A mapped grid's nodes are not increasing smoothly enough: the stretch `D_ξ t` is
+    /// not positive at a node.
+    #[error("the grid's nodes do not follow a smooth increasing map: at node {node} (t = {time}) the stretch D t is {stretch}")]
+    BadStretch {
+        /// The node (from 0).
+        node: usize,
+        /// Its time.
+        time: f64,
+        /// Its stretch.
+        stretch: f64,
+    },
 }
 
 /// An SBP first-derivative operator on a uniform grid of `n` nodes with step `dt`,
@@ -375,6 +404,10 @@ pub struct SbpOperator {
     /// Whether this is the partner `D−` of the kind's operator `D+` (for a centred kind
     /// the two are equal).
     minus: bool,
+    /// On a mapped grid ([`SbpOperator::on_times`]), the stretch `J_k = (D_ξ t)_k` of each
+    /// node: the rows above are those of the uniform grid in `ξ`, and row `k` of the
+    /// operator is theirs divided by `J_k` (the norm, above, already includes it).
+    stretch: Option<Vec<f64>>,
 }
 
 /// Which part of the operator row `i` belongs to.
@@ -410,7 +443,53 @@ impl SbpOperator {
         let left = c.left.iter().map(|row| nonzero(row)).collect();
         let right = c.right.iter().map(|row| nonzero(row)).collect();
         let interior = nonzero(&c.interior);
-        Ok(SbpOperator { kind, n, dt, h, left, right, interior, radius: c.interior.len() / 2, minus: false })
+        Ok(SbpOperator { kind, n, dt, h, left, right, interior, radius: c.interior.len() / 2, minus: false, stretch: None })
+    }
+
+    /// Build the operator of `kind` on the nodes `times` (strictly increasing), a smooth
+    /// map `t(ξ)` of a uniform grid in `ξ` whose step is their mean spacing: with `D_ξ`,
+    /// `H_ξ` the operator on that uniform grid and the stretch `J = diag(D_ξ t)` (the
+    /// centred operator's, for both members of a dissipative pair),
+    ///
+    /// ```text
+    /// D_t = J⁻¹ D_ξ,   H_t = H_ξ J,   so   H_t D_t = H_ξ D_ξ = Q_ξ:
+    /// ```
+    ///
+    /// the summation-by-parts identity, the boundary matrix `B` and the partner relation
+    /// are the uniform grid's, and the orders of accuracy are too on a smooth map
+    /// (docs/mathematics.md#mapped-time-grids). `D_t` differentiates linear functions of
+    /// `t` exactly, as on a uniform grid (a dissipative `D±_t` to its order: its
+    /// dissipation does not vanish on the map). Fails where the nodes are too few, not
+    /// finite and increasing, or so unevenly spread that some `J_k` is not positive.
+    pub fn on_times(kind: OperatorKind, times: &[f64]) -> Result<Self, SbpError> {
+        let n = times.len();
+        let min = kind.min_nodes();
+        if n < min {
+            return Err(SbpError::TooFewNodes { kind, nodes: n, min });
+        }
+        if let Some(k) = (1..n).find(|&k| !(times[k].is_finite() && times[k] > times[k - 1])) {
+            return Err(SbpError::NotIncreasing { node: k, time: times[k], previous: times[k - 1] });
+        }
+        let dt = (times[n - 1] - times[0]) / (n - 1) as f64;
+        let mut op = SbpOperator::new(kind, n, dt)?;
+        // Relative to the first node, so that the stretch does not carry the rounding of
+        // a large start time.
+        let relative: Vec<f64> = times.iter().map(|t| t - times[0]).collect();
+        let mut stretch = vec![0.0; n];
+        SbpOperator::new(kind.centred(), n, dt)?.apply(&relative, &mut stretch);
+        if let Some(k) = stretch.iter().position(|j| !(j.is_finite() && *j > 0.0)) {
+            return Err(SbpError::BadStretch { node: k, time: times[k], stretch: stretch[k] });
+        }
+        for (h, j) in op.h.iter_mut().zip(&stretch) {
+            *h *= j;
+        }
+        op.stretch = Some(stretch);
+        Ok(op)
+    }
+
+    /// The stretch `J_k = dt/dξ` of each node on a mapped grid, `None` on a uniform one.
+    pub fn stretch(&self) -> Option<&[f64]> {
+        self.stretch.as_deref()
     }
 
     /// The SBP partner `D− = −J D J` (`J` the flip of the grid): `H D + (H D−)ᵀ = B`.
@@ -451,7 +530,8 @@ impl SbpOperator {
         self.n == 0
     }
 
-    /// The time step Δt.
+    /// The time step Δt of the uniform grid (on a mapped grid, of the uniform grid in ξ:
+    /// the mean spacing).
     pub fn dt(&self) -> f64 {
         self.dt
     }
@@ -478,11 +558,15 @@ impl SbpOperator {
     /// If `i >= self.len()`.
     pub fn row(&self, i: usize) -> Vec<(usize, f64)> {
         assert!(i < self.n, "SbpOperator::row: row {i} of an operator on {} nodes", self.n);
-        match self.part(i) {
+        let mut row: Vec<(usize, f64)> = match self.part(i) {
             Part::Left(m) => self.left[m].clone(),
             Part::Interior => self.interior.iter().map(|&(k, c)| (i + k - self.radius, c)).collect(),
             Part::Right(m) => self.right[m].iter().rev().map(|&(j, c)| (self.n - 1 - j, c)).collect(),
+        };
+        if let Some(stretch) = &self.stretch {
+            row.iter_mut().for_each(|(_, c)| *c /= stretch[i]);
         }
+        row
     }
 
     /// `out = D u` without allocating.
@@ -512,6 +596,9 @@ impl SbpOperator {
                 Part::Interior => self.interior.iter().fold(0.0, |acc, &(k, c)| acc + c * at(i + k - self.radius)),
                 Part::Right(m) => self.right[m].iter().rev().fold(0.0, |acc, &(j, c)| acc + c * at(self.n - 1 - j)),
             };
+        }
+        if let Some(stretch) = &self.stretch {
+            out.iter_mut().zip(stretch).for_each(|(o, j)| *o /= j);
         }
     }
 }

@@ -419,3 +419,88 @@ fn dissipative_coefficients_match_an_independent_table() {
         assert_eq!(b.interior.len(), 2 * kind.dissipation_order().unwrap() + 1, "{kind}");
     }
 }
+
+/// A smooth increasing map of `[0, 1]` onto `[t0, t1]` whose spacing varies by a factor
+/// of 3 (t'(ξ) = 1 + 0.5 cos(πξ) before scaling).
+fn mapped_times(n: usize, t0: f64, t1: f64) -> Vec<f64> {
+    let map = |x: f64| x + 0.5 * (std::f64::consts::PI * x).sin() / std::f64::consts::PI;
+    (0..n).map(|k| t0 + (t1 - t0) * map(k as f64 / (n - 1) as f64)).collect()
+}
+
+/// On a mapped grid every kind keeps the SBP identity with its partner and a positive
+/// norm that integrates constants to the span; the centred kinds differentiate linear
+/// functions exactly (a dissipative one's dissipation does not vanish on the map).
+#[test]
+fn mapped_grids_keep_the_sbp_properties() {
+    for kind in OperatorKind::ALL {
+        for n in [kind.min_nodes() + 3, 50] {
+            let t = mapped_times(n, 0.4, 2.9);
+            let op = SbpOperator::on_times(kind, &t).unwrap();
+            let ctx = format!("{kind} mapped n={n}");
+            check_sbp_identity(&ctx, &op, &op.partner());
+            check_rows_and_apply(&ctx, &op);
+            assert!(op.norm().iter().all(|&w| w > 0.0), "{ctx}");
+            let total: f64 = op.norm().iter().sum();
+            assert!((total - 2.5).abs() < 1e-13, "{ctx}: ∑H = {total}");
+            let line: Vec<f64> = t.iter().map(|x| 3.0 * x - 1.0).collect();
+            let mut d = vec![0.0; n];
+            op.apply(&line, &mut d);
+            let exact = !kind.is_dissipative();
+            assert!(!exact || d.iter().all(|v| (v - 3.0).abs() < 1e-11), "{ctx}: D(3t − 1) = {d:?}");
+        }
+    }
+}
+
+/// The observed orders of `D` sin(t) and of the quadrature of cos(t) on the smooth map
+/// of [`mapped_times`] equal the uniform grid's (independent truth: the closed forms).
+#[test]
+fn mapped_grids_keep_the_orders_of_accuracy() {
+    for kind in OperatorKind::ALL {
+        let (t0, t1, ladder) = match kind.centred() {
+            OperatorKind::Sbp484 => (0.3, 8.3, [81usize, 121, 161, 241]),
+            _ => (0.3, 2.3, [21usize, 41, 81, 161]),
+        };
+        let b = kind.boundary_rows();
+        let (mut hs, mut e_all, mut e_int, mut e_quad) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for n in ladder {
+            let t = mapped_times(n, t0, t1);
+            let op = SbpOperator::on_times(kind, &t).unwrap();
+            let u: Vec<f64> = t.iter().map(|x| x.sin()).collect();
+            let mut du = vec![0.0; n];
+            op.apply(&u, &mut du);
+            let err: Vec<f64> = t.iter().zip(&du).map(|(x, d)| (d - x.cos()).abs()).collect();
+            hs.push((t1 - t0) / (n - 1) as f64);
+            e_all.push(err.iter().cloned().fold(0.0, f64::max));
+            e_int.push(err[b..n - b].iter().cloned().fold(0.0, f64::max));
+            let integral: f64 = op.norm().iter().zip(&t).map(|(w, x)| w * x.cos()).sum();
+            e_quad.push((integral - (t1.sin() - t0.sin())).abs());
+        }
+        let all = fit_order(&hs, &e_all, 1e-12).unwrap().order;
+        let int = fit_order(&hs, &e_int, 1e-12).unwrap().order;
+        let quad = fit_order(&hs, &e_quad, 1e-14).unwrap().order;
+        let (pb, pi) = (kind.boundary_order() as f64, kind.interior_order() as f64);
+        let slack = if kind.is_dissipative() { 1.0 } else { 0.3 };
+        assert!(all > pb - 0.3, "{kind}: max-norm order {all} vs {pb}");
+        assert!(int > pi - 0.5 && int < pi + slack, "{kind}: interior order {int} vs {pi}");
+        // The quadrature of a smooth function on the map converges at least as the
+        // stretch's boundary rows (order 2·boundary order for the exact norm).
+        assert!(quad > pb + 0.7, "{kind}: quadrature order {quad}");
+        eprintln!("{kind}: orders {all:.2} (all rows) {int:.2} (interior) {quad:.2} (quadrature)");
+    }
+}
+
+/// Nodes that fold back, or too few, are refused with their node named.
+#[test]
+fn mapped_grids_refuse_folded_nodes() {
+    let mut t = mapped_times(30, 0.0, 1.0);
+    t.swap(12, 13);
+    match SbpOperator::on_times(OperatorKind::Sbp242, &t) {
+        Err(SbpError::NotIncreasing { node: 13, .. }) => {}
+        other => panic!("expected nodes that do not increase, got {other:?}"),
+    }
+    // Increasing, but a spacing that jumps by 10⁴ between neighbours leaves the centred
+    // stencil's stretch negative beside it.
+    let jump: Vec<f64> = (0..30).map(|k| if k < 15 { k as f64 * 1e-4 } else { 14e-4 + (k - 14) as f64 }).collect();
+    assert!(matches!(SbpOperator::on_times(OperatorKind::Sbp242, &jump), Err(SbpError::BadStretch { .. })));
+    assert!(matches!(SbpOperator::on_times(OperatorKind::Sbp242, &t[..5]), Err(SbpError::TooFewNodes { .. })));
+}
