@@ -82,7 +82,7 @@ fn overrides(iv: InitialVelocity, set: Vec<(String, String)>) -> Overrides {
 fn fit_action(scene: &Scene, free: &[String]) -> Action {
     let model = Arc::new(Model::with_free_parameters(scene, free).unwrap());
     let disc = Discretization::of(scene);
-    action_on(&model, scene, &disc, disc.nodes, disc.spacing(scene)).unwrap()
+    action_on(&model, scene, &disc, &disc.times(scene)).unwrap()
 }
 
 fn residual(action: &Action, z: &[f64], ws: &mut skg_core::model::Workspace) -> Vec<f64> {

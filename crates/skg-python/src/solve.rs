@@ -84,7 +84,7 @@ impl NativeSolution {
 #[pyfunction]
 #[pyo3(signature = (path, *, out=None, nodes=None, set=None, operator=None, formulation=None, initial_velocity=None,
     hessian=None, max_iter=None, backend=None, window=None, overlap=None, verify_tol=None, no_verify=false, no_fallback=false,
-    refine=false, max_nodes=None, time_limit=None, stepper=None))]
+    refine=false, max_nodes=None, time_limit=None, stepper=None, grid=None))]
 #[pyo3(name = "solve")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_scene(
@@ -108,6 +108,7 @@ pub(crate) fn solve_scene(
     max_nodes: Option<&Bound<'_, PyAny>>,
     time_limit: Option<f64>,
     stepper: Option<&str>,
+    grid: Option<&str>,
 ) -> PyResult<NativeSolution> {
     let mut ov = Overrides {
         nodes: node_count(py, "nodes", nodes)?,
@@ -122,7 +123,7 @@ pub(crate) fn solve_scene(
         time_limit,
         ..Overrides::default()
     };
-    parse_choices(&mut ov, Choices { operator, formulation, initial_velocity, hessian, backend, stepper })?;
+    parse_choices(&mut ov, Choices { operator, formulation, initial_velocity, hessian, backend, stepper, grid })?;
     ov.set = assignments(set)?;
     let mut scene = load(py, &path, &ov)?;
     let state = run(py, &mut scene, out)?;
@@ -144,6 +145,7 @@ struct Choices<'a> {
     hessian: Option<&'a str>,
     backend: Option<&'a str>,
     stepper: Option<&'a str>,
+    grid: Option<&'a str>,
 }
 
 /// Set the overrides given as text (`operator="auto"` asks for the operator predicted to
@@ -172,6 +174,7 @@ fn parse_choices(ov: &mut Overrides, text: Choices<'_>) -> PyResult<()> {
     };
     ov.backend = parsed("backend", text.backend)?;
     ov.stepper = parsed("stepper", text.stepper)?;
+    ov.grid = parsed("grid", text.grid)?;
     Ok(())
 }
 

@@ -13,7 +13,9 @@ use std::path::{Path, PathBuf};
 
 use skg_core::output;
 use skg_core::sbp::ParseOperatorKindError;
-use skg_core::scene::{Location, ParseBackendError, ParseFormulationError, ParseInitialVelocityError, ParseStepperError, SceneError};
+use skg_core::scene::{
+    Location, ParseBackendError, ParseFormulationError, ParseGridChoiceError, ParseInitialVelocityError, ParseStepperError, SceneError,
+};
 
 use crate::shards;
 use crate::{SchemaError, UnknownStatus, CONFIRM_ABOVE};
@@ -271,6 +273,9 @@ pub enum AxisError {
     /// An unknown stepper.
     #[error(transparent)]
     Stepper(#[from] ParseStepperError),
+    /// An unknown grid.
+    #[error(transparent)]
+    Grid(#[from] ParseGridChoiceError),
 }
 
 /// `SIGTERM`, `SIGINT` or `signal N`.

@@ -7,13 +7,13 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use skg_core::scene::{Backend, Formulation, HessianMode, InitialVelocity, Overrides, Stepper};
+use skg_core::scene::{Backend, Formulation, GridChoice, HessianMode, InitialVelocity, Overrides, Stepper};
 
 use crate::AxisError;
 
 /// Axes that are not scene parameters.
 pub const SETTING_AXES: &[&str] =
-    &["nodes", "operator", "formulation", "initial_velocity", "hessian", "max_iter", "backend", "verify_tol", "stepper"];
+    &["nodes", "operator", "formulation", "initial_velocity", "hessian", "max_iter", "backend", "verify_tol", "stepper", "grid"];
 
 /// How a point is computed.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -113,6 +113,7 @@ impl Point {
                 "max_iter" => ov.max_iter = Some(v.parse().map_err(whole("max_iter"))?),
                 "backend" => ov.backend = Some(v.parse::<Backend>()?),
                 "stepper" => ov.stepper = Some(v.parse::<Stepper>()?),
+                "grid" => ov.grid = Some(v.parse::<GridChoice>()?),
                 _ => ov.set.push((k.clone(), v.clone())),
             }
         }

@@ -29,7 +29,7 @@ use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 
 use skg_core::sbp::OperatorKind;
-use skg_core::scene::{Backend, Formulation, HessianMode, InitialVelocity, Overrides, Scene, SceneFile, Stepper};
+use skg_core::scene::{Backend, Formulation, GridChoice, HessianMode, InitialVelocity, Overrides, Scene, SceneFile, Stepper};
 
 /// Exit code of a solve that ran but did not converge.
 pub const EXIT_NOT_CONVERGED: u8 = 3;
@@ -62,6 +62,13 @@ pub struct SceneArgs {
     /// operators, see docs/mathematics.md §5).
     #[arg(long, value_name = "KIND")]
     pub initial_velocity: Option<InitialVelocity>,
+    /// Where the nodes are: `uniform` (default), `adaptive` (along a map made from a time
+    /// stepping of the scene: dense in contacts, jumps and initial layers, so that a
+    /// brief fast motion does not need fine nodes over the whole span; docs/grids.md) or
+    /// `auto` (chosen with the operator by predicted cost, the default with `--operator
+    /// auto` or `--refine`). Overrides `[discretization] grid`.
+    #[arg(long, value_name = "KIND", value_parser = by_name::<GridChoice>(GridChoice::ALL.map(GridChoice::name)))]
+    pub grid: Option<GridChoice>,
     /// Hessian given to Ipopt: `zero` (default; the Newton step of a square system does
     /// not depend on it) or `exact` (reduced formulation only).
     #[arg(long, value_name = "MODE", value_parser = by_name::<HessianMode>(HessianMode::ALL.map(HessianMode::name)))]
@@ -140,6 +147,7 @@ impl SceneArgs {
             auto_operator: matches!(self.operator, Some(OperatorArg::Auto)),
             formulation: self.formulation,
             initial_velocity: self.initial_velocity,
+            grid: self.grid,
             hessian: self.hessian,
             max_iter: self.max_iter,
             backend: self.backend,

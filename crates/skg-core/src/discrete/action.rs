@@ -14,8 +14,9 @@
 //! `N d + N n + d` entries.
 //!
 //! The action is `S(Z) = Σ_k H_kk s(T_k Z, t_k) + ½ Zᵀ K Z + lᵀ Z` with `Z = [P, M]`,
-//! the node density `s` of [`crate::model`] evaluated at the node's time
-//! `t_k = t₀ + k Δt` (k from 0), `T_k` the linear map from `Z` to the local variables of
+//! the node density `s` of [`crate::model`] evaluated at the node's time `t_k`
+//! (`t₀ + k Δt` on a uniform grid, k from 0; `H` and `D` those of a mapped grid on its
+//! nodes, [`SbpOperator::on_times`]), `T_k` the linear map from `Z` to the local variables of
 //! node `k` (the SBP derivative `D` supplies `v = Dq+` and `dw = Dq-`), and `K`, `l` the
 //! boundary terms: `K` couples each boundary multiplier to its condition, and `l` holds
 //! the initial state, `l = −(q₀, q̇₀)` on `(ν_x, ν_v)` (natural: `−q₀` on `ν_x` and `p_i`
@@ -29,7 +30,8 @@
 //! structure is computed once, values are filled in place.
 //!
 //! The initial state and the start time enter only `l` and the node times, so one action
-//! serves successive windows of equal node count and spacing: [`Action::set_window`]
+//! serves successive windows of equal node count and spacing (the node times relative
+//! to the first stay): [`Action::set_window`]
 //! (or [`Action::set_initial_state`], [`Action::set_start_time`]) re-targets it without
 //! rebuilding the model or the plans.
 
@@ -256,6 +258,8 @@ pub struct Action {
     pub layout: GlobalLayout,
     /// Time of the first node.
     t0: f64,
+    /// The time of each node less the first node's.
+    elapsed: Vec<f64>,
     /// Initial coordinates q_i.
     q0: Vec<f64>,
     /// Initial velocities q̇_i.
@@ -274,12 +278,19 @@ pub struct Action {
 }
 
 impl Action {
-    /// The discrete action of `model` on the grid of `op` whose first node is at time
-    /// `t0`, with initial state (q0, v0) there imposed as `initial_velocity` says: the
-    /// node map T and the boundary terms.
-    pub fn new(model: Arc<Model>, op: SbpOperator, initial_velocity: InitialVelocity, t0: f64, q0: Vec<f64>, v0: Vec<f64>) -> Action {
+    /// The discrete action of `model` with the operator `op` on the nodes `times` (one per
+    /// row of `op`), with initial state (q0, v0) at the first imposed as
+    /// `initial_velocity` says: the node map T and the boundary terms.
+    ///
+    /// # Panics
+    /// If `times` does not have one entry per node of `op`, or the initial state one
+    /// entry per coordinate.
+    pub fn new(model: Arc<Model>, op: SbpOperator, initial_velocity: InitialVelocity, times: &[f64], q0: Vec<f64>, v0: Vec<f64>) -> Action {
         let (d, n) = (model.layout.d, model.layout.n);
         let nodes = op.len();
+        assert_eq!(times.len(), nodes, "one time per node of the operator");
+        let t0 = times[0];
+        let elapsed = times.iter().map(|t| t - t0).collect();
         let layout = GlobalLayout::new(d, n, nodes, initial_velocity);
         let m = model.layout.len();
         let mut offsets = Vec::with_capacity(nodes * m + 1);
@@ -328,7 +339,8 @@ impl Action {
         let minus_locals = (0..m).filter(|&a| !model.layout.kind(a).0.is_plus()).collect();
         assert_eq!((q0.len(), v0.len()), (d, d), "initial state of the wrong size");
         let all_locals = (0..m).collect();
-        let mut action = Action { model, op, layout, t0, q0, v0, p0: vec![0.0; d], offsets, map, bilinear, minus_locals, all_locals };
+        let mut action =
+            Action { model, op, layout, t0, elapsed, q0, v0, p0: vec![0.0; d], offsets, map, bilinear, minus_locals, all_locals };
         action.update_initial_momentum();
         action
     }
@@ -363,9 +375,9 @@ impl Action {
         &self.v0
     }
 
-    /// Time of node `k` (from 0): `t0 + k Δt`.
+    /// Time of node `k` (from 0).
     pub fn node_time(&self, k: usize) -> f64 {
-        self.t0 + k as f64 * self.op.dt()
+        self.t0 + self.elapsed[k]
     }
 
     /// The times of all nodes.
@@ -393,7 +405,7 @@ impl Action {
         (self.q0, self.v0, self.p0) = (q0, v0, p0);
     }
 
-    /// Move the grid to start at `t0` (same node count and spacing).
+    /// Move the grid to start at `t0` (the same nodes relative to the first).
     pub fn set_start_time(&mut self, t0: f64) {
         self.t0 = t0;
         self.update_initial_momentum();

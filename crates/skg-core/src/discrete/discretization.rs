@@ -1,14 +1,17 @@
 //! [`Discretization`]: what a solve chooses about the time discretization of a scene's
-//! model — the SBP operator, the number of nodes of the grid over the scene's span, and
-//! how the initial velocity is imposed. The refinement and the fallback ladder's coarse
-//! grid vary it while the model stays the one built from the scene; the scene holds the
-//! discretization it asks for ([`Discretization::of`]).
+//! model — the SBP operator, the number of nodes and where they are over the scene's
+//! span ([`Grid`]), and how the initial velocity is imposed. The refinement and the
+//! fallback ladder's coarse grid vary it while the model stays the one built from the
+//! scene; the scene holds the discretization it asks for ([`Discretization::of`]), with a
+//! uniform grid: a grid that follows the motion is made from a time stepping
+//! ([`adapt`](crate::solve::choice::adapt)).
 
-use crate::sbp::OperatorKind;
+use super::grid::Grid;
+use crate::sbp::{OperatorKind, SbpError, SbpOperator};
 use crate::scene::{InitialVelocity, Scene};
 
 /// A discretization of a scene's span (module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Discretization {
     /// The SBP operator.
     pub operator: OperatorKind,
@@ -16,28 +19,48 @@ pub struct Discretization {
     pub nodes: usize,
     /// How the initial velocity is imposed.
     pub initial_velocity: InitialVelocity,
+    /// Where the nodes are.
+    pub grid: Grid,
 }
 
 impl Discretization {
     /// The discretization the scene asks for (its `[discretization]`, `[time] nodes` and
-    /// the command line's overrides).
+    /// the command line's overrides) on a uniform grid.
     pub fn of(scene: &Scene) -> Discretization {
-        Discretization { operator: scene.operator, nodes: scene.nodes, initial_velocity: scene.initial_velocity }
+        Discretization { operator: scene.operator, nodes: scene.nodes, initial_velocity: scene.initial_velocity, grid: Grid::Uniform }
     }
 
     /// The same discretization on `nodes` nodes.
-    pub fn with_nodes(self, nodes: usize) -> Discretization {
-        Discretization { nodes, ..self }
+    pub fn with_nodes(&self, nodes: usize) -> Discretization {
+        Discretization { nodes, ..self.clone() }
     }
 
-    /// The node spacing over the scene's span.
+    /// The same discretization on the grid `grid`.
+    pub fn with_grid(&self, grid: Grid) -> Discretization {
+        Discretization { grid, ..self.clone() }
+    }
+
+    /// The mean node spacing over the scene's span (the spacing of a uniform grid).
     pub fn spacing(&self, scene: &Scene) -> f64 {
         (scene.t_end - scene.t_start) / (self.nodes as f64 - 1.0)
     }
 
-    /// The node times over the scene's span, and their spacing.
-    pub fn grid(&self, scene: &Scene) -> (Vec<f64>, f64) {
-        let dt = self.spacing(scene);
-        ((0..self.nodes).map(|k| scene.t_start + k as f64 * dt).collect(), dt)
+    /// The node times over the scene's span.
+    pub fn times(&self, scene: &Scene) -> Vec<f64> {
+        self.grid.times(scene.t_start, scene.t_end, self.nodes)
+    }
+
+    /// The operator on the nodes `times` (spread as this discretization's grid spreads
+    /// them): on a uniform grid the uniform operator of their spacing, on a mapped one
+    /// the operator on those nodes.
+    pub fn operator_on(&self, times: &[f64]) -> Result<SbpOperator, SbpError> {
+        match self.grid {
+            Grid::Uniform => {
+                let n = times.len();
+                let dt = if n > 1 { (times[n - 1] - times[0]) / (n - 1) as f64 } else { f64::NAN };
+                SbpOperator::new(self.operator, n, dt)
+            }
+            Grid::Mapped(_) => SbpOperator::on_times(self.operator, times),
+        }
     }
 }

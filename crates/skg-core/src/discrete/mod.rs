@@ -3,6 +3,8 @@
 //!
 //! * [`discretization`]: what a solve chooses about the discretization of a scene's model
 //!   (operator, nodes, initial-velocity condition; [`Discretization`]).
+//! * [`grid`]: where the nodes are — uniformly, or along a map that follows the motion,
+//!   made from the steps of a time stepping ([`Grid`], [`TimeMap`]).
 //! * [`action`]: the discrete action on the grid — the layout of the unknowns, the node
 //!   times, the boundary terms, the residual and the sparsity plans of its Jacobian and
 //!   Hessian ([`Action`]).
@@ -27,11 +29,13 @@
 pub mod action;
 pub mod contact;
 pub mod discretization;
+pub mod grid;
 pub mod interpolate;
 pub mod parameters;
 pub mod trajectory;
 
 pub use action::Action;
 pub use discretization::Discretization;
+pub use grid::{Grid, TimeMap};
 pub use parameters::ParameterPlan;
 pub use trajectory::{trajectory_header, trajectory_rows, NodeSeries, States, Trajectory};

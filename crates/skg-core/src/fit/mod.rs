@@ -272,8 +272,8 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let initial: Vec<f64> = names.iter().map(|n| scene.parameters[n]).collect();
     let model = Arc::new(Model::with_free_parameters(scene, &names)?);
     let disc = Discretization::of(scene);
-    let (times, dt) = disc.grid(scene);
-    let mut action = action_on(&model, scene, &disc, disc.nodes, dt)?;
+    let times = disc.times(scene);
+    let mut action = action_on(&model, scene, &disc, &times)?;
     let plans = Plans {
         jacobian: action.plan(Block::ReducedJacobian),
         hessian: (settings.hessian == FitHessian::Exact).then(|| action.plan(Block::ReducedHessian)),

@@ -28,7 +28,7 @@ pub(super) fn start_states(scene: &Scene, model: &Arc<Model>, disc: &Discretizat
     let run = solve_global(scene, model, disc, &Guess::TimeStepping)?;
     if run.solution.status.is_converged() {
         let tr = &run.solution.trajectory;
-        let action = action_on(model, scene, disc, disc.nodes, disc.spacing(scene))?;
+        let action = action_on(model, scene, disc, times)?;
         let z = point_from_states(&action, &tr.q, &tr.lambda);
         let description = format!("the solve at the starting values ({} iterations)", run.solution.iterations);
         return Ok(Start { q: tr.q.clone(), lambda: tr.lambda.clone(), description, solution: Some(z) });

@@ -14,7 +14,7 @@ use toml::Spanned;
 use super::emit::write_toml;
 use super::error::SceneError;
 use super::location::{parse_origin, parse_toml, read_toml, Location, Origin};
-use super::settings::{Backend, Formulation, HessianMode, InitialVelocity, Stepper};
+use super::settings::{Backend, Formulation, GridChoice, HessianMode, InitialVelocity, Stepper};
 
 /// A number or an expression of the scene's parameters, e.g. `0.5` or `"pi/6"`.
 /// (Deserialized by hand rather than as an untagged enum, so that a value of another
@@ -176,6 +176,9 @@ pub struct DiscretizationSpec {
     /// How the initial velocity is imposed (default strong).
     #[serde(default)]
     pub initial_velocity: Option<InitialVelocity>,
+    /// Where the nodes are (default uniform; chosen with the operator when it is).
+    #[serde(default)]
+    pub grid: Option<GridChoice>,
 }
 
 /// The `[solver]` table: the backend and Ipopt's settings.

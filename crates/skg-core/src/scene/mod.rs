@@ -69,8 +69,8 @@ pub use overrides::Overrides;
 pub use parameters::eval_constant;
 pub use resolved::{Constraint, ConstraintKind, Scene, SolverSettings, VerifySettings, Wall, Windows};
 pub use settings::{
-    Backend, Formulation, HessianMode, InitialVelocity, ParseBackendError, ParseFormulationError, ParseHessianModeError,
-    ParseInitialVelocityError, ParseStepperError, Stepper,
+    Backend, Formulation, GridChoice, HessianMode, InitialVelocity, ParseBackendError, ParseFormulationError, ParseGridChoiceError,
+    ParseHessianModeError, ParseInitialVelocityError, ParseStepperError, Stepper,
 };
 pub use solver::{MAX_ITER, MAX_LOG_NAME_BYTES};
 pub use time::{TimeResolutionError, MAX_NODES};

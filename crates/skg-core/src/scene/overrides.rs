@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 use super::error::SceneError;
-use super::settings::{Backend, Formulation, HessianMode, InitialVelocity, Stepper};
+use super::settings::{Backend, Formulation, GridChoice, HessianMode, InitialVelocity, Stepper};
 use crate::sbp::OperatorKind;
 
 /// Command-line and sweep overrides applied on top of a scene file.
@@ -23,6 +23,8 @@ pub struct Overrides {
     pub formulation: Option<Formulation>,
     /// How the initial velocity is imposed.
     pub initial_velocity: Option<InitialVelocity>,
+    /// Where the nodes are (`--grid`).
+    pub grid: Option<GridChoice>,
     /// Hessian given to Ipopt.
     pub hessian: Option<HessianMode>,
     /// The iteration limit (Ipopt's, and Newton's).

@@ -14,6 +14,7 @@ use super::file::{ConstraintSpec, SceneFile};
 use super::names::{check_identifier, ExpressionNames, RESERVED, TIME, VELOCITY_SUFFIX};
 use super::overrides::Overrides;
 use super::resolved::{Constraint, ConstraintKind, Scene, Wall};
+use super::settings::GridChoice;
 
 impl SceneFile {
     /// Resolve parameters, overrides and every number; check names and ranges.
@@ -35,6 +36,10 @@ impl SceneFile {
         let choose_operator = grid.auto_operator || (verify.refine && !grid.operator_named);
         let initial_velocity_named = ov.initial_velocity.is_some() || self.discretization.initial_velocity.is_some();
         let choose_initial_velocity = choose_operator && !initial_velocity_named;
+        // The grid is chosen with the operator unless one is named.
+        let grid_named = ov.grid.or(self.discretization.grid);
+        let choose_grid = grid_named == Some(GridChoice::Auto) || (choose_operator && grid_named.is_none());
+        let grid_kind = if grid_named == Some(GridChoice::Adaptive) { GridChoice::Adaptive } else { GridChoice::Uniform };
         Ok(Scene {
             name: self.scene.name.clone(),
             parameters: params,
@@ -51,6 +56,8 @@ impl SceneFile {
             choose_operator,
             choose_initial_velocity,
             initial_velocity_named,
+            grid: grid_kind,
+            choose_grid,
             formulation,
             initial_velocity,
             solver,

@@ -7,7 +7,7 @@ use indexmap::IndexMap;
 use serde::Serialize;
 
 use super::file::{IpoptValue, NumOrExpr, SceneFile};
-use super::settings::{Backend, Formulation, HessianMode, InitialVelocity, Stepper};
+use super::settings::{Backend, Formulation, GridChoice, HessianMode, InitialVelocity, Stepper};
 use crate::sbp::OperatorKind;
 
 /// Settings of the solve, resolved.
@@ -148,6 +148,12 @@ pub struct Scene {
     /// The solve chooses the initial-velocity condition too (it chooses the operator,
     /// and no condition is named).
     pub choose_initial_velocity: bool,
+    /// Where the nodes are: uniform or adaptive (the one chosen by the solve when
+    /// `choose_grid`).
+    pub grid: GridChoice,
+    /// The solve chooses the grid with the operator: `grid = "auto"`, or the operator
+    /// chosen and no grid named.
+    pub choose_grid: bool,
     /// Whether the scene or the command line names the initial-velocity condition (else
     /// the solve may choose the natural one for a fast initial layer).
     pub initial_velocity_named: bool,

@@ -21,7 +21,7 @@ macro_rules! deserialize_by_name {
     )*};
 }
 
-deserialize_by_name!(Formulation, InitialVelocity, HessianMode, Backend, Stepper);
+deserialize_by_name!(Formulation, InitialVelocity, HessianMode, Backend, Stepper, GridChoice);
 
 /// How the discrete action is posed to Ipopt (docs/mathematics.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
@@ -110,6 +110,63 @@ impl fmt::Display for InitialVelocity {
             InitialVelocity::Strong => "strong",
             InitialVelocity::Natural => "natural",
         })
+    }
+}
+
+/// Where a solve puts its nodes (`[discretization] grid`, `--grid`;
+/// docs/scene-file.md#discretization).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum GridChoice {
+    /// Equally spaced nodes.
+    #[default]
+    Uniform,
+    /// Nodes along a map that follows the motion, made from the steps of a time stepping
+    /// of the scene (dense in contacts, jumps and layers).
+    Adaptive,
+    /// Chosen with the operator, by predicted cost: the uniform grid or the adaptive one.
+    Auto,
+}
+
+/// Error of parsing a [`GridChoice`] from a string.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown grid `{input}` (expected `uniform`, `adaptive` or `auto`)")]
+pub struct ParseGridChoiceError {
+    /// The rejected input.
+    pub input: String,
+}
+
+impl GridChoice {
+    /// Every choice, in the order `--help` lists them.
+    pub const ALL: [GridChoice; 3] = [GridChoice::Uniform, GridChoice::Adaptive, GridChoice::Auto];
+
+    /// The name a scene file and the command line use.
+    pub fn name(self) -> &'static str {
+        match self {
+            GridChoice::Uniform => "uniform",
+            GridChoice::Adaptive => "adaptive",
+            GridChoice::Auto => "auto",
+        }
+    }
+}
+
+impl std::str::FromStr for GridChoice {
+    type Err = ParseGridChoiceError;
+
+    /// Case-insensitive: `uniform`, `adaptive` or `auto`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_lowercase().as_str() {
+            "uniform" => Ok(GridChoice::Uniform),
+            "adaptive" => Ok(GridChoice::Adaptive),
+            "auto" => Ok(GridChoice::Auto),
+            _ => Err(ParseGridChoiceError { input: s.to_string() }),
+        }
+    }
+}
+
+impl fmt::Display for GridChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
     }
 }
 

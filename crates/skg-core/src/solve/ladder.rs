@@ -93,7 +93,7 @@ pub fn climb(
     let mut ladder = Ladder {
         scene,
         model,
-        disc: *disc,
+        disc: disc.clone(),
         tried: Vec::new(),
         progress,
         preliminary: Work::default(),
@@ -220,7 +220,7 @@ impl Ladder<'_> {
 
     /// Step 2a; `Ok(true)` when it succeeded.
     fn coarse_to_fine(&mut self) -> Result<bool, SolveError> {
-        let (scene, model, disc) = (self.scene, self.model, self.disc);
+        let (scene, model, disc) = (self.scene, self.model, self.disc.clone());
         let coarse_nodes = (disc.nodes - 1) / 2 + 1;
         if coarse_nodes < disc.operator.min_nodes().max(8) || !self.may_go_on() {
             return Ok(false);
@@ -233,7 +233,7 @@ impl Ladder<'_> {
             self.set_aside_preliminary();
             return Ok(false);
         }
-        let (times, _) = disc.grid(scene);
+        let times = disc.times(scene);
         let guess = Guess::States {
             q: hermite(&coarse.trajectory, &times),
             lambda: linear(&coarse.trajectory.t, &coarse.trajectory.lambda, &times),
@@ -246,7 +246,7 @@ impl Ladder<'_> {
     /// Step 2b; `Ok(true)` when it succeeded. The one rung that changes the scene (its
     /// walls' widths), and so builds models of its own.
     fn width_continuation(&mut self) -> Result<bool, SolveError> {
-        let (scene, model, disc) = (self.scene, self.model, self.disc);
+        let (scene, model, disc) = (self.scene, self.model, self.disc.clone());
         if scene.walls.is_empty() {
             return Ok(false);
         }
@@ -284,7 +284,7 @@ impl Ladder<'_> {
     fn past_the_end(&mut self) -> Result<bool, SolveError> {
         let span = self.scene.t_end - self.scene.t_start;
         let windows = Windows { length: span * (1.0 + END_MARGIN), overlap: span * END_MARGIN };
-        let (scene, model, disc) = (self.scene, self.model, self.disc);
+        let (scene, model, disc) = (self.scene, self.model, self.disc.clone());
         if WindowGrid::new(scene, &disc, windows).is_err() || !self.may_go_on() {
             return Ok(false);
         }
@@ -296,7 +296,7 @@ impl Ladder<'_> {
 
     /// Step 4: windows of halving length.
     fn windows(&mut self) -> Result<(), SolveError> {
-        let (scene, model, disc) = (self.scene, self.model, self.disc);
+        let (scene, model, disc) = (self.scene, self.model, self.disc.clone());
         let mut length = scene.windows.map_or(scene.t_end - scene.t_start, |w| w.length) / 2.0;
         loop {
             if !self.may_go_on() {

@@ -29,10 +29,10 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::discrete::Discretization;
+use crate::discrete::{Discretization, Grid};
 use crate::memory;
 use crate::model::Model;
-use crate::scene::{InitialVelocity, Scene};
+use crate::scene::{GridChoice, InitialVelocity, Scene};
 use crate::stepping::layer::initial_layer;
 
 pub mod choice;
@@ -40,7 +40,7 @@ pub mod ladder;
 pub mod linalg;
 pub mod run;
 
-pub use choice::{cost, predict, refine};
+pub use choice::{adapt, cost, predict, refine};
 pub use linalg::{band, newton};
 pub use run::{backend, window};
 
@@ -67,12 +67,19 @@ pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
 /// fine (…)", "grid 2: SBP484 (natural) on 513 nodes"), for a progress display.
 pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
     let deadline = deadline(scene.solver.time_limit);
-    let chooses = scene.verify.refine || scene.choose_operator;
+    let chooses = scene.verify.refine || scene.choose_operator || scene.choose_grid;
     if !chooses {
         memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
     }
     let model = Arc::new(Model::build(scene)?);
-    let (own, note) = own_discretization(scene, &model);
+    let (own, mut note) = own_discretization(scene, &model);
+    let own = match adaptive_grid(scene, &model, &own) {
+        Ok(own) => own,
+        Err(why) => {
+            note = Some(note.map_or(why.clone(), |n| format!("{n}; {why}")));
+            own
+        }
+    };
     let mut outcome = if chooses {
         refine::refine(scene, &model, &own, deadline, progress)?
     } else {
@@ -97,6 +104,16 @@ fn own_discretization(scene: &Scene, model: &Model) -> (Discretization, Option<S
          which a strong condition would carry into the first node (--initial-velocity strong keeps it)"
     );
     (own, Some(note))
+}
+
+/// `own` on the grid that follows the motion when the scene asks for it
+/// (`grid = "adaptive"`, [`adapt::motion_map`]); or why it stays uniform.
+fn adaptive_grid(scene: &Scene, model: &Model, own: &Discretization) -> Result<Discretization, String> {
+    if scene.grid != GridChoice::Adaptive {
+        return Ok(own.clone());
+    }
+    let (map, _) = adapt::motion_map(scene, model).map_err(|e| format!("the grid is uniform: {e}"))?;
+    Ok(own.with_grid(Grid::Mapped(Arc::new(map))))
 }
 
 /// The moment a solve limited to `seconds` must end, if any: none for a limit beyond

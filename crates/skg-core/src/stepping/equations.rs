@@ -40,6 +40,16 @@ pub fn step_budget(nodes: usize) -> usize {
     STEPS_PER_NODE.saturating_mul(nodes).max(MIN_STEPS)
 }
 
+/// The mean spacing of increasing node times (None for fewer than two): the longest step
+/// a time stepping sampled at a grid's nodes takes. On a uniform grid it is the spacing;
+/// on an adaptive one the short spacings are where the motion is fast, where the
+/// stepper's own error control shortens its steps (and, near a wall, its test of the
+/// gap, [`wall_step_accepted`]): bounding every step by the shortest spacing would make
+/// it take that step over the whole span.
+pub fn mean_spacing(times: &[f64]) -> Option<f64> {
+    (times.len() >= 2).then(|| (times[times.len() - 1] - times[0]) / (times.len() - 1) as f64).filter(|d| *d > 0.0)
+}
+
 /// Smallest spacing of increasing sample times (None for fewer than two samples).
 pub fn min_spacing(times: &[f64]) -> Option<f64> {
     times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).reduce(f64::min)
@@ -75,11 +85,44 @@ pub fn integrate_states(
     opts: &OdeOptions,
 ) -> Result<Stepped<Vec<Vec<f64>>>, OdeError> {
     let y0: Vec<f64> = q0.iter().chain(v0).copied().collect();
+    let integrated = integrate_with(rhs(model, &mut model.workspace()), None, &y0, times, opts, wall_test(model))?;
+    let method = integrated.method();
+    Ok(Stepped { states: integrated.solution.states, stats: integrated.solution.stats, method })
+}
+
+/// The times where the accepted steps of a time stepping of `model` from the state
+/// `(q0, v0)` at `t0` to `t1` ended (the last `t1`), and its work: where an adaptive
+/// stepper found the motion fast (short steps) or smooth (long ones). Only the span's
+/// ends are requested, so that no step is cut to land on a sample time.
+pub fn step_ends(model: &Model, q0: &[f64], v0: &[f64], (t0, t1): (f64, f64), opts: &OdeOptions) -> Result<(Vec<f64>, OdeStats), OdeError> {
+    let y0: Vec<f64> = q0.iter().chain(v0).copied().collect();
+    let mut test = wall_test(model);
+    let mut ends: Vec<f64> = Vec::new();
+    // A step that passed the tests may still be retried (the right-hand side failing at
+    // its end): a later step from an earlier time replaces the ones after it.
+    let logged = |t: f64, y: &[f64], t_new: f64, y_new: &[f64]| {
+        let ok = test(t, y, t_new, y_new);
+        if ok {
+            while ends.last().is_some_and(|&e| e > t) {
+                ends.pop();
+            }
+            ends.push(t_new);
+        }
+        ok
+    };
+    let integrated = integrate_with(rhs(model, &mut model.workspace()), None, &y0, &[t0, t1], opts, logged)?;
+    Ok((ends, integrated.solution.stats))
+}
+
+/// The test every step of a time stepping of `model` must pass besides its error
+/// estimate: with regularized walls, that no step changes a wall's gap by more than
+/// [`wall_step_accepted`] allows (true for every step otherwise).
+fn wall_test(model: &Model) -> impl FnMut(f64, &[f64], f64, &[f64]) -> bool + '_ {
     let d = model.layout.d;
     let regularized_walls = model.wall_model == WallModel::Gaussian && !model.walls.is_empty();
     // The gaps at the end of the last accepted step are those at the start of the next.
     let mut last_end: Option<(f64, Vec<f64>)> = None;
-    let accept = |t: f64, y: &[f64], t_new: f64, y_new: &[f64]| {
+    move |t: f64, y: &[f64], t_new: f64, y_new: &[f64]| {
         if !regularized_walls {
             return true;
         }
@@ -91,10 +134,7 @@ pub fn integrate_states(
         let ok = wall_step_accepted(model, &before, &after);
         last_end = Some(if ok { (t_new, after) } else { (t, before) });
         ok
-    };
-    let integrated = integrate_with(rhs(model, &mut model.workspace()), None, &y0, times, opts, accept)?;
-    let method = integrated.method();
-    Ok(Stepped { states: integrated.solution.states, stats: integrated.solution.stats, method })
+    }
 }
 
 /// Fraction of `|h| + σ` by which one step may change a wall's gap `h`.

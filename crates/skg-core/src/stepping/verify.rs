@@ -48,7 +48,7 @@ use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::{Scene, Stepper};
-use crate::stepping::equations::{integrate_model, min_spacing, step_budget, Stepped, STEPS_PER_NODE};
+use crate::stepping::equations::{integrate_model, mean_spacing, step_budget, Stepped, STEPS_PER_NODE};
 use crate::stepping::ode::{OdeError, OdeOptions, OdeStats};
 
 /// Relative tolerance of the time-stepping reference.
@@ -226,7 +226,7 @@ fn time_stepping_at_nodes(scene: &Scene, model: &Model, tr: &Trajectory) -> (Res
     let stepper = scene.verify.stepper;
     let integrate = |rtol: f64, atol: f64| {
         let opts =
-            OdeOptions { rtol, atol, max_step: min_spacing(&tr.t), max_steps: step_budget(tr.t.len()), stepper, ..OdeOptions::default() };
+            OdeOptions { rtol, atol, max_step: mean_spacing(&tr.t), max_steps: step_budget(tr.t.len()), stepper, ..OdeOptions::default() };
         let integrated = integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts);
         let method = match &integrated {
             Ok(stepped) => stepped.method.clone(),

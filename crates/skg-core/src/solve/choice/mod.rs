@@ -7,10 +7,12 @@
 //!   time-stepping reference: the discretization applied to the reference's own
 //!   kinematics.
 //! * [`cost`]: the measured time per node of each operator on each backend.
+//! * [`adapt`]: the adaptive grid's map, made from the steps of a time stepping.
 //!
 //! **Place in the flow.** Above the [`ladder`](crate::solve::ladder), which solves each
 //! grid it chooses; called by [`solve_scene`](crate::solve::solve_scene) alone.
 
+pub mod adapt;
 pub mod cost;
 pub mod predict;
 pub mod refine;

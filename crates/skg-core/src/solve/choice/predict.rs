@@ -32,7 +32,9 @@
 //! right-hand side per coordinate: a fraction of one solve's.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
+use crate::discrete::grid::{uniform_times, TimeMap};
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
 use crate::sbp::{OperatorKind, SbpOperator};
@@ -57,14 +59,16 @@ pub const ROUNDOFF: f64 = 0.05;
 /// from N = 129 and 257 predicts 0.1×.)
 pub const NOISY: f64 = 0.1;
 
-/// A discretization a solve can be made with: the operator and the condition that
-/// imposes the initial velocity.
+/// A discretization a solve can be made with: the operator, the condition that
+/// imposes the initial velocity, and whether the nodes follow the motion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Candidate {
     /// The SBP operator.
     pub operator: OperatorKind,
     /// How the initial velocity is imposed.
     pub initial_velocity: InitialVelocity,
+    /// On the adaptive grid (the predictor's map), else on the uniform one.
+    pub adaptive: bool,
 }
 
 impl Candidate {
@@ -75,17 +79,23 @@ impl Candidate {
     pub fn all() -> Vec<Candidate> {
         let mut all = Vec::new();
         for operator in OperatorKind::ALL {
-            all.push(Candidate { operator, initial_velocity: InitialVelocity::Strong });
+            all.push(Candidate { operator, initial_velocity: InitialVelocity::Strong, adaptive: false });
             if operator != OperatorKind::Sbp121 {
-                all.push(Candidate { operator, initial_velocity: InitialVelocity::Natural });
+                all.push(Candidate { operator, initial_velocity: InitialVelocity::Natural, adaptive: false });
             }
         }
         all
     }
 
-    /// `"SBP242 (natural)"`.
+    /// The same candidate on the adaptive grid.
+    pub fn adaptive(self) -> Candidate {
+        Candidate { adaptive: true, ..self }
+    }
+
+    /// `"SBP242 (natural)"`, `"SBP242 (natural, adaptive grid)"`.
     pub fn describe(&self) -> String {
-        format!("{} ({})", self.operator.name(), self.initial_velocity)
+        let grid = if self.adaptive { ", adaptive grid" } else { "" };
+        format!("{} ({}{grid})", self.operator.name(), self.initial_velocity)
     }
 }
 
@@ -102,16 +112,19 @@ struct Samples {
 }
 
 /// Predicted errors of the candidates on grids of a scene, from its time-stepping
-/// reference (see the module docs). Samples and predictions are cached per grid.
+/// reference (see the module docs). Samples and predictions are cached per grid: a grid
+/// is its node count and whether it is the adaptive one (`true`) or uniform.
 pub struct Predictor<'a> {
     scene: &'a Scene,
     model: &'a Model,
+    /// The adaptive grid's map, when adaptive candidates are weighed.
+    map: Option<Arc<TimeMap>>,
     /// The verification's tolerance of each coordinate.
     tolerances: Vec<f64>,
     /// Where the tolerances came from (the verification's words).
     pub tolerance_source: String,
-    samples: HashMap<usize, Samples>,
-    /// The reference's states on the grid of [`FINE_NODES`] nodes.
+    samples: HashMap<(usize, bool), Samples>,
+    /// The reference's states on the uniform grid of [`FINE_NODES`] nodes.
     fine: Option<(NodeSeries, NodeSeries)>,
     /// The reference's relative tolerance ([`verify::reference_rtol`]).
     rtol: f64,
@@ -122,11 +135,13 @@ pub struct Predictor<'a> {
 
 impl<'a> Predictor<'a> {
     /// A predictor for `scene`, whose tolerances are those the verification applies,
-    /// found from the reference on the scene's own grid.
-    pub fn new(scene: &'a Scene, model: &'a Model) -> Result<Predictor<'a>, SolveError> {
+    /// found from the reference on the scene's own grid; with `map`, the adaptive grid's,
+    /// for the adaptive candidates.
+    pub fn new(scene: &'a Scene, model: &'a Model, map: Option<Arc<TimeMap>>) -> Result<Predictor<'a>, SolveError> {
         let mut p = Predictor {
             scene,
             model,
+            map,
             tolerances: Vec::new(),
             tolerance_source: String::new(),
             samples: HashMap::new(),
@@ -135,11 +150,11 @@ impl<'a> Predictor<'a> {
             proxies: HashMap::new(),
             steps: OdeStats::default(),
         };
-        let (mut q, mut v) = p.integrate(FINE_NODES, REFERENCE_RTOL)?;
+        let (mut q, mut v) = p.integrate((FINE_NODES, false), REFERENCE_RTOL)?;
         let (tolerances, source) = verify::tolerances(scene, &q);
         let rtol = verify::reference_rtol(&tolerances, &q);
         if rtol < REFERENCE_RTOL {
-            (q, v) = p.integrate(FINE_NODES, rtol)?;
+            (q, v) = p.integrate((FINE_NODES, false), rtol)?;
         }
         p.rtol = rtol;
         p.fine = Some((q, v));
@@ -155,31 +170,64 @@ impl<'a> Predictor<'a> {
 
     /// The rounding error of a solve on `nodes` nodes relative to the tightest
     /// tolerance: [`ROUNDOFF`] `· ε (N − 1)² max |q|`, the conditioning of a
-    /// second-order operator on the grid times the motion's size. No grid is predicted
+    /// second-order operator on the grid times the motion's size (on the adaptive grid
+    /// `(N − 1)·T/h_min`, `h_min` its finest spacing). No grid is predicted
     /// below it: beyond some N, refining makes the error worse.
-    pub fn roundoff_ratio(&self, nodes: usize) -> f64 {
+    pub fn roundoff_ratio(&self, c: Candidate, nodes: usize) -> f64 {
         let size = self.fine.as_ref().map_or(1.0, |(q, _)| q.iter().flatten().fold(1.0_f64, |m, x| m.max(x.abs())));
         let tightest = self.tolerances.iter().copied().fold(f64::INFINITY, f64::min);
-        ROUNDOFF * f64::EPSILON * ((nodes - 1) as f64).powi(2) * size / tightest
+        let steps = (nodes - 1) as f64;
+        // On the adaptive grid one factor of the conditioning is the finest spacing's.
+        let finest = match (&self.map, c.adaptive) {
+            (Some(map), true) => {
+                let t = map.times(nodes);
+                (t[nodes - 1] - t[0]) / min_spacing(&t).unwrap_or(f64::MIN_POSITIVE)
+            }
+            _ => steps,
+        };
+        ROUNDOFF * f64::EPSILON * steps * finest * size / tightest
     }
 
-    /// The reference on the grid of `nodes` nodes as a trajectory with its physical
+    /// Whether the adaptive candidates can be predicted (a map was given).
+    pub fn has_map(&self) -> bool {
+        self.map.is_some()
+    }
+
+    /// The adaptive grid's map, if any.
+    pub fn map(&self) -> Option<&Arc<TimeMap>> {
+        self.map.as_ref()
+    }
+
+    /// The node times of the grid `(nodes, adaptive)`.
+    fn times(&self, (nodes, adaptive): (usize, bool)) -> Vec<f64> {
+        match (&self.map, adaptive) {
+            (Some(map), true) => map.times(nodes),
+            _ => uniform_times(self.scene.t_start, self.scene.t_end, nodes),
+        }
+    }
+
+    /// The reference on the grid `(nodes, adaptive)` as a trajectory with its physical
     /// columns (for the contacts' resolution).
-    pub fn reference(&mut self, nodes: usize) -> Result<Trajectory, SolveError> {
-        self.sample(nodes)?;
-        let s = &self.samples[&nodes];
+    pub fn reference(&mut self, grid: (usize, bool)) -> Result<Trajectory, SolveError> {
+        self.sample(grid)?;
+        let s = &self.samples[&grid];
         let states = crate::discrete::trajectory::States { q: s.q.clone(), v: s.v.clone(), lambda: vec![Vec::new(); s.q.len()] };
-        Ok(Trajectory::with_physical_columns(self.model, &times(self.scene, nodes), states))
+        Ok(Trajectory::with_physical_columns(self.model, &self.times(grid), states))
     }
 
-    /// The reference's states on the grid of `nodes` nodes, integrated anew. With walls
-    /// its steps are at most the scene's own node spacing, as the verification's.
-    fn integrate(&mut self, nodes: usize, rtol: f64) -> Result<(NodeSeries, NodeSeries), SolveError> {
-        let t = times(self.scene, nodes);
+    /// The reference's states on the grid `(nodes, adaptive)`, integrated anew. With
+    /// walls its steps are at most the scene's own node spacing, as the verification's.
+    fn integrate(&mut self, grid: (usize, bool), rtol: f64) -> Result<(NodeSeries, NodeSeries), SolveError> {
+        let nodes = grid.0;
+        let t = self.times(grid);
         let opts = OdeOptions {
             rtol,
             atol: rtol * (REFERENCE_ATOL / REFERENCE_RTOL),
-            max_step: if self.model.walls.is_empty() { None } else { min_spacing(&times(self.scene, self.scene.nodes)) },
+            max_step: if self.model.walls.is_empty() {
+                None
+            } else {
+                min_spacing(&uniform_times(self.scene.t_start, self.scene.t_end, self.scene.nodes))
+            },
             max_steps: step_budget(nodes.max(self.scene.nodes)),
             stepper: self.scene.verify.stepper,
             ..OdeOptions::default()
@@ -191,28 +239,30 @@ impl<'a> Predictor<'a> {
         Ok(states.into_iter().map(|y| (y[..d].to_vec(), y[d..].to_vec())).unzip())
     }
 
-    /// Sample the reference with its accelerations on the grid of `nodes` nodes, once:
-    /// from the fine grid when it is a subgrid of it, else integrated anew.
-    fn sample(&mut self, nodes: usize) -> Result<(), SolveError> {
-        if self.samples.contains_key(&nodes) {
+    /// Sample the reference with its accelerations on the grid `(nodes, adaptive)`, once:
+    /// from the fine grid of the same kind when it is a subgrid of it, else integrated
+    /// anew.
+    fn sample(&mut self, grid: (usize, bool)) -> Result<(), SolveError> {
+        if self.samples.contains_key(&grid) {
             return Ok(());
         }
+        let (nodes, adaptive) = grid;
         let samples = if nested(nodes) && nodes < FINE_NODES && self.fine.is_some() {
             // Every subgrid strides through the fine grid's samples, accelerations too.
-            self.sample(FINE_NODES)?;
-            let fine = &self.samples[&FINE_NODES];
+            self.sample((FINE_NODES, adaptive))?;
+            let fine = &self.samples[&(FINE_NODES, adaptive)];
             let stride = (FINE_NODES - 1) / (nodes - 1);
             let every = |s: &NodeSeries| s.iter().step_by(stride).cloned().collect();
             Samples { q: every(&fine.q), v: every(&fine.v), a: every(&fine.a) }
         } else {
             let (q, v) = match &self.fine {
-                Some((fq, fv)) if nodes == FINE_NODES => (fq.clone(), fv.clone()),
-                _ => self.integrate(nodes, self.rtol)?,
+                Some((fq, fv)) if grid == (FINE_NODES, false) => (fq.clone(), fv.clone()),
+                _ => self.integrate(grid, self.rtol)?,
             };
-            let a = self.accelerations(&times(self.scene, nodes), &q, &v)?;
+            let a = self.accelerations(&self.times(grid), &q, &v)?;
             Samples { q, v, a }
         };
-        self.samples.insert(nodes, samples);
+        self.samples.insert(grid, samples);
         Ok(())
     }
 
@@ -255,11 +305,12 @@ impl<'a> Predictor<'a> {
         if let Some(&r) = self.proxies.get(&(c, nodes)) {
             return Ok(r);
         }
-        let ratio = if nodes < c.operator.min_nodes() {
+        let ratio = if nodes < c.operator.min_nodes() || (c.adaptive && self.map.is_none()) {
             f64::INFINITY
         } else {
-            self.sample(nodes)?;
-            let (errors, floors) = proxy_errors(self.scene, &self.samples[&nodes], c, nodes);
+            let grid = (nodes, c.adaptive);
+            self.sample(grid)?;
+            let (errors, floors) = proxy_errors(&self.samples[&grid], c, &self.times(grid));
             let relative = |e: &[f64]| e.iter().zip(&self.tolerances).map(|(e, tol)| e / tol).fold(0.0, f64::max);
             let (raw, floor) = (relative(&errors), relative(&floors));
             if floor > NOISY * raw {
@@ -304,12 +355,6 @@ fn nested(nodes: usize) -> bool {
     (2..=FINE_NODES).contains(&nodes) && (FINE_NODES - 1).is_multiple_of(nodes - 1)
 }
 
-/// The node times of a grid of `nodes` nodes over the scene's span.
-fn times(scene: &Scene, nodes: usize) -> Vec<f64> {
-    let dt = (scene.t_end - scene.t_start) / (nodes as f64 - 1.0);
-    (0..nodes).map(|k| scene.t_start + k as f64 * dt).collect()
-}
-
 /// Row `b` of a product `D_b D_a` given the rows of `D_a`: each column once (an
 /// interior row of `SBP484`'s product has 17 columns, where the products of the two
 /// stencils' entries are 81).
@@ -325,13 +370,19 @@ fn product_row(b: &[(usize, f64)], da: &[Vec<(usize, f64)>]) -> Vec<(usize, f64)
     dense.into_iter().enumerate().filter(|&(_, v)| v != 0.0).map(|(k, v)| (first + k, v)).collect()
 }
 
-/// The proxy's error max_k |q_h − q| of each coordinate (see the module docs), and the
-/// rounding error of its solve; infinite when its system is singular.
-fn proxy_errors(scene: &Scene, s: &Samples, c: Candidate, n: usize) -> (Vec<f64>, Vec<f64>) {
+/// The proxy's error max_k |q_h − q| of each coordinate (see the module docs) on the
+/// nodes `times`, and the rounding error of its solve; infinite when its system is
+/// singular.
+fn proxy_errors(s: &Samples, c: Candidate, times: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let d = s.q.first().map_or(0, Vec::len);
-    let dt = (scene.t_end - scene.t_start) / (n as f64 - 1.0);
+    let n = times.len();
     let singular = || (vec![f64::INFINITY; d], vec![f64::INFINITY; d]);
-    let Ok(op) = SbpOperator::new(c.operator, n, dt) else { return singular() };
+    let op = if c.adaptive {
+        SbpOperator::on_times(c.operator, times)
+    } else {
+        SbpOperator::new(c.operator, n, (times[n - 1] - times[0]) / (n - 1) as f64)
+    };
+    let Ok(op) = op else { return singular() };
     let da: Vec<Vec<(usize, f64)>> = (0..n).map(|i| op.row(i)).collect();
     // The equations' operator D_b: the partner D− of a dissipative operator, D itself
     // for a centred one.
@@ -353,7 +404,7 @@ fn proxy_errors(scene: &Scene, s: &Samples, c: Candidate, n: usize) -> (Vec<f64>
     // The unknown is the motion less its initial straight line, q0 + v0·(t − t0), which
     // every operator differentiates exactly: the rounding errors of the proxy then scale
     // with what remains (the disk's θ grows by 31 rad, 5 of them curved).
-    let line = |i: usize, k: usize| s.q[0][i] + s.v[0][i] * k as f64 * dt;
+    let line = |i: usize, k: usize| s.q[0][i] + s.v[0][i] * (times[k] - times[0]);
     // Columns 0..d: the proxies. Columns d..2d: the same system with the right-hand
     // side it gives the sampled motion itself, whose solution is that motion up to the
     // rounding of the solve (the proxy's floor).

@@ -43,11 +43,12 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::adapt;
 use super::cost::relative_cost;
 use super::predict::{along_power_law, observed_order, Candidate, Predictor, FINE_NODES};
 use crate::discrete::contact::{self, MIN_STEPS};
 use crate::discrete::interpolate::{hermite, linear};
-use crate::discrete::Discretization;
+use crate::discrete::{Discretization, Grid, TimeMap};
 use crate::memory;
 use crate::model::Model;
 use crate::sbp::OperatorKind;
@@ -116,13 +117,15 @@ struct Refiner<'a> {
     started: Instant,
     /// The predictor, unless its reference could not be computed (then: why not).
     predictor: Result<Predictor<'a>, String>,
+    /// The adaptive grid's map, when adaptive candidates are solved.
+    map: Option<Arc<TimeMap>>,
     candidates: Vec<Candidate>,
     /// The measured error over the proxy of the last solve with each candidate.
     calibration: Vec<(Candidate, f64)>,
     /// The least nodes each candidate may be solved on next (after a failure with it).
     floor: Vec<(Candidate, usize)>,
-    /// The nodes the walls' contacts need.
-    wall_nodes: usize,
+    /// The nodes the walls' contacts need on the uniform grid and on the adaptive one.
+    wall_nodes: [usize; 2],
     max_nodes: usize,
     max_nodes_source: String,
     grids: Vec<RefinedGrid>,
@@ -139,26 +142,38 @@ struct Refiner<'a> {
 impl<'a> Refiner<'a> {
     fn new(scene: &'a Scene, model: &'a Arc<Model>, own: &Discretization, deadline: Option<Instant>) -> Result<Refiner<'a>, SolveError> {
         let t = Instant::now();
-        let predictor = Predictor::new(scene, model).map_err(|e| e.to_string());
+        let map = match &own.grid {
+            Grid::Mapped(map) => Some(Arc::clone(map)),
+            Grid::Uniform if scene.choose_grid => adapt::motion_map(scene, model).ok().map(|(map, _)| Arc::new(map)),
+            Grid::Uniform => None,
+        };
+        let predictor = Predictor::new(scene, model, map.clone()).map_err(|e| e.to_string());
         // A condition the front door chose (for an initial layer) is kept, as a named one.
         let iv_chosen = scene.choose_initial_velocity && own.initial_velocity == scene.initial_velocity;
-        let candidates: Vec<Candidate> = if scene.choose_operator {
+        let mut candidates: Vec<Candidate> = if scene.choose_operator {
             Candidate::all().into_iter().filter(|c| iv_chosen || c.initial_velocity == own.initial_velocity).collect()
         } else {
-            vec![Candidate { operator: own.operator, initial_velocity: own.initial_velocity }]
+            vec![own_candidate(own)]
         };
+        // The adaptive grid beside the uniform one when the grid is chosen, in its place
+        // when it is the scene's.
+        if map.is_some() {
+            let adaptive = candidates.iter().map(|c| c.adaptive());
+            candidates = if scene.choose_grid { candidates.iter().copied().chain(adaptive).collect() } else { adaptive.collect() };
+        }
         let (max_nodes, max_nodes_source) = budget(scene);
         let mut r = Refiner {
             scene,
             model,
-            own: *own,
+            own: own.clone(),
             deadline,
             started: t,
             predictor,
+            map,
             candidates,
             calibration: Vec::new(),
             floor: Vec::new(),
-            wall_nodes: 0,
+            wall_nodes: [0, 0],
             max_nodes,
             max_nodes_source,
             grids: Vec::new(),
@@ -167,7 +182,7 @@ impl<'a> Refiner<'a> {
             prediction_s: 0.0,
             work: Work::default(),
         };
-        r.wall_nodes = r.nodes_for_contacts();
+        r.wall_nodes = [r.nodes_for_contacts(false), r.nodes_for_contacts(true)];
         r.prediction_s = t.elapsed().as_secs_f64();
         Ok(r)
     }
@@ -176,10 +191,13 @@ impl<'a> Refiner<'a> {
     /// (0 without walls or without a reference): below, no solve of a scene with walls
     /// was measured to verify; above, the prediction decides (the proxy sees a contact
     /// too short for the grid as a large acceleration).
-    fn nodes_for_contacts(&mut self) -> usize {
+    fn nodes_for_contacts(&mut self, adaptive: bool) -> usize {
         let nodes = self.scene.nodes;
         let Ok(p) = self.predictor.as_mut() else { return 0 };
-        let Ok(reference) = p.reference(nodes) else { return 0 };
+        if adaptive && !p.has_map() {
+            return 0;
+        }
+        let Ok(reference) = p.reference((nodes, adaptive)) else { return 0 };
         let resolution = contact::resolution(self.model, &reference);
         let fewest = resolution.values().map(|r| r.steps).fold(f64::INFINITY, f64::min);
         if !fewest.is_finite() || fewest >= MIN_STEPS {
@@ -196,7 +214,7 @@ impl<'a> Refiner<'a> {
 
     fn floor_of(&self, c: Candidate) -> usize {
         let own = self.floor.iter().rev().find(|(k, _)| *k == c).map_or(0, |&(_, n)| n);
-        own.max(self.scene.nodes).max(self.wall_nodes).max(c.operator.min_nodes())
+        own.max(self.scene.nodes).max(self.wall_nodes[usize::from(c.adaptive)]).max(c.operator.min_nodes())
     }
 
     /// The predicted error of `c` on `nodes` nodes relative to the tolerance, calibrated.
@@ -304,8 +322,8 @@ impl<'a> Refiner<'a> {
     /// most accurate there).
     fn first_choice(&mut self) -> (Candidate, usize, Option<f64>) {
         let nodes = self.scene.nodes;
-        let own = Candidate { operator: self.own.operator, initial_velocity: self.own.initial_velocity };
-        if !self.scene.choose_operator {
+        let own = own_candidate(&self.own);
+        if !self.scene.choose_operator && !self.scene.choose_grid {
             let p = self.predicted(own, nodes);
             return (own, nodes, p);
         }
@@ -380,11 +398,15 @@ impl<'a> Refiner<'a> {
         progress: &mut dyn FnMut(&str),
     ) -> Result<Outcome, SolveError> {
         let (scene, model) = (self.scene, self.model);
-        let disc = Discretization { operator: c.operator, nodes, initial_velocity: c.initial_velocity };
+        let grid = match (&self.map, c.adaptive) {
+            (Some(map), true) => Grid::Mapped(Arc::clone(map)),
+            _ => Grid::Uniform,
+        };
+        let disc = Discretization { operator: c.operator, nodes, initial_velocity: c.initial_velocity, grid };
         // The ladder's other rungs repair the scene's own discretization; a grid the
         // refinement chose that fails gets a better one instead (and a refinement of the
         // scene's own that is predicted to fail, too).
-        let own = !self.scene.choose_operator && nodes == self.scene.nodes;
+        let own = !self.scene.choose_operator && !self.scene.choose_grid && nodes == self.scene.nodes;
         let rungs = if self.grids.is_empty() && own && (!self.scene.verify.refine || predicted.is_none_or(|r| r <= 1.0)) {
             Rungs::All
         } else {
@@ -393,7 +415,7 @@ impl<'a> Refiner<'a> {
         let outcome = match &self.best {
             None => ladder::climb(scene, model, &disc, &Guess::TimeStepping, rungs, self.deadline, progress)?,
             Some((best, _)) => {
-                let (times, _) = disc.grid(scene);
+                let times = disc.times(scene);
                 let tr = &best.trajectory;
                 let guess = Guess::States {
                     q: hermite(tr, &times),
@@ -430,6 +452,7 @@ impl<'a> Refiner<'a> {
             nodes,
             operator: c.operator.name().to_string(),
             initial_velocity: c.initial_velocity,
+            grid: if c.adaptive { "adaptive" } else { "uniform" },
             predicted,
             measured,
             max_error: v.max_error,
@@ -591,6 +614,11 @@ impl<'a> Refiner<'a> {
     }
 }
 
+/// The candidate of the discretization `own`.
+fn own_candidate(own: &Discretization) -> Candidate {
+    Candidate { operator: own.operator, initial_velocity: own.initial_velocity, adaptive: !own.grid.is_uniform() }
+}
+
 /// The calibration of `c` given those measured so far (in order): its last measured
 /// one; else the largest measured in its family (centred or dissipative), at least 1;
 /// else the largest measured in the other family, at least 1: always from a dissipative
@@ -638,7 +666,7 @@ fn counted_grids(n: usize) -> String {
 /// The proxy's ratio of `c` on `nodes` nodes, extrapolated beyond [`PROXY_MAX_NODES`]
 /// with the order between the two largest grids computed.
 fn proxy_ratio(p: &mut Predictor, c: Candidate, nodes: usize) -> Result<f64, SolveError> {
-    let floor = p.roundoff_ratio(nodes);
+    let floor = p.roundoff_ratio(c, nodes);
     if nodes <= PROXY_MAX_NODES {
         return Ok(p.ratio_between(c, nodes)?.max(floor));
     }
@@ -684,7 +712,7 @@ mod tests {
     use crate::scene::InitialVelocity::{Natural, Strong};
 
     fn cand(operator: OperatorKind, initial_velocity: crate::scene::InitialVelocity) -> Candidate {
-        Candidate { operator, initial_velocity }
+        Candidate { operator, initial_velocity, adaptive: false }
     }
 
     #[test]

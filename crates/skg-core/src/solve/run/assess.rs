@@ -104,6 +104,7 @@ fn settings(scene: &Scene, disc: &Discretization, times: &[f64], initial_guess: 
     Settings {
         operator: disc.operator.name().to_string(),
         nodes: disc.nodes,
+        grid: disc.grid.name(),
         t_start: times[0],
         t_end: times[times.len() - 1],
         formulation: scene.formulation,

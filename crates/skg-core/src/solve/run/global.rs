@@ -34,11 +34,11 @@ pub struct Run {
 /// one piece from `guess`.
 pub fn solve_global(scene: &Scene, model: &Arc<Model>, disc: &Discretization, guess: &Guess) -> Result<Run, SolveError> {
     let t_setup = Instant::now();
-    let (times, dt) = disc.grid(scene);
-    let action = action_on(model, scene, disc, disc.nodes, dt)?;
+    let times = disc.times(scene);
+    let action = action_on(model, scene, disc, &times)?;
     let mut solver = SquareSolver::new(scene, &action);
     let setup_s = t_setup.elapsed().as_secs_f64();
     let mut solution = solve_piece(scene, &action, &mut solver, &times, guess)?;
     solution.timings.setup_s = setup_s;
-    Ok(Run { method: Method::Global, discretization: *disc, sizes: sizes(scene, &action, &solver), solution })
+    Ok(Run { method: Method::Global, discretization: disc.clone(), sizes: sizes(scene, &action, &solver), solution })
 }

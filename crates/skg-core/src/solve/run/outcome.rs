@@ -247,6 +247,9 @@ pub struct Settings {
     pub operator: String,
     /// Grid nodes N.
     pub nodes: usize,
+    /// Where the nodes are: `uniform`, or `adaptive` (along the motion; the trajectory
+    /// lists each node's time).
+    pub grid: &'static str,
     /// Start time.
     pub t_start: f64,
     /// End time.
@@ -390,6 +393,8 @@ pub struct RefinedGrid {
     pub operator: String,
     /// The initial-velocity condition.
     pub initial_velocity: InitialVelocity,
+    /// `uniform` or `adaptive`.
+    pub grid: &'static str,
     /// The predicted error relative to the tolerance (max over coordinates of error /
     /// tolerance), when a prediction was made.
     pub predicted: Option<f64>,

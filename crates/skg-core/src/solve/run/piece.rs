@@ -24,34 +24,34 @@ use super::status::{SolveStatus, CONVERGED_RESIDUAL};
 use crate::discrete::trajectory::{NodeSeries, States, Trajectory};
 use crate::discrete::{Action, Discretization};
 use crate::model::{Model, Physical};
-use crate::sbp::SbpOperator;
 #[cfg(feature = "ipopt")]
 use crate::scene::IpoptValue;
 use crate::scene::{Formulation, Scene, SceneError, Stepper};
 use crate::solve::linalg::IterationStat;
-use crate::stepping::equations::{integrate_model, min_spacing, step_budget, Stepped};
+use crate::stepping::equations::{integrate_model, mean_spacing, step_budget, Stepped};
 use crate::stepping::ode::{OdeOptions, OdeStats};
 #[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
 
-/// Node times of a scene's own grid, and their spacing.
+/// Node times of a scene's own uniform grid, and their spacing.
 pub fn grid(scene: &Scene) -> (Vec<f64>, f64) {
-    Discretization::of(scene).grid(scene)
+    let disc = Discretization::of(scene);
+    (disc.times(scene), disc.spacing(scene))
 }
 
 /// Build the discrete action of a resolved scene on its own grid, with a model of its
 /// own.
 pub fn build_action(scene: &Scene) -> Result<Action, SolveError> {
     let disc = Discretization::of(scene);
-    action_on(&Arc::new(Model::build(scene)?), scene, &disc, disc.nodes, disc.spacing(scene))
+    action_on(&Arc::new(Model::build(scene)?), scene, &disc, &disc.times(scene))
 }
 
 /// The discrete action of `model` (the scene's) with `disc`'s operator and
-/// initial-velocity condition on `nodes` nodes of spacing `dt`, from the scene's initial
-/// state (a window re-targets it with [`Action::set_window`]).
-pub fn action_on(model: &Arc<Model>, scene: &Scene, disc: &Discretization, nodes: usize, dt: f64) -> Result<Action, SolveError> {
-    let op = SbpOperator::new(disc.operator, nodes, dt)?;
-    Ok(Action::new(Arc::clone(model), op, disc.initial_velocity, scene.t_start, scene.initial_q.clone(), scene.initial_v.clone()))
+/// initial-velocity condition on the nodes `times`, from the scene's initial state (a
+/// window re-targets it with [`Action::set_window`]).
+pub fn action_on(model: &Arc<Model>, scene: &Scene, disc: &Discretization, times: &[f64]) -> Result<Action, SolveError> {
+    let op = disc.operator_on(times)?;
+    Ok(Action::new(Arc::clone(model), op, disc.initial_velocity, times, scene.initial_q.clone(), scene.initial_v.clone()))
 }
 
 /// How the initial guess of one solve is made.
@@ -186,7 +186,7 @@ fn initial_guess(
             // N = 16384 the capped guess cost as much as the whole Newton solve, the
             // uncapped one a tenth, with the same Newton iterations on every shipped
             // scene (docs/benchmarks.md#the-initial-guess).
-            let max_step = if action.model.walls.is_empty() { None } else { min_spacing(times) };
+            let max_step = if action.model.walls.is_empty() { None } else { mean_spacing(times) };
             let opts =
                 OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps: step_budget(times.len()), stepper, ..OdeOptions::default() };
             let (q0, v0) = (action.q0(), action.v0());
@@ -365,7 +365,7 @@ fn evaluate(action: &Action, times: &[f64], z: &[f64]) -> (Trajectory, f64) {
 }
 
 /// An operator applied to each component of a node-major series.
-fn apply_d(op: &SbpOperator, series: &[Vec<f64>]) -> Vec<Vec<f64>> {
+fn apply_d(op: &crate::sbp::SbpOperator, series: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let nodes = series.len();
     let d = series.first().map_or(0, Vec::len);
     let mut out = vec![vec![0.0; d]; nodes];

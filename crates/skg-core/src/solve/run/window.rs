@@ -35,7 +35,7 @@ use super::piece::{action_on, solve_piece, Guess, Piece};
 use super::status::SolveStatus;
 use crate::discrete::contact;
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
-use crate::discrete::Discretization;
+use crate::discrete::{Discretization, Grid};
 use crate::model::Model;
 use crate::scene::{Scene, Windows};
 use crate::solve::linalg::IterationStat;
@@ -79,7 +79,11 @@ pub fn solve_windows(scene: &Scene, model: &Arc<Model>, disc: &Discretization, w
     let grid =
         WindowGrid::new(scene, disc, windows).map_err(|error| SolveError::Windows { scene: scene.file.origin.path.clone(), error })?;
     let t_setup = Instant::now();
-    let mut action = action_on(model, scene, disc, grid.nodes, grid.dt)?;
+    // Windows are uniform: one action serves them all (a mapped grid's windows would
+    // each need operators of their own).
+    let disc = &disc.with_grid(Grid::Uniform);
+    let first: Vec<f64> = (0..grid.nodes).map(|k| scene.t_start + k as f64 * grid.dt).collect();
+    let mut action = action_on(model, scene, disc, &first)?;
     // One solver for all windows: the sparsity plans and Newton's LU analysis are made
     // once and reused by every window.
     let mut solver = SquareSolver::new(scene, &action);
@@ -108,7 +112,7 @@ pub fn solve_windows(scene: &Scene, model: &Arc<Model>, disc: &Discretization, w
     let length = (grid.nodes - 1) as f64 * grid.dt;
     let method =
         Method::Windows { length, overlap: length - grid.keep as f64 * grid.dt, nodes_per_window: grid.nodes, count: joined.count };
-    Ok(Run { method, discretization: *disc, sizes, solution: joined.into_piece() })
+    Ok(Run { method, discretization: disc.clone(), sizes, solution: joined.into_piece() })
 }
 
 /// The windows' pieces joined into the run's (see [`Run::solution`]).

@@ -1,0 +1,34 @@
+//! The grid that follows the motion: a [`TimeMap`] made from the steps of a time stepping
+//! of the scene at the verification's tolerance (module [`grid`](crate::discrete::grid)
+//! says how the steps become a node spacing). One map serves every node count, so a
+//! refinement changes `N` and keeps it; a solve on `[discretization] grid = "adaptive"`
+//! puts its nodes along it, and `grid = "auto"` (or the operator chosen) weighs it
+//! against the uniform grid by predicted cost.
+
+use crate::discrete::grid::TimeMap;
+use crate::model::Model;
+use crate::scene::Scene;
+use crate::stepping::equations::{min_spacing, step_budget, step_ends};
+use crate::stepping::ode::{OdeOptions, OdeStats};
+use crate::stepping::verify::{REFERENCE_ATOL, REFERENCE_RTOL};
+
+/// The map of `scene`'s span whose nodes follow the steps of a time stepping of its model
+/// at the verification's tolerance, and that time stepping's work; or why there is none
+/// (the time stepping failed, or took fewer than two steps).
+pub fn motion_map(scene: &Scene, model: &Model) -> Result<(TimeMap, OdeStats), String> {
+    let uniform = crate::discrete::grid::uniform_times(scene.t_start, scene.t_end, scene.nodes);
+    let opts = OdeOptions {
+        rtol: REFERENCE_RTOL,
+        atol: REFERENCE_ATOL,
+        // As the verification's: with walls no step longer than the scene's own spacing.
+        max_step: if model.walls.is_empty() { None } else { min_spacing(&uniform) },
+        max_steps: step_budget(scene.nodes),
+        stepper: scene.verify.stepper,
+        ..OdeOptions::default()
+    };
+    let (ends, stats) = step_ends(model, &scene.initial_q, &scene.initial_v, (scene.t_start, scene.t_end), &opts)
+        .map_err(|e| format!("the time stepping that places the nodes failed: {e}"))?;
+    let map = TimeMap::from_steps(scene.t_start, scene.t_end, &ends)
+        .ok_or_else(|| format!("the time stepping that places the nodes took {} steps, too few to follow", ends.len()))?;
+    Ok((map, stats))
+}
