@@ -242,10 +242,11 @@ fn print_refinement(outcome: &solve::Outcome, quiet: bool) {
             x.map_or("–".to_string(), |x| if x.abs() < 1e4 || !x.is_finite() { format!("{x:.2}") } else { format!("{x:.2e}") })
         };
         note!(
-            "  {}. {} ({}) on {} nodes: {} (error/tolerance {}, predicted {}) ({:.2} s)",
+            "  {}. {} ({}{}) on {} nodes: {} (error/tolerance {}, predicted {}) ({:.2} s)",
             i + 1,
             g.operator,
             g.initial_velocity,
+            if g.grid == "adaptive" { ", adaptive grid" } else { "" },
             g.nodes,
             g.verdict,
             ratio(g.measured),

@@ -12,12 +12,17 @@
 //! a contact, a relaxation jump or an initial layer. [`TimeMap::from_steps`] turns the
 //! steps `h_j` into a node spacing `s(t)`:
 //!
-//! 1. *graded*: no step longer than [`GRADING`] times its neighbour, so that the spacing
-//!    changes gradually (two passes, `h_j ← min(h_j, γ h_{j∓1})`);
-//! 2. *smoothed*: a few passes of the filter (¼, ½, ¼) over `ln h_j`;
-//! 3. *with a uniform floor*: `s = h H / (h + H)` with `H` the mean step, i.e. a node
+//! 1. *smoothed*: a few passes of the filter (¼, ½, ¼) over `ln h_j`;
+//! 2. *with a uniform floor*: `s = h H / (h + H)` with `H` the mean step, i.e. a node
 //!    density `1/s = 1/h + 1/H` that gives half of the nodes to the step density and
 //!    half to a uniform spread, so that no part of the span is left without nodes;
+//! 3. *graded*: on `N` nodes the spacing is `s(t)·S/(N − 1)` with `S = ∫ dt/s`, so
+//!    neighbouring spacings differ by a factor of about `1 + |ds/dt|·S/(N − 1)`. The
+//!    spacing is shortened until `|ds/dt| ≤ κ (N_min − 1)/S` (`κ` = [`GRADING`], `N_min`
+//!    the fewest nodes the map is made for; two passes `s_j ← min(s_j, s_{j∓1} + slope
+//!    |t_j − t_{j∓1}|)`, repeated as `S` grows), so that on every grid of at least `N_min`
+//!    nodes neighbouring spacings differ by at most about `1 + κ` and the boundary
+//!    closures' stretch stays positive;
 //! 4. linear in `t` between the steps' midpoints.
 //!
 //! `ξ(t) = ∫ dt/s / ∫ dt/s` over the span is then continuous with a continuous,
@@ -33,8 +38,12 @@
 
 use std::sync::Arc;
 
-/// A step may be at most this many times as long as its neighbour in the graded spacing.
-pub const GRADING: f64 = 1.25;
+/// Neighbouring node spacings differ by a factor of at most about `1 + GRADING` on the
+/// grids a map is made for.
+pub const GRADING: f64 = 0.25;
+
+/// Passes of the grading (each with the slope of the `S` the last one left).
+const GRADING_PASSES: usize = 6;
 
 /// Passes of the (¼, ½, ¼) filter over the logarithm of the graded spacing.
 const SMOOTHING_PASSES: usize = 3;
@@ -101,18 +110,18 @@ pub struct TimeMap {
 }
 
 impl TimeMap {
-    /// The map whose node spacing follows the steps of a time stepping from `t0` to `t1`:
-    /// `ends` are the times where its accepted steps ended, increasing, the last `t1`
-    /// (module documentation). `None` with fewer than two steps or a span that is not
-    /// finite and positive.
-    pub fn from_steps(t0: f64, t1: f64, ends: &[f64]) -> Option<TimeMap> {
+    /// The map whose node spacing follows the steps of a time stepping from `t0` to `t1`,
+    /// for grids of at least `min_nodes` nodes: `ends` are the times where its accepted
+    /// steps ended, increasing, the last `t1` (module documentation). `None` with fewer
+    /// than two steps or a span that is not finite and positive.
+    pub fn from_steps(t0: f64, t1: f64, ends: &[f64], min_nodes: usize) -> Option<TimeMap> {
         let bounds: Vec<f64> = std::iter::once(t0).chain(ends.iter().copied().filter(|&t| t > t0 && t <= t1)).collect();
         let steps: Vec<f64> = bounds.windows(2).map(|w| w[1] - w[0]).filter(|h| *h > 0.0).collect();
         if steps.len() < 2 || !(t1 - t0).is_finite() || t1 <= t0 {
             return None;
         }
         let mean = (t1 - t0) / steps.len() as f64;
-        let mut ln_h: Vec<f64> = graded(&steps).iter().map(|h| h.ln()).collect();
+        let mut ln_h: Vec<f64> = steps.iter().map(|h| h.ln()).collect();
         for _ in 0..SMOOTHING_PASSES {
             ln_h = smoothed(&ln_h);
         }
@@ -131,6 +140,10 @@ impl TimeMap {
         }
         at.push(t1);
         spacing.push(floor(*ln_h.last().unwrap_or(&0.0)));
+        for _ in 0..GRADING_PASSES {
+            let total: f64 = (0..at.len() - 1).map(|j| piece_integral(at[j + 1] - at[j], spacing[j], spacing[j + 1])).sum();
+            graded(&at, &mut spacing, GRADING * (min_nodes.max(2) - 1) as f64 / total);
+        }
         Some(TimeMap::new(at, spacing))
     }
 
@@ -195,17 +208,15 @@ fn piece_inverse(target: f64, len: f64, a: f64, b: f64) -> f64 {
     tau.clamp(0.0, len)
 }
 
-/// The steps with none longer than [`GRADING`] times a neighbour (shortened, never
+/// Shorten the spacing `s` at the breakpoints `at` until `|ds/dt| ≤ slope` (never
 /// lengthened).
-fn graded(steps: &[f64]) -> Vec<f64> {
-    let mut h = steps.to_vec();
-    for j in 1..h.len() {
-        h[j] = h[j].min(GRADING * h[j - 1]);
+fn graded(at: &[f64], s: &mut [f64], slope: f64) {
+    for j in 1..s.len() {
+        s[j] = s[j].min(s[j - 1] + slope * (at[j] - at[j - 1]));
     }
-    for j in (0..h.len() - 1).rev() {
-        h[j] = h[j].min(GRADING * h[j + 1]);
+    for j in (0..s.len() - 1).rev() {
+        s[j] = s[j].min(s[j + 1] + slope * (at[j + 1] - at[j]));
     }
-    h
 }
 
 /// One pass of the filter (¼, ½, ¼), the ends repeated.
@@ -230,7 +241,7 @@ mod tests {
             t = (t + h).min(1.0);
             ends.push(t);
         }
-        let map = TimeMap::from_steps(0.0, 1.0, &ends).unwrap();
+        let map = TimeMap::from_steps(0.0, 1.0, &ends, 201).unwrap();
         let times = map.times(201);
         assert_eq!((times[0], times[200]), (0.0, 1.0));
         assert!(times.windows(2).all(|w| w[1] > w[0]));
@@ -252,12 +263,12 @@ mod tests {
     #[test]
     fn equal_steps_give_a_uniform_grid() {
         let ends: Vec<f64> = (1..=50).map(|k| 2.0 + k as f64 * 0.1).collect();
-        let map = TimeMap::from_steps(2.0, 7.0, &ends).unwrap();
+        let map = TimeMap::from_steps(2.0, 7.0, &ends, 11).unwrap();
         let times = map.times(11);
         for (k, t) in times.iter().enumerate() {
             assert!((t - (2.0 + 0.5 * k as f64)).abs() < 1e-12, "{times:?}");
         }
-        assert!(TimeMap::from_steps(2.0, 7.0, &[7.0]).is_none());
+        assert!(TimeMap::from_steps(2.0, 7.0, &[7.0], 11).is_none());
     }
 
     /// The closed-form integral and its inverse agree.

@@ -13,7 +13,8 @@ use crate::stepping::ode::{OdeOptions, OdeStats};
 use crate::stepping::verify::{REFERENCE_ATOL, REFERENCE_RTOL};
 
 /// The map of `scene`'s span whose nodes follow the steps of a time stepping of its model
-/// at the verification's tolerance, and that time stepping's work; or why there is none
+/// at the verification's tolerance, graded for grids of at least the scene's own nodes,
+/// and that time stepping's work; or why there is none
 /// (the time stepping failed, or took fewer than two steps).
 pub fn motion_map(scene: &Scene, model: &Model) -> Result<(TimeMap, OdeStats), String> {
     let uniform = crate::discrete::grid::uniform_times(scene.t_start, scene.t_end, scene.nodes);
@@ -28,7 +29,7 @@ pub fn motion_map(scene: &Scene, model: &Model) -> Result<(TimeMap, OdeStats), S
     };
     let (ends, stats) = step_ends(model, &scene.initial_q, &scene.initial_v, (scene.t_start, scene.t_end), &opts)
         .map_err(|e| format!("the time stepping that places the nodes failed: {e}"))?;
-    let map = TimeMap::from_steps(scene.t_start, scene.t_end, &ends)
+    let map = TimeMap::from_steps(scene.t_start, scene.t_end, &ends, scene.nodes)
         .ok_or_else(|| format!("the time stepping that places the nodes took {} steps, too few to follow", ends.len()))?;
     Ok((map, stats))
 }

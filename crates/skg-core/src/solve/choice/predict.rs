@@ -330,7 +330,8 @@ impl<'a> Predictor<'a> {
     fn beyond_the_floor(&mut self, c: Candidate, nodes: usize) -> Result<Option<f64>, SolveError> {
         let half = |n: usize| (n - 1) / 2 + 1;
         let (m, m2) = (half(nodes), half(half(nodes)));
-        if !nested(nodes) || m2 < c.operator.min_nodes().max(3) {
+        // Two halvings of the grid keep every other node (of a uniform grid and of a map's).
+        if !(nested(nodes) || (nodes - 1) % 4 == 0) || m2 < c.operator.min_nodes().max(3) {
             return Ok(None);
         }
         let (r1, r2) = (self.ratio(c, m)?, self.ratio(c, m2)?);
