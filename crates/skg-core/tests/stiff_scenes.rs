@@ -96,6 +96,16 @@ fn a_chain_of_masses_on_stiff_springs() {
     solved_within_tolerance_of_the_truth("stiff_chain");
 }
 
+/// The rolling disk with its heading damped at 4000 /s, a damped nonholonomic scene: the
+/// heading's layer (2.5e-4 s in a span of 2π s) is resolved by an adaptive grid of a few
+/// thousand nodes, where a uniform grid needs 355 856.
+#[test]
+fn a_rolling_disk_with_a_strongly_damped_heading() {
+    let o = solved_within_tolerance_of_the_truth("damped_yaw_disk");
+    assert_eq!(o.settings.grid, "adaptive");
+    assert!(o.settings.nodes <= 20_000, "{} nodes", o.settings.nodes);
+}
+
 /// Van der Pol's relaxation oscillator at μ = 20 as mechanics.
 #[test]
 fn a_relaxation_oscillator() {
