@@ -207,3 +207,16 @@ def test_bad_refinement_arguments_are_value_errors(scene):
         skg.solve(scene("free_fall"), refine=True, max_nodes=1)
     with pytest.raises(ValueError, match="time_limit"):
         skg.solve(scene("free_fall"), time_limit=-1.0)
+
+
+def test_the_tumbler_with_a_thin_wall_is_verified_on_an_adaptive_grid(scene):
+    # σ = 1e-4: a uniform grid needs about 600 000 nodes; the adaptive one puts its nodes
+    # in the two contacts. The hard-wall motion (σ → 0) is within 1e-4 m; here the
+    # verification's own tolerance and the node spacing are checked.
+    sol = skg.solve(scene("tumbler"), set={"sigma": 1e-4}, grid="adaptive", refine=True)
+    assert sol.trusted
+    assert sol.summary["settings"]["grid"] == "adaptive" and len(sol.t) <= 8192
+    spacing = np.diff(sol.t)
+    assert spacing.min() < 0.1 * spacing.mean() and np.all(spacing > 0)
+    with pytest.raises(ValueError, match="grid"):
+        skg.solve(scene("tumbler"), grid="dense")

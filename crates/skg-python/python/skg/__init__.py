@@ -135,6 +135,7 @@ def solve(
     max_nodes: Optional[int] = None,
     time_limit: Optional[float] = None,
     stepper: Optional[str] = None,
+    grid: Optional[str] = None,
 ) -> Solution:
     """Solve a scene file (or a :class:`Scene`, or a mapping that makes one) as
     ``skg-solve SCENE`` does; without ``out``, no file is written.
@@ -160,7 +161,11 @@ def solve(
     budget), ``time_limit`` (``--time-limit``, seconds for the whole solve) and
     ``stepper`` (``--stepper``: ``"auto"``, the default, steps the verification, the
     initial guess and the predictions with DOP853 and goes on with the implicit Radau IIA
-    where the scene turns out stiff; ``"dop853"`` or ``"implicit"`` choose one).
+    where the scene turns out stiff; ``"dop853"`` or ``"implicit"`` choose one) and
+    ``grid`` (``--grid``: ``"uniform"``, the default; ``"adaptive"``, nodes dense where a
+    time stepping of the scene finds the motion fast — contacts, jumps, initial layers;
+    ``"auto"``, chosen with the operator by predicted cost, the default with
+    ``operator="auto"`` or ``refine=True``; ``summary["settings"]["grid"]`` says which).
 
     Every solve is verified against time stepping and may use the fallback ladder, as on
     the command line. A solve that does not converge or verify is returned, not raised:
@@ -188,6 +193,7 @@ def solve(
         max_nodes=max_nodes,
         time_limit=time_limit,
         stepper=stepper,
+        grid=grid,
     )
     sol = Solution(native)
     for w in sol.warnings:

@@ -1,5 +1,5 @@
 //! The grid that follows the motion: a [`TimeMap`] made from the steps of a time stepping
-//! of the scene at the verification's tolerance (module [`grid`](crate::discrete::grid)
+//! of the scene (module [`grid`](crate::discrete::grid)
 //! says how the steps become a node spacing). One map serves every node count, so a
 //! refinement changes `N` and keeps it; a solve on `[discretization] grid = "adaptive"`
 //! puts its nodes along it, and `grid = "auto"` (or the operator chosen) weighs it
@@ -12,15 +12,26 @@ use crate::stepping::equations::{min_spacing, step_budget, step_ends};
 use crate::stepping::ode::{OdeOptions, OdeStats};
 use crate::stepping::verify::{REFERENCE_ATOL, REFERENCE_RTOL};
 
+/// The relative tolerance of the time stepping that places the nodes.
+const MAP_RTOL: f64 = 1e-8;
+
+/// When the grid is chosen, the adaptive one is weighed only if its spacings vary by at
+/// least this factor: otherwise it cannot save the half of the nodes it must save to be
+/// chosen (its nodes are at least the uniform grid's over the longest spacing's span),
+/// and predicting it would only cost time.
+pub const WORTH_ADAPTING: f64 = 4.0;
+
 /// The map of `scene`'s span whose nodes follow the steps of a time stepping of its model
-/// at the verification's tolerance, graded for grids of at least the scene's own nodes,
+/// (with the verification's stepper, at a relative tolerance of 1e-8), graded for grids of at least the scene's own nodes,
 /// and that time stepping's work; or why there is none
 /// (the time stepping failed, or took fewer than two steps).
 pub fn motion_map(scene: &Scene, model: &Model) -> Result<(TimeMap, OdeStats), String> {
     let uniform = crate::discrete::grid::uniform_times(scene.t_start, scene.t_end, scene.nodes);
+    // Where the steps are short does not depend on the tolerance (they all shrink alike
+    // as it tightens): a looser one than the verification's takes fewer of them.
     let opts = OdeOptions {
-        rtol: REFERENCE_RTOL,
-        atol: REFERENCE_ATOL,
+        rtol: MAP_RTOL,
+        atol: MAP_RTOL * (REFERENCE_ATOL / REFERENCE_RTOL),
         // As the verification's: with walls no step longer than the scene's own spacing.
         max_step: if model.walls.is_empty() { None } else { min_spacing(&uniform) },
         max_steps: step_budget(scene.nodes),

@@ -154,7 +154,10 @@ impl<'a> Refiner<'a> {
         let t = Instant::now();
         let map = match &own.grid {
             Grid::Mapped(map) => Some(Arc::clone(map)),
-            Grid::Uniform if scene.choose_grid => adapt::motion_map(scene, model).ok().map(|(map, _)| Arc::new(map)),
+            Grid::Uniform if scene.choose_grid => adapt::motion_map(scene, model)
+                .ok()
+                .filter(|(map, _)| map.spacing_ratio() >= adapt::WORTH_ADAPTING)
+                .map(|(map, _)| Arc::new(map)),
             Grid::Uniform => None,
         };
         let predictor = Predictor::new(scene, model, map.clone()).map_err(|e| e.to_string());
