@@ -222,11 +222,15 @@ impl Ladder<'_> {
     fn coarse_to_fine(&mut self) -> Result<bool, SolveError> {
         let (scene, model, disc) = (self.scene, self.model, self.disc.clone());
         let coarse_nodes = (disc.nodes - 1) / 2 + 1;
-        if coarse_nodes < disc.operator.min_nodes().max(8) || !self.may_go_on() {
+        let coarse_disc = disc.with_nodes(coarse_nodes);
+        // An adaptive grid's map is graded for the scene's nodes: on half of them its
+        // spacing may change too fast for the operator (then there is no coarse grid).
+        let operator_fits = || coarse_disc.operator_on(&coarse_disc.times(scene)).is_ok();
+        if coarse_nodes < disc.operator.min_nodes().max(8) || !self.may_go_on() || !operator_fits() {
             return Ok(false);
         }
         self.announce(&format!("coarse to fine (solving on {coarse_nodes} nodes first)"));
-        let coarse = solve_global(scene, model, &disc.with_nodes(coarse_nodes), &Guess::TimeStepping)?;
+        let coarse = solve_global(scene, model, &coarse_disc, &Guess::TimeStepping)?;
         self.preliminary(&coarse);
         let coarse = coarse.solution;
         if !coarse.status.is_converged() {

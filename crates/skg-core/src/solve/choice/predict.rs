@@ -331,7 +331,7 @@ impl<'a> Predictor<'a> {
         let half = |n: usize| (n - 1) / 2 + 1;
         let (m, m2) = (half(nodes), half(half(nodes)));
         // Two halvings of the grid keep every other node (of a uniform grid and of a map's).
-        if !(nested(nodes) || (nodes - 1) % 4 == 0) || m2 < c.operator.min_nodes().max(3) {
+        if !(nested(nodes) || (nodes - 1).is_multiple_of(4)) || m2 < c.operator.min_nodes().max(3) {
             return Ok(None);
         }
         let (r1, r2) = (self.ratio(c, m)?, self.ratio(c, m2)?);
