@@ -7,6 +7,8 @@
 //!   time-stepping reference: the discretization applied to the reference's own
 //!   kinematics.
 //! * [`cost`]: the measured time per node of each operator on each backend.
+//! * `estimate`: what the refinement expects of a candidate — its calibrated prediction
+//!   and its cost (the adaptive grid's with a penalty).
 //! * [`adapt`]: the adaptive grid's map, made from the steps of a time stepping.
 //!
 //! **Place in the flow.** Above the [`ladder`](crate::solve::ladder), which solves each
@@ -14,5 +16,6 @@
 
 pub mod adapt;
 pub mod cost;
+mod estimate;
 pub mod predict;
 pub mod refine;

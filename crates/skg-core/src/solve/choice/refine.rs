@@ -8,6 +8,9 @@
 //!   tolerance at the least cost ([`cost`](super::cost): measured time per node of each
 //!   operator and backend). Without `--refine` on the scene's grid; if none is predicted
 //!   to meet it there, the one predicted most accurate.
+//! * **The grid** (`grid = "auto"`, the default when the operator is chosen): each
+//!   candidate also on the adaptive grid ([`adapt`](super::adapt)), weighed with a
+//!   penalty on its cost (`estimate`), where the map's spacings vary enough to matter.
 //! * **`--refine`**: the scene's own solve with the fallback ladder, on the scene's grid
 //!   (with the chosen operator when it chooses one); while the result is not verified,
 //!   or did not converge, a solve on the next discretization: the one of least cost
@@ -44,8 +47,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use super::adapt;
-use super::cost::relative_cost;
-use super::predict::{along_power_law, observed_order, Candidate, Predictor, FINE_NODES};
+use super::estimate::{calibration, cost_of, proxy_ratio};
+use super::predict::{observed_order, Candidate, Predictor};
 use crate::discrete::contact::{self, MIN_STEPS};
 use crate::discrete::interpolate::{hermite, linear};
 use crate::discrete::{Discretization, Grid, TimeMap};
@@ -81,26 +84,6 @@ const EXTRAPOLATE_FROM: usize = 257;
 /// A first grid predicted at more than this many times the tolerance is not solved: it
 /// cannot pass, and the refinement starts on the grid predicted to.
 const HOPELESS: f64 = 16.0;
-/// A calibration measured with a centred operator is carried to the dissipative ones
-/// only up to this: beyond, it is the centred operators' odd-even mode. (Measured on
-/// first grids, where nothing is calibrated yet: the disk, the tumbler and the damped
-/// oscillator at tolerances 1e-3 … 1e-8 are off by 0.8 … 6 on both families; on the
-/// strongly contracting test scene `SBP121` is off by 15.7, `SBP242` and `SBP484` by 0.3
-/// and 0.04.)
-const CROSS_FAMILY: f64 = 10.0;
-/// An adaptive grid is chosen over the uniform one only where it is predicted to need
-/// fewer than 1/ADAPTIVE_PENALTY of the nodes: its proxy misses more (the map's
-/// transitions; on a strongly contracting scene a centred operator on it was predicted
-/// at 0.38 of the tolerance and measured at 9.9), and where the motion has no brief fast
-/// part the uniform grid does as well.
-const ADAPTIVE_PENALTY: f64 = 2.0;
-/// The proxy is computed on grids up to the reference's fine grid; beyond, its error is
-/// extrapolated with the order it shows between the two largest of them.
-const PROXY_MAX_NODES: usize = FINE_NODES;
-/// On the adaptive grid up to this many nodes: its map is graded for grids of at least
-/// the scene's nodes, so coarser grids need not show the order of finer ones (each grid
-/// beyond the fine one costs a time stepping sampled at its nodes).
-const ADAPTIVE_PROXY_MAX_NODES: usize = (1 << 16) + 1;
 
 /// The refinement or the operator choice of `scene` with its model `model` (module
 /// docs), stopped at `deadline`; `progress` is told what each grid and attempt is about
@@ -627,45 +610,9 @@ impl<'a> Refiner<'a> {
     }
 }
 
-/// The cost of solving `c` on `nodes` nodes relative to the others: its operator's
-/// measured cost per node on `backend`, times [`ADAPTIVE_PENALTY`] on the adaptive grid.
-fn cost_of(c: Candidate, backend: crate::scene::Backend, nodes: usize) -> f64 {
-    relative_cost(c.operator, backend, nodes) * if c.adaptive { ADAPTIVE_PENALTY } else { 1.0 }
-}
-
 /// The candidate of the discretization `own`.
 fn own_candidate(own: &Discretization) -> Candidate {
     Candidate { operator: own.operator, initial_velocity: own.initial_velocity, adaptive: !own.grid.is_uniform() }
-}
-
-/// The calibration of `c` given those measured so far (in order): its last measured
-/// one; else the largest measured in its family (centred or dissipative), at least 1;
-/// else the largest measured in the other family, at least 1: always from a dissipative
-/// operator to a centred one (what it carries is the scene's dynamics, which the proxy
-/// leaves out and a centred operator meets as well), from a centred one only up to
-/// [`CROSS_FAMILY`] (beyond, it is the centred operators' odd-even mode, which says
-/// nothing of a dissipative one's error); else 1.
-fn calibration(measured: &[(Candidate, f64)], c: Candidate) -> f64 {
-    if let Some(&(_, g)) = measured.iter().rev().find(|(k, _)| *k == c) {
-        return g;
-    }
-    let largest = |same: bool| {
-        measured
-            .iter()
-            .filter(|(k, _)| (k.operator.is_dissipative() == c.operator.is_dissipative()) == same)
-            .map(|&(_, g)| g)
-            .fold(f64::NAN, f64::max)
-    };
-    let own_family = largest(true);
-    if !own_family.is_nan() {
-        return own_family.max(1.0);
-    }
-    let other = largest(false);
-    if other <= CROSS_FAMILY || !c.operator.is_dissipative() {
-        other.max(1.0)
-    } else {
-        1.0
-    }
 }
 
 /// An error relative to the tolerance in words: three significant digits, in exponent
@@ -680,27 +627,6 @@ fn ratio_text(r: f64) -> String {
 
 fn counted_grids(n: usize) -> String {
     crate::solve::run::outcome::counted(n, "grid")
-}
-
-/// The proxy's ratio of `c` on `nodes` nodes, extrapolated beyond [`PROXY_MAX_NODES`]
-/// ([`ADAPTIVE_PROXY_MAX_NODES`] on the adaptive grid) with the order between the two
-/// largest grids computed.
-fn proxy_ratio(p: &mut Predictor, c: Candidate, nodes: usize) -> Result<f64, SolveError> {
-    let floor = p.roundoff_ratio(c, nodes);
-    let largest = if c.adaptive { ADAPTIVE_PROXY_MAX_NODES } else { PROXY_MAX_NODES };
-    if nodes <= PROXY_MAX_NODES {
-        return Ok(p.ratio_between(c, nodes)?.max(floor));
-    }
-    if nodes <= largest {
-        return Ok(p.ratio(c, nodes)?.max(floor));
-    }
-    let (hi, lo) = (largest, (largest - 1) / 2 + 1);
-    let (r_hi, r_lo) = (p.ratio(c, hi)?, p.ratio(c, lo)?);
-    let order = observed_order(lo, r_lo, hi, r_hi);
-    if !(order.is_finite() && order > 0.0) {
-        return Ok(r_hi.max(floor));
-    }
-    Ok(along_power_law(hi, r_hi, order, nodes).max(floor))
 }
 
 /// The largest grid a refinement may use and why: `--max-nodes`, else the largest the
@@ -728,39 +654,4 @@ fn budget(scene: &Scene) -> (usize, String) {
         }
     }
     (lo, "the largest grid the available memory allows".to_string())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scene::InitialVelocity::{Natural, Strong};
-
-    fn cand(operator: OperatorKind, initial_velocity: crate::scene::InitialVelocity) -> Candidate {
-        Candidate { operator, initial_velocity, adaptive: false }
-    }
-
-    #[test]
-    fn calibrations_carry_within_a_family_and_across_it_below_the_odd_even_mode() {
-        let c242 = cand(OperatorKind::Sbp242, Strong);
-        let c363n = cand(OperatorKind::Sbp363, Natural);
-        let d242 = cand(OperatorKind::Sbp242Ad, Natural);
-        // Nothing measured: the proxy as it is.
-        assert_eq!(calibration(&[], c242), 1.0);
-        // Its own last measurement first, even below 1 and below the family's largest.
-        let m = [(c363n, 5.0), (c242, 3.0), (c242, 0.5)];
-        assert_eq!(calibration(&m, c242), 0.5);
-        // Else the family's largest, at least 1.
-        assert_eq!(calibration(&m, cand(OperatorKind::Sbp484, Natural)), 5.0);
-        assert_eq!(calibration(&[(c242, 0.3)], c363n), 1.0);
-        // The other family's, as the disk at 1e-3 measured (SBP242-AD 4.7, then SBP242
-        // off by 2.6 with the proxy as it was), when it is not the odd-even mode.
-        assert_eq!(calibration(&[(d242, 4.7)], c242), 4.7);
-        assert_eq!(calibration(&[(c242, 4.2)], d242), 4.2);
-        assert_eq!(calibration(&[(c242, 1e3)], d242), 1.0);
-        // A dissipative operator's, however large, to a centred one (the rotor and spring
-        // test scene: SBP242-AD off by 10.6, then SBP242 by 3.9 with the proxy as it was).
-        assert_eq!(calibration(&[(d242, 10.6)], c242), 10.6);
-        // A family's own measurement outranks the other's.
-        assert_eq!(calibration(&[(c242, 8.0), (d242, 2.0)], cand(OperatorKind::Sbp484Ad, Strong)), 2.0);
-    }
 }
