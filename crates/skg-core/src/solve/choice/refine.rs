@@ -9,7 +9,7 @@
 //!   operator and backend). Without `--refine` on the scene's grid; if none is predicted
 //!   to meet it there, the one predicted most accurate.
 //! * **The grid** (`grid = "auto"`, the default when the operator is chosen): each
-//!   candidate also on the adaptive grid ([`adapt`](super::adapt)), weighed with a
+//!   candidate also on the adaptive grid ([`adapt`]), weighed with a
 //!   penalty on its cost (`estimate`), where the map's spacings vary enough to matter.
 //! * **`--refine`**: the scene's own solve with the fallback ladder, on the scene's grid
 //!   (with the chosen operator when it chooses one); while the result is not verified,
