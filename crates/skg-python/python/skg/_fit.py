@@ -129,7 +129,8 @@ def fit(
     bounds (``"c>=0"``, ``"mu in [0, 2]"``); ``bounds`` adds bounds by name
     (``{"c": (0, None)}``). The scene's values (with ``set``) are the starting values.
     ``hessian``: ``"exact"`` (default) or ``"limited-memory"``; ``start``: ``"auto"``
-    (default: the data for a scene without constraints, else the solve), ``"data"`` or
+    (default: the data for a scene without constraints or data of every coordinate,
+    else the solve), ``"data"`` or
     ``"solve"``; ``tol``, ``max_iter``: Ipopt's. With ``out`` the files of
     the command line are written there (trajectory.csv, reference.csv, data.csv,
     fitted.toml, summary.json).
