@@ -58,6 +58,13 @@ fn the_scene_s_fit_table_replaces_the_flags_and_the_flags_override_it() {
     let names = summary["fit"]["covariance"]["names"].as_array().unwrap().iter().map(|n| n.as_str().unwrap()).collect::<Vec<_>>();
     assert_eq!(names, ["k", "c", "x0", "v0"]);
 
+    // `plot fit` draws the data against the fitted motion from the fit's directory.
+    let o = common::skg(&["plot", "fit", "table", "-o", "chart"], dir.path());
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+    let svg = std::fs::read_to_string(dir.path().join("chart.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("</svg>") && svg.contains("fit: damped oscillator (fit)"), "{svg:.300}");
+    assert_eq!(&std::fs::read(dir.path().join("chart.png")).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+
     // --free replaces the table's list; --data its file (here one that does not exist).
     let o = common::skg(&["fit", scene, "--free", "k", "--data", "missing.csv", "-o", "flags"], dir.path());
     let t = common::text(&o);
