@@ -234,9 +234,9 @@ The shipped fits (`examples/fit/`, [fitting.md](fitting.md)): the data (points, 
 deviation where the data give them) against the fitted motion (lines), and the residuals. Made from the \
 repository root by\n\n```sh\n\
 skg-solve fit examples/fit/double_pendulum.toml -o out/double_pendulum-fit\n\
-skg-solve plot fit out/double_pendulum-fit -o docs/img/fit_double_pendulum\n\
+skg-solve plot fit out/double_pendulum-fit -o docs/img/fit_double_pendulum.png\n\
 skg-solve fit examples/fit/oscillator.toml -o out/oscillator-fit\n\
-skg-solve plot fit out/oscillator-fit -o docs/img/fit_oscillator\n```\n\n\
+skg-solve plot fit out/oscillator-fit -o docs/img/fit_oscillator.png\n```\n\n\
 The double pendulum's release angles, fitted from 1.9 and 2.4 rad to both masses' positions \
 ([benchmarks.md](benchmarks.md#fitting)):\n\n\
 ![double pendulum fit](img/fit_double_pendulum.png)\n\n\
