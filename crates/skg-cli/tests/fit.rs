@@ -42,3 +42,49 @@ fn the_example_fits_writes_its_files_and_exits_by_the_convention() {
     assert_eq!(o.status.code(), Some(3), "{t}");
     assert!(t.contains("the fit did not converge"), "{t}");
 }
+
+#[test]
+fn the_scene_s_fit_table_replaces_the_flags_and_the_flags_override_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = common::root();
+    let scene = root.join("examples/fit/oscillator.toml");
+    let scene = scene.to_str().unwrap();
+
+    // [fit] names k, c, x0, v0 and oscillator.csv beside the scene: no flags needed.
+    let o = common::skg(&["fit", scene, "-o", "table"], dir.path());
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("table/summary.json")).unwrap()).unwrap();
+    let names = summary["fit"]["covariance"]["names"].as_array().unwrap().iter().map(|n| n.as_str().unwrap()).collect::<Vec<_>>();
+    assert_eq!(names, ["k", "c", "x0", "v0"]);
+
+    // `plot fit` draws the data against the fitted motion from the fit's directory.
+    let o = common::skg(&["plot", "fit", "table", "-o", "chart"], dir.path());
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+    let svg = std::fs::read_to_string(dir.path().join("chart.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("</svg>") && svg.contains("fit: damped oscillator (fit)"), "{svg:.300}");
+    assert_eq!(&std::fs::read(dir.path().join("chart.png")).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+
+    // --free replaces the table's list; --data its file (here one that does not exist).
+    let o = common::skg(&["fit", scene, "--free", "k", "--data", "missing.csv", "-o", "flags"], dir.path());
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("missing.csv"), "{t}");
+
+    // A bad entry of the table is an error at its line, with its value.
+    let text = std::fs::read_to_string(scene).unwrap().replace("\"c>=0\"", "\"c>=zero\"");
+    std::fs::write(dir.path().join("bad.toml"), &text).unwrap();
+    let line = text.lines().position(|l| l.contains("c>=zero")).unwrap() + 1;
+    let o = common::skg(&["fit", "bad.toml", "-o", "bad"], dir.path());
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains(&format!("bad.toml:{line}:")) && t.contains("free parameter `c>=zero`"), "{t}");
+
+    // Neither flags nor table: a usage error that says what to give.
+    let plain = text.split("\n[fit]\n").next().unwrap();
+    std::fs::write(dir.path().join("plain.toml"), plain).unwrap();
+    let o = common::skg(&["fit", "plain.toml", "-o", "plain"], dir.path());
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert!(t.contains("no free parameter"), "{t}");
+}

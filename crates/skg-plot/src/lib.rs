@@ -10,6 +10,7 @@
 //!   line of slope 1.
 //! * [`trajectory`]: the coordinates over time with the reference overlaid, and the
 //!   energy over time.
+//! * [`fit`](fn@fit): a fit's data against its fitted motion, and the residuals.
 //! * [`stability`]: a map over two grid axes, each cell converged / failed / converged
 //!   with energy artifacts / not run.
 //! * [`motion`]: the motion itself: a solution's path in the plane of two coordinates
@@ -31,6 +32,7 @@
 //!   labels and the corner for its legend;
 //! * `line_charts`: [`work_precision`], [`tolerance`], [`convergence`], [`scaling`];
 //! * `trajectory`: [`trajectory`];
+//! * `fit`: [`fit`](fn@fit);
 //! * `stability`: [`stability`] and its [`Cell`];
 //! * [`motion`]: the pictures of the motion.
 
@@ -39,6 +41,7 @@
 mod error;
 mod render;
 
+mod fit;
 mod line_charts;
 mod loglog;
 mod results;
@@ -48,6 +51,7 @@ mod trajectory;
 pub mod motion;
 
 pub use error::{DrawError, PlotError};
+pub use fit::fit;
 pub use line_charts::{convergence, scaling, tolerance, work_precision};
 pub use render::SIZE;
 pub use results::{cell_value, sweep_solutions};

@@ -52,17 +52,17 @@ pub(crate) enum DataArg {
     Path(PathBuf),
 }
 
-/// Fit `free` parameters of a scene to `data` as `skg-solve fit` does; with `out`, into
-/// that directory.
+/// Fit `free` parameters of a scene to `data` as `skg-solve fit` does (each, when `None`,
+/// from the scene's `[fit]` table); with `out`, into that directory.
 #[pyfunction]
-#[pyo3(signature = (path, data, free, *, out=None, nodes=None, set=None, operator=None, hessian=None, start=None, tol=None, max_iter=None))]
+#[pyo3(signature = (path, data=None, free=None, *, out=None, nodes=None, set=None, operator=None, hessian=None, start=None, tol=None, max_iter=None))]
 #[pyo3(name = "fit")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fit_scene(
     py: Python<'_>,
     path: SceneArg,
-    data: DataArg,
-    free: Vec<String>,
+    data: Option<DataArg>,
+    free: Option<Vec<String>>,
     out: Option<PathBuf>,
     nodes: Option<usize>,
     set: Option<&Bound<'_, PyDict>>,
@@ -74,8 +74,20 @@ pub(crate) fn fit_scene(
 ) -> PyResult<NativeFit> {
     let mut ov = Overrides { nodes, set: assignments(set)?, ..Overrides::default() };
     ov.operator = operator.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("operator: {e}")))).transpose()?;
-    let settings = settings(free, hessian, start, tol, max_iter)?;
+    let free = free.map(|items| parse_free(&items)).transpose()?;
     let mut scene = load(py, &path, &ov)?;
+    let free = match free {
+        Some(free) => free,
+        None => fit::free_of_scene(&scene.file).map_err(|e| scene_err(py, &e))?,
+    };
+    let settings = settings(free, hessian, start, tol, max_iter)?;
+    let data = match data {
+        Some(data) => data,
+        None => match fit::data_of_scene(&scene.file).map_err(|e| scene_err(py, &e))? {
+            Some(path) => DataArg::Path(path),
+            None => return Err(PyValueError::new_err("data: give the data, or data = \"FILE.csv\" in the scene's [fit] table")),
+        },
+    };
     let data = match data {
         DataArg::Path(p) => py.detach(|| Data::read(&p, &scene)),
         DataArg::Columns(c) => Data::from_columns("<python>", &c, &scene),
@@ -89,19 +101,24 @@ pub(crate) fn fit_scene(
     native(py, fitted)
 }
 
+/// The free parameters as given, each item read as `--free` reads it (a `ValueError`
+/// names a malformed one).
+fn parse_free(items: &[String]) -> PyResult<Vec<FreeParameter>> {
+    items
+        .iter()
+        .flat_map(|s| fit::split_list(s))
+        .map(|s| FreeParameter::parse(&s).map_err(|e| PyValueError::new_err(e.to_string())))
+        .collect()
+}
+
 /// The settings from the keyword arguments (a `ValueError` names the wrong one).
 fn settings(
-    free: Vec<String>,
+    free: Vec<FreeParameter>,
     hessian: Option<&str>,
     start: Option<&str>,
     tol: Option<f64>,
     max_iter: Option<u32>,
 ) -> PyResult<FitSettings> {
-    let free = free
-        .iter()
-        .flat_map(|s| fit::split_list(s))
-        .map(|s| FreeParameter::parse(&s).map_err(|e| PyValueError::new_err(e.to_string())))
-        .collect::<PyResult<Vec<_>>>()?;
     let mut settings = FitSettings::new(free);
     if let Some(h) = hessian {
         settings.hessian = h.parse().map_err(|e| PyValueError::new_err(format!("hessian: {e}")))?;

@@ -72,3 +72,19 @@ def test_bad_data_and_undetermined_parameters_raise():
         skg.fit(scene, {"t": T, "x": oscillator(T, 4.0, 0.3, 1.0, 0.0)}, ["m", "k", "c"])
     with pytest.raises(ValueError, match="bounds: q not among"):
         skg.fit(scene, {"t": T, "x": T}, ["k"], bounds={"q": (0, 1)})
+
+
+def test_the_scenes_fit_table_gives_free_and_data(repo):
+    # examples/fit/oscillator.toml's [fit] table: k>=0, c>=0, x0, v0 and oscillator.csv
+    # beside it, generated with k = 4, c = 0.3, x0 = 1.2, v0 = -0.5 and noise 0.01.
+    f = skg.fit(repo / "examples" / "fit" / "oscillator.toml")
+    assert list(f.report["covariance"]["names"]) == ["k", "c", "x0", "v0"]
+    for name, truth in [("k", 4.0), ("c", 0.3), ("x0", 1.2), ("v0", -0.5)]:
+        assert abs(f.parameters[name] - truth) < 3 * f.std_errors[name], name
+    # An argument replaces the table's entry; bounds need free.
+    g = skg.fit(repo / "examples" / "fit" / "oscillator.toml", free=["k", "c"])
+    assert set(g.parameters) == {"k", "c"}
+    with pytest.raises(ValueError, match="bounds: give free as well"):
+        skg.fit(repo / "examples" / "fit" / "oscillator.toml", bounds={"k": (0, None)})
+    with pytest.raises(ValueError, match="data: give the data"):
+        skg.fit(skg.Scene.from_toml(OSCILLATOR), free=["k"])

@@ -9,6 +9,7 @@ use anyhow::Result;
 use clap::Args;
 
 use skg_core::fit::{self, Data, Fit, FitHessian, FitSettings, FitStart, FitWritten, FreeParameter};
+use skg_core::scene::Scene;
 use skg_core::stepping::verify::VerifyStatus;
 
 use super::{load, SceneArgs, UsageError, EXIT_NOT_CONVERGED, EXIT_NOT_VERIFIED};
@@ -22,14 +23,16 @@ pub struct FitArgs {
     /// The measured motion (CSV): a column `t` and any of the scene's coordinates, named
     /// as in trajectory.csv; optional columns sigma_<coordinate> give each value's
     /// standard deviation (default: equal weights, the covariance scaled by the residual
-    /// variance as curve_fit does). An empty cell is a value not measured.
+    /// variance as curve_fit does). An empty cell is a value not measured. Default: the
+    /// scene's `[fit] data`, relative to the scene file.
     #[arg(long, value_name = "FILE.csv")]
-    pub data: PathBuf,
+    pub data: Option<PathBuf>,
     /// The scene parameters to fit, comma-separated, each optionally with bounds:
     /// `NAME`, `NAME>=LO`, `NAME<=HI` or `NAME in [LO, HI]`, e.g. --free 'c>=0,mu in [0, 2]'
     /// (repeatable). Initial positions and velocities are fitted by writing them as
-    /// parameters in the scene (velocity = "v0").
-    #[arg(long, value_name = "NAME[,NAME…]", required = true)]
+    /// parameters in the scene (velocity = "v0"). Default: the scene's `[fit] free`,
+    /// which --free replaces as a whole.
+    #[arg(long, value_name = "NAME[,NAME…]")]
     pub free: Vec<String>,
     /// Output directory [default: out/<scene file name without .toml>-fit].
     #[arg(short, long, value_name = "DIR")]
@@ -43,7 +46,8 @@ pub struct FitArgs {
     pub fit_hessian: FitHessian,
     /// Where the trajectory starts: `data` (the data where they observe a coordinate, the
     /// solve at the starting values elsewhere), `solve` (the solve everywhere) or `auto`
-    /// (default: `data` for a scene without constraints, `solve` for one with them).
+    /// (default: `data` for a scene without constraints or data that observe every
+    /// coordinate, else `solve`).
     #[arg(long, value_name = "FROM", default_value = "auto", value_parser = super::by_name::<FitStart>(["auto", "data", "solve"]))]
     pub start: FitStart,
     /// Ipopt's tolerance of the fit (its scaled optimality error).
@@ -59,8 +63,8 @@ pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
     for n in &scene.notes {
         note!("note: {}: {n}", args.scenario.display());
     }
-    let settings = settings(&args)?;
-    let data = Data::read(&args.data, &scene)?;
+    let settings = settings(&args, &scene)?;
+    let data = Data::read(&data_path(&args, &scene)?, &scene)?;
     let dir = args.output.clone().unwrap_or_else(|| default_dir(&args.scenario));
     let (fitted, written) = fit::fit_into(&dir, &mut scene, &ov, &data, &settings)?;
     let fit_warnings = &fitted.report.warnings;
@@ -76,14 +80,23 @@ pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The fit's settings from the command line (a malformed `--free` is a usage error).
-fn settings(args: &FitArgs) -> Result<FitSettings> {
-    let free = args
-        .free
-        .iter()
-        .flat_map(|list| fit::split_list(list))
-        .map(|item| FreeParameter::parse(&item).map_err(|e| UsageError(format!("--free: {e}"))))
-        .collect::<Result<Vec<_>, _>>()?;
+/// The fit's settings from the command line, the free parameters from the scene's
+/// `[fit] free` when `--free` is not given (a malformed `--free`, or no free parameter
+/// anywhere, is a usage error; a malformed `[fit]` entry an error at its line).
+fn settings(args: &FitArgs, scene: &Scene) -> Result<FitSettings> {
+    let free = if args.free.is_empty() {
+        fit::free_of_scene(&scene.file)?
+    } else {
+        args.free
+            .iter()
+            .flat_map(|list| fit::split_list(list))
+            .map(|item| FreeParameter::parse(&item).map_err(|e| UsageError(format!("--free: {e}"))))
+            .collect::<Result<Vec<_>, _>>()?
+    };
+    if free.is_empty() {
+        let message = "no free parameter: name the parameters to fit with --free, or with free = [...] in the scene's [fit] table";
+        return Err(UsageError(format!("{}: {message}", args.scenario.display())).into());
+    }
     let mut settings = FitSettings::new(free);
     settings.hessian = args.fit_hessian;
     settings.start = args.start;
@@ -92,6 +105,21 @@ fn settings(args: &FitArgs) -> Result<FitSettings> {
         settings.max_iter = n;
     }
     Ok(settings)
+}
+
+/// `--data`, or the scene's `[fit] data` (relative to the scene file); neither is a usage
+/// error.
+fn data_path(args: &FitArgs, scene: &Scene) -> Result<PathBuf> {
+    if let Some(path) = &args.data {
+        return Ok(path.clone());
+    }
+    match fit::data_of_scene(&scene.file)? {
+        Some(path) => Ok(path),
+        None => {
+            let message = "no data: give --data FILE.csv, or data = \"FILE.csv\" in the scene's [fit] table";
+            Err(UsageError(format!("{}: {message}", args.scenario.display())).into())
+        }
+    }
 }
 
 /// `out/<stem>-fit`.

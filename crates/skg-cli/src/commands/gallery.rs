@@ -223,8 +223,26 @@ how walls are drawn: `skg-solve plot path --help`.\n"
         let _ = writeln!(s, "![{} path](img/gallery/{}.png)\n", e.name, e.stem);
         let _ = writeln!(s, "![{} frames](img/gallery/{}_frames.png)", e.name, e.stem);
     }
+    s.push_str(FITS);
     s
 }
+
+/// The page's last section: the fits of the shipped examples, whose pictures are made by
+/// `skg-solve fit` and `skg-solve plot fit` (not by the gallery, which solves scenes).
+const FITS: &str = "\n## Fits\n\n\
+The shipped fits (`examples/fit/`, [fitting.md](fitting.md)): the data (points, with error bars of one standard \
+deviation where the data give them) against the fitted motion (lines), and the residuals. Made from the \
+repository root by\n\n```sh\n\
+skg-solve fit examples/fit/double_pendulum.toml -o out/double_pendulum-fit\n\
+skg-solve plot fit out/double_pendulum-fit -o docs/img/fit_double_pendulum.png\n\
+skg-solve fit examples/fit/oscillator.toml -o out/oscillator-fit\n\
+skg-solve plot fit out/oscillator-fit -o docs/img/fit_oscillator.png\n```\n\n\
+The double pendulum's release angles, fitted from 1.9 and 2.4 rad to both masses' positions \
+([benchmarks.md](benchmarks.md#fitting)):\n\n\
+![double pendulum fit](img/fit_double_pendulum.png)\n\n\
+The damped oscillator's stiffness, damping and initial state, from positions with noise of standard \
+deviation 0.01:\n\n\
+![oscillator fit](img/fit_oscillator.png)\n";
 
 /// GitHub's anchor of a heading.
 fn anchor(heading: &str) -> String {

@@ -84,6 +84,21 @@ pub enum PlotKind {
         #[arg(long, default_value = "trajectory and energy")]
         title: String,
     },
+    /// A fit's data against its fitted motion (points with error bars of one standard
+    /// deviation where the data give them, lines), and the residuals: from the output
+    /// directory of `skg-solve fit` (its data.csv and trajectory.csv).
+    Fit {
+        /// The output directory of `skg-solve fit`.
+        #[arg(value_name = "DIR")]
+        dir: PathBuf,
+        /// Output path without extension (writes .svg and .png).
+        #[arg(short, long, value_name = "STEM")]
+        output: PathBuf,
+        /// Chart title [default: the scene's name from the fit's summary.json, else the
+        /// directory's name].
+        #[arg(long)]
+        title: Option<String>,
+    },
 }
 
 #[derive(Args)]
@@ -138,6 +153,14 @@ pub fn run(kind: PlotKind, quiet: bool) -> Result<ExitCode> {
             let r = reference.or_else(verification_reference).as_deref().map(Table::read).transpose()?;
             plot::trajectory(&sols, r.as_ref(), &title, &out)?
         }
+        PlotKind::Fit { dir, output, title } => {
+            let data = Table::read(&dir.join(skg_core::fit::DATA_FILE))?;
+            let (trajectory, pairing) = Table::read_paired(&dir.join("trajectory.csv"))?;
+            if let Some(w) = pairing.warning(&dir.join("trajectory.csv")) {
+                note!("warning: {w}");
+            }
+            plot::fit(&data, &trajectory, &title.unwrap_or_else(|| fit_title(&dir)), &output)?
+        }
     };
     if !quiet {
         for w in written {
@@ -158,6 +181,14 @@ impl ResultsPlotArgs {
             format!("{kind}{name}")
         })
     }
+}
+
+/// `fit: <scene name>` from a fit's summary.json, else `fit: <directory name>`.
+fn fit_title(dir: &Path) -> String {
+    let summary = std::fs::read_to_string(dir.join("summary.json")).ok().and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+    let name = summary.as_ref().and_then(|s| s["scene"].as_str().map(str::to_string));
+    let name = name.unwrap_or_else(|| dir.file_name().map_or(dir.display().to_string(), |n| n.to_string_lossy().into_owned()));
+    format!("fit: {name}")
 }
 
 /// The `--where COLUMN=VALUE` filters as (column, value) pairs.

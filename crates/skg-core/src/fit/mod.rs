@@ -14,7 +14,8 @@
 //! In the order of a fit:
 //! 1. the settings are checked against the scene: the free parameters are parameters,
 //!    their starting values lie within their bounds, and they do not move the time grid
-//!    ([`FitSettings`], [`FreeParameter`], with `free.rs`);
+//!    ([`FitSettings`], [`FreeParameter`], with `free.rs`; the scene's `[fit]` table,
+//!    read by `table.rs`, gives them when the caller does not);
 //! 2. the data are read and checked against the scene ([`Data`], `data.rs`) and become
 //!    rows of weights over the trajectory's unknowns, interpolated at the data's times
 //!    consistently with the operator (`observe.rs`);
@@ -46,6 +47,7 @@ mod problem;
 mod report;
 mod start;
 mod statistics;
+mod table;
 
 use std::fmt;
 use std::str::FromStr;
@@ -73,6 +75,7 @@ pub use files::{fit_into, write_fit, FitIntoError, FitWritten, DATA_FILE, FITTED
 pub use free::{split_list, FreeParameter, FreeParameterError};
 pub use report::{CovarianceReport, DataReport, FitReport, MisfitReport, ParameterReport};
 pub use statistics::{covariance, undetermined, SINGULAR};
+pub use table::{data_of_scene, free_of_scene};
 
 /// The Hessian of the Lagrangian given to Ipopt.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
@@ -90,10 +93,11 @@ pub enum FitHessian {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum FitStart {
-    /// [`FitStart::Data`] for a scene without constraints, [`FitStart::Solve`] for one
-    /// with constraints: the data put in place of some coordinates violate the
-    /// constraints that tie them to the others, and Ipopt then starts far from
-    /// feasibility.
+    /// [`FitStart::Data`] for a scene without constraints or data that observe every
+    /// coordinate, [`FitStart::Solve`] otherwise: the data put in place of some
+    /// coordinates violate the constraints that tie them to the others, and Ipopt then
+    /// starts far from feasibility (data of every coordinate satisfy the constraints up to
+    /// their noise).
     #[default]
     Auto,
     /// The data themselves where they observe a coordinate (interpolated at the nodes
@@ -199,7 +203,7 @@ impl FitSettings {
     /// The defaults for these free parameters: exact Hessian, [`FitStart::Auto`],
     /// [`DEFAULT_TOL`], [`DEFAULT_MAX_ITER`].
     pub fn new(free: Vec<FreeParameter>) -> FitSettings {
-        FitSettings { free, hessian: FitHessian::Exact, start: FitStart::Data, tol: DEFAULT_TOL, max_iter: DEFAULT_MAX_ITER }
+        FitSettings { free, hessian: FitHessian::Exact, start: FitStart::Auto, tol: DEFAULT_TOL, max_iter: DEFAULT_MAX_ITER }
     }
 
     /// The names of the free parameters.
@@ -377,7 +381,7 @@ impl Problem<'_> {
         }
         let mut q = start.q.clone();
         let start_from_data = match settings.start {
-            FitStart::Auto => self.scene.constraints.is_empty(),
+            FitStart::Auto => self.scene.constraints.is_empty() || data.coordinates.len() == self.scene.coordinates.len(),
             FitStart::Data => true,
             FitStart::Solve => false,
         };

@@ -1,6 +1,6 @@
 //! The scene file as written: [`SceneFile`], the TOML document, made of one part per
 //! table (`[scene]`, `[[coordinates]]`, `[[constraints]]`, `[[walls]]`, `[time]`,
-//! `[discretization]`, `[solver]`, `[verify]`), each named after what it holds. Values
+//! `[discretization]`, `[solver]`, `[verify]`, `[fit]`), each named after what it holds. Values
 //! keep their byte spans, so that later errors point into the file.
 
 use std::fmt;
@@ -209,6 +209,20 @@ pub struct SolverSpec {
     pub time_limit: Option<Spanned<f64>>,
 }
 
+/// The `[fit]` table: what `skg-solve fit SCENE` fits when its command line does not say
+/// (read by the fit, `skg_core::fit`, which checks the entries; docs/fitting.md).
+#[derive(Debug, Clone, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct FitSpec {
+    /// The free parameters, each `NAME`, `NAME>=LO`, `NAME<=HI` or `NAME in [LO, HI]`
+    /// as `--free` takes them.
+    #[serde(default)]
+    pub free: Vec<Spanned<String>>,
+    /// The data file (CSV), relative to the scene file's directory.
+    #[serde(default)]
+    pub data: Option<Spanned<String>>,
+}
+
 /// The value of a pass-through Ipopt option: integer, number or string, as Ipopt's
 /// option has that type. An integer outside Ipopt's `int` range is a number.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -278,6 +292,9 @@ pub struct SceneFile {
     /// `[verify]`.
     #[serde(default)]
     pub verify: VerifySpec,
+    /// `[fit]`: the free parameters and the data of `skg-solve fit SCENE`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<FitSpec>,
     /// Path and source text, for error positions.
     #[serde(skip)]
     pub origin: Origin,

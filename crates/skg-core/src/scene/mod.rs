@@ -18,7 +18,7 @@
 //! **What it holds**, one part per file:
 //! * `file.rs`: [`SceneFile`], the TOML document, with one part per table
 //!   ([`SceneMeta`], [`CoordinateSpec`], [`ConstraintSpec`], [`WallSpec`], [`TimeSpec`],
-//!   [`DiscretizationSpec`], [`SolverSpec`], [`VerifySpec`]);
+//!   [`DiscretizationSpec`], [`SolverSpec`], [`VerifySpec`], [`FitSpec`]);
 //! * `location.rs`: [`Location`] and [`Origin`] (`file:line:column` of a value) and the
 //!   reading of TOML ([`read_toml`], [`parse_toml`], [`TomlError`]); `error.rs`:
 //!   [`SceneError`];
@@ -60,8 +60,8 @@ mod tests;
 
 pub use error::{readable_number, SceneError};
 pub use file::{
-    ConstraintSpec, CoordinateSpec, DiscretizationSpec, IpoptValue, NumOrExpr, SceneFile, SceneMeta, SolverSpec, TimeSpec, VerifySpec,
-    WallSpec,
+    ConstraintSpec, CoordinateSpec, DiscretizationSpec, FitSpec, IpoptValue, NumOrExpr, SceneFile, SceneMeta, SolverSpec, TimeSpec,
+    VerifySpec, WallSpec,
 };
 pub use location::{parse_toml, read_toml, Location, Origin, TomlError};
 pub use names::{ExpressionNames, InvalidName, RESERVED, TIME, VELOCITY_SUFFIX};

@@ -108,8 +108,8 @@ class FitResult:
 
 def fit(
     scene: Union[PathLike, Scene],
-    data: Any,
-    free: Union[str, Sequence[str]],
+    data: Any = None,
+    free: Optional[Union[str, Sequence[str]]] = None,
     *,
     bounds: Optional[Mapping[str, Bound]] = None,
     out: Optional[PathLike] = None,
@@ -121,7 +121,9 @@ def fit(
     tol: Optional[float] = None,
     max_iter: Optional[int] = None,
 ) -> FitResult:
-    """Fit the scene parameters ``free`` to ``data`` as ``skg-solve fit`` does.
+    """Fit the scene parameters ``free`` to ``data`` as ``skg-solve fit`` does; either,
+    when not given, from the scene's ``[fit]`` table (``free``, and ``data`` relative to
+    the scene file).
 
     ``data``: a CSV path, a pandas DataFrame or a mapping of column names to arrays, with
     a column ``t``, any of the scene's coordinates and optional ``sigma_<coordinate>``
@@ -129,7 +131,8 @@ def fit(
     bounds (``"c>=0"``, ``"mu in [0, 2]"``); ``bounds`` adds bounds by name
     (``{"c": (0, None)}``). The scene's values (with ``set``) are the starting values.
     ``hessian``: ``"exact"`` (default) or ``"limited-memory"``; ``start``: ``"auto"``
-    (default: the data for a scene without constraints, else the solve), ``"data"`` or
+    (default: the data for a scene without constraints or data of every coordinate,
+    else the solve), ``"data"`` or
     ``"solve"``; ``tol``, ``max_iter``: Ipopt's. With ``out`` the files of
     the command line are written there (trajectory.csv, reference.csv, data.csv,
     fitted.toml, summary.json).
@@ -139,10 +142,12 @@ def fit(
     undetermined combination is named), :class:`SceneError`, :class:`SolveError`. A fit
     that did not converge or verify is returned: check ``trusted``.
     """
+    if free is None and bounds:
+        raise ValueError("bounds: give free as well (the bounds of the scene's [fit] free are written in it)")
     native = _skg.fit(
         scene_arg(scene),
-        _columns(data),
-        _free_items(free, bounds),
+        None if data is None else _columns(data),
+        None if free is None else _free_items(free, bounds),
         out=None if out is None else os.fspath(out),
         nodes=nodes,
         set=None if set is None else plain(dict(set), "set"),
