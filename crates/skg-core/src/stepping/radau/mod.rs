@@ -31,9 +31,14 @@
 //!
 //! The systems are small (twice the coordinates: at most a few hundred unknowns), so
 //! `J` is dense and the systems are factored by nalgebra's LU (real, and complex for the
-//! conjugate pair). `J` is the caller's when it gives one, else forward differences of
-//! `f` (one evaluation per unknown, as RADAU5 does; they affect only the iteration's
-//! speed, never the converged stages).
+//! conjugate pair). `J` is the caller's when it gives one: for a scene's equations the
+//! model's exact Jacobian, the saddle-point solve for the accelerations differentiated
+//! ([`Model::state_jacobian`](crate::model::Model::state_jacobian),
+//! docs/mathematics.md#11-the-jacobian-of-the-time-stepping), which costs one solve with
+//! the accelerations' factored matrix instead of one evaluation of `f` per unknown.
+//! Without one (a plain right-hand side that is not a model's, as in this module's
+//! tests), `J` is taken by forward differences of `f`, as RADAU5 does. Either way `J`
+//! affects only the iteration's speed, never the converged stages.
 //!
 //! # Why not a crate
 //! `diffsol` (BDF and ESDIRK methods) was evaluated (docs/benchmarks.md#stiff-scenes):
