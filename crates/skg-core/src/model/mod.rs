@@ -48,9 +48,9 @@
 //! forces; `derivatives.rs`, the mechanics, the density `s` and its derivative tapes
 //! ([`PairTape`]); `physical.rs`, the physical quantities at a state ([`Physical`]) and
 //! the accelerations; `jacobian.rs`, the exact Jacobian of the accelerations in the
-//! state, for implicit time stepping ([`Model::state_jacobian`]); `geometry.rs`, the walls' geometry; `initial.rs`, the checks of
-//! the initial state and of a solution's nodes; `parameters.rs`, a fit's free
-//! parameters.
+//! state, for implicit time stepping ([`Model::state_jacobian`]); `geometry.rs`, the
+//! walls' geometry; `initial.rs`, the checks of the initial state and of a solution's
+//! nodes; `parameters.rs`, a fit's free parameters.
 //!
 //! **Place in the flow.** After the scene: it uses [`scene`](crate::scene) (the resolved
 //! [`Scene`] and its errors) and the expression language, and nothing later. The
@@ -220,7 +220,8 @@ impl Model {
         Ok(model)
     }
 
-    /// A workspace large enough for every tape of this model.
+    /// A workspace large enough for every tape of this model (the exact Jacobian's tape,
+    /// compiled on first use, grows it when it needs more: [`Model::state_jacobian`]).
     pub fn workspace(&self) -> Workspace {
         let mut tapes = vec![
             &self.density,
