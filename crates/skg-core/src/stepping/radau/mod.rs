@@ -325,7 +325,10 @@ impl<'o> Stepper<'o> {
                 self.reject(quot, &mut stats);
                 continue;
             }
-            let (t_new, y_new) = (self.t + h, self.y.iter().zip(&step.z[2]).map(|(y, z)| y + z).collect::<Vec<f64>>());
+            // A step sized to reach the next requested time ends on it exactly: `t + (target
+            // − t)` may fall an ulp short, and the next step would be that ulp, an underflow.
+            let t_new = if h == times[next] - self.t { times[next] } else { self.t + h };
+            let y_new: Vec<f64> = self.y.iter().zip(&step.z[2]).map(|(y, z)| y + z).collect();
             if !accept(self.t, &self.y, t_new, &y_new) {
                 self.reject(2.0, &mut stats);
                 continue;
