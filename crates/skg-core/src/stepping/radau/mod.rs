@@ -34,8 +34,9 @@
 //! conjugate pair). `J` is the caller's when it gives one: for a scene's equations the
 //! model's exact Jacobian, the saddle-point solve for the accelerations differentiated
 //! ([`Model::state_jacobian`](crate::model::Model::state_jacobian),
-//! docs/mathematics.md#11-the-jacobian-of-the-time-stepping), which costs one solve with
-//! the accelerations' factored matrix instead of one evaluation of `f` per unknown.
+//! docs/mathematics.md#11-the-jacobian-of-the-time-stepping), which costs about one
+//! evaluation of `f` and one solve with many right-hand sides instead of one evaluation
+//! of `f` per unknown.
 //! Without one (a plain right-hand side that is not a model's, as in this module's
 //! tests), `J` is taken by forward differences of `f`, as RADAU5 does. Either way `J`
 //! affects only the iteration's speed, never the converged stages.
