@@ -167,3 +167,76 @@ fn discrete_systems_are_square_and_nonsingular_at_small_n() {
         }
     }
 }
+
+/// The exact Jacobian `∂(v, q̈)/∂(q, v)` of the time stepping's right-hand side
+/// (`Model::state_jacobian`, the saddle-point solve differentiated) against central
+/// differences of the accelerations, at random states: every shipped scene (position
+/// and velocity constraints, walls with friction, forces depending on time), a damped
+/// spring, a chain of rigid links, and stiff scenes (a damped nonholonomic disk, a chain
+/// on stiff springs). On a scene with walls, half the states are put inside a wall's
+/// width, where its force acts.
+#[test]
+fn the_state_jacobian_matches_finite_differences_of_the_accelerations() {
+    use skg_core::model::Model;
+    let stiff = |name: &str| {
+        let path = common::root().join("crates/skg-core/tests/scenes/stiff").join(format!("{name}.toml"));
+        skg_core::scene::SceneFile::load(&path).unwrap().resolve(&Overrides::default()).unwrap()
+    };
+    let mut scenes: Vec<(String, _)> = common::SHIPPED.iter().map(|n| (n.to_string(), common::load(n, &Overrides::default()))).collect();
+    for name in ["damped_oscillator", "chain4"] {
+        scenes.push((name.to_string(), common::load(name, &Overrides::default())));
+    }
+    for name in ["damped_yaw_disk", "stiff_chain"] {
+        scenes.push((name.to_string(), stiff(name)));
+    }
+    let mut rng = common::Rng(0x2545_f491_4f6c_dd1d);
+    for (name, scene) in &scenes {
+        let model = Model::build(scene).unwrap();
+        let d = model.layout.d;
+        let mut ws = model.workspace();
+        for sample in 0..6 {
+            let t = scene.t_start + rng.uniform() * (scene.t_end - scene.t_start);
+            let mut q: Vec<f64> = scene.initial_q.iter().map(|x| x + 0.05 * rng.signed()).collect();
+            let v: Vec<f64> = scene.initial_v.iter().map(|x| x + 0.5 * rng.signed()).collect();
+            if !model.walls.is_empty() && sample % 2 == 1 {
+                // One Newton step to a gap of −σ·u, u in [0, 2): inside the wall's width.
+                let j = rng.below(model.walls.len());
+                let target = -model.walls[j].width * 2.0 * rng.uniform();
+                let h = model.wall_gaps(t, &q)[j];
+                let n = model.wall_normal(j, t, &q);
+                let nn: f64 = n.iter().map(|x| x * x).sum();
+                q.iter_mut().zip(&n).for_each(|(x, ni)| *x -= (h - target) * ni / nn);
+            }
+            let mut jac = DMatrix::zeros(2 * d, 2 * d);
+            model.state_jacobian(t, &q, &v, &mut ws, &mut jac).unwrap();
+            for c in 0..2 * d {
+                let x = if c < d { q[c] } else { v[c - d] };
+                let step = 1e-6 * (1.0 + x.abs());
+                let mut at = |delta: f64| {
+                    let (mut qs, mut vs) = (q.clone(), v.clone());
+                    if c < d {
+                        qs[c] += delta;
+                    } else {
+                        vs[c - d] += delta;
+                    }
+                    model.accelerations(t, &qs, &vs, &mut ws).unwrap().0
+                };
+                let (plus, minus) = (at(step), at(-step));
+                for i in 0..d {
+                    let fd = (plus[i] - minus[i]) / (2.0 * step);
+                    // Relative to the row's largest entry: a stiff row holds entries of order k.
+                    let scale = (0..2 * d).map(|k| jac[(d + i, k)].abs()).fold(1.0, f64::max);
+                    let exact = jac[(d + i, c)];
+                    assert!(
+                        (exact - fd).abs() <= 1e-6 * scale,
+                        "{name}, state {sample}: ∂a_{i}/∂x_{c} exact {exact:e}, finite difference {fd:e} (row scale {scale:e})"
+                    );
+                }
+                // The kinematic rows: ∂q̇/∂(q, v) = [0 I].
+                for i in 0..d {
+                    assert_eq!(jac[(i, c)], if c == d + i { 1.0 } else { 0.0 }, "{name}: ∂q̇_{i}/∂x_{c}");
+                }
+            }
+        }
+    }
+}

@@ -48,6 +48,12 @@ impl WallGeometry {
         geometry
     }
 
+    /// The model's graph, which the walls' geometry keeps (the exact Jacobian of the
+    /// time stepping is built on a copy of it when first needed).
+    pub(super) fn graph(&self) -> &Graph {
+        &self.graph
+    }
+
     /// Evaluate `exprs` at (t, q, v); `v` may be empty where the expressions do not use it.
     fn eval(&self, exprs: &[ExprId], t: f64, q: &[f64], v: &[f64]) -> Vec<f64> {
         let lay = self.layout;

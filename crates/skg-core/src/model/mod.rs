@@ -47,9 +47,10 @@
 //! expressions parsed into one graph; `forces.rs`, the walls' normal and friction
 //! forces; `derivatives.rs`, the mechanics, the density `s` and its derivative tapes
 //! ([`PairTape`]); `physical.rs`, the physical quantities at a state ([`Physical`]) and
-//! the accelerations; `geometry.rs`, the walls' geometry; `initial.rs`, the checks of
-//! the initial state and of a solution's nodes; `parameters.rs`, a fit's free
-//! parameters.
+//! the accelerations; `jacobian.rs`, the exact Jacobian of the accelerations in the
+//! state, for implicit time stepping ([`Model::state_jacobian`]); `geometry.rs`, the
+//! walls' geometry; `initial.rs`, the checks of the initial state and of a solution's
+//! nodes; `parameters.rs`, a fit's free parameters.
 //!
 //! **Place in the flow.** After the scene: it uses [`scene`](crate::scene) (the resolved
 //! [`Scene`] and its errors) and the expression language, and nothing later. The
@@ -60,6 +61,7 @@ mod expressions;
 mod forces;
 mod geometry;
 mod initial;
+mod jacobian;
 mod layout;
 mod parameters;
 mod physical;
@@ -71,6 +73,7 @@ use derivatives::{density, DerivativeTapes, Mechanics};
 use expressions::Expressions;
 use forces::{add_friction_force, add_normal_force};
 use geometry::WallGeometry;
+use jacobian::LazyJacobian;
 use physical::{physical_tape, PhysLayout};
 
 pub use derivatives::PairTape;
@@ -124,6 +127,8 @@ pub struct Model {
     phys: Tape,
     phys_layout: PhysLayout,
     geometry: WallGeometry,
+    /// The exact Jacobian of the time stepping's right-hand side, compiled on first use.
+    jacobian: LazyJacobian,
 }
 
 /// Scratch memory for evaluating tapes without allocation.
@@ -209,12 +214,14 @@ impl Model {
             phys,
             phys_layout,
             geometry: WallGeometry::derive(g, lay, e.walls, theta),
+            jacobian: LazyJacobian { mechanics: mech, compiled: std::sync::OnceLock::new() },
         };
         model.validate_initial_state(scene)?;
         Ok(model)
     }
 
-    /// A workspace large enough for every tape of this model.
+    /// A workspace large enough for every tape of this model (the exact Jacobian's tape,
+    /// compiled on first use, grows it when it needs more: [`Model::state_jacobian`]).
     pub fn workspace(&self) -> Workspace {
         let mut tapes = vec![
             &self.density,

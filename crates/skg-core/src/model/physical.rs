@@ -205,6 +205,14 @@ impl Model {
     /// the index-reduced system
     /// `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v − ∂p/∂t; −(∂g/∂q) v − ∂g/∂t]`.
     pub fn accelerations(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace) -> Result<(Vec<f64>, Vec<f64>), DynamicsError> {
+        let d = self.layout.d;
+        let (_, sol) = self.saddle_point(t, q, v, ws)?;
+        Ok((sol.rows(0, d).iter().copied().collect(), sol.rows(d, self.layout.n).iter().copied().collect()))
+    }
+
+    /// The factored matrix `[W Gᵀ; G 0]` at (t, q, v) and the solution `[q̈; λ]` of the
+    /// system of [`Model::accelerations`] (the Jacobian solves with the same matrix).
+    pub(super) fn saddle_point(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace) -> Result<(SaddleLu, DVector<f64>), DynamicsError> {
         let (d, n) = (self.layout.d, self.layout.n);
         let ph = self.physical(t, q, v, ws);
         let mut a = DMatrix::zeros(d + n, d + n);
@@ -216,10 +224,14 @@ impl Model {
             a.view_mut((d, 0), (n, d)).copy_from(&ph.gv);
             rhs.rows_mut(d, n).copy_from(&ph.constraint_acceleration(v));
         }
-        let sol = a.lu().solve(&rhs).ok_or(DynamicsError::SingularMassMatrix)?;
+        let lu = a.lu();
+        let sol = lu.solve(&rhs).ok_or(DynamicsError::SingularMassMatrix)?;
         if sol.iter().any(|x| !x.is_finite()) {
             return Err(DynamicsError::NonFinite);
         }
-        Ok((sol.rows(0, d).iter().copied().collect(), sol.rows(d, n).iter().copied().collect()))
+        Ok((lu, sol))
     }
 }
+
+/// The LU factorization of `[W Gᵀ; G 0]`.
+pub(super) type SaddleLu = nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;

@@ -13,7 +13,7 @@ use super::radau::{self, Jacobian};
 /// Integrate `y' = f(t, y)` from `times[0]` with `y(times[0]) = y0` by `opts.stepper`,
 /// returning the state at every requested time; `accept` is a test every step must pass
 /// besides the error estimate ([`ode::integrate_checked`]), `jacobian` the Jacobian
-/// `∂f/∂y` for the implicit stepper (forward differences without it). The statistics
+/// `∂f/∂y` for the implicit stepper (a model's is exact, [`Model::state_jacobian`](crate::model::Model::state_jacobian); forward differences without one). The statistics
 /// add up both steppers' work, and the method names what ran.
 pub fn integrate_with<F, C>(
     mut f: F,

@@ -31,9 +31,15 @@
 //!
 //! The systems are small (twice the coordinates: at most a few hundred unknowns), so
 //! `J` is dense and the systems are factored by nalgebra's LU (real, and complex for the
-//! conjugate pair). `J` is the caller's when it gives one, else forward differences of
-//! `f` (one evaluation per unknown, as RADAU5 does; they affect only the iteration's
-//! speed, never the converged stages).
+//! conjugate pair). `J` is the caller's when it gives one: for a scene's equations the
+//! model's exact Jacobian, the saddle-point solve for the accelerations differentiated
+//! ([`Model::state_jacobian`](crate::model::Model::state_jacobian),
+//! docs/mathematics.md#11-the-jacobian-of-the-time-stepping), which costs about one
+//! evaluation of `f` and one solve with many right-hand sides instead of one evaluation
+//! of `f` per unknown.
+//! Without one (a plain right-hand side that is not a model's, as in this module's
+//! tests), `J` is taken by forward differences of `f`, as RADAU5 does. Either way `J`
+//! affects only the iteration's speed, never the converged stages.
 //!
 //! # Why not a crate
 //! `diffsol` (BDF and ESDIRK methods) was evaluated (docs/benchmarks.md#stiff-scenes):
@@ -320,7 +326,10 @@ impl<'o> Stepper<'o> {
                 self.reject(quot, &mut stats);
                 continue;
             }
-            let (t_new, y_new) = (self.t + h, self.y.iter().zip(&step.z[2]).map(|(y, z)| y + z).collect::<Vec<f64>>());
+            // A step sized to reach the next requested time ends on it exactly: `t + (target
+            // − t)` may fall an ulp short, and the next step would be that ulp, an underflow.
+            let t_new = if h == times[next] - self.t { times[next] } else { self.t + h };
+            let y_new: Vec<f64> = self.y.iter().zip(&step.z[2]).map(|(y, z)| y + z).collect();
             if !accept(self.t, &self.y, t_new, &y_new) {
                 self.reject(2.0, &mut stats);
                 continue;

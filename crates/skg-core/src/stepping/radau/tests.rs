@@ -163,3 +163,22 @@ fn bad_input_and_the_step_budget_are_errors() {
     let budget = OdeOptions { max_steps: 3, ..opts(1e-12, 1e-12) };
     assert!(matches!(integrate(f, None, &[1.0], &[0.0, 100.0], &budget, no_check), Err(OdeError::MaxSteps { .. })));
 }
+
+/// A step sized to reach a requested time ends on it exactly. From `t` below half of the
+/// target `T`, `t + (T − t)` can round an ulp short of `T`; the step after it would be
+/// that ulp, reported as a step-size underflow (the damped yaw disk at rtol 1e-12 stopped
+/// so at its first node, `2π/127`). A fast layer, then long steps: targets `2πj/127`.
+#[test]
+fn a_step_sized_to_a_requested_time_ends_on_it() {
+    let f = |_: f64, y: &[f64], dy: &mut [f64]| {
+        dy[0] = -4000.0 * y[0];
+        dy[1] = 5.0;
+        Ok(())
+    };
+    for j in 1..=127 {
+        let target = 2.0 * std::f64::consts::PI * j as f64 / 127.0;
+        let sol = integrate(f, None, &[1.0, 0.0], &[0.0, target], &opts(1e-12, 1e-12), no_check)
+            .unwrap_or_else(|e| panic!("target {target}: {e}"));
+        assert!((sol.states[1][1] - 5.0 * target).abs() < 1e-11, "target {target}: {:?}", sol.states[1]);
+    }
+}
