@@ -241,6 +241,9 @@ fn a_double_pendulums_release_angles_are_recovered_where_shooting_stops_short() 
     let f = fit(&scene, &ov, &data, &settings).unwrap();
     assert_recovered(&f, &[("a1", 2.0), ("a2", 2.5)], 1e-6);
     assert!(f.trusted(), "verification: {}", f.outcome.verification.reason);
+    // fitted.toml's [fit] table names the copy of the data written beside it.
+    let fitted = SceneFile::parse(&f.fitted_toml, "fitted.toml").unwrap();
+    assert_eq!(fitted.fit.as_ref().and_then(|t| t.data.as_ref()).map(|d| d.get_ref().as_str()), Some("data.csv"));
 }
 
 #[test]

@@ -303,6 +303,11 @@ pub(super) fn fitted_toml(scene: &Scene, overrides: &Overrides, report: &FitRepo
             edits.push((spanned.span(), new));
         }
     }
+    // The data are written beside fitted.toml: its `[fit] data` names that copy, so that
+    // the fitted scene can be fitted again from its own directory.
+    if let Some(data) = file.fit.as_ref().and_then(|f| f.data.as_ref()) {
+        edits.push((data.span(), format!("{:?}", super::files::DATA_FILE)));
+    }
     edits.sort_by_key(|e| std::cmp::Reverse(e.0.start));
     let mut out = text.clone();
     for (span, new) in edits {
