@@ -180,7 +180,7 @@ fn guess_from(q: &[Vec<f64>], action: &skg_core::discrete::action::Action) -> Ve
 }
 
 /// A system with subnormal entries reaches Ipopt without crashing MUMPS: the pendulum of
-/// length 1e-307 (found by the fuzz run, seed 238), whose KKT matrix had entries below
+/// length 1e-307 (1e-320 in the fuzz run that found it, seed 238), whose KKT matrix had entries below
 /// the smallest normal number, made Debian's MUMPS corrupt its memory in the analysis
 /// ("double free or corruption", a segmentation fault), with Ipopt asked for and after
 /// Newton handed over. Now both return an outcome (one that cannot be trusted: the

@@ -166,8 +166,8 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
 
 /// Set the subnormal entries of a matrix handed to Ipopt to zero. Debian's MUMPS 5.5
 /// corrupts its memory in the analysis of a KKT matrix with subnormal entries (a
-/// pendulum of length 1e-307, found by the fuzz run: "double free or corruption", or a
-/// segmentation fault); an entry below the smallest normal number, 2.2e-308, is zero to
+/// pendulum of length 1e-320, found by the fuzz run, or 1e-307: "double free or
+/// corruption", or a segmentation fault); an entry below the smallest normal number, 2.2e-308, is zero to
 /// any factorization's precision next to the others.
 fn flush_subnormals(values: &mut [f64]) {
     values.iter_mut().filter(|v| v.is_subnormal()).for_each(|v| *v = 0.0);
