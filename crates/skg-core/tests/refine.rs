@@ -4,8 +4,10 @@
 
 mod common;
 
-use skg_core::scene::{Overrides, Scene, SceneFile};
+use skg_core::scene::{Backend, Overrides, Scene, SceneFile};
+use skg_core::solve::backend::SolverStatus;
 use skg_core::solve::{self, Outcome};
+use skg_core::stepping::verify::VerifyStatus;
 
 fn resolve(text: &str, ov: &Overrides) -> Scene {
     SceneFile::parse(text, "unseen.toml").unwrap().resolve(ov).unwrap()
@@ -158,14 +160,31 @@ fn auto_without_refine_keeps_the_grid() {
     assert!(max_error(&o, underdamped_exact) <= 1e-4);
 }
 
-/// A time limit stops the fallback ladder after the attempt that reached it, and says so.
+/// A time limit stops the backend inside its solve (here before its first step: the
+/// limit has passed by then) and the fallback ladder after that attempt, as not
+/// converged, unverified (the verification is not run), with a status that names the
+/// limit and a remedy that raises it; with either backend.
 #[test]
-fn the_time_limit_stops_the_ladder() {
-    let ov = Overrides { time_limit: Some(1e-6), ..Overrides::default() };
-    let scene = common::load("damped_oscillator", &ov);
-    let o = solve::solve_scene(&scene).unwrap();
-    assert_eq!(o.attempts.len(), 1, "{:?}", o.attempts);
-    assert!(o.warnings.iter().any(|w| w.contains("stopped at the time limit")), "{:?}", o.warnings);
+fn the_time_limit_stops_the_solve_and_the_ladder() {
+    for backend in [Backend::Ipopt, Backend::Newton] {
+        let ov = Overrides { time_limit: Some(1e-6), backend: Some(backend), ..Overrides::default() };
+        let scene = common::load("damped_oscillator", &ov);
+        let o = solve::solve_scene(&scene).unwrap();
+        assert_eq!(o.attempts.len(), 1, "{backend:?}: {:?}", o.attempts);
+        assert!(o.warnings.iter().any(|w| w.contains("stopped at the time limit")), "{backend:?}: {:?}", o.warnings);
+        assert!(!o.converged(), "{backend:?}");
+        let SolverStatus::TimeLimitReached { backend: stopped, limit_s, elapsed_s } = o.status.solver() else {
+            panic!("{backend:?}: {}", o.status)
+        };
+        assert_eq!((stopped, limit_s), (backend, 1e-6));
+        assert!(elapsed_s >= limit_s, "{elapsed_s}");
+        assert!(o.status.to_string().contains("time limit of 0.000001 s"), "{}", o.status);
+        assert_eq!(o.verification.status, VerifyStatus::Unverified);
+        assert!(o.verification.reason.contains("time limit"), "{}", o.verification.reason);
+        assert!(o.remedy.as_deref().is_some_and(|r| r.contains("raise the time limit (--time-limit")), "{:?}", o.remedy);
+        // Newton stopped at the limit is not handed over to Ipopt.
+        assert!(!o.backend.handed_over_to_ipopt);
+    }
 }
 
 /// A refinement ends at once, after its first grid, where more nodes would not cure the

@@ -10,7 +10,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use skg_core::output::{self, Written};
-use skg_core::scene::{Overrides, Scene};
+use skg_core::scene::{Backend, Overrides, Scene};
 use skg_core::solve;
 use skg_core::solve::backend::SolverStatus;
 use skg_core::stepping::verify::VerifyStatus;
@@ -42,7 +42,8 @@ pub struct SolveArgs {
     #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = clap::value_parser!(u64).range(2..=100_000_000))]
     pub max_nodes: Option<u64>,
     /// Seconds the whole solve may take (fallback ladder and refinement included),
-    /// checked between attempts: the best attempt so far is then reported.
+    /// checked between attempts and inside each solve's iterations: the best attempt so
+    /// far is then reported (exit 3 if the limit stopped it before it converged).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = super::positive)]
     pub time_limit: Option<f64>,
 }
@@ -51,7 +52,7 @@ pub struct SolveArgs {
 /// `Ipopt (after Newton failed)`.
 fn solver_name(outcome: &solve::Outcome) -> &'static str {
     match (outcome.status.solver(), outcome.backend.handed_over_to_ipopt) {
-        (SolverStatus::Newton(_), _) => "Newton",
+        (SolverStatus::Newton(_) | SolverStatus::TimeLimitReached { backend: Backend::Newton, .. }, _) => "Newton",
         (_, false) => "Ipopt",
         (_, true) => "Ipopt (after Newton failed)",
     }

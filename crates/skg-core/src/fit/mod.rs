@@ -494,7 +494,7 @@ fn solved_from_the_fit(fitted: &Scene, action: &Action, disc: &Discretization, z
     let fitted_model = Arc::new(Model::build(fitted)?);
     let (q, lambda) = states_of(action, z);
     let guess = Guess::States { q, lambda, description: "the fit's trajectory".into() };
-    let run = solve_global(fitted, &fitted_model, disc, &guess)?;
+    let run = solve_global(fitted, &fitted_model, disc, &guess, None)?;
     Ok(outcome(fitted, &fitted_model, run))
 }
 

@@ -25,7 +25,7 @@ pub(super) struct Start {
 /// Solve the scene at its starting values (one global solve from time stepping); when
 /// that does not converge, the time stepping itself.
 pub(super) fn start_states(scene: &Scene, model: &Arc<Model>, disc: &Discretization, times: &[f64]) -> Result<Start, FitError> {
-    let run = solve_global(scene, model, disc, &Guess::TimeStepping)?;
+    let run = solve_global(scene, model, disc, &Guess::TimeStepping, None)?;
     if run.solution.status.is_converged() {
         let tr = &run.solution.trajectory;
         let action = action_on(model, scene, disc, times)?;

@@ -37,6 +37,8 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::run::backend::SolverStatus;
+use super::run::deadline::{self, Deadline};
 use super::run::error::SolveError;
 use super::run::global::{solve_global, Run};
 use super::run::outcome::{Attempt, Method, Outcome, Work};
@@ -87,7 +89,7 @@ pub fn climb(
     disc: &Discretization,
     guess: &Guess,
     rungs: Rungs,
-    deadline: Option<Instant>,
+    deadline: Option<Deadline>,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Outcome, SolveError> {
     let mut ladder = Ladder {
@@ -103,8 +105,8 @@ pub fn climb(
         stopped: None,
     };
     let go_on = match scene.windows {
-        Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, model, disc, w))?,
-        None => ladder.attempt("one global solve", || solve_global(scene, model, disc, guess))?,
+        Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, model, disc, w, deadline))?,
+        None => ladder.attempt("one global solve", || solve_global(scene, model, disc, guess, deadline))?,
     };
     if !go_on || !scene.solver.fallback {
         return Ok(ladder.finish());
@@ -151,7 +153,7 @@ struct Ladder<'a> {
     /// When the ladder started.
     started: Instant,
     /// The whole solve's deadline (`--time-limit`), if any.
-    deadline: Option<Instant>,
+    deadline: Option<Deadline>,
     /// Why the ladder stopped before its rungs were done, if it did.
     stopped: Option<String>,
 }
@@ -170,7 +172,7 @@ impl Ladder<'_> {
             return false;
         }
         let elapsed = self.started.elapsed().as_secs_f64();
-        if self.deadline.is_some_and(|d| Instant::now() >= d) {
+        if deadline::passed(self.deadline) {
             self.stopped = Some(format!("the fallback ladder stopped at the time limit after {elapsed:.1} s"));
         } else if let Some(first) = self.tried.first() {
             let bound = (LADDER_COST_FACTOR * first.wall_s).max(LADDER_FLOOR_S);
@@ -220,7 +222,7 @@ impl Ladder<'_> {
 
     /// Step 2a; `Ok(true)` when it succeeded.
     fn coarse_to_fine(&mut self) -> Result<bool, SolveError> {
-        let (scene, model, disc) = (self.scene, self.model, self.disc.clone());
+        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.deadline);
         let coarse_nodes = (disc.nodes - 1) / 2 + 1;
         let coarse_disc = disc.with_nodes(coarse_nodes);
         // An adaptive grid's map is graded for the scene's nodes: on half of them its
@@ -230,7 +232,7 @@ impl Ladder<'_> {
             return Ok(false);
         }
         self.announce(&format!("coarse to fine (solving on {coarse_nodes} nodes first)"));
-        let coarse = solve_global(scene, model, &coarse_disc, &Guess::TimeStepping)?;
+        let coarse = solve_global(scene, model, &coarse_disc, &Guess::TimeStepping, deadline)?;
         self.preliminary(&coarse);
         let coarse = coarse.solution;
         if !coarse.status.is_converged() {
@@ -243,14 +245,16 @@ impl Ladder<'_> {
             lambda: linear(&coarse.trajectory.t, &coarse.trajectory.lambda, &times),
             description: format!("the solve on {coarse_nodes} nodes, interpolated onto the grid (cubic Hermite)"),
         };
-        self.attempt(&format!("coarse to fine (initial guess from {coarse_nodes} nodes)"), || solve_global(scene, model, &disc, &guess))?;
+        self.attempt(&format!("coarse to fine (initial guess from {coarse_nodes} nodes)"), || {
+            solve_global(scene, model, &disc, &guess, deadline)
+        })?;
         Ok(self.succeeded())
     }
 
     /// Step 2b; `Ok(true)` when it succeeded. The one rung that changes the scene (its
     /// walls' widths), and so builds models of its own.
     fn width_continuation(&mut self) -> Result<bool, SolveError> {
-        let (scene, model, disc) = (self.scene, self.model, self.disc.clone());
+        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.deadline);
         if scene.walls.is_empty() {
             return Ok(false);
         }
@@ -263,7 +267,7 @@ impl Ladder<'_> {
             self.announce(&format!("wall-width continuation (every wall width × {factor})"));
             let mut wide = scene.clone();
             wide.walls.iter_mut().for_each(|w| w.width *= factor);
-            let run = solve_global(&wide, &Arc::new(Model::build(&wide)?), &disc, &guess)?;
+            let run = solve_global(&wide, &Arc::new(Model::build(&wide)?), &disc, &guess, deadline)?;
             self.preliminary(&run);
             if run.solution.status.is_converged() {
                 guess = Guess::States {
@@ -279,7 +283,7 @@ impl Ladder<'_> {
             return Ok(false);
         };
         self.attempt(&format!("wall-width continuation (σ × {:?} down to × {last}, then the scene's σ)", WIDTH_FACTORS), || {
-            solve_global(scene, model, &disc, &guess)
+            solve_global(scene, model, &disc, &guess, deadline)
         })?;
         Ok(self.succeeded())
     }
@@ -288,19 +292,19 @@ impl Ladder<'_> {
     fn past_the_end(&mut self) -> Result<bool, SolveError> {
         let span = self.scene.t_end - self.scene.t_start;
         let windows = Windows { length: span * (1.0 + END_MARGIN), overlap: span * END_MARGIN };
-        let (scene, model, disc) = (self.scene, self.model, self.disc.clone());
+        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.deadline);
         if WindowGrid::new(scene, &disc, windows).is_err() || !self.may_go_on() {
             return Ok(false);
         }
         self.attempt(&format!("one solve {:.0} % past the end time", 100.0 * END_MARGIN), || {
-            window::solve_windows(scene, model, &disc, windows)
+            window::solve_windows(scene, model, &disc, windows, deadline)
         })?;
         Ok(self.succeeded())
     }
 
     /// Step 4: windows of halving length.
     fn windows(&mut self) -> Result<(), SolveError> {
-        let (scene, model, disc) = (self.scene, self.model, self.disc.clone());
+        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.deadline);
         let mut length = scene.windows.map_or(scene.t_end - scene.t_start, |w| w.length) / 2.0;
         loop {
             if !self.may_go_on() {
@@ -311,7 +315,7 @@ impl Ladder<'_> {
                 Ok(grid) if grid.nodes >= MIN_WINDOW_NODES => {}
                 _ => return Ok(()),
             }
-            self.attempt(&format!("windows of {length:.4} s"), || window::solve_windows(scene, model, &disc, windows))?;
+            self.attempt(&format!("windows of {length:.4} s"), || window::solve_windows(scene, model, &disc, windows, deadline))?;
             if self.succeeded() {
                 return Ok(());
             }
@@ -331,10 +335,16 @@ impl Ladder<'_> {
         let mut work = self.unlisted;
         work.add(&self.preliminary);
         attempts.iter().for_each(|a| work.add(&a.work));
+        // Whether the time limit stopped an attempt or the ladder (before the reported
+        // attempt leaves the list).
+        let timed_out = deadline::passed(self.deadline) || self.tried.iter().any(|t| stopped_at_time_limit(&t.outcome));
         let mut outcome = self.tried.swap_remove(chosen).outcome;
         outcome.timings.other_attempts_s = others_s;
         outcome.work = work;
-        outcome.remedy = (!outcome.trusted()).then(|| remedy(self.scene, &self.disc, &outcome, fallback_used, windows_tried));
+        outcome.remedy = (!outcome.trusted()).then(|| match self.deadline.filter(|_| timed_out) {
+            Some(d) => time_limit_remedy(d),
+            None => remedy(self.scene, &self.disc, &outcome, fallback_used, windows_tried),
+        });
         outcome.warnings.extend(self.stopped.take());
         outcome.attempts = attempts;
         outcome
@@ -360,6 +370,20 @@ impl Ladder<'_> {
 /// (a stiff scene spent 7 s on seven rungs that way).
 fn ends_the_ladder(o: &Outcome) -> bool {
     o.trusted() || (o.converged() && o.verification.status == VerifyStatus::Unverified)
+}
+
+/// Whether an attempt's backend was stopped at the time limit.
+fn stopped_at_time_limit(o: &Outcome) -> bool {
+    matches!(o.status.solver(), SolverStatus::TimeLimitReached { .. })
+}
+
+/// What to do about a solve that the time limit `d` stopped before it could be trusted.
+fn time_limit_remedy(d: Deadline) -> String {
+    format!(
+        "raise the time limit (--time-limit or [solver] time_limit, now {} s) to let the solve finish, or make it cheaper \
+         (fewer nodes, or windows)",
+        d.limit_s
+    )
 }
 
 /// The summary's record of one attempt.

@@ -27,7 +27,6 @@
 //! and the consumers (check, tune, the command line, Python) call [`solve_scene`].
 
 use std::sync::Arc;
-use std::time::{Duration, Instant};
 
 use crate::discrete::{Discretization, Grid};
 use crate::memory;
@@ -42,10 +41,11 @@ pub mod run;
 
 pub use choice::{adapt, cost, predict, refine};
 pub use linalg::{band, newton};
-pub use run::{backend, window};
+pub use run::{backend, deadline, window};
 
 pub use run::assess::{energy_drift_skip, outcome, sizes};
 pub use run::backend::SquareSolver;
+pub use run::deadline::Deadline;
 pub use run::error::{SolveError, WindowError};
 pub use run::global::{solve_global, Run};
 pub use run::outcome::{Attempt, Diagnostics, KineticLoss, Method, Outcome, RefinedGrid, Refinement, Settings, Sizes, Timings, Work};
@@ -66,7 +66,7 @@ pub fn solve_scene(scene: &Scene) -> Result<Outcome, SolveError> {
 /// [`solve_scene`], telling `progress` what each attempt is about to do ("2. coarse to
 /// fine (…)", "grid 2: SBP484 (natural) on 513 nodes"), for a progress display.
 pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<Outcome, SolveError> {
-    let deadline = deadline(scene.solver.time_limit);
+    let deadline = Deadline::after(scene.solver.time_limit);
     let chooses = scene.verify.refine || scene.choose_operator || scene.choose_grid;
     if !chooses {
         memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
@@ -114,10 +114,4 @@ fn adaptive_grid(scene: &Scene, model: &Model, own: &Discretization) -> Result<D
     }
     let (map, _) = adapt::motion_map(scene, model).map_err(|e| format!("the grid is uniform: {e}"))?;
     Ok(own.with_grid(Grid::Mapped(Arc::new(map))))
-}
-
-/// The moment a solve limited to `seconds` must end, if any: none for a limit beyond
-/// what the clock can represent (which no solve reaches).
-fn deadline(seconds: Option<f64>) -> Option<Instant> {
-    Instant::now().checked_add(Duration::try_from_secs_f64(seconds?).ok()?)
 }

@@ -72,12 +72,16 @@ class SolverStatus(_StrEnum):
     """An Ipopt return code skg-solve does not know (``summary.json`` writes it as
     ``Unknown(<code>)``, which stays a plain string)."""
     IPOPT_CONVERGED_TO_ROUND_OFF = "Ipopt_Converged_To_Round_Off"
+    IPOPT_TIME_LIMIT_REACHED = "Ipopt_Time_Limit_Reached"
+    """Ipopt stopped at the solve's ``time_limit`` before it converged."""
     NEWTON_CONVERGED = "Newton_Converged"
     NEWTON_CONVERGED_TO_ROUND_OFF = "Newton_Converged_To_Round_Off"
     NEWTON_MAXIMUM_ITERATIONS_EXCEEDED = "Newton_Maximum_Iterations_Exceeded"
     NEWTON_LINE_SEARCH_FAILED = "Newton_Line_Search_Failed"
     NEWTON_SINGULAR_JACOBIAN = "Newton_Singular_Jacobian"
     NEWTON_INVALID_NUMBER = "Newton_Invalid_Number"
+    NEWTON_TIME_LIMIT_REACHED = "Newton_Time_Limit_Reached"
+    """Newton's method stopped at the solve's ``time_limit`` before it converged."""
     ODE_SUCCEEDED = "ODE_Succeeded"
 
 

@@ -57,6 +57,7 @@ use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::Scene;
 use crate::solve::ladder::{self, Rungs};
+use crate::solve::run::deadline::{self, Deadline};
 use crate::solve::run::error::SolveError;
 use crate::solve::run::outcome::{Outcome, RefinedGrid, Refinement, Work};
 use crate::solve::run::piece::Guess;
@@ -92,7 +93,7 @@ pub(crate) fn refine(
     scene: &Scene,
     model: &Arc<Model>,
     own: &Discretization,
-    deadline: Option<Instant>,
+    deadline: Option<Deadline>,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Outcome, SolveError> {
     Refiner::new(scene, model, own, deadline)?.run(progress)
@@ -105,7 +106,7 @@ struct Refiner<'a> {
     /// The scene's own discretization (with the natural initial-velocity condition when
     /// the front door chose it for a fast initial layer).
     own: Discretization,
-    deadline: Option<Instant>,
+    deadline: Option<Deadline>,
     /// When the refinement started.
     started: Instant,
     /// The predictor, unless its reference could not be computed (then: why not).
@@ -133,7 +134,7 @@ struct Refiner<'a> {
 }
 
 impl<'a> Refiner<'a> {
-    fn new(scene: &'a Scene, model: &'a Arc<Model>, own: &Discretization, deadline: Option<Instant>) -> Result<Refiner<'a>, SolveError> {
+    fn new(scene: &'a Scene, model: &'a Arc<Model>, own: &Discretization, deadline: Option<Deadline>) -> Result<Refiner<'a>, SolveError> {
         let t = Instant::now();
         let map = match &own.grid {
             Grid::Mapped(map) => Some(Arc::clone(map)),
@@ -369,7 +370,7 @@ impl<'a> Refiner<'a> {
             if let Some((reason, advice)) = self.incurable(&outcome) {
                 break (format!("stopped after grid {number} ({what}): {reason}; more nodes would not change that"), advice);
             }
-            if self.deadline.is_some_and(|d| Instant::now() >= d) {
+            if deadline::passed(self.deadline) {
                 break (format!("stopped at the time limit after {}", counted_grids(self.grids.len())), Some(LONGER.to_string()));
             }
             let Some(next) = self.next() else {
@@ -520,7 +521,7 @@ impl<'a> Refiner<'a> {
         let elapsed = self.started.elapsed().as_secs_f64();
         match self.deadline {
             Some(d) => {
-                let left = d.saturating_duration_since(Instant::now()).as_secs_f64();
+                let left = d.left_s();
                 (estimate > left).then(|| format!("it would take about {estimate:.1} s, and the time limit leaves {left:.1} s"))
             }
             None => {

@@ -98,6 +98,8 @@ pub enum NewtonStatus {
     SingularJacobian,
     /// A residual at the start, or a Jacobian, could not be evaluated or is not finite.
     InvalidNumber,
+    /// The deadline ([`NewtonOptions::deadline`]) was reached before the next step.
+    TimeLimitReached,
 }
 
 impl NewtonStatus {
@@ -110,6 +112,7 @@ impl NewtonStatus {
             NewtonStatus::LineSearchFailed => "Newton_Line_Search_Failed",
             NewtonStatus::SingularJacobian => "Newton_Singular_Jacobian",
             NewtonStatus::InvalidNumber => "Newton_Invalid_Number",
+            NewtonStatus::TimeLimitReached => "Newton_Time_Limit_Reached",
         }
     }
 
@@ -130,6 +133,7 @@ impl fmt::Display for NewtonStatus {
             NewtonStatus::LineSearchFailed => "Newton's method: the line search found no step that decreases the residual",
             NewtonStatus::SingularJacobian => "Newton's method: the Jacobian is singular (no pivot, or a non-finite step)",
             NewtonStatus::InvalidNumber => "Newton's method: the residual at the start or a Jacobian is not finite",
+            NewtonStatus::TimeLimitReached => "Newton's method: stopped at the time limit",
         })
     }
 }
@@ -167,6 +171,9 @@ pub struct NewtonOptions {
     /// Whether the Jacobian is factored in single precision first, with the solutions
     /// refined in double precision (module documentation, "Mixed precision").
     pub single_precision: bool,
+    /// When the solve must end, if ever: checked before every step (a solve that has not
+    /// converged by then ends with [`NewtonStatus::TimeLimitReached`]).
+    pub deadline: Option<Instant>,
 }
 
 /// Counts and wall times of a Newton solve, in seconds.
@@ -431,7 +438,7 @@ impl<'s, S: SquareSystem + ?Sized> Iteration<'s, S> {
 
     /// The status that ends the solve before the next step, if any: a residual that is
     /// not finite, at the tolerance, at the round-off level (unless a chord step may
-    /// still contract it: cheap enough to be tried first), or the iteration limit.
+    /// still contract it: cheap enough to be tried first), the iteration limit, or the deadline.
     fn stop(&self, options: &NewtonOptions) -> Option<NewtonStatus> {
         if !self.norm.is_finite() {
             return Some(NewtonStatus::InvalidNumber);
@@ -443,6 +450,8 @@ impl<'s, S: SquareSystem + ?Sized> Iteration<'s, S> {
             Some(NewtonStatus::ConvergedToRoundOff)
         } else if self.iterations >= options.max_iter as usize {
             Some(NewtonStatus::MaximumIterationsExceeded)
+        } else if options.deadline.is_some_and(|d| Instant::now() >= d) {
+            Some(NewtonStatus::TimeLimitReached)
         } else {
             None
         }
@@ -656,7 +665,7 @@ mod tests {
         assert_eq!(solver.pattern_nonzeros(), 4);
         // At this tolerance no step is expected to finish at the rate of the one before
         // it, so every step is a Newton step even with chord steps allowed.
-        let opts = NewtonOptions { tol: 1e-14, max_iter: 20, chord: true, single_precision: false };
+        let opts = NewtonOptions { tol: 1e-14, max_iter: 20, chord: true, single_precision: false, deadline: None };
         for x0 in [[1.0, 0.5], [3.0, 2.0]] {
             let sol = solver.solve(&mut p, &x0, &opts).unwrap();
             assert_eq!(sol.status, NewtonStatus::Converged);
@@ -683,10 +692,12 @@ mod tests {
         let mut solver = SystemSolver::new(2, &p.jac.clone()).unwrap();
         let r = 2f64.sqrt();
         for x0 in [[1.0, 0.5], [3.0, 2.0]] {
-            let full =
-                solver.solve(&mut p, &x0, &NewtonOptions { tol: 1e-10, max_iter: 20, chord: false, single_precision: false }).unwrap();
-            let chord =
-                solver.solve(&mut p, &x0, &NewtonOptions { tol: 1e-10, max_iter: 20, chord: true, single_precision: false }).unwrap();
+            let full = solver
+                .solve(&mut p, &x0, &NewtonOptions { tol: 1e-10, max_iter: 20, chord: false, single_precision: false, deadline: None })
+                .unwrap();
+            let chord = solver
+                .solve(&mut p, &x0, &NewtonOptions { tol: 1e-10, max_iter: 20, chord: true, single_precision: false, deadline: None })
+                .unwrap();
             for sol in [&full, &chord] {
                 assert_eq!(sol.status, NewtonStatus::Converged);
                 assert!(sol.max_residual <= 1e-10);
@@ -722,10 +733,12 @@ mod tests {
     fn a_chord_step_that_does_not_contract_is_replaced_by_a_newton_step() {
         let mut p = Atan(vec![(0, 0)]);
         let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
-        let full =
-            solver.solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: false, single_precision: false }).unwrap();
-        let chord =
-            solver.solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: true, single_precision: false }).unwrap();
+        let full = solver
+            .solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: false, single_precision: false, deadline: None })
+            .unwrap();
+        let chord = solver
+            .solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: true, single_precision: false, deadline: None })
+            .unwrap();
         assert_eq!((full.status, chord.status), (NewtonStatus::Converged, NewtonStatus::Converged));
         assert_eq!((chord.stats.chord_steps, chord.stats.chord_rejections), (0, 1));
         assert_eq!(chord.iterations, 2);
@@ -744,7 +757,9 @@ mod tests {
     fn line_search_rescues_a_diverging_newton_iteration() {
         let mut p = Atan(vec![(0, 0)]);
         let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
-        let sol = solver.solve(&mut p, &[3.0], &NewtonOptions { tol: 1e-12, max_iter: 50, chord: true, single_precision: false }).unwrap();
+        let sol = solver
+            .solve(&mut p, &[3.0], &NewtonOptions { tol: 1e-12, max_iter: 50, chord: true, single_precision: false, deadline: None })
+            .unwrap();
         assert_eq!(sol.status, NewtonStatus::Converged);
         assert!(sol.x[0].abs() < 1e-12);
         assert!(sol.history[1].alpha_pr < 1.0, "the first step must be damped: {:?}", sol.history[1]);
@@ -757,14 +772,15 @@ mod tests {
         // A structurally singular Jacobian (column 1 empty): x0 − 1 = 0, x0 + 1 = 0.
         let mut p = Linear { structure: vec![(0, 0), (1, 0)], values: vec![1.0, 1.0], b: vec![1.0, -1.0] };
         let mut solver = SystemSolver::new(2, &p.structure.clone()).unwrap();
-        let sol =
-            solver.solve(&mut p, &[0.0, 0.0], &NewtonOptions { tol: 1e-12, max_iter: 10, chord: true, single_precision: false }).unwrap();
+        let sol = solver
+            .solve(&mut p, &[0.0, 0.0], &NewtonOptions { tol: 1e-12, max_iter: 10, chord: true, single_precision: false, deadline: None })
+            .unwrap();
         assert_eq!(sol.status, NewtonStatus::SingularJacobian);
         assert!(!sol.status.is_success());
         assert_eq!(sol.status.name(), "Newton_Singular_Jacobian");
 
         let mut c = circle();
-        let opts = NewtonOptions { tol: 1e-14, max_iter: 1, chord: true, single_precision: false };
+        let opts = NewtonOptions { tol: 1e-14, max_iter: 1, chord: true, single_precision: false, deadline: None };
         let mut solver = SystemSolver::new(2, &c.jac.clone()).unwrap();
         assert_eq!(solver.solve(&mut c, &[1.0, 0.5], &opts).unwrap().status, NewtonStatus::MaximumIterationsExceeded);
         assert_eq!(solver.solve(&mut c, &[f64::NAN, 0.5], &opts).unwrap().status, NewtonStatus::InvalidNumber);
@@ -878,7 +894,7 @@ mod tests {
         let root = Cubic::root(n);
         let mut solver = SystemSolver::new(n, &p.jac.clone()).unwrap();
         let x0: Vec<f64> = root.iter().enumerate().map(|(i, r)| r + 0.01 * (i as f64).cos()).collect();
-        let options = |single_precision| NewtonOptions { tol: 1e-12, max_iter: 20, chord: true, single_precision };
+        let options = |single_precision| NewtonOptions { tol: 1e-12, max_iter: 20, chord: true, single_precision, deadline: None };
         let double = solver.solve(&mut p, &x0, &options(false)).unwrap();
         let mixed = solver.solve(&mut p, &x0, &options(true)).unwrap();
         for sol in [&double, &mixed] {
@@ -902,7 +918,7 @@ mod tests {
         let n = 200;
         let mut p = Cubic::new(n, 1e40, 4.0);
         let mut solver = SystemSolver::new(n, &p.jac.clone()).unwrap();
-        let opts = NewtonOptions { tol: 1e28, max_iter: 20, chord: true, single_precision: true };
+        let opts = NewtonOptions { tol: 1e28, max_iter: 20, chord: true, single_precision: true, deadline: None };
         let sol = solver.solve(&mut p, &vec![0.0; n], &opts).unwrap();
         assert!(sol.status.is_success(), "{:?}", sol.status);
         assert!(max_error(&sol.x, &Cubic::root(n)) < 1e-11);
@@ -918,7 +934,7 @@ mod tests {
         let mut p =
             Linear { structure: vec![(0, 0), (0, 1), (1, 0), (1, 1)], values: vec![1.0, 1.0, 1.0, 1.0 + 1e-9], b: vec![2.0, 2.0 + 1e-9] };
         let mut solver = SystemSolver::new(2, &p.structure.clone()).unwrap();
-        let opts = NewtonOptions { tol: 1e-14, max_iter: 10, chord: true, single_precision: true };
+        let opts = NewtonOptions { tol: 1e-14, max_iter: 10, chord: true, single_precision: true, deadline: None };
         for _ in 0..2 {
             let sol = solver.solve(&mut p, &[0.0, 0.0], &opts).unwrap();
             assert!(sol.status.is_success(), "{:?}", sol.status);

@@ -6,17 +6,18 @@ use std::time::Instant;
 
 use indexmap::IndexMap;
 
-use super::backend::{IpoptReport, SquareSolver};
+use super::backend::{IpoptReport, SolverStatus, SquareSolver};
 use super::global::Run;
 use super::outcome::{counted, Diagnostics, KineticLoss, Outcome, Settings, Sizes};
 use super::piece::Piece;
 use super::status::SolveStatus;
 use crate::discrete::contact;
+use crate::discrete::Trajectory;
 use crate::discrete::{Action, Discretization};
 use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::{ConstraintKind, Formulation, Scene, Wall};
-use crate::stepping::verify;
+use crate::stepping::verify::{self, Verification, VerifyStatus};
 
 /// A solution farther than this fraction of the coordinates' range from the
 /// time-stepping solution gets a warning. Discretization errors of usable grids are
@@ -29,7 +30,12 @@ const FAR_FROM_TIME_STEPPING: f64 = 0.1;
 pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
     let Run { method, discretization: disc, sizes, solution: run } = run;
     let t = Instant::now();
-    let mut verification = verify::verify(scene, model, &run.trajectory, disc.operator);
+    let timed_out = matches!(run.status.solver(), SolverStatus::TimeLimitReached { .. }) && !run.status.is_converged();
+    let mut verification = if timed_out {
+        not_verified_after_time_limit(scene, model, &run.trajectory, disc.operator)
+    } else {
+        verify::verify(scene, model, &run.trajectory, disc.operator)
+    };
     let mut timings = run.timings.clone();
     timings.verification_s = t.elapsed().as_secs_f64();
     let mut work = run.work;
@@ -70,6 +76,20 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
         history: run.history,
         trajectory: run.trajectory,
     }
+}
+
+/// The verification of a run whose backend was stopped at the time limit: not run (its
+/// time stepping would take the solve further past the limit, and the run did not
+/// converge); only the checks of the numbers themselves (finite, odd-even amplitudes).
+fn not_verified_after_time_limit(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorKind) -> Verification {
+    let mut unchecked = scene.clone();
+    unchecked.verify.enabled = false;
+    let mut verification = verify::verify(&unchecked, model, tr, operator);
+    if verification.status == VerifyStatus::Skipped {
+        verification.status = VerifyStatus::Unverified;
+        verification.reason = "not run: the solve was stopped at the time limit before it converged".to_string();
+    }
+    verification
 }
 
 /// The Newton backend's factorization must be at least this many times faster than

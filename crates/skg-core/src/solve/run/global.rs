@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use super::assess::sizes;
 use super::backend::SquareSolver;
+use super::deadline::Deadline;
 use super::error::SolveError;
 use super::outcome::{Method, Sizes};
 use super::piece::{action_on, solve_piece, Guess, Piece};
@@ -31,12 +32,19 @@ pub struct Run {
 }
 
 /// Solve the scene's whole span with its model `model` and the discretization `disc` in
-/// one piece from `guess`.
-pub fn solve_global(scene: &Scene, model: &Arc<Model>, disc: &Discretization, guess: &Guess) -> Result<Run, SolveError> {
+/// one piece from `guess`, its backend stopped at `deadline` (if any).
+pub fn solve_global(
+    scene: &Scene,
+    model: &Arc<Model>,
+    disc: &Discretization,
+    guess: &Guess,
+    deadline: Option<Deadline>,
+) -> Result<Run, SolveError> {
     let t_setup = Instant::now();
     let times = disc.times(scene);
     let action = action_on(model, scene, disc, &times)?;
     let mut solver = SquareSolver::new(scene, &action);
+    solver.set_deadline(deadline);
     let setup_s = t_setup.elapsed().as_secs_f64();
     let mut solution = solve_piece(scene, &action, &mut solver, &times, guess)?;
     solution.timings.setup_s = setup_s;

@@ -7,6 +7,9 @@
 //!   [`SquareSystem`](crate::solve::linalg::SquareSystem), and [`SquareSolver`](backend::SquareSolver):
 //!   Ipopt or Newton with the sparsity plans and the LU analysis kept between solves of
 //!   equal structure; the statuses and reports of the backends.
+//! * [`deadline`]: the whole solve's time limit as the moment it ends, checked by the
+//!   backends inside their iterations and by the ladder and the refinement between
+//!   attempts.
 //! * `status.rs`: [`SolveStatus`](crate::solve::SolveStatus), how a solve ended, judged
 //!   on the unscaled residual; `error.rs`: [`SolveError`](crate::solve::SolveError),
 //!   [`WindowError`](crate::solve::WindowError); `outcome.rs`:
@@ -23,6 +26,7 @@
 
 pub(crate) mod assess;
 pub mod backend;
+pub mod deadline;
 pub(crate) mod error;
 pub(crate) mod global;
 pub(crate) mod outcome;

@@ -28,6 +28,7 @@ use std::time::Instant;
 
 use super::assess::sizes;
 use super::backend::{BackendReport, SquareSolver};
+use super::deadline::Deadline;
 use super::error::{SolveError, WindowError};
 use super::global::Run;
 use super::outcome::{Method, Timings, Work};
@@ -74,8 +75,16 @@ impl WindowGrid {
     }
 }
 
-/// Solve `scene` with its model `model` and the discretization `disc` in windows.
-pub fn solve_windows(scene: &Scene, model: &Arc<Model>, disc: &Discretization, windows: Windows) -> Result<Run, SolveError> {
+/// Solve `scene` with its model `model` and the discretization `disc` in windows, the
+/// backend stopped at `deadline` (if any; the windows after one that did not converge
+/// are not solved).
+pub fn solve_windows(
+    scene: &Scene,
+    model: &Arc<Model>,
+    disc: &Discretization,
+    windows: Windows,
+    deadline: Option<Deadline>,
+) -> Result<Run, SolveError> {
     let grid =
         WindowGrid::new(scene, disc, windows).map_err(|error| SolveError::Windows { scene: scene.file.origin.path.clone(), error })?;
     let t_setup = Instant::now();
@@ -87,6 +96,7 @@ pub fn solve_windows(scene: &Scene, model: &Arc<Model>, disc: &Discretization, w
     // One solver for all windows: the sparsity plans and Newton's LU analysis are made
     // once and reused by every window.
     let mut solver = SquareSolver::new(scene, &action);
+    solver.set_deadline(deadline);
     let sizes = sizes(scene, &action, &solver);
     let total = disc.nodes;
     let mut joined = Joined::new(total, t_setup.elapsed().as_secs_f64());

@@ -12,14 +12,16 @@
 //! "recompute multipliers for the feasibility problem" (it prints that this fails; the
 //! multipliers are unused here), and at large `N`, where round-off keeps `max |c|` just
 //! above the tolerance, it iterates on until its acceptable-level test (disk,
-//! N = 16384: 11 iterations instead of 1).
+//! N = 16384: 11 iterations instead of 1). It is also stopped there at the whole solve's
+//! deadline (`--time-limit`), as not converged.
 
 use skg_ipopt::{self as ipopt, Problem};
 
 use super::{IpoptReport, SolverStatus};
-use crate::scene::{ConstraintKind, IpoptValue, Scene};
+use crate::scene::{Backend, ConstraintKind, IpoptValue, Scene};
 use crate::solve::linalg::roundoff::residual_roundoff_level;
 use crate::solve::linalg::{EvalError, IterationStat, SquareSystem};
+use crate::solve::run::deadline::Deadline;
 
 /// What an Ipopt solve of a square system found.
 pub(super) struct IpoptOutcome {
@@ -41,13 +43,14 @@ pub(super) struct IpoptOutcome {
 }
 
 /// Solve `system` from `x0` with Ipopt and `options`, stopped by the tolerance
-/// `options.tol` or the round-off level (module docs).
+/// `options.tol`, the round-off level or `deadline` (module docs).
 pub(super) fn solve<S: SquareSystem + ?Sized>(
     system: &mut S,
     x0: &[f64],
     options: &ipopt::Options,
+    deadline: Option<Deadline>,
 ) -> Result<IpoptOutcome, ipopt::SolveError> {
-    let mut square = IpoptSquare { system, tol: options.tol, roundoff: 0.0, stopped: None };
+    let mut square = IpoptSquare { system, tol: options.tol, roundoff: 0.0, deadline, stopped: None };
     let sol = ipopt::solve(&mut square, x0, options)?;
     let calls = |stat: ipopt::EvalStat| stat.calls as usize;
     Ok(IpoptOutcome {
@@ -76,6 +79,8 @@ enum Stop {
     Tolerance,
     /// `max |c|` at the round-off level of the last Jacobian.
     RoundOff,
+    /// The deadline, reached this many seconds after the whole solve started.
+    TimeLimit(f64),
 }
 
 /// A square system seen by Ipopt, with skg-solve's stopping test in the intermediate
@@ -85,12 +90,15 @@ enum Stop {
 /// the residual, which a starting point alone cannot show). `max |c|` is Ipopt's
 /// `inf_pr`: unscaled, since skg-solve turns Ipopt's NLP scaling off (a scene that turns
 /// it on under `[solver.ipopt]` is stopped on the scaled value, as Ipopt's own test
-/// would be; convergence is judged on the recomputed unscaled residual either way).
+/// would be; convergence is judged on the recomputed unscaled residual either way). In
+/// any phase, stop once the deadline has passed.
 pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
     system: &'p mut S,
     tol: f64,
     /// Round-off level of the residual from the last Jacobian (0 before the first).
     roundoff: f64,
+    /// When to stop without converging, if ever.
+    deadline: Option<Deadline>,
     stopped: Option<Stop>,
 }
 
@@ -100,6 +108,9 @@ impl<S: SquareSystem + ?Sized> IpoptSquare<'_, S> {
         match (ipopt_status, self.stopped) {
             (ipopt::Status::UserRequestedStop, Some(Stop::Tolerance)) => SolverStatus::Ipopt(ipopt::Status::SolveSucceeded),
             (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff)) => SolverStatus::IpoptConvergedToRoundOff,
+            (ipopt::Status::UserRequestedStop, Some(Stop::TimeLimit(elapsed_s))) => {
+                SolverStatus::TimeLimitReached { backend: Backend::Ipopt, limit_s: self.deadline.map_or(0.0, |d| d.limit_s), elapsed_s }
+            }
             (status, _) => SolverStatus::Ipopt(status),
         }
     }
@@ -125,6 +136,7 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
     }
     fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), ipopt::EvalError> {
         self.system.jacobian_values(x, values).map_err(to_ipopt)?;
+        flush_subnormals(values);
         let entries = self.system.jacobian_structure().iter().zip(values.iter()).map(|(&(r, c), &v)| (r as usize, c as usize, v));
         self.roundoff = residual_roundoff_level(entries, x, self.system.size());
         Ok(())
@@ -133,7 +145,9 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
         self.system.hessian_structure()
     }
     fn hessian_values(&mut self, x: &[f64], _obj_factor: f64, lambda: &[f64], values: &mut [f64]) -> Result<(), ipopt::EvalError> {
-        self.system.hessian_values(x, lambda, values).map_err(to_ipopt)
+        self.system.hessian_values(x, lambda, values).map_err(to_ipopt)?;
+        flush_subnormals(values);
+        Ok(())
     }
     fn intermediate(&mut self, stat: &ipopt::IterationStat) -> bool {
         if !stat.restoration {
@@ -143,8 +157,20 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
                 self.stopped = Some(Stop::RoundOff);
             }
         }
+        if let Some(d) = self.deadline.filter(|d| self.stopped.is_none() && d.passed()) {
+            self.stopped = Some(Stop::TimeLimit(d.elapsed_s()));
+        }
         self.stopped.is_none()
     }
+}
+
+/// Set the subnormal entries of a matrix handed to Ipopt to zero. Debian's MUMPS 5.5
+/// corrupts its memory in the analysis of a KKT matrix with subnormal entries (a
+/// pendulum of length 1e-320, found by the fuzz run, or 1e-307: "double free or
+/// corruption", or a segmentation fault); an entry below the smallest normal number, 2.2e-308, is zero to
+/// any factorization's precision next to the others.
+fn flush_subnormals(values: &mut [f64]) {
+    values.iter_mut().filter(|v| v.is_subnormal()).for_each(|v| *v = 0.0);
 }
 
 /// One row of Ipopt's iteration table as the crate's own record.

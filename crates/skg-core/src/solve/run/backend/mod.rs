@@ -26,8 +26,9 @@
 //! the thread replaces it, or [`discard_kept_analysis`] frees it. Ipopt keeps doing its
 //! own MUMPS analysis in every solve (its C interface offers no way to keep one).
 //!
-//! **Hand-over.** When Newton does not converge, the same system is solved by Ipopt
-//! (when the crate is built with it) from the same starting point, so a Newton solve
+//! **Hand-over.** When Newton does not converge (and was not stopped at the deadline,
+//! [`SquareSolver::set_deadline`]), the same system is solved by Ipopt (when the crate
+//! is built with it) from the same starting point, so a Newton solve
 //! never ends worse than an Ipopt solve; the [`BackendReport`] records Newton's own
 //! outcome and that Ipopt finished.
 
@@ -40,6 +41,7 @@ use crate::discrete::action::{Action, Block, MatrixPlan};
 use crate::scene::{Backend, Formulation, HessianMode, Scene};
 use crate::solve::linalg::roundoff::row_roundoff_levels;
 use crate::solve::linalg::{IterationStat, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SquareSystem, SystemSolver};
+use crate::solve::run::deadline::Deadline;
 #[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
 
@@ -66,6 +68,16 @@ pub enum SolverStatus {
     IpoptConvergedToRoundOff,
     /// Newton's status.
     Newton(NewtonStatus),
+    /// The backend was stopped at the whole solve's time limit ([`Deadline`]) before it
+    /// converged: Ipopt from its intermediate callback, Newton before its next step.
+    TimeLimitReached {
+        /// The backend that was stopped.
+        backend: Backend,
+        /// The time limit, seconds.
+        limit_s: f64,
+        /// The seconds since the whole solve started, when it was stopped.
+        elapsed_s: f64,
+    },
 }
 
 impl SolverStatus {
@@ -77,6 +89,7 @@ impl SolverStatus {
             #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => true,
             SolverStatus::Newton(s) => s.is_success(),
+            SolverStatus::TimeLimitReached { .. } => false,
         }
     }
 
@@ -88,6 +101,8 @@ impl SolverStatus {
             #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => "Ipopt_Converged_To_Round_Off",
             SolverStatus::Newton(s) => s.name(),
+            SolverStatus::TimeLimitReached { backend: Backend::Ipopt, .. } => "Ipopt_Time_Limit_Reached",
+            SolverStatus::TimeLimitReached { backend: Backend::Newton, .. } => "Newton_Time_Limit_Reached",
         }
     }
 }
@@ -102,6 +117,13 @@ impl fmt::Display for SolverStatus {
                 f.write_str("Ipopt converged to the round-off level of the residual (above the requested tolerance)")
             }
             SolverStatus::Newton(s) => write!(f, "{s}"),
+            SolverStatus::TimeLimitReached { backend, limit_s, elapsed_s } => {
+                let who = match backend {
+                    Backend::Ipopt => "Ipopt",
+                    Backend::Newton => "Newton's method",
+                };
+                write!(f, "{who} was stopped at the time limit of {limit_s} s (--time-limit), {elapsed_s:.1} s after the solve started")
+            }
         }
     }
 }
@@ -114,6 +136,7 @@ impl Serialize for SolverStatus {
             #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => serializer.serialize_str(self.name()),
             SolverStatus::Newton(s) => s.serialize(serializer),
+            SolverStatus::TimeLimitReached { .. } => serializer.serialize_str(self.name()),
         }
     }
 }
@@ -234,6 +257,8 @@ pub enum BackendError {
 /// The backend and its options.
 struct Settings {
     backend: Backend,
+    /// When the solve must end, if ever (Newton's options hold the same moment).
+    deadline: Option<Deadline>,
     newton: NewtonOptions,
     #[cfg(feature = "ipopt")]
     ipopt: ipopt::Options,
@@ -266,11 +291,13 @@ impl SquareSolver {
             formulation: scene.formulation,
             settings: Settings {
                 backend: scene.solver.backend,
+                deadline: None,
                 newton: NewtonOptions {
                     tol: scene.solver.tol,
                     max_iter: scene.solver.max_iter,
                     chord: true,
                     single_precision: single_precision_pays(scene, action),
+                    deadline: None,
                 },
                 #[cfg(feature = "ipopt")]
                 ipopt: ipopt_square::options(scene),
@@ -280,6 +307,13 @@ impl SquareSolver {
             lu: if scene.solver.backend == Backend::Newton { KEPT_ANALYSIS.take() } else { None },
             unreported_analysis_s: None,
         }
+    }
+
+    /// Stop every later solve at `deadline` (none: no limit), as not converged with
+    /// [`SolverStatus::TimeLimitReached`].
+    pub fn set_deadline(&mut self, deadline: Option<Deadline>) {
+        self.settings.deadline = deadline;
+        self.settings.newton.deadline = deadline.map(|d| d.at);
     }
 
     /// The Jacobian's sparsity plan.
@@ -449,9 +483,14 @@ fn solve_system<S: SquareSystem>(
         analysis_reused: reusable,
         stats: sol.stats,
     });
-    if sol.status.is_success() || !cfg!(feature = "ipopt") {
+    let timed_out = sol.status == NewtonStatus::TimeLimitReached;
+    if sol.status.is_success() || timed_out || !cfg!(feature = "ipopt") {
+        let status = match settings.deadline.filter(|_| timed_out) {
+            Some(d) => SolverStatus::TimeLimitReached { backend: Backend::Newton, limit_s: d.limit_s, elapsed_s: d.elapsed_s() },
+            None => SolverStatus::Newton(sol.status),
+        };
         return Ok(SystemSolution {
-            status: SolverStatus::Newton(sol.status),
+            status,
             z: sol.x,
             max_residual: sol.max_residual,
             iterations: sol.iterations,
@@ -476,7 +515,7 @@ fn solve_by_ipopt<S: SquareSystem>(
     system: &mut S,
     x0: &[f64],
 ) -> Result<SystemSolution, BackendError> {
-    let sol = ipopt_square::solve(system, x0, &settings.ipopt)?;
+    let sol = ipopt_square::solve(system, x0, &settings.ipopt, settings.deadline)?;
     let mut ipopt_report = sol.report;
     let internal_s = ipopt_report.internal_s;
     if report.requested == Backend::Ipopt && internal_s >= NEWTON_LU_TIMED_FROM_S && internal_s >= NEWTON_LU_TIMED_SHARE * sol.total_s {
