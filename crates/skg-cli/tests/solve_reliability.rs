@@ -7,7 +7,7 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Command;
 
 use common::{run, s};
 
@@ -330,22 +330,9 @@ fn a_single_long_solve_stops_at_the_time_limit() {
     for backend in ["ipopt", "newton"] {
         let out = format!("out-{backend}");
         let args = [s(&scene), "--nodes", "32768", "--time-limit", "1", "--backend", backend, "-o", &out, "-q"];
-        let mut child = Command::new(env!("CARGO_BIN_EXE_skg-solve"))
-            .args(args)
-            .current_dir(dir.path())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let started = std::time::Instant::now();
-        while child.try_wait().unwrap().is_none() {
-            if started.elapsed() > std::time::Duration::from_secs(60) {
-                let _ = child.kill();
-                panic!("{backend}: still running after 60 s with --time-limit 1");
-            }
-            std::thread::sleep(std::time::Duration::from_millis(50));
-        }
-        let o = child.wait_with_output().unwrap();
+        let mut command = Command::new(env!("CARGO_BIN_EXE_skg-solve"));
+        command.args(args).current_dir(dir.path());
+        let o = common::with_watchdog(command, &format!("{backend} with --time-limit 1"));
         let t = common::text(&o);
         assert_eq!(o.status.code(), Some(3), "{backend}: {t}");
         assert!(

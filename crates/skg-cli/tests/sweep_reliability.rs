@@ -303,24 +303,9 @@ fn fake_slurm(bin: &Path, commands: &[(&str, &str)]) {
 /// command limited to `timeout` seconds; killed (and the test failed) after 60 s.
 fn run_with_slurm(args: &[&str], dir: &Path, bin: &Path, timeout: &str) -> (Option<i32>, String) {
     let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
-    let mut child = Command::new(env!("CARGO_BIN_EXE_skg-solve"))
-        .args(args)
-        .current_dir(dir)
-        .env("PATH", path)
-        .env("SKG_SLURM_TIMEOUT", timeout)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let started = std::time::Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if started.elapsed() > std::time::Duration::from_secs(60) {
-            let _ = child.kill();
-            panic!("{args:?} still running after 60 s: a hanging Slurm command hangs skg-solve");
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    let o = child.wait_with_output().unwrap();
+    let mut command = Command::new(env!("CARGO_BIN_EXE_skg-solve"));
+    command.args(args).current_dir(dir).env("PATH", path).env("SKG_SLURM_TIMEOUT", timeout);
+    let o = common::with_watchdog(command, &format!("{args:?} (a hanging Slurm command hangs skg-solve)"));
     let t = common::text(&o);
     assert!(!t.contains("panicked"), "{t}");
     (o.status.code(), t)
