@@ -51,16 +51,20 @@ impl Discretization {
     }
 
     /// The operator on the nodes `times` (spread as this discretization's grid spreads
-    /// them): on a uniform grid the uniform operator of their spacing, on a mapped one
-    /// the operator on those nodes.
+    /// them; [`operator_on`]).
     pub fn operator_on(&self, times: &[f64]) -> Result<SbpOperator, SbpError> {
-        match self.grid {
-            Grid::Uniform => {
-                let n = times.len();
-                let dt = if n > 1 { (times[n - 1] - times[0]) / (n - 1) as f64 } else { f64::NAN };
-                SbpOperator::new(self.operator, n, dt)
-            }
-            Grid::Mapped(_) => SbpOperator::on_times(self.operator, times),
-        }
+        operator_on(self.operator, times, !self.grid.is_uniform())
     }
+}
+
+/// The operator of `kind` on the nodes `times`: on a uniform grid the uniform operator of
+/// their spacing, on a mapped one (`mapped`) the operator on those nodes
+/// ([`SbpOperator::on_times`]).
+pub fn operator_on(kind: OperatorKind, times: &[f64], mapped: bool) -> Result<SbpOperator, SbpError> {
+    if mapped {
+        return SbpOperator::on_times(kind, times);
+    }
+    let n = times.len();
+    let dt = if n > 1 { (times[n - 1] - times[0]) / (n - 1) as f64 } else { f64::NAN };
+    SbpOperator::new(kind, n, dt)
 }

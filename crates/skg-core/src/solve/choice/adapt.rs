@@ -6,9 +6,10 @@
 //! against the uniform grid by predicted cost.
 
 use crate::discrete::grid::TimeMap;
+use crate::discrete::Discretization;
 use crate::model::Model;
 use crate::scene::Scene;
-use crate::stepping::equations::{min_spacing, step_budget, step_ends};
+use crate::stepping::equations::{step_budget, step_ends};
 use crate::stepping::ode::{OdeOptions, OdeStats};
 use crate::stepping::verify::{REFERENCE_ATOL, REFERENCE_RTOL};
 
@@ -26,14 +27,13 @@ pub const WORTH_ADAPTING: f64 = 4.0;
 /// and that time stepping's work; or why there is none
 /// (the time stepping failed, or took fewer than two steps).
 pub fn motion_map(scene: &Scene, model: &Model) -> Result<(TimeMap, OdeStats), String> {
-    let uniform = crate::discrete::grid::uniform_times(scene.t_start, scene.t_end, scene.nodes);
     // Where the steps are short does not depend on the tolerance (they all shrink alike
     // as it tightens): a looser one than the verification's takes fewer of them.
     let opts = OdeOptions {
         rtol: MAP_RTOL,
         atol: MAP_RTOL * (REFERENCE_ATOL / REFERENCE_RTOL),
         // As the verification's: with walls no step longer than the scene's own spacing.
-        max_step: if model.walls.is_empty() { None } else { min_spacing(&uniform) },
+        max_step: if model.walls.is_empty() { None } else { Some(Discretization::of(scene).spacing(scene)) },
         max_steps: step_budget(scene.nodes),
         stepper: scene.verify.stepper,
         ..OdeOptions::default()

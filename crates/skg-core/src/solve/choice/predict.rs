@@ -34,10 +34,11 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use crate::discrete::discretization::operator_on;
 use crate::discrete::grid::{uniform_times, TimeMap};
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
-use crate::sbp::{OperatorKind, SbpOperator};
+use crate::sbp::OperatorKind;
 use crate::scene::{InitialVelocity, Scene};
 use crate::solve::linalg::band::solve_banded;
 use crate::solve::run::error::SolveError;
@@ -378,12 +379,7 @@ fn proxy_errors(s: &Samples, c: Candidate, times: &[f64]) -> (Vec<f64>, Vec<f64>
     let d = s.q.first().map_or(0, Vec::len);
     let n = times.len();
     let singular = || (vec![f64::INFINITY; d], vec![f64::INFINITY; d]);
-    let op = if c.adaptive {
-        SbpOperator::on_times(c.operator, times)
-    } else {
-        SbpOperator::new(c.operator, n, (times[n - 1] - times[0]) / (n - 1) as f64)
-    };
-    let Ok(op) = op else { return singular() };
+    let Ok(op) = operator_on(c.operator, times, c.adaptive) else { return singular() };
     let da: Vec<Vec<(usize, f64)>> = (0..n).map(|i| op.row(i)).collect();
     // The equations' operator D_b: the partner D− of a dissipative operator, D itself
     // for a centred one.
