@@ -73,8 +73,7 @@ fn draw_fit<DB: DrawingBackend<ErrorType: 'static>>(root: &DrawingArea<DB, Shift
 
 /// Each coordinate's fitted motion as a line, its data as points with error bars.
 fn draw_motion<DB: DrawingBackend<ErrorType: 'static>>(area: &DrawingArea<DB, Shift>, obs: &[Observed]) -> Result<(), DrawError> {
-    let ts = obs.iter().flat_map(|o| o.fitted.iter().map(|p| p.0));
-    let (t0, t1) = ts.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
+    let (t0, t1) = time_span(obs);
     let ys = obs
         .iter()
         .flat_map(|o| o.fitted.iter().map(|p| p.1).chain(o.data.iter().flat_map(|d| [d.1 - d.2.unwrap_or(0.0), d.1 + d.2.unwrap_or(0.0)])));
@@ -101,10 +100,15 @@ fn draw_motion<DB: DrawingBackend<ErrorType: 'static>>(area: &DrawingArea<DB, Sh
     draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 11)
 }
 
+/// The span of the fitted motion's times (∞, −∞ when there is none).
+fn time_span(obs: &[Observed]) -> (f64, f64) {
+    let ts = obs.iter().flat_map(|o| o.fitted.iter().map(|p| p.0));
+    ts.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)))
+}
+
 /// The residuals (fitted − data) at the data's times, one colour per coordinate.
 fn draw_residuals<DB: DrawingBackend<ErrorType: 'static>>(area: &DrawingArea<DB, Shift>, obs: &[Observed]) -> Result<(), DrawError> {
-    let ts = obs.iter().flat_map(|o| o.fitted.iter().map(|p| p.0));
-    let (t0, t1) = ts.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
+    let (t0, t1) = time_span(obs);
     let Some((r0, r1)) = padded(obs.iter().flat_map(|o| o.residuals.iter().map(|p| p.1)).chain([0.0])) else {
         return Err(DrawError::no_data("no residuals to draw"));
     };
