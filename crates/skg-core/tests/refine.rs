@@ -6,6 +6,7 @@ mod common;
 
 use skg_core::scene::{Backend, Overrides, Scene, SceneFile};
 use skg_core::solve::backend::SolverStatus;
+use skg_core::solve::deadline::Bound;
 use skg_core::solve::{self, Outcome};
 use skg_core::stepping::verify::VerifyStatus;
 
@@ -173,10 +174,10 @@ fn the_time_limit_stops_the_solve_and_the_ladder() {
         assert_eq!(o.attempts.len(), 1, "{backend:?}: {:?}", o.attempts);
         assert!(o.warnings.iter().any(|w| w.contains("stopped at the time limit")), "{backend:?}: {:?}", o.warnings);
         assert!(!o.converged(), "{backend:?}");
-        let SolverStatus::TimeLimitReached { backend: stopped, limit_s, elapsed_s } = o.status.solver() else {
+        let SolverStatus::TimeLimitReached { backend: stopped, bound, limit_s, elapsed_s } = o.status.solver() else {
             panic!("{backend:?}: {}", o.status)
         };
-        assert_eq!((stopped, limit_s), (backend, 1e-6));
+        assert_eq!((stopped, bound, limit_s), (backend, Bound::TimeLimit, 1e-6));
         assert!(elapsed_s >= limit_s, "{elapsed_s}");
         assert!(o.status.to_string().contains("time limit of 0.000001 s"), "{}", o.status);
         assert_eq!(o.verification.status, VerifyStatus::Unverified);

@@ -495,7 +495,7 @@ fn solved_from_the_fit(fitted: &Scene, action: &Action, disc: &Discretization, z
     let (q, lambda) = states_of(action, z);
     let guess = Guess::States { q, lambda, description: "the fit's trajectory".into() };
     let run = solve_global(fitted, &fitted_model, disc, &guess, None)?;
-    Ok(outcome(fitted, &fitted_model, run))
+    Ok(outcome(fitted, &fitted_model, run, None))
 }
 
 /// A warning for each parameter that ended on its bound.

@@ -38,7 +38,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use super::run::backend::SolverStatus;
-use super::run::deadline::{self, Deadline};
+use super::run::deadline::{self, Bound, Deadline, Limits};
 use super::run::error::SolveError;
 use super::run::global::{solve_global, Run};
 use super::run::outcome::{Attempt, Method, Outcome, Work};
@@ -66,6 +66,9 @@ pub const END_MARGIN: f64 = 0.25;
 pub const LADDER_COST_FACTOR: f64 = 8.0;
 /// The time every ladder may take regardless of [`LADDER_COST_FACTOR`], seconds.
 pub const LADDER_FLOOR_S: f64 = 2.0;
+/// The bound of the ladder's budget, for its deadline and its messages.
+const LADDER_BUDGET: Bound =
+    Bound::Budget { of: "the fallback ladder", first: "attempt", factor: LADDER_COST_FACTOR, floor_s: LADDER_FLOOR_S };
 
 /// Which rungs the ladder may climb after the scene's own solve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -80,8 +83,9 @@ pub enum Rungs {
 
 /// The solve of the scene's model `model` with the discretization `disc` from `guess`
 /// (one global solve, or the scene's windows) and, when it fails to converge or to
-/// verify, the ladder's `rungs` (see the module docs), stopped at `deadline` and by
-/// [`LADDER_COST_FACTOR`]. `progress` is told what each attempt is about to do ("2.
+/// verify, the ladder's `rungs` (see the module docs), stopped at `limits` and by its
+/// own budget, [`LADDER_COST_FACTOR`] times its first attempt (checked inside the
+/// solves too). `progress` is told what each attempt is about to do ("2.
 /// coarse to fine (…)").
 pub fn climb(
     scene: &Scene,
@@ -89,7 +93,7 @@ pub fn climb(
     disc: &Discretization,
     guess: &Guess,
     rungs: Rungs,
-    deadline: Option<Deadline>,
+    limits: Limits,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Outcome, SolveError> {
     let mut ladder = Ladder {
@@ -101,9 +105,10 @@ pub fn climb(
         preliminary: Work::default(),
         unlisted: Work::default(),
         started: Instant::now(),
-        deadline,
+        limits,
         stopped: None,
     };
+    let deadline = limits.solve();
     let go_on = match scene.windows {
         Some(w) => ladder.attempt("the scene's windows", || window::solve_windows(scene, model, disc, w, deadline))?,
         None => ladder.attempt("one global solve", || solve_global(scene, model, disc, guess, deadline))?,
@@ -152,8 +157,9 @@ struct Ladder<'a> {
     unlisted: Work,
     /// When the ladder started.
     started: Instant,
-    /// The whole solve's deadline (`--time-limit`), if any.
-    deadline: Option<Deadline>,
+    /// The time limit and the budgets in force, this ladder's own once its first
+    /// attempt is done.
+    limits: Limits,
     /// Why the ladder stopped before its rungs were done, if it did.
     stopped: Option<String>,
 }
@@ -165,25 +171,23 @@ impl Ladder<'_> {
     }
 
     /// Whether the ladder may start another attempt: within the whole solve's time limit
-    /// and within [`LADDER_COST_FACTOR`] of the scene's own solve. The first time it may
-    /// not, the reason is kept for the summary's warnings.
+    /// and within the budgets (its own: [`LADDER_COST_FACTOR`] times its first attempt),
+    /// none of which stopped the last attempt. The first time it may not, the reason is
+    /// kept for the summary's warnings.
     fn may_go_on(&mut self) -> bool {
         if self.stopped.is_some() {
             return false;
         }
         let elapsed = self.started.elapsed().as_secs_f64();
-        if deadline::passed(self.deadline) {
+        let last_stopped_by = |which: fn(&Bound) -> bool| self.tried.last().is_some_and(|t| stopped_by(&t.outcome, which));
+        if deadline::passed(self.limits.time_limit) || last_stopped_by(|b| *b == Bound::TimeLimit) {
             self.stopped = Some(format!("the fallback ladder stopped at the time limit after {elapsed:.1} s"));
-        } else if let Some(first) = self.tried.first() {
-            let bound = (LADDER_COST_FACTOR * first.wall_s).max(LADDER_FLOOR_S);
-            if elapsed >= bound {
-                self.stopped = Some(format!(
-                    "the fallback ladder stopped after {} in {elapsed:.1} s: it may take {LADDER_COST_FACTOR}× the scene's own \
-                     solve ({:.2} s) or {LADDER_FLOOR_S} s, whichever is longer",
-                    super::run::outcome::counted(self.tried.len(), "attempt"),
-                    first.wall_s
-                ));
-            }
+        } else if let Some(d) = self.limits.budget.filter(|d| d.passed() || last_stopped_by(|b| *b != Bound::TimeLimit)) {
+            self.stopped = Some(format!(
+                "the fallback ladder stopped after {} in {elapsed:.1} s, at {}",
+                super::run::outcome::counted(self.tried.len(), "attempt"),
+                d.describe()
+            ));
         }
         self.stopped.is_none()
     }
@@ -197,10 +201,15 @@ impl Ladder<'_> {
         self.announce(description);
         let start = Instant::now();
         let run = run()?;
-        let mut outcome = super::run::assess::outcome(self.scene, self.model, run);
+        let mut outcome = super::run::assess::outcome(self.scene, self.model, run, self.limits.time_limit);
         outcome.work.add(&std::mem::take(&mut self.preliminary));
         let go_on = !ends_the_ladder(&outcome);
-        self.tried.push(Tried { description: description.to_string(), outcome, wall_s: start.elapsed().as_secs_f64() });
+        let wall_s = start.elapsed().as_secs_f64();
+        if self.tried.is_empty() {
+            let budget_s = (LADDER_COST_FACTOR * wall_s).max(LADDER_FLOOR_S);
+            self.limits = self.limits.with_budget(Deadline::from(self.started, budget_s, LADDER_BUDGET));
+        }
+        self.tried.push(Tried { description: description.to_string(), outcome, wall_s });
         Ok(go_on && self.may_go_on())
     }
 
@@ -222,7 +231,7 @@ impl Ladder<'_> {
 
     /// Step 2a; `Ok(true)` when it succeeded.
     fn coarse_to_fine(&mut self) -> Result<bool, SolveError> {
-        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.deadline);
+        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.limits.solve());
         let coarse_nodes = (disc.nodes - 1) / 2 + 1;
         let coarse_disc = disc.with_nodes(coarse_nodes);
         // An adaptive grid's map is graded for the scene's nodes: on half of them its
@@ -254,7 +263,7 @@ impl Ladder<'_> {
     /// Step 2b; `Ok(true)` when it succeeded. The one rung that changes the scene (its
     /// walls' widths), and so builds models of its own.
     fn width_continuation(&mut self) -> Result<bool, SolveError> {
-        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.deadline);
+        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.limits.solve());
         if scene.walls.is_empty() {
             return Ok(false);
         }
@@ -292,7 +301,7 @@ impl Ladder<'_> {
     fn past_the_end(&mut self) -> Result<bool, SolveError> {
         let span = self.scene.t_end - self.scene.t_start;
         let windows = Windows { length: span * (1.0 + END_MARGIN), overlap: span * END_MARGIN };
-        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.deadline);
+        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.limits.solve());
         if WindowGrid::new(scene, &disc, windows).is_err() || !self.may_go_on() {
             return Ok(false);
         }
@@ -304,7 +313,7 @@ impl Ladder<'_> {
 
     /// Step 4: windows of halving length.
     fn windows(&mut self) -> Result<(), SolveError> {
-        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.deadline);
+        let (scene, model, disc, deadline) = (self.scene, self.model, self.disc.clone(), self.limits.solve());
         let mut length = scene.windows.map_or(scene.t_end - scene.t_start, |w| w.length) / 2.0;
         loop {
             if !self.may_go_on() {
@@ -337,11 +346,12 @@ impl Ladder<'_> {
         attempts.iter().for_each(|a| work.add(&a.work));
         // Whether the time limit stopped an attempt or the ladder (before the reported
         // attempt leaves the list).
-        let timed_out = deadline::passed(self.deadline) || self.tried.iter().any(|t| stopped_at_time_limit(&t.outcome));
+        let timed_out =
+            deadline::passed(self.limits.time_limit) || self.tried.iter().any(|t| stopped_by(&t.outcome, |b| *b == Bound::TimeLimit));
         let mut outcome = self.tried.swap_remove(chosen).outcome;
         outcome.timings.other_attempts_s = others_s;
         outcome.work = work;
-        outcome.remedy = (!outcome.trusted()).then(|| match self.deadline.filter(|_| timed_out) {
+        outcome.remedy = (!outcome.trusted()).then(|| match self.limits.time_limit.filter(|_| timed_out) {
             Some(d) => time_limit_remedy(d),
             None => remedy(self.scene, &self.disc, &outcome, fallback_used, windows_tried),
         });
@@ -372,9 +382,9 @@ fn ends_the_ladder(o: &Outcome) -> bool {
     o.trusted() || (o.converged() && o.verification.status == VerifyStatus::Unverified)
 }
 
-/// Whether an attempt's backend was stopped at the time limit.
-fn stopped_at_time_limit(o: &Outcome) -> bool {
-    matches!(o.status.solver(), SolverStatus::TimeLimitReached { .. })
+/// Whether an attempt's backend was stopped at a deadline set by a bound `which` accepts.
+fn stopped_by(o: &Outcome, which: fn(&Bound) -> bool) -> bool {
+    matches!(o.status.solver(), SolverStatus::TimeLimitReached { bound, .. } if which(&bound))
 }
 
 /// What to do about a solve that the time limit `d` stopped before it could be trusted.

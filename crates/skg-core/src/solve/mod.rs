@@ -83,7 +83,8 @@ pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) 
     let mut outcome = if chooses {
         refine::refine(scene, &model, &own, deadline, progress)?
     } else {
-        ladder::climb(scene, &model, &own, &Guess::TimeStepping, ladder::Rungs::All, deadline, progress)?
+        let limits = run::deadline::Limits { time_limit: deadline, budget: None };
+        ladder::climb(scene, &model, &own, &Guess::TimeStepping, ladder::Rungs::All, limits, progress)?
     };
     outcome.notes.extend(note);
     Ok(outcome)

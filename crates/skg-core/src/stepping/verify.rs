@@ -39,6 +39,7 @@
 //!   even when verification is switched off.
 
 use std::fmt;
+use std::time::Instant;
 
 use indexmap::IndexMap;
 use serde::Serialize;
@@ -174,6 +175,12 @@ impl Verification {
 /// Verify `tr`, a solution of `scene` with model `model` by the SBP operator `operator`,
 /// against time stepping of the same scene from its initial state, sampled at `tr.t`.
 pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorKind) -> Verification {
+    verify_until(scene, model, tr, operator, None)
+}
+
+/// [`verify`], its time stepping given up at `deadline` (if any): the solve is then
+/// unverified, and the reason says so.
+pub fn verify_until(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorKind, deadline: Option<Instant>) -> Verification {
     let base = not_compared(scene, tr);
     if let Some(bad) = first_non_finite(scene, tr) {
         return Verification { status: VerifyStatus::Failed, reason: bad, ..base };
@@ -181,7 +188,7 @@ pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorK
     if !scene.verify.enabled {
         return Verification { reason: "verification switched off (--no-verify); every number is finite".into(), ..base };
     }
-    let (integrated, reference) = time_stepping_at_nodes(scene, model, tr);
+    let (integrated, reference) = time_stepping_at_nodes(scene, model, tr, deadline);
     match integrated {
         Ok(Stepped { states, stats: steps, .. }) => {
             let reference_trajectory = Trajectory::with_physical_columns(model, &tr.t, states);
@@ -222,11 +229,16 @@ fn not_compared(scene: &Scene, tr: &Trajectory) -> Verification {
 /// tolerance is judged on the motion's size as the solve found it; the default ones,
 /// relative to the ranges, only once the reference has them (then a second pass, whose
 /// work adds to the first's, if they are tight).
-fn time_stepping_at_nodes(scene: &Scene, model: &Model, tr: &Trajectory) -> (Result<Stepped<States>, OdeError>, String) {
+fn time_stepping_at_nodes(
+    scene: &Scene,
+    model: &Model,
+    tr: &Trajectory,
+    deadline: Option<Instant>,
+) -> (Result<Stepped<States>, OdeError>, String) {
     let stepper = scene.verify.stepper;
     let integrate = |rtol: f64, atol: f64| {
-        let opts =
-            OdeOptions { rtol, atol, max_step: mean_spacing(&tr.t), max_steps: step_budget(tr.t.len()), stepper, ..OdeOptions::default() };
+        let (max_step, max_steps) = (mean_spacing(&tr.t), step_budget(tr.t.len()));
+        let opts = OdeOptions { rtol, atol, max_step, max_steps, stepper, deadline, ..OdeOptions::default() };
         let integrated = integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts);
         let method = match &integrated {
             Ok(stepped) => stepped.method.clone(),
@@ -268,6 +280,9 @@ fn time_stepping_failure(e: &OdeError, stepper: Stepper) -> String {
             "{failed} (more than {STEPS_PER_NODE} steps per node: the motion is far finer than the grid; refine N or \
              shorten the span)"
         ),
+        OdeError::TimeLimit { t } => {
+            format!("the time stepping that checks the solve was stopped at the time limit at t = {t}, so the solve could not be checked")
+        }
         _ => failed,
     }
 }

@@ -57,7 +57,7 @@ use crate::model::Model;
 use crate::sbp::OperatorKind;
 use crate::scene::Scene;
 use crate::solve::ladder::{self, Rungs};
-use crate::solve::run::deadline::{self, Deadline};
+use crate::solve::run::deadline::{self, Bound, Deadline, Limits};
 use crate::solve::run::error::SolveError;
 use crate::solve::run::outcome::{Outcome, RefinedGrid, Refinement, Work};
 use crate::solve::run::piece::Guess;
@@ -69,6 +69,8 @@ use crate::stepping::verify::VerifyStatus;
 pub const REFINE_COST_FACTOR: f64 = 30.0;
 /// The least time a refinement without `--time-limit` may take, seconds.
 pub const REFINE_FLOOR_S: f64 = 60.0;
+/// The bound of the refinement's budget, for its deadline and its messages.
+const REFINE_BUDGET: Bound = Bound::Budget { of: "the refinement", first: "grid", factor: REFINE_COST_FACTOR, floor_s: REFINE_FLOOR_S };
 
 /// What to do when the refinement stopped at its time limit.
 const LONGER: &str = "a longer --time-limit lets the refinement go on to finer grids";
@@ -87,7 +89,8 @@ const EXTRAPOLATE_FROM: usize = 257;
 const HOPELESS: f64 = 16.0;
 
 /// The refinement or the operator choice of `scene` with its model `model` (module
-/// docs), stopped at `deadline`; `progress` is told what each grid and attempt is about
+/// docs), stopped at `deadline` (the time limit) or, without one, at its budget (checked
+/// inside the solves too); `progress` is told what each grid and attempt is about
 /// to do ("grid 2: SBP484 (natural) on 513 nodes").
 pub(crate) fn refine(
     scene: &Scene,
@@ -96,7 +99,7 @@ pub(crate) fn refine(
     deadline: Option<Deadline>,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Outcome, SolveError> {
-    Refiner::new(scene, model, own, deadline)?.run(progress)
+    Refiner::new(scene, model, own, Limits { time_limit: deadline, budget: None })?.run(progress)
 }
 
 /// The state of a refinement.
@@ -106,7 +109,8 @@ struct Refiner<'a> {
     /// The scene's own discretization (with the natural initial-velocity condition when
     /// the front door chose it for a fast initial layer).
     own: Discretization,
-    deadline: Option<Deadline>,
+    /// The time limit, and the refinement's budget once its first grid is solved.
+    limits: Limits,
     /// When the refinement started.
     started: Instant,
     /// The predictor, unless its reference could not be computed (then: why not).
@@ -134,7 +138,7 @@ struct Refiner<'a> {
 }
 
 impl<'a> Refiner<'a> {
-    fn new(scene: &'a Scene, model: &'a Arc<Model>, own: &Discretization, deadline: Option<Deadline>) -> Result<Refiner<'a>, SolveError> {
+    fn new(scene: &'a Scene, model: &'a Arc<Model>, own: &Discretization, limits: Limits) -> Result<Refiner<'a>, SolveError> {
         let t = Instant::now();
         let map = match &own.grid {
             Grid::Mapped(map) => Some(Arc::clone(map)),
@@ -163,7 +167,7 @@ impl<'a> Refiner<'a> {
             scene,
             model,
             own: own.clone(),
-            deadline,
+            limits,
             started: t,
             predictor,
             map,
@@ -361,17 +365,21 @@ impl<'a> Refiner<'a> {
             let outcome = self.solve_on(c, nodes, predicted, &mut |step: &str| progress(&format!("grid {number} ({what}), {step}")))?;
             let trusted = outcome.trusted();
             self.record(c, nodes, predicted, &outcome);
+            if self.grids.len() == 1 && self.limits.time_limit.is_none() {
+                let budget_s = (REFINE_COST_FACTOR * self.grids[0].wall_s).max(REFINE_FLOOR_S);
+                self.limits = self.limits.with_budget(Deadline::from(self.started, budget_s, REFINE_BUDGET));
+            }
             if trusted {
                 break (format!("verified on grid {number}: {what}"), None);
             }
             if !self.scene.verify.refine {
                 break (format!("the operator was chosen for the scene's grid of {nodes} nodes; --refine would refine it"), None);
             }
+            if let Some(what) = self.stopped_at(&outcome) {
+                break (format!("stopped at {what} after {}", counted_grids(self.grids.len())), Some(LONGER.to_string()));
+            }
             if let Some((reason, advice)) = self.incurable(&outcome) {
                 break (format!("stopped after grid {number} ({what}): {reason}; more nodes would not change that"), advice);
-            }
-            if deadline::passed(self.deadline) {
-                break (format!("stopped at the time limit after {}", counted_grids(self.grids.len())), Some(LONGER.to_string()));
             }
             let Some(next) = self.next() else {
                 break self.out_of_budget();
@@ -410,7 +418,7 @@ impl<'a> Refiner<'a> {
             Rungs::GuessOnly
         };
         let outcome = match &self.best {
-            None => ladder::climb(scene, model, &disc, &Guess::TimeStepping, rungs, self.deadline, progress)?,
+            None => ladder::climb(scene, model, &disc, &Guess::TimeStepping, rungs, self.limits, progress)?,
             Some((best, _)) => {
                 let times = disc.times(scene);
                 let tr = &best.trajectory;
@@ -422,7 +430,7 @@ impl<'a> Refiner<'a> {
                         best.settings.operator, best.settings.nodes
                     ),
                 };
-                ladder::climb(scene, model, &disc, &guess, Rungs::GuessOnly, self.deadline, progress)?
+                ladder::climb(scene, model, &disc, &guess, Rungs::GuessOnly, self.limits, progress)?
             }
         };
         Ok(outcome)
@@ -518,23 +526,21 @@ impl<'a> Refiner<'a> {
     fn beyond_time(&self, nodes: usize) -> Option<String> {
         let last = self.grids.last()?;
         let estimate = last.wall_s * nodes as f64 / last.nodes as f64;
-        let elapsed = self.started.elapsed().as_secs_f64();
-        match self.deadline {
-            Some(d) => {
-                let left = d.left_s();
-                (estimate > left).then(|| format!("it would take about {estimate:.1} s, and the time limit leaves {left:.1} s"))
-            }
-            None => {
-                let first = self.grids[0].wall_s;
-                let bound = (REFINE_COST_FACTOR * first).max(REFINE_FLOOR_S);
-                (elapsed + estimate > bound).then(|| {
-                    format!(
-                        "it would take about {estimate:.1} s more, beyond the refinement's budget of {bound:.0} s ({REFINE_COST_FACTOR}× \
-                         the first grid's solve or {REFINE_FLOOR_S} s, whichever is longer; --time-limit sets another)"
-                    )
-                })
-            }
+        let d = self.limits.solve()?;
+        let left = d.left_s();
+        (estimate > left).then(|| format!("it would take about {estimate:.1} s, and {} leaves {left:.1} s", d.describe()))
+    }
+
+    /// What stopped the grid just solved (`outcome`) or stops the refinement now, if a
+    /// deadline did: the time limit, or the refinement's budget.
+    fn stopped_at(&self, outcome: &Outcome) -> Option<String> {
+        if let Some(d) = self.limits.time_limit.filter(|d| d.passed()) {
+            return Some(d.describe());
         }
+        if let crate::solve::backend::SolverStatus::TimeLimitReached { bound, limit_s, .. } = outcome.status.solver() {
+            return Some(deadline::describe(bound, limit_s));
+        }
+        self.limits.budget.filter(|d| d.passed()).map(|d| d.describe())
     }
 
     /// Why the refinement stopped without a verified solve at the budget.

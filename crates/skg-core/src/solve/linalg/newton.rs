@@ -58,7 +58,7 @@
 //! 16 rods; the multipliers, which the residual determines less well, within 2·10⁻⁷).
 //! The backend asks for it where that pays (`backend::single_precision_pays`).
 use std::fmt;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
@@ -172,7 +172,8 @@ pub struct NewtonOptions {
     /// refined in double precision (module documentation, "Mixed precision").
     pub single_precision: bool,
     /// When the solve must end, if ever: checked before every step (a solve that has not
-    /// converged by then ends with [`NewtonStatus::TimeLimitReached`]).
+    /// converged by then, or whose next step would end past it if it took as long as the
+    /// last one, ends with [`NewtonStatus::TimeLimitReached`]).
     pub deadline: Option<Instant>,
 }
 
@@ -309,10 +310,12 @@ impl SystemSolver {
             if let Some(status) = it.stop(options) {
                 break status;
             }
+            let step_start = Instant::now();
             // Residual evaluations from this point (a rejected chord trial, line-search trials).
             let mut trials = 0;
             if it.chord_next {
                 if self.chord_step(&mut it, options, &mut trials) {
+                    it.last_step_s = step_start.elapsed().as_secs_f64();
                     continue;
                 }
                 if it.residual() <= it.floor {
@@ -322,6 +325,7 @@ impl SystemSolver {
             if let Err(status) = self.newton_step(&mut it, options, &mut trials) {
                 break status;
             }
+            it.last_step_s = step_start.elapsed().as_secs_f64();
         };
         Ok(it.finish(status))
     }
@@ -398,6 +402,8 @@ struct Iteration<'s, S: SquareSystem + ?Sized> {
     floor: f64,
     /// Whether the next step is tried as a chord step on the stored factorization.
     chord_next: bool,
+    /// Seconds the last step took (0 before the first).
+    last_step_s: f64,
     stats: NewtonStats,
     history: Vec<IterationStat>,
 }
@@ -421,6 +427,7 @@ impl<'s, S: SquareSystem + ?Sized> Iteration<'s, S> {
             iterations: 0,
             floor: 0.0,
             chord_next: false,
+            last_step_s: 0.0,
             stats: NewtonStats::default(),
             history: Vec::new(),
         };
@@ -438,7 +445,8 @@ impl<'s, S: SquareSystem + ?Sized> Iteration<'s, S> {
 
     /// The status that ends the solve before the next step, if any: a residual that is
     /// not finite, at the tolerance, at the round-off level (unless a chord step may
-    /// still contract it: cheap enough to be tried first), the iteration limit, or the deadline.
+    /// still contract it: cheap enough to be tried first), the iteration limit, or the deadline
+    /// (reached, or to be passed by a step as long as the last one).
     fn stop(&self, options: &NewtonOptions) -> Option<NewtonStatus> {
         if !self.norm.is_finite() {
             return Some(NewtonStatus::InvalidNumber);
@@ -450,7 +458,7 @@ impl<'s, S: SquareSystem + ?Sized> Iteration<'s, S> {
             Some(NewtonStatus::ConvergedToRoundOff)
         } else if self.iterations >= options.max_iter as usize {
             Some(NewtonStatus::MaximumIterationsExceeded)
-        } else if options.deadline.is_some_and(|d| Instant::now() >= d) {
+        } else if options.deadline.is_some_and(|d| Instant::now() + Duration::from_secs_f64(self.last_step_s) >= d) {
             Some(NewtonStatus::TimeLimitReached)
         } else {
             None
@@ -652,6 +660,42 @@ mod tests {
             v[0] = 1.0 / (1.0 + x[0] * x[0]);
             Ok(())
         }
+    }
+
+    /// `F(x) = x⁹`, whose every residual takes 0.3 s: Newton's steps contract it by
+    /// (8/9)⁹ ≈ 0.35 (no chord steps), so it needs dozens.
+    struct SlowPower(Vec<(u32, u32)>);
+    impl SquareSystem for SlowPower {
+        fn size(&self) -> usize {
+            1
+        }
+        fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+            std::thread::sleep(Duration::from_millis(300));
+            c[0] = x[0].powi(9);
+            Ok(())
+        }
+        fn jacobian_structure(&self) -> &[(u32, u32)] {
+            &self.0
+        }
+        fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
+            v[0] = 9.0 * x[0].powi(8);
+            Ok(())
+        }
+    }
+
+    /// Steps of at least 0.3 s against a deadline 1.05 s away: Newton stops before the
+    /// step that would end past it (after 2 steps at the latest, at 0.9 s; a loaded
+    /// machine, whose steps take longer, stops earlier), not at the first check past it
+    /// (3 steps, 1.2 s).
+    #[test]
+    fn newton_stops_before_a_step_that_would_pass_the_deadline() {
+        let mut p = SlowPower(vec![(0, 0)]);
+        let mut solver = SystemSolver::new(1, &p.0.clone()).unwrap();
+        let deadline = Some(Instant::now() + Duration::from_millis(1050));
+        let opts = NewtonOptions { tol: 1e-300, max_iter: 100, chord: true, single_precision: false, deadline };
+        let sol = solver.solve(&mut p, &[1.0], &opts).unwrap();
+        assert_eq!(sol.status, NewtonStatus::TimeLimitReached);
+        assert!((1..=2).contains(&sol.iterations), "{} steps", sol.iterations);
     }
 
     fn circle() -> Circle {

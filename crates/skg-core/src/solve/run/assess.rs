@@ -7,6 +7,7 @@ use std::time::Instant;
 use indexmap::IndexMap;
 
 use super::backend::{IpoptReport, SolverStatus, SquareSolver};
+use super::deadline::{self, Deadline};
 use super::global::Run;
 use super::outcome::{counted, Diagnostics, KineticLoss, Outcome, Settings, Sizes};
 use super::piece::Piece;
@@ -25,16 +26,16 @@ use crate::stepping::verify::{self, Verification, VerifyStatus};
 /// N=48) and 100 %+ (knife edge on SBP121, an odd-even mode).
 const FAR_FROM_TIME_STEPPING: f64 = 0.1;
 
-/// The outcome of a run: its diagnostics, verification and warnings (the ladder adds
-/// the attempts and a remedy).
-pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
+/// The outcome of a run: its diagnostics, verification (given up at `time_limit`, if
+/// any) and warnings (the ladder adds the attempts and a remedy).
+pub fn outcome(scene: &Scene, model: &Model, run: Run, time_limit: Option<Deadline>) -> Outcome {
     let Run { method, discretization: disc, sizes, solution: run } = run;
     let t = Instant::now();
-    let timed_out = matches!(run.status.solver(), SolverStatus::TimeLimitReached { .. }) && !run.status.is_converged();
-    let mut verification = if timed_out {
-        not_verified_after_time_limit(scene, model, &run.trajectory, disc.operator)
-    } else {
-        verify::verify(scene, model, &run.trajectory, disc.operator)
+    let mut verification = match run.status.solver() {
+        SolverStatus::TimeLimitReached { bound, limit_s, .. } if !run.status.is_converged() => {
+            not_verified_after_time_limit(scene, model, &run.trajectory, disc.operator, &deadline::describe(bound, limit_s))
+        }
+        _ => verify::verify_until(scene, model, &run.trajectory, disc.operator, time_limit.map(|d| d.at)),
     };
     let mut timings = run.timings.clone();
     timings.verification_s = t.elapsed().as_secs_f64();
@@ -78,16 +79,16 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run) -> Outcome {
     }
 }
 
-/// The verification of a run whose backend was stopped at the time limit: not run (its
-/// time stepping would take the solve further past the limit, and the run did not
+/// The verification of a run whose backend was stopped at a deadline (`what`): not run
+/// (its time stepping would take the solve further past it, and the run did not
 /// converge); only the checks of the numbers themselves (finite, odd-even amplitudes).
-fn not_verified_after_time_limit(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorKind) -> Verification {
+fn not_verified_after_time_limit(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorKind, what: &str) -> Verification {
     let mut unchecked = scene.clone();
     unchecked.verify.enabled = false;
     let mut verification = verify::verify(&unchecked, model, tr, operator);
     if verification.status == VerifyStatus::Skipped {
         verification.status = VerifyStatus::Unverified;
-        verification.reason = "not run: the solve was stopped at the time limit before it converged".to_string();
+        verification.reason = format!("not run: the solve was stopped at {what} before it converged");
     }
     verification
 }

@@ -110,9 +110,10 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     let mut warnings = Vec::new();
     // The Newton backend's LU analysis needs only the structure: it runs beside the
     // guess, on a second thread (its time is the solver's, `analysis_s`).
+    let deadline = solver.deadline().map(|d| d.at);
     let (made, guess_s, analysed) = std::thread::scope(|s| {
         let analysing = solver.needs_analysis(action).then(|| s.spawn(|| solver.analyse(action)));
-        let made = initial_guess(action, times, guess, scene.verify.stepper, &mut warnings);
+        let made = initial_guess(action, times, guess, scene.verify.stepper, deadline, &mut warnings);
         let guess_s = t_guess.elapsed().as_secs_f64();
         (made, guess_s, analysing.map(|a| a.join().expect("the LU analysis panicked")))
     });
@@ -168,12 +169,14 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
 
 /// Initial point Z0 and a description of how it was made; also the time-stepping
 /// coordinates when the guess made them (for the spurious-solution check) and the work
-/// of that time stepping.
+/// of that time stepping, given up at `deadline` (the backend then stops before its
+/// first step).
 fn initial_guess(
     action: &Action,
     times: &[f64],
     guess: &Guess,
     stepper: Stepper,
+    deadline: Option<Instant>,
     warnings: &mut Vec<String>,
 ) -> (Vec<f64>, String, Option<NodeSeries>, OdeStats) {
     let (d, n) = (action.layout.d, action.layout.n);
@@ -187,8 +190,8 @@ fn initial_guess(
             // uncapped one a tenth, with the same Newton iterations on every shipped
             // scene (docs/benchmarks.md#the-initial-guess).
             let max_step = if action.model.walls.is_empty() { None } else { mean_spacing(times) };
-            let opts =
-                OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps: step_budget(times.len()), stepper, ..OdeOptions::default() };
+            let max_steps = step_budget(times.len());
+            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps, stepper, deadline, ..OdeOptions::default() };
             let (q0, v0) = (action.q0(), action.v0());
             match integrate_model(&action.model, q0, v0, times, &opts) {
                 Ok(Stepped { states: States { q, lambda, .. }, stats: steps, .. }) => (

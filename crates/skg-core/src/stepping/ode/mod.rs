@@ -54,6 +54,8 @@ mod stepper;
 mod tableau;
 
 pub use crate::scene::Stepper;
+use std::time::Instant;
+
 use stepper::{Dop853, Rejection, Stage};
 
 /// Name of the method reported in [`OdeSolution::method`].
@@ -79,11 +81,24 @@ pub struct OdeOptions {
     /// [`integrate_with`](super::integrate::integrate_with), which chooses by it; the
     /// DOP853 functions of this module step with DOP853 whatever it says. Default `Auto`.
     pub stepper: Stepper,
+    /// When to give up, if ever ([`OdeError::TimeLimit`]): checked before every step, by
+    /// both integrators. Default `None`. Not part of the options' record (a moment of
+    /// this process).
+    #[serde(skip)]
+    pub deadline: Option<Instant>,
 }
 
 impl Default for OdeOptions {
     fn default() -> Self {
-        OdeOptions { rtol: 1e-10, atol: 1e-12, max_steps: 1_000_000, initial_step: None, max_step: None, stepper: Stepper::Auto }
+        OdeOptions {
+            rtol: 1e-10,
+            atol: 1e-12,
+            max_steps: 1_000_000,
+            initial_step: None,
+            max_step: None,
+            stepper: Stepper::Auto,
+            deadline: None,
+        }
     }
 }
 
@@ -163,6 +178,12 @@ pub enum OdeError {
         t: f64,
         /// The step attempts made.
         steps: usize,
+    },
+    /// The deadline ([`OdeOptions::deadline`]) was reached at time `t`.
+    #[error("stopped at the time limit at t = {t}")]
+    TimeLimit {
+        /// Where the integration stopped.
+        t: f64,
     },
     /// Invalid arguments (times, initial state, options).
     #[error("bad input: {0}")]
@@ -457,6 +478,8 @@ struct Controller {
     t_end: f64,
     /// The most attempts allowed.
     max_steps: usize,
+    /// When to give up, if ever.
+    deadline: Option<Instant>,
     /// The attempts made.
     attempts: usize,
     /// Whether the last attempt was rejected (the next step may then not grow).
@@ -478,7 +501,16 @@ impl Controller {
             Some(h0) => h0.min(hmax),
             None => s.hinit(t0, hmax),
         };
-        Controller { h, hmax, t_end, max_steps: opts.max_steps, attempts: 0, after_rejection: false, last_failure: None }
+        Controller {
+            h,
+            hmax,
+            t_end,
+            max_steps: opts.max_steps,
+            deadline: opts.deadline,
+            attempts: 0,
+            after_rejection: false,
+            last_failure: None,
+        }
     }
 
     /// The size and end time of the next attempt from `t` (the last step stretched or
@@ -488,6 +520,9 @@ impl Controller {
     fn next_step(&mut self, t: f64) -> Result<(f64, f64), OdeError> {
         if self.attempts >= self.max_steps {
             return Err(OdeError::MaxSteps { t, steps: self.attempts });
+        }
+        if self.deadline.is_some_and(|d| Instant::now() >= d) {
+            return Err(OdeError::TimeLimit { t });
         }
         let hmin = 10.0 * f64::EPSILON * t.abs().max(self.t_end.abs());
         if self.h.is_nan() || self.h <= hmin {

@@ -60,6 +60,8 @@ mod coefficients;
 #[cfg(test)]
 mod tests;
 
+use std::time::Instant;
+
 use nalgebra::{Complex, DMatrix, DVector};
 
 use self::coefficients::{ALPHA, BETA, C, ERROR_WEIGHTS, GAMMA, T, T_INV};
@@ -288,6 +290,9 @@ impl<'o> Stepper<'o> {
         while self.t < t_end {
             if stats.accepted + stats.rejected >= self.opts.max_steps {
                 return Err(OdeError::MaxSteps { t: self.t, steps: stats.accepted + stats.rejected });
+            }
+            if self.opts.deadline.is_some_and(|d| Instant::now() >= d) {
+                return Err(OdeError::TimeLimit { t: self.t });
             }
             let h = self.bounded_step(times[next]);
             if h <= f64::EPSILON * (self.t.abs() + (t_end - t_start).abs()) {

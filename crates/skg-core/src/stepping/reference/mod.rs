@@ -155,6 +155,7 @@ impl ReferenceOptions {
             initial_step: None,
             max_step: min_spacing(times),
             stepper: self.stepper,
+            deadline: None,
         }
     }
 }

@@ -15,12 +15,14 @@
 //! N = 16384: 11 iterations instead of 1). It is also stopped there at the whole solve's
 //! deadline (`--time-limit`), as not converged.
 
+use std::time::Instant;
+
 use skg_ipopt::{self as ipopt, Problem};
 
 use super::{IpoptReport, SolverStatus};
 use crate::scene::{Backend, ConstraintKind, IpoptValue, Scene};
 use crate::solve::linalg::roundoff::residual_roundoff_level;
-use crate::solve::linalg::{EvalError, IterationStat, SquareSystem};
+use crate::solve::linalg::{max_abs, EvalError, IterationStat, SquareSystem};
 use crate::solve::run::deadline::Deadline;
 
 /// What an Ipopt solve of a square system found.
@@ -50,7 +52,10 @@ pub(super) fn solve<S: SquareSystem + ?Sized>(
     options: &ipopt::Options,
     deadline: Option<Deadline>,
 ) -> Result<IpoptOutcome, ipopt::SolveError> {
-    let mut square = IpoptSquare { system, tol: options.tol, roundoff: 0.0, deadline, stopped: None };
+    if let Some(d) = deadline.filter(|d| d.passed()) {
+        return Ok(not_started(system, x0, d));
+    }
+    let mut square = IpoptSquare { system, tol: options.tol, roundoff: 0.0, deadline, last_callback: None, stopped: None };
     let sol = ipopt::solve(&mut square, x0, options)?;
     let calls = |stat: ipopt::EvalStat| stat.calls as usize;
     Ok(IpoptOutcome {
@@ -72,6 +77,33 @@ pub(super) fn solve<S: SquareSystem + ?Sized>(
     })
 }
 
+/// The outcome of a solve not started because `deadline` had passed (Ipopt's analysis
+/// and initialization alone may take longer than a whole iteration): the start, as it is.
+fn not_started<S: SquareSystem + ?Sized>(system: &mut S, x0: &[f64], deadline: Deadline) -> IpoptOutcome {
+    let mut c = vec![0.0; x0.len()];
+    let max_residual = match system.residual(x0, &mut c) {
+        Ok(()) => max_abs(&c),
+        Err(_) => f64::NAN,
+    };
+    IpoptOutcome {
+        status: deadline.stopped(Backend::Ipopt),
+        x: x0.to_vec(),
+        max_residual,
+        iterations: 0,
+        history: Vec::new(),
+        total_s: 0.0,
+        evaluation_s: 0.0,
+        report: IpoptReport {
+            iterations: 0,
+            residual_evaluations: 1,
+            jacobian_evaluations: 0,
+            hessian_evaluations: 0,
+            internal_s: 0.0,
+            newton_lu_s: None,
+        },
+    }
+}
+
 /// Why [`IpoptSquare`] stopped Ipopt.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Stop {
@@ -79,7 +111,8 @@ enum Stop {
     Tolerance,
     /// `max |c|` at the round-off level of the last Jacobian.
     RoundOff,
-    /// The deadline, reached this many seconds after the whole solve started.
+    /// The deadline (reached, or to be passed by the next iteration), this many seconds
+    /// after the start of what it bounds.
     TimeLimit(f64),
 }
 
@@ -91,7 +124,8 @@ enum Stop {
 /// `inf_pr`: unscaled, since skg-solve turns Ipopt's NLP scaling off (a scene that turns
 /// it on under `[solver.ipopt]` is stopped on the scaled value, as Ipopt's own test
 /// would be; convergence is judged on the recomputed unscaled residual either way). In
-/// any phase, stop once the deadline has passed.
+/// any phase, stop once the deadline has passed, or would be by an iteration as long as
+/// the last one ([`deadline`](crate::solve::run::deadline)).
 pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
     system: &'p mut S,
     tol: f64,
@@ -99,6 +133,8 @@ pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
     roundoff: f64,
     /// When to stop without converging, if ever.
     deadline: Option<Deadline>,
+    /// When the intermediate callback was last called.
+    last_callback: Option<Instant>,
     stopped: Option<Stop>,
 }
 
@@ -108,9 +144,10 @@ impl<S: SquareSystem + ?Sized> IpoptSquare<'_, S> {
         match (ipopt_status, self.stopped) {
             (ipopt::Status::UserRequestedStop, Some(Stop::Tolerance)) => SolverStatus::Ipopt(ipopt::Status::SolveSucceeded),
             (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff)) => SolverStatus::IpoptConvergedToRoundOff,
-            (ipopt::Status::UserRequestedStop, Some(Stop::TimeLimit(elapsed_s))) => {
-                SolverStatus::TimeLimitReached { backend: Backend::Ipopt, limit_s: self.deadline.map_or(0.0, |d| d.limit_s), elapsed_s }
-            }
+            (ipopt::Status::UserRequestedStop, Some(Stop::TimeLimit(elapsed_s))) => match self.deadline {
+                Some(d) => SolverStatus::TimeLimitReached { backend: Backend::Ipopt, bound: d.bound, limit_s: d.limit_s, elapsed_s },
+                None => SolverStatus::Ipopt(ipopt::Status::UserRequestedStop),
+            },
             (status, _) => SolverStatus::Ipopt(status),
         }
     }
@@ -157,7 +194,10 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
                 self.stopped = Some(Stop::RoundOff);
             }
         }
-        if let Some(d) = self.deadline.filter(|d| self.stopped.is_none() && d.passed()) {
+        // The time of the iteration just ended (none for the initialization's).
+        let now = Instant::now();
+        let iteration_s = self.last_callback.replace(now).map(|last| now.duration_since(last).as_secs_f64());
+        if let Some(d) = self.deadline.filter(|d| self.stopped.is_none() && (d.passed() || iteration_s.is_some_and(|s| d.would_pass(s)))) {
             self.stopped = Some(Stop::TimeLimit(d.elapsed_s()));
         }
         self.stopped.is_none()
@@ -254,9 +294,64 @@ pub(super) fn options(scene: &Scene) -> ipopt::Options {
 #[cfg(test)]
 mod tests {
     use std::path::Path;
+    use std::time::Duration;
 
     use super::*;
     use crate::scene::{Overrides, SceneFile};
+    use crate::solve::run::deadline::Bound;
+
+    /// `F(x) = x − 1`, which the test below never lets Ipopt solve.
+    struct Shift;
+    impl SquareSystem for Shift {
+        fn size(&self) -> usize {
+            1
+        }
+        fn residual(&mut self, x: &[f64], f: &mut [f64]) -> Result<(), EvalError> {
+            f[0] = x[0] - 1.0;
+            Ok(())
+        }
+        fn jacobian_structure(&self) -> &[(u32, u32)] {
+            &[(0, 0)]
+        }
+        fn jacobian_values(&mut self, _: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
+            v[0] = 1.0;
+            Ok(())
+        }
+    }
+
+    /// Iterations of 0.3 s against a deadline 1.05 s away: the callback stops Ipopt
+    /// before the iteration that would end past the deadline (at iteration 3, at 0.9 s,
+    /// at the latest; a loaded machine, whose iterations take longer, stops earlier), not
+    /// at the first callback past it (iteration 4, 1.2 s).
+    #[test]
+    fn ipopt_is_stopped_before_an_iteration_that_would_pass_the_deadline() {
+        let mut system = Shift;
+        let deadline = Deadline::from(Instant::now(), 1.05, Bound::TimeLimit);
+        let mut square = IpoptSquare { system: &mut system, tol: 1e-12, roundoff: 0.0, deadline, last_callback: None, stopped: None };
+        let stat = |iter: i32| ipopt::IterationStat {
+            iter,
+            objective: 0.0,
+            inf_pr: 1.0,
+            inf_du: 0.0,
+            mu: 0.0,
+            d_norm: 0.0,
+            regularization: 0.0,
+            alpha_pr: 0.0,
+            alpha_du: 0.0,
+            ls_trials: 1,
+            restoration: false,
+        };
+        let stopped_at = (0..10).find(|&iter| {
+            if iter > 0 {
+                std::thread::sleep(Duration::from_millis(300));
+            }
+            !square.intermediate(&stat(iter))
+        });
+        let stopped_at = stopped_at.expect("stopped");
+        assert!((1..=3).contains(&stopped_at), "stopped at iteration {stopped_at}");
+        assert!(matches!(square.stopped, Some(Stop::TimeLimit(_))));
+        assert!(matches!(square.status(ipopt::Status::UserRequestedStop), SolverStatus::TimeLimitReached { backend: Backend::Ipopt, .. }));
+    }
 
     /// A shipped scene of `scenarios/`.
     fn shipped(name: &str) -> Scene {

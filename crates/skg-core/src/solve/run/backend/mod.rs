@@ -41,7 +41,7 @@ use crate::discrete::action::{Action, Block, MatrixPlan};
 use crate::scene::{Backend, Formulation, HessianMode, Scene};
 use crate::solve::linalg::roundoff::row_roundoff_levels;
 use crate::solve::linalg::{IterationStat, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SquareSystem, SystemSolver};
-use crate::solve::run::deadline::Deadline;
+use crate::solve::run::deadline::{self, Bound, Deadline};
 #[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
 
@@ -68,14 +68,16 @@ pub enum SolverStatus {
     IpoptConvergedToRoundOff,
     /// Newton's status.
     Newton(NewtonStatus),
-    /// The backend was stopped at the whole solve's time limit ([`Deadline`]) before it
+    /// The backend was stopped at a [`Deadline`] (the time limit or a budget) before it
     /// converged: Ipopt from its intermediate callback, Newton before its next step.
     TimeLimitReached {
         /// The backend that was stopped.
         backend: Backend,
-        /// The time limit, seconds.
+        /// What set the deadline.
+        bound: Bound,
+        /// The deadline, seconds from the start of what it bounds.
         limit_s: f64,
-        /// The seconds since the whole solve started, when it was stopped.
+        /// The seconds since that start, when it was stopped.
         elapsed_s: f64,
     },
 }
@@ -117,12 +119,13 @@ impl fmt::Display for SolverStatus {
                 f.write_str("Ipopt converged to the round-off level of the residual (above the requested tolerance)")
             }
             SolverStatus::Newton(s) => write!(f, "{s}"),
-            SolverStatus::TimeLimitReached { backend, limit_s, elapsed_s } => {
+            SolverStatus::TimeLimitReached { backend, bound, limit_s, elapsed_s } => {
                 let who = match backend {
                     Backend::Ipopt => "Ipopt",
                     Backend::Newton => "Newton's method",
                 };
-                write!(f, "{who} was stopped at the time limit of {limit_s} s (--time-limit), {elapsed_s:.1} s after the solve started")
+                let (what, start) = (deadline::describe(*bound, *limit_s), deadline::start_of(*bound));
+                write!(f, "{who} was stopped at {what}, {elapsed_s:.1} s after {start} started")
             }
         }
     }
@@ -316,6 +319,11 @@ impl SquareSolver {
         self.settings.newton.deadline = deadline.map(|d| d.at);
     }
 
+    /// The deadline of every later solve, if any ([`SquareSolver::set_deadline`]).
+    pub fn deadline(&self) -> Option<Deadline> {
+        self.settings.deadline
+    }
+
     /// The Jacobian's sparsity plan.
     pub fn jacobian_plan(&self) -> &MatrixPlan {
         &self.jac
@@ -486,7 +494,7 @@ fn solve_system<S: SquareSystem>(
     let timed_out = sol.status == NewtonStatus::TimeLimitReached;
     if sol.status.is_success() || timed_out || !cfg!(feature = "ipopt") {
         let status = match settings.deadline.filter(|_| timed_out) {
-            Some(d) => SolverStatus::TimeLimitReached { backend: Backend::Newton, limit_s: d.limit_s, elapsed_s: d.elapsed_s() },
+            Some(d) => d.stopped(Backend::Newton),
             None => SolverStatus::Newton(sol.status),
         };
         return Ok(SystemSolution {
