@@ -470,6 +470,10 @@ mod tests {
         let v = verify(&scene, &model, &tr, scene.operator);
         assert_eq!(v.status, VerifyStatus::Passed, "{}", v.reason);
         assert!(v.max_error.unwrap() < 1e-12);
+        // Its time stepping given up at a deadline already passed: unverified, saying why.
+        let v = verify_until(&scene, &model, &tr, scene.operator, Some(Instant::now()));
+        assert_eq!(v.status, VerifyStatus::Unverified, "{}", v.reason);
+        assert!(v.reason.contains("stopped at the time limit at t = 0"), "{}", v.reason);
         tr.energy[5] = f64::NAN;
         for ov in [Overrides::default(), Overrides { no_verify: true, ..Default::default() }] {
             let v = verify(&resolve(&ov), &model, &tr, scene.operator);
