@@ -526,7 +526,14 @@ fn solve_by_ipopt<S: SquareSystem>(
     let sol = ipopt_square::solve(system, x0, &settings.ipopt, settings.deadline)?;
     let mut ipopt_report = sol.report;
     let internal_s = ipopt_report.internal_s;
-    if report.requested == Backend::Ipopt && internal_s >= NEWTON_LU_TIMED_FROM_S && internal_s >= NEWTON_LU_TIMED_SHARE * sol.total_s {
+    // Not after a solve a deadline stopped: the note is for a solve that ran its course,
+    // and the factorization would take the solve further past the deadline.
+    let stopped = matches!(sol.status, SolverStatus::TimeLimitReached { .. }) || deadline::passed(settings.deadline);
+    if report.requested == Backend::Ipopt
+        && !stopped
+        && internal_s >= NEWTON_LU_TIMED_FROM_S
+        && internal_s >= NEWTON_LU_TIMED_SHARE * sol.total_s
+    {
         ipopt_report.newton_lu_s = time_newton_lu(system, &sol.x);
     }
     report.ipopt = Some(ipopt_report);
