@@ -58,7 +58,11 @@ fn a_hard_walls_sweep_measures_the_model_error_against_the_closed_form_bounce() 
         let compared = solution.rows.len() - 2;
         let truth = solution.rows[..compared].iter().map(|v| (v[y] - hard_floor(v[0])).abs()).fold(0.0, f64::max);
         let (model, discretization) = (number(&r, row, "error_max"), number(&r, row, "verify_error"));
-        assert!((model - truth).abs() <= 1e-7 * (1.0 + truth), "sigma {}: error_max {model:e}, closed form {truth:e}", cell(&r, row, "sigma"));
+        assert!(
+            (model - truth).abs() <= 1e-7 * (1.0 + truth),
+            "sigma {}: error_max {model:e}, closed form {truth:e}",
+            cell(&r, row, "sigma")
+        );
         assert_eq!(cell(&r, row, "error_column"), "y");
         assert!(discretization <= 1e-3, "verify_error {discretization:e}");
         model_errors.push((number(&r, row, "sigma"), model, discretization));

@@ -170,9 +170,8 @@ impl SweepFile {
     /// at the `reference` key, with the scene's reason and its location.
     fn check_hard_walls(&self, first: &Scene) -> Result<(), SweepError> {
         let (Some(ReferenceSpec::HardWalls), Some(r)) = (self.reference(), &self.sweep.reference) else { return Ok(()) };
-        skg_core::stepping::reference::check_hard_walls(first).map_err(|e| {
-            self.invalid(r, format!("sweep.reference = {:?}: {}", r.get_ref(), skg_core::error_text(&e)))
-        })
+        skg_core::stepping::reference::check_hard_walls(first)
+            .map_err(|e| self.invalid(r, format!("sweep.reference = {:?}: {}", r.get_ref(), skg_core::error_text(&e))))
     }
 
     /// Refuse a file that lists more than [`MAX_POINTS`] points, before any is made.
