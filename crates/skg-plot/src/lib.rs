@@ -6,6 +6,9 @@
 //!   operator and formulation, the reference integrator at a ladder of tolerances as the
 //!   peer line.
 //! * [`convergence`]: error versus N, log-log, the fitted order in the legend.
+//! * [`errors`]: the error against the sweep's reference and the verification's error
+//!   versus a parameter (with the hard-wall reference: the model error beside the
+//!   discretization error as the wall thins), log-log.
 //! * [`scaling`]: solve time versus N from `skg-solve bench --csv`, log-log, with a
 //!   line of slope 1.
 //! * [`trajectory`]: the coordinates over time with the reference overlaid, and the
@@ -30,7 +33,7 @@
 //!   converged SKG points by line, the kept trajectories);
 //! * `loglog`: the log-log chart that the charts of `line_charts` draw, with its axes'
 //!   labels and the corner for its legend;
-//! * `line_charts`: [`work_precision`], [`tolerance`], [`convergence`], [`scaling`];
+//! * `line_charts`: [`work_precision`], [`tolerance`], [`convergence`], [`errors`], [`scaling`];
 //! * `trajectory`: [`trajectory`];
 //! * `fit`: [`fit`](fn@fit);
 //! * `stability`: [`stability`] and its [`Cell`];
@@ -52,7 +55,7 @@ pub mod motion;
 
 pub use error::{DrawError, PlotError};
 pub use fit::fit;
-pub use line_charts::{convergence, scaling, tolerance, work_precision};
+pub use line_charts::{convergence, errors, scaling, tolerance, work_precision};
 pub use render::SIZE;
 pub use results::{cell_value, sweep_solutions};
 pub use stability::{stability, Cell};

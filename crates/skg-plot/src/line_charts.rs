@@ -2,7 +2,8 @@
 //! [`crate::loglog`] chart: [`work_precision`] (error against wall time, the time
 //! stepper's rtol ladder as the peer line), [`tolerance`] (accuracy reached against
 //! accuracy asked, and the wall time), [`convergence`] (error against N with the fitted
-//! order) and [`scaling`] (wall time against N). Uses `crate::results` to read the rows.
+//! order), [`errors`] (the error against the reference and the verification's against a
+//! parameter: the hard-contact limit) and [`scaling`] (wall time against N). Uses `crate::results` to read the rows.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -215,4 +216,82 @@ pub fn convergence(res: &Results, filters: &[(String, String)], title: &str, ste
         })
         .collect();
     render!(stem, SIZE, draw_loglog(title, "nodes N", "max error against the reference", &lines))
+}
+
+/// The two errors of each converged point against a column `x` (a parameter, e.g. the
+/// wall width `sigma`): `error_max` against the sweep's `reference` (as written in
+/// `sweep.json`; with `"hard_walls"` the *model error*) and `verify_error`, the
+/// verification's against time stepping of the same scene (the *discretization error*),
+/// each point of the latter tagged with the operator and nodes it was solved on; with a
+/// `verify_tol` column, the tolerance as a dashed line. One line per error over every
+/// converged point (`--where` picks one setting of the sweep's other axes).
+pub fn errors(
+    res: &Results,
+    x: &str,
+    reference: Option<&str>,
+    filters: &[(String, String)],
+    title: &str,
+    stem: &Path,
+) -> Result<Vec<PathBuf>, PlotError> {
+    let points = error_points(res, &filtered(res, filters)?, x)?;
+    let line = |label: &str, y: fn(&ErrorPoint) -> Option<f64>, i: usize| Line {
+        label: label.into(),
+        tags: Vec::new(),
+        points: points.iter().filter_map(|p| Some((p.x, y(p)?))).collect(),
+        color: color(i),
+        dashed: false,
+    };
+    let model = line(&reference_error_label(reference), |p| p.error_max, 0);
+    let mut discretization = line("discretization error: against time stepping of the same scene (verify_error)", |p| p.verify_error, 1);
+    discretization.tags = points.iter().filter(|p| p.verify_error.is_some()).map(|p| p.tag.clone()).collect();
+    let mut tolerance = line("the verification's tolerance (verify_tol)", |p| p.verify_tol, 2);
+    (tolerance.color, tolerance.dashed) = (RGBColor(150, 150, 150), true);
+    if model.points.is_empty() && discretization.points.is_empty() {
+        return Err(PlotError::Data(format!("no converged point has a number in `{x}` and an error (error_max or verify_error)")));
+    }
+    let lines: Vec<Line> = [model, discretization, tolerance].into_iter().filter(|l| !l.points.is_empty()).collect();
+    render!(stem, SIZE, draw_loglog(title, x, "max error over the nodes", &lines))
+}
+
+/// One converged point of [`errors`]: its value of the column, its errors, its tolerance
+/// and its tag (" operator nodes").
+struct ErrorPoint {
+    x: f64,
+    error_max: Option<f64>,
+    verify_error: Option<f64>,
+    verify_tol: Option<f64>,
+    tag: String,
+}
+
+/// The converged SKG points among `rows` that have a number in the column `x`, by `x`.
+fn error_points(res: &Results, rows: &[&Vec<String>], x: &str) -> Result<Vec<ErrorPoint>, PlotError> {
+    let (im, io, inodes, ix, ie, iv) =
+        (col(res, "method")?, col(res, "operator")?, col(res, "nodes")?, col(res, x)?, col(res, "error_max")?, col(res, "verify_error")?);
+    let itol = col(res, "verify_tol").ok();
+    let mut points = Vec::new();
+    for r in rows {
+        if r[im] != "skg" || !res.status(r)?.is_converged() {
+            continue;
+        }
+        let Some(xv) = cell_value(&r[ix]) else { continue };
+        points.push(ErrorPoint {
+            x: xv,
+            error_max: cell_value(&r[ie]),
+            verify_error: cell_value(&r[iv]),
+            verify_tol: itol.and_then(|i| cell_value(&r[i])),
+            tag: format!(" {} {}", r[io], r[inodes]),
+        });
+    }
+    points.sort_by(|a, b| a.x.total_cmp(&b.x));
+    Ok(points)
+}
+
+/// The legend of `error_max` for a sweep's `reference` as written.
+fn reference_error_label(reference: Option<&str>) -> String {
+    match reference {
+        Some(r) if r.eq_ignore_ascii_case(skg_sweep::REFERENCE_HARD_WALLS) => "model error: against the hard walls (error_max)".into(),
+        Some(r) if r.eq_ignore_ascii_case(skg_sweep::REFERENCE_INTEGRATE) => "against the regularized reference (error_max)".into(),
+        Some(file) => format!("against {file} (error_max)"),
+        None => "error_max".into(),
+    }
 }

@@ -112,6 +112,7 @@ impl SweepFile {
             .resolve(&points[0].overrides().unwrap_or_default())
             .map_err(|e| SweepError::scene(self.origin.whole(), SceneOf::Point(points[0].canonical()), e))?;
         self.check_compare_columns(&first)?;
+        self.check_hard_walls(&first)?;
         let expression_axes = expression_axes(&axes, &points);
         let expanded = Expanded {
             points,
@@ -155,10 +156,22 @@ impl SweepFile {
             let r = self.sweep.reference.as_ref().expect("reference given");
             return Err(self.invalid(
                 r,
-                format!("reference file {} does not exist (give a CSV written by `skg-solve reference`, or \"integrate\")", p.display()),
+                format!(
+                    "reference file {} does not exist (give a CSV written by `skg-solve reference`, \"integrate\" or \"hard_walls\")",
+                    p.display()
+                ),
             ));
         }
         Ok(hash)
+    }
+
+    /// Refuse `reference = "hard_walls"` for a base scene the hard-wall reference does not
+    /// model (no walls, walls with constraints, a moving wall; `first`: its first point),
+    /// at the `reference` key, with the scene's reason and its location.
+    fn check_hard_walls(&self, first: &Scene) -> Result<(), SweepError> {
+        let (Some(ReferenceSpec::HardWalls), Some(r)) = (self.reference(), &self.sweep.reference) else { return Ok(()) };
+        skg_core::stepping::reference::check_hard_walls(first)
+            .map_err(|e| self.invalid(r, format!("sweep.reference = {:?}: {}", r.get_ref(), skg_core::error_text(&e))))
     }
 
     /// Refuse a file that lists more than [`MAX_POINTS`] points, before any is made.

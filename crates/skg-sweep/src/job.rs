@@ -275,6 +275,14 @@ fn reference_errors(
             )?;
             Table::of_trajectory(scene, &r.trajectory)
         }
+        ReferenceSpec::HardWalls => {
+            let r = skg_core::stepping::reference::hard_wall(
+                scene,
+                &solution.times(),
+                &skg_core::stepping::reference::ReferenceOptions::default(),
+            )?;
+            Table::of_trajectory(scene, &r.trajectory)
+        }
     };
     let opts = CheckOptions { skip_last, columns: Some(columns.to_vec()) };
     Ok(check::compare(solution, &reference, &opts)?)

@@ -55,5 +55,8 @@ pub use results::{
     PROVENANCE_COLUMNS, RESULT_COLUMNS,
 };
 pub use status::{PointStatus, UnknownStatus};
-pub use sweep_file::{name_problem, AxisValue, AxisValues, PeerSpec, ReferenceSpec, SweepFile, SweepMeta, MAX_NAME_BYTES};
+pub use sweep_file::{
+    name_problem, AxisValue, AxisValues, PeerSpec, ReferenceSpec, SweepFile, SweepMeta, MAX_NAME_BYTES, REFERENCE_HARD_WALLS,
+    REFERENCE_INTEGRATE,
+};
 pub use workers::{die_of, serve_points, stop_on_signals, stop_signal};

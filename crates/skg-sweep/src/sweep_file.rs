@@ -71,7 +71,18 @@ pub enum ReferenceSpec {
     /// The scene's Lagrange–d'Alembert equations integrated on the point's own grid at
     /// a tight tolerance ([`skg_core::stepping::reference::regularized`], rtol = atol = 1e-12).
     Integrate,
+    /// The scene's event-driven hard-wall reference (every wall ideal and elastic, the
+    /// σ → 0 limit; [`skg_core::stepping::reference::hard_wall`], rtol = atol = 1e-12) on
+    /// the point's own grid: the errors are the point's *model error* (the wall's width
+    /// against the ideal wall), beside its discretization error `verify_error`.
+    HardWalls,
 }
+
+/// `[sweep] reference` naming the regularized reference integrated on each point's grid.
+pub const REFERENCE_INTEGRATE: &str = "integrate";
+
+/// `[sweep] reference` naming the hard-wall reference on each point's grid.
+pub const REFERENCE_HARD_WALLS: &str = "hard_walls";
 
 /// `[sweep]`: what is swept and how results are judged.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -83,8 +94,8 @@ pub struct SweepMeta {
     /// default output directory `out/sweeps/<name>`.
     #[serde(default)]
     pub name: Option<Spanned<String>>,
-    /// Reference to measure errors against: a CSV path relative to the sweep file, or
-    /// `"integrate"`. Without it the error columns stay empty.
+    /// Reference to measure errors against: a CSV path relative to the sweep file,
+    /// `"integrate"` or `"hard_walls"`. Without it the error columns stay empty.
     #[serde(default)]
     pub reference: Option<Spanned<String>>,
     /// Columns compared with the reference (default: the scene's coordinates).
@@ -275,10 +286,13 @@ impl SweepFile {
     /// Where errors are measured against, if anywhere (`[sweep] reference`).
     pub fn reference(&self) -> Option<ReferenceSpec> {
         self.sweep.reference.as_ref().map(|r| {
-            if r.get_ref().eq_ignore_ascii_case("integrate") {
+            let r = r.get_ref();
+            if r.eq_ignore_ascii_case(REFERENCE_INTEGRATE) {
                 ReferenceSpec::Integrate
+            } else if r.eq_ignore_ascii_case(REFERENCE_HARD_WALLS) {
+                ReferenceSpec::HardWalls
             } else {
-                ReferenceSpec::File(self.dir().join(r.get_ref()))
+                ReferenceSpec::File(self.dir().join(r))
             }
         })
     }

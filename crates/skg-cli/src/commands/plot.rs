@@ -22,6 +22,19 @@ pub enum PlotKind {
     /// error and wall time over the tolerance asked (one line per backend), beside the
     /// time stepper's rtol ladder (writes STEM and STEM-time).
     Tolerance(ResultsPlotArgs),
+    /// The errors of each converged point over a column (a parameter such as `sigma`),
+    /// log-log: `error_max` against the sweep's reference and `verify_error`, the
+    /// verification's against time stepping of the same scene, each tagged with the
+    /// operator and nodes it was solved on; the tolerance when the sweep has a
+    /// `verify_tol` column. With `reference = "hard_walls"` the first is the model error
+    /// and the second the discretization error: the hard-contact limit.
+    Errors {
+        #[command(flatten)]
+        common: ResultsPlotArgs,
+        /// Column on the horizontal axis.
+        #[arg(long, default_value = "sigma")]
+        x: String,
+    },
     /// Map over two grid axes: verified / verified with energy artifacts / converged but
     /// not verified / failed, each cell labelled with a column's value.
     Stability {
@@ -134,6 +147,11 @@ pub fn run(kind: PlotKind, quiet: bool) -> Result<ExitCode> {
             let r = sweep::Results::read(&c.results)?;
             plot::convergence(&r, &filters(&c.filters)?, &c.title_or("convergence"), &c.output)?
         }
+        PlotKind::Errors { common: c, x } => {
+            let r = sweep::Results::read(&c.results)?;
+            let reference = sweep::SweepInfo::read(&c.dir()).ok().and_then(|i| i.settings.reference);
+            plot::errors(&r, &x, reference.as_deref(), &filters(&c.filters)?, &c.title_or("errors"), &c.output)?
+        }
         PlotKind::Stability { common: c, x, y, value } => {
             let r = sweep::Results::read(&c.results)?;
             plot::stability(&r, &x, &y, &value, &filters(&c.filters)?, &c.title_or("stability"), &c.output)?
@@ -175,11 +193,19 @@ impl ResultsPlotArgs {
     /// `convergence: tumbler_convergence`.
     fn title_or(&self, kind: &str) -> String {
         self.title.clone().unwrap_or_else(|| {
-            let c = &self.results;
-            let dir = if c.is_dir() { c.clone() } else { c.parent().map(Path::to_path_buf).unwrap_or_default() };
-            let name = dir.file_name().map_or(String::new(), |n| format!(": {}", n.to_string_lossy()));
+            let name = self.dir().file_name().map_or(String::new(), |n| format!(": {}", n.to_string_lossy()));
             format!("{kind}{name}")
         })
+    }
+
+    /// The sweep's directory: the results' own, or the directory holding the results file.
+    fn dir(&self) -> PathBuf {
+        let c = &self.results;
+        if c.is_dir() {
+            c.clone()
+        } else {
+            c.parent().map(Path::to_path_buf).unwrap_or_default()
+        }
     }
 }
 

@@ -361,7 +361,9 @@ def sweep_file_of(mapping: Mapping[str, Any], out: Optional[PathLike]) -> "tuple
     else:
         table["scene"] = str(Path(os.fspath(scene)).resolve())
     reference = table.get("reference")
-    if reference is not None and reference != "integrate":
+    # "integrate" and "hard_walls" name references computed on each point's grid, as the
+    # sweep file reads them (any case); anything else is a reference CSV's path.
+    if reference is not None and str(reference).lower() not in ("integrate", "hard_walls"):
         table["reference"] = str(Path(os.fspath(reference)).resolve())
     if name is None:
         table["name"] = out_dir.name

@@ -8,8 +8,9 @@
 //! the final time pollutes the run). A window bounds the amplification to one window's
 //! length, and discarding its tail keeps every reported node away from an end closure —
 //! including the last window's, which is solved past the scene's end time. The cost is
-//! linear in the span: every window has the same number of nodes, so one action (and its
-//! sparsity plans) serves all of them; only the initial state changes.
+//! linear in the span: every window has the same number of nodes, so on a uniform grid
+//! one action (and its sparsity plans) serves all of them; only the initial state
+//! changes.
 //!
 //! Grid: the scene's nodes `t_k = t_start + k Δt` extended past `t_end` as far as the
 //! last window needs. A window of `n_w = round(length/Δt) + 1` nodes starting at global
@@ -19,6 +20,15 @@
 //! every wall ([`contact`]), searched down to half the window, so that no window
 //! starts inside a bounce (else the largest). Each window's initial guess is time
 //! stepping from its own initial state.
+//!
+//! **On a mapped grid** (`grid = "adaptive"`, docs/grids.md) the windows are the same
+//! runs of nodes of the grid that follows the motion: its `N` nodes over the span,
+//! continued past the end at its last spacing, `Δt` the mean spacing; the window's
+//! length and overlap count nodes at that mean spacing, so a window is short in time
+//! where the nodes crowd (a contact) and long where they are sparse. Each window's
+//! operator is made on its own nodes (`SbpOperator::on_times`), so each gets its action
+//! and its solver's plans (their boundary constants hold the operator's first row); the
+//! structure is the same, and Newton's LU analysis passes from one to the next.
 //!
 //! A window that does not converge ends the run: the nodes after its start are not
 //! computed (NaN in the trajectory) and the run's status is that window's.
@@ -36,7 +46,7 @@ use super::piece::{action_on, solve_piece, Guess, Piece};
 use super::status::SolveStatus;
 use crate::discrete::contact;
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
-use crate::discrete::{Discretization, Grid};
+use crate::discrete::Discretization;
 use crate::model::Model;
 use crate::scene::{Scene, Windows};
 use crate::solve::linalg::IterationStat;
@@ -44,7 +54,7 @@ use crate::solve::linalg::IterationStat;
 /// Nodes and restart of the windows of a scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WindowGrid {
-    /// Node spacing Δt (the scene's).
+    /// Node spacing Δt (the scene's; on a mapped grid its mean).
     pub dt: f64,
     /// Nodes of each window's solve.
     pub nodes: usize,
@@ -88,13 +98,10 @@ pub fn solve_windows(
     let grid =
         WindowGrid::new(scene, disc, windows).map_err(|error| SolveError::Windows { scene: scene.file.origin.path.clone(), error })?;
     let t_setup = Instant::now();
-    // Windows are uniform: one action serves them all (a mapped grid's windows would
-    // each need operators of their own).
-    let disc = &disc.with_grid(Grid::Uniform);
-    let first: Vec<f64> = (0..grid.nodes).map(|k| scene.t_start + k as f64 * grid.dt).collect();
-    let mut action = action_on(model, scene, disc, &first)?;
-    // One solver for all windows: the sparsity plans and Newton's LU analysis are made
-    // once and reused by every window.
+    let at = NodeTimes::of(scene, disc, grid.dt);
+    let mut action = action_on(model, scene, disc, &at.window(0, grid.nodes))?;
+    // One solver for all windows of a uniform grid: the sparsity plans and Newton's LU
+    // analysis are made once and reused by every window.
     let mut solver = SquareSolver::new(scene, &action);
     solver.set_deadline(deadline);
     let sizes = sizes(scene, &action, &solver);
@@ -103,8 +110,20 @@ pub fn solve_windows(
     let (mut q0, mut v0) = (scene.initial_q.clone(), scene.initial_v.clone());
     let mut start = 0;
     loop {
-        let times: Vec<f64> = (0..grid.nodes).map(|k| scene.t_start + (start + k) as f64 * grid.dt).collect();
-        action.set_window(times[0], &q0, &v0);
+        let times = at.window(start, grid.nodes);
+        if at.mapped.is_none() {
+            action.set_window(times[0], &q0, &v0);
+        } else if start > 0 {
+            // A mapped window's operator is made on its own nodes, and so are the
+            // boundary constants of the plans made from it: a new action and solver (of
+            // the same structure: Newton's LU analysis is handed over, as the solver's
+            // module documentation says, once the old solver is dropped).
+            action = action_on(model, scene, disc, &times)?;
+            action.set_initial_state(&q0, &v0);
+            drop(solver);
+            solver = SquareSolver::new(scene, &action);
+            solver.set_deadline(deadline);
+        }
         let piece = solve_piece(scene, &action, &mut solver, &times, &Guess::TimeStepping)?;
         let last = start + grid.nodes >= total;
         let keep = if last { total - start } else { restart_node(scene, &piece.trajectory, grid.keep) };
@@ -112,7 +131,7 @@ pub fn solve_windows(
         let converged = piece.status.is_converged();
         joined.add(piece, keep);
         if !converged {
-            joined.not_computed((start + keep..total).map(|k| scene.t_start + k as f64 * grid.dt));
+            joined.not_computed((start + keep..total).map(|k| at.time(k)));
             break;
         }
         let Some((q, v)) = restart else { break };
@@ -123,6 +142,43 @@ pub fn solve_windows(
     let method =
         Method::Windows { length, overlap: length - grid.keep as f64 * grid.dt, nodes_per_window: grid.nodes, count: joined.count };
     Ok(Run { method, discretization: disc.clone(), sizes, solution: joined.into_piece() })
+}
+
+/// The node times of a windowed run by global index: the discretization's over the
+/// scene's span, continued past its end as far as the last window reaches, at the
+/// uniform spacing, or on a mapped grid at its last spacing.
+struct NodeTimes {
+    t_start: f64,
+    dt: f64,
+    /// The mapped grid's nodes over the span (`None`: uniform).
+    mapped: Option<Vec<f64>>,
+}
+
+impl NodeTimes {
+    fn of(scene: &Scene, disc: &Discretization, dt: f64) -> NodeTimes {
+        let mapped = (!disc.grid.is_uniform()).then(|| disc.times(scene));
+        NodeTimes { t_start: scene.t_start, dt, mapped }
+    }
+
+    /// The time of global node `k`.
+    fn time(&self, k: usize) -> f64 {
+        match &self.mapped {
+            None => self.t_start + k as f64 * self.dt,
+            Some(t) => {
+                let last = t.len() - 1;
+                if k <= last {
+                    t[k]
+                } else {
+                    t[last] + (k - last) as f64 * (t[last] - t[last - 1])
+                }
+            }
+        }
+    }
+
+    /// The times of the `nodes` nodes from global node `start` on.
+    fn window(&self, start: usize, nodes: usize) -> Vec<f64> {
+        (start..start + nodes).map(|k| self.time(k)).collect()
+    }
 }
 
 /// The windows' pieces joined into the run's (see [`Run::solution`]).

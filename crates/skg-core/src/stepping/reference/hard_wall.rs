@@ -332,6 +332,14 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
 /// constraints, moving walls) is a property of the scene file: the error names the file
 /// and the place that makes it so (the wall's h, the first constraint), like any other
 /// error of the scene.
+/// Refuse a scene the hard-wall reference does not model (no walls, walls with
+/// constraints, a moving wall), with the error [`hard_wall`] would give, before anything
+/// is integrated: a sweep measuring its points against this reference checks its base
+/// scene once, up front.
+pub fn check_hard_walls(scene: &Scene) -> Result<(), ReferenceError> {
+    hard_wall_model(scene).map(|_| ())
+}
+
 fn hard_wall_model(scene: &Scene) -> Result<Model, ReferenceError> {
     let file = &scene.file;
     let unsupported = |location: Location, e: HardWallError| -> ReferenceError {

@@ -49,7 +49,7 @@ use std::fmt;
 
 mod hard_wall;
 
-pub use hard_wall::{hard_wall, HardWallError};
+pub use hard_wall::{check_hard_walls, hard_wall, HardWallError};
 
 use crate::discrete::trajectory::Trajectory;
 use crate::model::Model;
