@@ -326,12 +326,6 @@ pub fn hard_wall(scene: &Scene, times: &[f64], opts: &ReferenceOptions) -> Resul
     })
 }
 
-/// The model of the hard-wall reference: the scene without its wall forces, so that the
-/// motion between impacts is the scene's without its walls (building it checks that the
-/// start is not beyond a wall). What the reference does not model (no walls, walls and
-/// constraints, moving walls) is a property of the scene file: the error names the file
-/// and the place that makes it so (the wall's h, the first constraint), like any other
-/// error of the scene.
 /// Refuse a scene the hard-wall reference does not model (no walls, walls with
 /// constraints, a moving wall), with the error [`hard_wall`] would give, before anything
 /// is integrated: a sweep measuring its points against this reference checks its base
@@ -340,6 +334,12 @@ pub fn check_hard_walls(scene: &Scene) -> Result<(), ReferenceError> {
     hard_wall_model(scene).map(|_| ())
 }
 
+/// The model of the hard-wall reference: the scene without its wall forces, so that the
+/// motion between impacts is the scene's without its walls (building it checks that the
+/// start is not beyond a wall). What the reference does not model (no walls, walls and
+/// constraints, moving walls) is a property of the scene file: the error names the file
+/// and the place that makes it so (the wall's h, the first constraint), like any other
+/// error of the scene.
 fn hard_wall_model(scene: &Scene) -> Result<Model, ReferenceError> {
     let file = &scene.file;
     let unsupported = |location: Location, e: HardWallError| -> ReferenceError {
