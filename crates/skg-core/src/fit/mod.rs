@@ -67,7 +67,7 @@ use crate::scene::{Overrides, Scene, SceneError};
 use crate::solve::backend::mumps_options;
 use crate::solve::{action_on, outcome, point_from_states, solve_global, Guess, Outcome, SolveError};
 use observe::Observations;
-use problem::{FitProblem, Plans};
+use problem::{FitProblem, Plans, StopTest};
 use start::{put_data, start_states, Start};
 
 pub use data::{Data, DataError, DataPlace, Observation, SIGMA_PREFIX};
@@ -290,12 +290,14 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let start_s = started.elapsed().as_secs_f64();
 
     let t_opt = Instant::now();
-    let solution = {
-        let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free);
-        ipopt::solve(&mut fit_problem, &x0, &ipopt_options(scene, settings))?
+    let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol) };
+    let (solution, at_kkt_point) = {
+        let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free, stop);
+        let solution = ipopt::solve(&mut fit_problem, &x0, &ipopt_options(scene, settings))?;
+        (solution, fit_problem.stopped_at_kkt_point())
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
-    let converged = converged(&solution, scene.solver.tol, &mut warnings);
+    let converged = at_kkt_point.is_some() || converged(&solution, scene.solver.tol, &mut warnings);
 
     let t_stat = Instant::now();
     let at = problem.statistics_at(&mut action, &solution, converged, data, &mut warnings)?;
@@ -317,7 +319,11 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
         verification_s,
         total_s: started.elapsed().as_secs_f64(),
     };
-    let report = problem.report(&action, &solution, converged, settings, start, parameters, at, data, timings, warnings);
+    let status = match at_kkt_point {
+        Some(stop) => (stop.status().to_string(), stop.text().to_string()),
+        None => (solution.status.name().to_string(), solution.status.to_string()),
+    };
+    let report = problem.report(&action, &solution, (converged, status), settings, start, parameters, at, data, timings, warnings);
     let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
     let data_table = report::data_table(scene, data, &outcome.trajectory);
     Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
@@ -439,7 +445,7 @@ impl Problem<'_> {
         &self,
         action: &Action,
         solution: &ipopt::Solution,
-        converged: bool,
+        (converged, (status, status_text)): (bool, (String, String)),
         settings: &FitSettings,
         start: Start,
         parameters: IndexMap<String, report::ParameterReport>,
@@ -451,8 +457,8 @@ impl Problem<'_> {
         let plans = self.plans;
         FitReport {
             converged,
-            status: solution.status.name().to_string(),
-            status_text: solution.status.to_string(),
+            status,
+            status_text,
             iterations: solution.iterations,
             hessian: settings.hessian,
             start: settings.start,
