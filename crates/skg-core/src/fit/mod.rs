@@ -196,6 +196,10 @@ pub const DEFAULT_TOL: f64 = 1e-10;
 /// which it stops (its default is 15).
 pub const ACCEPTABLE_ITER: i32 = 5;
 
+/// MUMPS's pivot tolerance in a fit (Ipopt's `mumps_pivtol`; its default is 1e-6) unless
+/// the scene's `[solver.ipopt]` gives one.
+pub const MUMPS_PIVTOL: f64 = 1e-3;
+
 /// Ipopt's iteration limit for a fit unless the scene or the caller gives one.
 pub const DEFAULT_MAX_ITER: u32 = 200;
 
@@ -495,13 +499,19 @@ impl Problem<'_> {
 }
 
 /// The fitted scene solved from the fit's trajectory (`z`, on `action`'s grid) and
-/// verified like any solve.
+/// verified like any solve, by Newton's method (which hands over to Ipopt if it fails):
+/// the guess is a solution already, at the equations' round-off level, which Newton
+/// accepts after one step; Ipopt's filter line search can fail to decrease a residual at
+/// that level, and on the double pendulum it then went through its restoration phase
+/// (8 iterations, 1.6 s, where one LU takes 0.02 s; docs/benchmarks.md#fitting).
 fn solved_from_the_fit(fitted: &Scene, action: &Action, disc: &Discretization, z: &[f64]) -> Result<Outcome, FitError> {
-    let fitted_model = Arc::new(Model::build(fitted)?);
+    let mut fitted = fitted.clone();
+    fitted.solver.backend = crate::scene::Backend::Newton;
+    let fitted_model = Arc::new(Model::build(&fitted)?);
     let (q, lambda) = states_of(action, z);
     let guess = Guess::States { q, lambda, description: "the fit's trajectory".into() };
-    let run = solve_global(fitted, &fitted_model, disc, &guess, None)?;
-    Ok(outcome(fitted, &fitted_model, run))
+    let run = solve_global(&fitted, &fitted_model, disc, &guess, None)?;
+    Ok(outcome(&fitted, &fitted_model, run))
 }
 
 /// A warning for each parameter that ended on its bound.
@@ -624,7 +634,8 @@ fn fitted_scene(scene: &Scene, overrides: &Overrides, names: &[String], theta: &
 
 /// Ipopt's options for a fit of `scene`: the scene's linear solver, print level and
 /// MUMPS settings as for a solve, the fit's tolerance and iteration limit, the
-/// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], the Hessian, then the scene's
+/// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], [`MUMPS_PIVTOL`],
+/// zero starting multipliers, the Hessian, then the scene's
 /// `[solver.ipopt]` options.
 fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     let solver = &scene.solver;
@@ -634,6 +645,16 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     // fit's tol: stop after a few iterations at Ipopt's acceptable level (with a warning)
     // instead of line-searching at that floor up to the iteration limit.
     extra.push(("acceptable_iter".into(), ipopt::OptionValue::Int(ACCEPTABLE_ITER)));
+    // MUMPS's default pivot tolerance (1e-6) left its solves of the fit's KKT matrix
+    // inaccurate (Ipopt's iterative refinement failed, then it raised the tolerance and
+    // factored again, 2 to 3 factorizations per iteration on the disk); at 1e-3 none
+    // failed on the shipped fits. Ipopt's least-squares estimate of the multipliers at
+    // the start factors a larger matrix than an iteration does (fill 2.3 M against 1.0 M
+    // on the disk, 7.0 M against 2.2 M on the double pendulum at this pivot tolerance);
+    // starting from zero multipliers costs 0 to 3 more iterations and less time
+    // (docs/benchmarks.md#fitting).
+    extra.push(("mumps_pivtol".into(), ipopt::OptionValue::Num(MUMPS_PIVTOL)));
+    extra.push(("constr_mult_init_max".into(), ipopt::OptionValue::Num(0.0)));
     if settings.hessian == FitHessian::LimitedMemory {
         extra.push(("hessian_approximation".into(), ipopt::OptionValue::Str("limited-memory".into())));
     }
