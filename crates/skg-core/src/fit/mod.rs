@@ -635,8 +635,7 @@ fn fitted_scene(scene: &Scene, overrides: &Overrides, names: &[String], theta: &
 /// Ipopt's options for a fit of `scene`: the scene's linear solver, print level and
 /// MUMPS settings as for a solve, the fit's tolerance and iteration limit, the
 /// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], [`MUMPS_PIVTOL`],
-/// zero starting multipliers, the Hessian, then the scene's
-/// `[solver.ipopt]` options.
+/// the Hessian, then the scene's `[solver.ipopt]` options.
 fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     let solver = &scene.solver;
     let mut extra: Vec<(String, ipopt::OptionValue)> =
@@ -648,13 +647,8 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     // MUMPS's default pivot tolerance (1e-6) left its solves of the fit's KKT matrix
     // inaccurate (Ipopt's iterative refinement failed, then it raised the tolerance and
     // factored again, 2 to 3 factorizations per iteration on the disk); at 1e-3 none
-    // failed on the shipped fits. Ipopt's least-squares estimate of the multipliers at
-    // the start factors a larger matrix than an iteration does (fill 2.3 M against 1.0 M
-    // on the disk, 7.0 M against 2.2 M on the double pendulum at this pivot tolerance);
-    // starting from zero multipliers costs 0 to 3 more iterations and less time
-    // (docs/benchmarks.md#fitting).
+    // failed on the disk (docs/benchmarks.md#fitting).
     extra.push(("mumps_pivtol".into(), ipopt::OptionValue::Num(MUMPS_PIVTOL)));
-    extra.push(("constr_mult_init_max".into(), ipopt::OptionValue::Num(0.0)));
     if settings.hessian == FitHessian::LimitedMemory {
         extra.push(("hessian_approximation".into(), ipopt::OptionValue::Str("limited-memory".into())));
     }
