@@ -28,8 +28,9 @@
 //!    the covariance and the standard errors, and tell whether the data determine the
 //!    parameters (`statistics.rs`; the same test runs on the start, so that a fit the
 //!    data cannot determine is refused before it is attempted);
-//! 6. the scene with the fitted values is solved from the fitted trajectory and verified
-//!    against time stepping like any solve: its [`Outcome`] is the fitted motion;
+//! 6. the scene with the fitted values is solved from the fitted trajectory (by Newton,
+//!    which hands over to Ipopt if it fails) and verified against time stepping like any
+//!    solve: its [`Outcome`] is the fitted motion;
 //! 7. the report ([`FitReport`], the `fit` object of `summary.json`), the fitted scene's
 //!    text and the data beside the fitted values (`report.rs`).
 //!
@@ -503,7 +504,7 @@ impl Problem<'_> {
 /// the guess is a solution already, at the equations' round-off level, which Newton
 /// accepts after one step; Ipopt's filter line search can fail to decrease a residual at
 /// that level, and on the double pendulum it then went through its restoration phase
-/// (8 iterations, 1.6 s, where one LU takes 0.02 s; docs/benchmarks.md#fitting).
+/// (8 iterations, 1.6 s) where Newton takes one step (docs/benchmarks.md#fitting).
 fn solved_from_the_fit(fitted: &Scene, action: &Action, disc: &Discretization, z: &[f64]) -> Result<Outcome, FitError> {
     let mut fitted = fitted.clone();
     fitted.solver.backend = crate::scene::Backend::Newton;
