@@ -20,7 +20,8 @@
 //!    rows of weights over the trajectory's unknowns, interpolated at the data's times
 //!    consistently with the operator (`observe.rs`);
 //! 3. the scene's model with the free parameters symbolic
-//!    ([`Model::with_free_parameters`]) is solved at the starting values, and the start
+//!    ([`Model::with_free_parameters`]) is solved at the starting values (by Newton,
+//!    which hands over to Ipopt if it fails), and the start
 //!    is that solve with the data in place of the coordinates they observe ([`FitStart`],
 //!    `start.rs`);
 //! 4. Ipopt minimizes the misfit under the constraints (`problem.rs`);
