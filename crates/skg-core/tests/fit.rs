@@ -95,7 +95,7 @@ fn an_oscillators_stiffness_damping_and_initial_state_are_recovered() {
     assert!(f.trusted(), "verification: {}", f.outcome.verification.reason);
     assert!(f.report.parameters.values().all(|p| p.std_error.is_some_and(|s| s > 0.0)));
     assert_eq!((f.report.misfit.points, f.report.misfit.dof), (40, 36));
-    assert!(f.report.iterations <= 30, "{} iterations", f.report.iterations);
+    assert_stopped_at_a_kkt_point(&f, 30);
     // The fitted scene holds the fitted values.
     for (name, value) in [("k", k), ("c", c)] {
         assert!((f.fitted.parameters[name] - value).abs() < 1e-6 * value, "{name} in the fitted scene");
@@ -220,6 +220,19 @@ fn a_rolling_disks_incline_and_speed_are_recovered_from_its_track() {
     // A scene with constraints starts from the solve at the starting values (FitStart::Auto).
     let f = run(&scene, &ov, &data, &free(&["alpha in [0, 1.5]", "v0"])).unwrap();
     assert_recovered(&f, &[("alpha", alpha), ("v0", v0)], 1e-6);
+    assert!(f.trusted(), "verification: {}", f.outcome.verification.reason);
+    assert_stopped_at_a_kkt_point(&f, 10);
+}
+
+/// The fit stopped itself at a KKT point (docs/fitting.md, "Stopping") within `most`
+/// iterations, not at Ipopt's acceptable level: the equations of motion of these fits
+/// stagnate at their round-off level above the scene's `tol`, where Ipopt alone went on
+/// for 5 more iterations (the disk: 9 then, 6 or 7 now, whatever the BLAS kernels).
+fn assert_stopped_at_a_kkt_point(f: &Fit, most: usize) {
+    let status = f.report.status.as_str();
+    assert!(matches!(status, "Solve_Succeeded" | "Ipopt_Converged_To_Round_Off"), "status {status}");
+    assert!(f.report.iterations <= most, "{} iterations", f.report.iterations);
+    assert!(f.report.warnings.iter().all(|w| !w.contains("acceptable level")), "{:?}", f.report.warnings);
 }
 
 /// The shipped example where single shooting from the same start stops in a wrong

@@ -20,7 +20,8 @@
 //!    rows of weights over the trajectory's unknowns, interpolated at the data's times
 //!    consistently with the operator (`observe.rs`);
 //! 3. the scene's model with the free parameters symbolic
-//!    ([`Model::with_free_parameters`]) is solved at the starting values, and the start
+//!    ([`Model::with_free_parameters`]) is solved at the starting values (by Newton,
+//!    which hands over to Ipopt if it fails), and the start
 //!    is that solve with the data in place of the coordinates they observe ([`FitStart`],
 //!    `start.rs`);
 //! 4. Ipopt minimizes the misfit under the constraints (`problem.rs`);
@@ -28,8 +29,9 @@
 //!    the covariance and the standard errors, and tell whether the data determine the
 //!    parameters (`statistics.rs`; the same test runs on the start, so that a fit the
 //!    data cannot determine is refused before it is attempted);
-//! 6. the scene with the fitted values is solved from the fitted trajectory and verified
-//!    against time stepping like any solve: its [`Outcome`] is the fitted motion;
+//! 6. the scene with the fitted values is solved from the fitted trajectory (by Newton,
+//!    which hands over to Ipopt if it fails) and verified against time stepping like any
+//!    solve: its [`Outcome`] is the fitted motion;
 //! 7. the report ([`FitReport`], the `fit` object of `summary.json`), the fitted scene's
 //!    text and the data beside the fitted values (`report.rs`).
 //!
@@ -67,7 +69,7 @@ use crate::scene::{Overrides, Scene, SceneError};
 use crate::solve::backend::mumps_options;
 use crate::solve::{action_on, outcome, point_from_states, solve_global, Guess, Outcome, SolveError};
 use observe::Observations;
-use problem::{FitProblem, Plans};
+use problem::{FitProblem, Plans, StopTest};
 use start::{put_data, start_states, Start};
 
 pub use data::{Data, DataError, DataPlace, Observation, SIGMA_PREFIX};
@@ -196,6 +198,10 @@ pub const DEFAULT_TOL: f64 = 1e-10;
 /// which it stops (its default is 15).
 pub const ACCEPTABLE_ITER: i32 = 5;
 
+/// MUMPS's pivot tolerance in a fit (Ipopt's `mumps_pivtol`; its default is 1e-6) unless
+/// the scene's `[solver.ipopt]` gives one.
+pub const MUMPS_PIVTOL: f64 = 1e-3;
+
 /// Ipopt's iteration limit for a fit unless the scene or the caller gives one.
 pub const DEFAULT_MAX_ITER: u32 = 200;
 
@@ -290,12 +296,14 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let start_s = started.elapsed().as_secs_f64();
 
     let t_opt = Instant::now();
-    let solution = {
-        let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free);
-        ipopt::solve(&mut fit_problem, &x0, &ipopt_options(scene, settings))?
+    let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol) };
+    let (solution, at_kkt_point) = {
+        let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free, stop);
+        let solution = ipopt::solve(&mut fit_problem, &x0, &ipopt_options(scene, settings))?;
+        (solution, fit_problem.stopped_at_kkt_point())
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
-    let converged = converged(&solution, scene.solver.tol, &mut warnings);
+    let converged = at_kkt_point.is_some() || converged(&solution, scene.solver.tol, &mut warnings);
 
     let t_stat = Instant::now();
     let at = problem.statistics_at(&mut action, &solution, converged, data, &mut warnings)?;
@@ -317,7 +325,11 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
         verification_s,
         total_s: started.elapsed().as_secs_f64(),
     };
-    let report = problem.report(&action, &solution, converged, settings, start, parameters, at, data, timings, warnings);
+    let status = match at_kkt_point {
+        Some(stop) => (stop.status().to_string(), stop.text().to_string()),
+        None => (solution.status.name().to_string(), solution.status.to_string()),
+    };
+    let report = problem.report(&action, &solution, (converged, status), settings, start, parameters, at, data, timings, warnings);
     let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
     let data_table = report::data_table(scene, data, &outcome.trajectory);
     Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
@@ -439,7 +451,7 @@ impl Problem<'_> {
         &self,
         action: &Action,
         solution: &ipopt::Solution,
-        converged: bool,
+        (converged, (status, status_text)): (bool, (String, String)),
         settings: &FitSettings,
         start: Start,
         parameters: IndexMap<String, report::ParameterReport>,
@@ -451,8 +463,8 @@ impl Problem<'_> {
         let plans = self.plans;
         FitReport {
             converged,
-            status: solution.status.name().to_string(),
-            status_text: solution.status.to_string(),
+            status,
+            status_text,
             iterations: solution.iterations,
             hessian: settings.hessian,
             start: settings.start,
@@ -489,13 +501,19 @@ impl Problem<'_> {
 }
 
 /// The fitted scene solved from the fit's trajectory (`z`, on `action`'s grid) and
-/// verified like any solve.
+/// verified like any solve, by Newton's method (which hands over to Ipopt if it fails):
+/// the guess is a solution already, at the equations' round-off level, which Newton
+/// accepts after one step; Ipopt's filter line search can fail to decrease a residual at
+/// that level, and on the double pendulum it then went through its restoration phase
+/// (8 iterations, 1.6 s) where Newton takes one step (docs/benchmarks.md#fitting).
 fn solved_from_the_fit(fitted: &Scene, action: &Action, disc: &Discretization, z: &[f64]) -> Result<Outcome, FitError> {
-    let fitted_model = Arc::new(Model::build(fitted)?);
+    let mut fitted = fitted.clone();
+    fitted.solver.backend = crate::scene::Backend::Newton;
+    let fitted_model = Arc::new(Model::build(&fitted)?);
     let (q, lambda) = states_of(action, z);
     let guess = Guess::States { q, lambda, description: "the fit's trajectory".into() };
-    let run = solve_global(fitted, &fitted_model, disc, &guess, None)?;
-    Ok(outcome(fitted, &fitted_model, run, None))
+    let run = solve_global(&fitted, &fitted_model, disc, &guess, None)?;
+    Ok(outcome(&fitted, &fitted_model, run, None))
 }
 
 /// A warning for each parameter that ended on its bound.
@@ -618,8 +636,8 @@ fn fitted_scene(scene: &Scene, overrides: &Overrides, names: &[String], theta: &
 
 /// Ipopt's options for a fit of `scene`: the scene's linear solver, print level and
 /// MUMPS settings as for a solve, the fit's tolerance and iteration limit, the
-/// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], the Hessian, then the scene's
-/// `[solver.ipopt]` options.
+/// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], [`MUMPS_PIVTOL`],
+/// the Hessian, then the scene's `[solver.ipopt]` options.
 fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     let solver = &scene.solver;
     let mut extra: Vec<(String, ipopt::OptionValue)> =
@@ -628,6 +646,11 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     // fit's tol: stop after a few iterations at Ipopt's acceptable level (with a warning)
     // instead of line-searching at that floor up to the iteration limit.
     extra.push(("acceptable_iter".into(), ipopt::OptionValue::Int(ACCEPTABLE_ITER)));
+    // MUMPS's default pivot tolerance (1e-6) left its solves of the fit's KKT matrix
+    // inaccurate (Ipopt's iterative refinement failed, then it raised the tolerance and
+    // factored again, 2 to 3 factorizations per iteration on the disk); at 1e-3 none
+    // failed on the disk (docs/benchmarks.md#fitting).
+    extra.push(("mumps_pivtol".into(), ipopt::OptionValue::Num(MUMPS_PIVTOL)));
     if settings.hessian == FitHessian::LimitedMemory {
         extra.push(("hessian_approximation".into(), ipopt::OptionValue::Str("limited-memory".into())));
     }

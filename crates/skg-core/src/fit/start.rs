@@ -22,10 +22,14 @@ pub(super) struct Start {
     pub solution: Option<Vec<f64>>,
 }
 
-/// Solve the scene at its starting values (one global solve from time stepping); when
-/// that does not converge, the time stepping itself.
+/// Solve the scene at its starting values (one global solve from time stepping, by
+/// Newton's method, which hands over to Ipopt if it fails: one sparse LU of the square
+/// Jacobian per step instead of MUMPS's analysis and factorizations of Ipopt's KKT
+/// matrix); when that does not converge, the time stepping itself.
 pub(super) fn start_states(scene: &Scene, model: &Arc<Model>, disc: &Discretization, times: &[f64]) -> Result<Start, FitError> {
-    let run = solve_global(scene, model, disc, &Guess::TimeStepping, None)?;
+    let mut newton = scene.clone();
+    newton.solver.backend = crate::scene::Backend::Newton;
+    let run = solve_global(&newton, model, disc, &Guess::TimeStepping, None)?;
     if run.solution.status.is_converged() {
         let tr = &run.solution.trajectory;
         let action = action_on(model, scene, disc, times)?;
