@@ -318,6 +318,37 @@ impl<'a> Refiner<'a> {
         best.map(|(_, c, n, r)| (c, n, Some(r)))
     }
 
+    /// When no discretization is predicted to meet the tolerance within the budget but no
+    /// solve has converged yet, the predictions are the proxy's alone, uncalibrated, and
+    /// can be off by orders of magnitude (van der Pol at μ = 1000 on its adaptive grid:
+    /// 36 904 times the tolerance predicted on 4096 nodes with `SBP484`, 90 measured):
+    /// the candidate not yet solved that is predicted the most accurate on its first grid
+    /// (the scene's, or more for contacts) is solved there, or, when every one has been,
+    /// `c` (the last) on its floor, so
+    /// that a converged solve calibrates the predictions. `None` once one has converged,
+    /// or beyond the budget.
+    fn uncalibrated_retry(&mut self, c: Candidate) -> Option<(Candidate, usize, Option<f64>)> {
+        if !self.calibration.is_empty() || self.grids.iter().any(|g| g.measured.is_some()) {
+            return None;
+        }
+        let untried: Vec<Candidate> = self.candidates.iter().copied().filter(|k| self.floor.iter().all(|(f, _)| f != k)).collect();
+        let mut best: Option<(f64, Candidate, usize)> = None;
+        for k in untried {
+            let n = self.floor_of(k);
+            if n > self.max_nodes {
+                continue;
+            }
+            if let Some(r) = self.predicted(k, n).filter(|r| best.is_none_or(|b| *r < b.0)) {
+                best = Some((r, k, n));
+            }
+        }
+        if let Some((r, k, n)) = best {
+            return Some((k, n, Some(r)));
+        }
+        let n = self.floor_of(c);
+        (n <= self.max_nodes).then_some((c, n, None))
+    }
+
     /// The first discretization: the scene's own, with the chosen candidate when it
     /// chooses one (the cheapest predicted to meet the aim on the scene's grid, else the
     /// most accurate there).
@@ -381,7 +412,7 @@ impl<'a> Refiner<'a> {
             if let Some((reason, advice)) = self.incurable(&outcome) {
                 break (format!("stopped after grid {number} ({what}): {reason}; more nodes would not change that"), advice);
             }
-            let Some(next) = self.next() else {
+            let Some(next) = self.next().or_else(|| self.uncalibrated_retry(c)) else {
                 break self.out_of_budget();
             };
             if let Some(reason) = self.beyond_time(next.1) {
