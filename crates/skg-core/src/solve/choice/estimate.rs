@@ -69,11 +69,8 @@ pub(super) fn calibration(measured: &[(Candidate, f64)], c: Candidate) -> f64 {
 pub(super) fn proxy_ratio(p: &mut Predictor, c: Candidate, nodes: usize) -> Result<f64, SolveError> {
     let floor = p.roundoff_ratio(c, nodes);
     let largest = if c.adaptive { ADAPTIVE_PROXY_MAX_NODES } else { PROXY_MAX_NODES };
-    if nodes <= PROXY_MAX_NODES {
-        return Ok(p.ratio_between(c, nodes)?.max(floor));
-    }
     if nodes <= largest {
-        return Ok(p.ratio(c, nodes)?.max(floor));
+        return Ok(p.ratio_between(c, nodes)?.max(floor));
     }
     let (hi, lo) = (largest, (largest - 1) / 2 + 1);
     let (r_hi, r_lo) = (p.ratio(c, hi)?, p.ratio(c, lo)?);
