@@ -117,3 +117,17 @@ def test_a_sweep_too_large_to_start_unasked(cli_error, scene, skg_solve, tmp_pat
         skg.sweep(f, out=tmp_path / "out", exe=skg_solve)
     assert status == 1 and str(e.value) == message and "10201 points" in message and "--yes" in message
     assert not (tmp_path / "out").exists()
+
+
+def test_a_sweep_mapping_measures_points_against_the_hard_walls(scene, skg_solve, tmp_path):
+    # "hard_walls" is a reference's name, not a path: each point is measured against the
+    # event-driven hard-wall reference on its own grid, so error_max is the model error
+    # of the Gaussian wall, which falls as the wall thins (docs/validation.md)
+    sweep = {
+        "sweep": {"scene": scene("tumbler"), "name": "hard-limit-test", "reference": "hard_walls"},
+        "grid": [{"nodes": 512, "sigma": ["1/30", "1/110"]}],
+    }
+    res = skg.sweep(sweep, out=tmp_path / "out", exe=skg_solve, progress=False)
+    assert res.report["failed"] == 0 and res["converged"].all()
+    by_sigma = dict(zip(res["sigma_expr"], res["error_max"]))
+    assert 1e-3 < by_sigma["1/110"] < by_sigma["1/30"] < 0.1, by_sigma
