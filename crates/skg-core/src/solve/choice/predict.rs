@@ -282,9 +282,9 @@ impl<'a> Predictor<'a> {
     /// of them, interpolated in log-log (the proxy decreases as a power of N between
     /// them), so that predicting for any N costs no new time stepping below the fine grid
     /// and one per doubling above it (the adaptive grid's proxy is computed up to
-    /// [`ADAPTIVE_PROXY_MAX_NODES`](super::estimate::ADAPTIVE_PROXY_MAX_NODES): each
-    /// node count a refinement's bisection tried was a time stepping of its own, 41 % of
-    /// the refinement of van der Pol at μ = 20).
+    /// 65 537 nodes, `estimate::ADAPTIVE_PROXY_MAX_NODES`: each node count a
+    /// refinement's bisection tried was a time stepping of its own, 41 % of the
+    /// refinement of van der Pol at μ = 20).
     pub fn ratio_between(&mut self, c: Candidate, nodes: usize) -> Result<f64, SolveError> {
         if on_the_ladder(nodes) {
             return self.ratio(c, nodes);
