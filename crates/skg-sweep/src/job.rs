@@ -265,22 +265,13 @@ fn reference_errors(
     columns: &[String],
     skip_last: usize,
 ) -> Result<Comparison, PointError> {
+    use skg_core::stepping::reference::{hard_wall, regularized, ReferenceOptions};
     let reference = match reference {
         ReferenceSpec::File(p) => Table::read(p)?,
-        ReferenceSpec::Integrate => {
-            let r = skg_core::stepping::reference::regularized(
-                scene,
-                &solution.times(),
-                &skg_core::stepping::reference::ReferenceOptions::default(),
-            )?;
-            Table::of_trajectory(scene, &r.trajectory)
-        }
-        ReferenceSpec::HardWalls => {
-            let r = skg_core::stepping::reference::hard_wall(
-                scene,
-                &solution.times(),
-                &skg_core::stepping::reference::ReferenceOptions::default(),
-            )?;
+        computed @ (ReferenceSpec::Integrate | ReferenceSpec::HardWalls) => {
+            // Both references are integrated on the point's own grid, the same way.
+            let integrate = if matches!(computed, ReferenceSpec::HardWalls) { hard_wall } else { regularized };
+            let r = integrate(scene, &solution.times(), &ReferenceOptions::default())?;
             Table::of_trajectory(scene, &r.trajectory)
         }
     };
