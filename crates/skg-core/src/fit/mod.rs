@@ -507,13 +507,20 @@ impl Problem<'_> {
 /// that level, and on the double pendulum it then went through its restoration phase
 /// (8 iterations, 1.6 s) where Newton takes one step (docs/benchmarks.md#fitting).
 fn solved_from_the_fit(fitted: &Scene, action: &Action, disc: &Discretization, z: &[f64]) -> Result<Outcome, FitError> {
-    let mut fitted = fitted.clone();
-    fitted.solver.backend = crate::scene::Backend::Newton;
+    let fitted = on_newton(fitted);
     let fitted_model = Arc::new(Model::build(&fitted)?);
     let (q, lambda) = states_of(action, z);
     let guess = Guess::States { q, lambda, description: "the fit's trajectory".into() };
     let run = solve_global(&fitted, &fitted_model, disc, &guess, None)?;
     Ok(outcome(&fitted, &fitted_model, run, None))
+}
+
+/// `scene` solved by Newton's method (which hands over to Ipopt if it fails): the fit's
+/// square solves, whose guesses are close (module docs, steps 2 and 6).
+fn on_newton(scene: &Scene) -> Scene {
+    let mut newton = scene.clone();
+    newton.solver.backend = crate::scene::Backend::Newton;
+    newton
 }
 
 /// A warning for each parameter that ended on its bound.

@@ -27,8 +27,7 @@ pub(super) struct Start {
 /// Jacobian per step instead of MUMPS's analysis and factorizations of Ipopt's KKT
 /// matrix); when that does not converge, the time stepping itself.
 pub(super) fn start_states(scene: &Scene, model: &Arc<Model>, disc: &Discretization, times: &[f64]) -> Result<Start, FitError> {
-    let mut newton = scene.clone();
-    newton.solver.backend = crate::scene::Backend::Newton;
+    let newton = super::on_newton(scene);
     let run = solve_global(&newton, model, disc, &Guess::TimeStepping, None)?;
     if run.solution.status.is_converged() {
         let tr = &run.solution.trajectory;

@@ -206,8 +206,7 @@ impl Ladder<'_> {
         let go_on = !ends_the_ladder(&outcome);
         let wall_s = start.elapsed().as_secs_f64();
         if self.tried.is_empty() {
-            let budget_s = (LADDER_COST_FACTOR * wall_s).max(LADDER_FLOOR_S);
-            self.limits = self.limits.with_budget(Deadline::from(self.started, budget_s, LADDER_BUDGET));
+            self.limits = self.limits.with_budget(Deadline::budget(self.started, wall_s, LADDER_BUDGET));
         }
         self.tried.push(Tried { description: description.to_string(), outcome, wall_s });
         Ok(go_on && self.may_go_on())

@@ -397,8 +397,7 @@ impl<'a> Refiner<'a> {
             let trusted = outcome.trusted();
             self.record(c, nodes, predicted, &outcome);
             if self.grids.len() == 1 && self.limits.time_limit.is_none() {
-                let budget_s = (REFINE_COST_FACTOR * self.grids[0].wall_s).max(REFINE_FLOOR_S);
-                self.limits = self.limits.with_budget(Deadline::from(self.started, budget_s, REFINE_BUDGET));
+                self.limits = self.limits.with_budget(Deadline::budget(self.started, self.grids[0].wall_s, REFINE_BUDGET));
             }
             if trusted {
                 break (format!("verified on grid {number}: {what}"), None);

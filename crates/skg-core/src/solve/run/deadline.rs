@@ -63,6 +63,14 @@ impl Deadline {
         Some(Deadline { at, limit_s, bound })
     }
 
+    /// The deadline a budget `bound` sets from `start` for what first took `first_s`
+    /// seconds: its factor times that, or its floor, whichever is longer (none for the
+    /// time limit, which is not a budget).
+    pub fn budget(start: Instant, first_s: f64, bound: Bound) -> Option<Deadline> {
+        let Bound::Budget { factor, floor_s, .. } = bound else { return None };
+        Deadline::from(start, (factor * first_s).max(floor_s), bound)
+    }
+
     /// The earlier of two deadlines (either may be absent).
     pub fn earliest(a: Option<Deadline>, b: Option<Deadline>) -> Option<Deadline> {
         match (a, b) {
@@ -189,6 +197,14 @@ mod tests {
         assert!(d.would_pass(f64::INFINITY));
         // A limit the clock cannot represent sets no deadline.
         assert_eq!(Deadline::after(Some(1e300)), None);
+    }
+
+    #[test]
+    fn a_budget_is_its_factor_times_the_first_solve_or_its_floor() {
+        let now = Instant::now();
+        assert_eq!(Deadline::budget(now, 0.1, LADDER).map(|d| d.limit_s), Some(2.0));
+        assert_eq!(Deadline::budget(now, 0.5, LADDER).map(|d| d.limit_s), Some(4.0));
+        assert_eq!(Deadline::budget(now, 0.5, Bound::TimeLimit), None);
     }
 
     #[test]
