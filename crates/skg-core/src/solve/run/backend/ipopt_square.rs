@@ -55,7 +55,7 @@ pub(super) fn solve<S: SquareSystem + ?Sized>(
     if let Some(d) = deadline.filter(|d| d.passed()) {
         return Ok(not_started(system, x0, d));
     }
-    let mut square = IpoptSquare { system, tol: options.tol, roundoff: 0.0, deadline, last_callback: None, stopped: None };
+    let mut square = IpoptSquare { system, tol: options.tol, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stopped: None };
     let sol = ipopt::solve(&mut square, x0, options)?;
     let calls = |stat: ipopt::EvalStat| stat.calls as usize;
     Ok(IpoptOutcome {
@@ -114,7 +114,18 @@ enum Stop {
     /// The deadline (reached, or to be passed by the next iteration), this many seconds
     /// after the start of what it bounds.
     TimeLimit(f64),
+    /// `max |c|` rose to [`DIVERGED`] times the least it had been.
+    Diverged,
 }
+
+/// A solve whose `max |c|` rises to this many times the least it had been (or the
+/// tolerance, if larger) is stopped as diverged. With a zero objective, Ipopt's filter
+/// accepts a step of its main phase only if it lowers `max |c|`: such a rise happens in
+/// the restoration phase, once it has lost the way. (The chain on stiff springs with
+/// `SBP242` and the natural condition on 512 nodes: from 1.8e-4 at the time stepping
+/// down to 3.0e-8 in the restoration phase, then up to 0.23 at its iteration 19 and to
+/// 1e4 at its limit of 100 iterations, 3 s later.)
+const DIVERGED: f64 = 1e3;
 
 /// A square system seen by Ipopt, with skg-solve's stopping test in the intermediate
 /// callback (module docs): outside the restoration phase, stop once `max |c| ≤ tol`,
@@ -135,6 +146,8 @@ pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
     deadline: Option<Deadline>,
     /// When the intermediate callback was last called.
     last_callback: Option<Instant>,
+    /// The least `max |c|` so far.
+    least_inf_pr: f64,
     stopped: Option<Stop>,
 }
 
@@ -144,6 +157,7 @@ impl<S: SquareSystem + ?Sized> IpoptSquare<'_, S> {
         match (ipopt_status, self.stopped) {
             (ipopt::Status::UserRequestedStop, Some(Stop::Tolerance)) => SolverStatus::Ipopt(ipopt::Status::SolveSucceeded),
             (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff)) => SolverStatus::IpoptConvergedToRoundOff,
+            (ipopt::Status::UserRequestedStop, Some(Stop::Diverged)) => SolverStatus::Ipopt(ipopt::Status::DivergingIterates),
             (ipopt::Status::UserRequestedStop, Some(Stop::TimeLimit(elapsed_s))) => match self.deadline {
                 Some(d) => SolverStatus::TimeLimitReached { backend: Backend::Ipopt, bound: d.bound, limit_s: d.limit_s, elapsed_s },
                 None => SolverStatus::Ipopt(ipopt::Status::UserRequestedStop),
@@ -194,6 +208,10 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
                 self.stopped = Some(Stop::RoundOff);
             }
         }
+        if stat.inf_pr > DIVERGED * self.least_inf_pr.max(self.tol) {
+            self.stopped = Some(Stop::Diverged);
+        }
+        self.least_inf_pr = self.least_inf_pr.min(stat.inf_pr);
         // The time of the iteration just ended (none for the initialization's).
         let now = Instant::now();
         let iteration_s = self.last_callback.replace(now).map(|last| now.duration_since(last).as_secs_f64());
@@ -327,7 +345,7 @@ mod tests {
     fn ipopt_is_stopped_before_an_iteration_that_would_pass_the_deadline() {
         let mut system = Shift;
         let deadline = Deadline::from(Instant::now(), 1.05, Bound::TimeLimit);
-        let mut square = IpoptSquare { system: &mut system, tol: 1e-12, roundoff: 0.0, deadline, last_callback: None, stopped: None };
+        let mut square = IpoptSquare { system: &mut system, tol: 1e-12, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stopped: None };
         let stat = |iter: i32| ipopt::IterationStat {
             iter,
             objective: 0.0,
