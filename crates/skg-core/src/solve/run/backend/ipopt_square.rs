@@ -55,7 +55,8 @@ pub(super) fn solve<S: SquareSystem + ?Sized>(
     if let Some(d) = deadline.filter(|d| d.passed()) {
         return Ok(not_started(system, x0, d));
     }
-    let mut square = IpoptSquare { system, tol: options.tol, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stopped: None };
+    let mut square =
+        IpoptSquare { system, tol: options.tol, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stopped: None };
     let sol = ipopt::solve(&mut square, x0, options)?;
     let calls = |stat: ipopt::EvalStat| stat.calls as usize;
     Ok(IpoptOutcome {
@@ -345,7 +346,15 @@ mod tests {
     fn ipopt_is_stopped_before_an_iteration_that_would_pass_the_deadline() {
         let mut system = Shift;
         let deadline = Deadline::from(Instant::now(), 1.05, Bound::TimeLimit);
-        let mut square = IpoptSquare { system: &mut system, tol: 1e-12, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stopped: None };
+        let mut square = IpoptSquare {
+            system: &mut system,
+            tol: 1e-12,
+            roundoff: 0.0,
+            deadline,
+            last_callback: None,
+            least_inf_pr: f64::INFINITY,
+            stopped: None,
+        };
         let stat = |iter: i32| ipopt::IterationStat {
             iter,
             objective: 0.0,
