@@ -240,3 +240,39 @@ fn the_state_jacobian_matches_finite_differences_of_the_accelerations() {
         }
     }
 }
+
+/// The accelerations and multipliers the time stepping uses (`Model::accelerations`,
+/// assembled and solved in place) satisfy the index-reduced system written out from the
+/// physical quantities with nalgebra:
+/// `W q̈ + Gᵀ λ = f + F − (∂p/∂q) v − ∂p/∂t` and `G q̈ = −(∂g/∂q) v − ∂g/∂t`, at random
+/// states of every shipped scene, the rigid chain and a stiff scene.
+#[test]
+fn the_accelerations_solve_the_index_reduced_system() {
+    let mut scenes: Vec<(String, _)> = common::SHIPPED.iter().map(|n| (n.to_string(), common::load(n, &Overrides::default()))).collect();
+    scenes.push(("chain4".to_string(), common::load("chain4", &Overrides::default())));
+    let path = common::root().join("crates/skg-core/tests/scenes/stiff/damped_yaw_disk.toml");
+    scenes.push(("damped_yaw_disk".to_string(), skg_core::scene::SceneFile::load(&path).unwrap().resolve(&Overrides::default()).unwrap()));
+    let mut rng = common::Rng(0x9e37_79b9_7f4a_7c15);
+    for (name, scene) in &scenes {
+        let model = skg_core::model::Model::build(scene).unwrap();
+        let mut ws = model.workspace();
+        for sample in 0..6 {
+            let t = scene.t_start + rng.uniform() * (scene.t_end - scene.t_start);
+            let q: Vec<f64> = scene.initial_q.iter().map(|x| x + 0.05 * rng.signed()).collect();
+            let v: Vec<f64> = scene.initial_v.iter().map(|x| x + 0.5 * rng.signed()).collect();
+            let (a, lambda) = model.accelerations(t, &q, &v, &mut ws).unwrap();
+            let ph = model.physical(t, &q, &v, &mut ws);
+            let (a, lambda) = (nalgebra::DVector::from_column_slice(&a), nalgebra::DVector::from_column_slice(&lambda));
+            let dynamics = &ph.kinetic * &a + ph.gv.transpose() * &lambda - ph.free_force(&v);
+            let constraints = &ph.gv * &a - ph.constraint_acceleration(&v);
+            // Relative to the size of the terms of each row.
+            let scale = 1.0 + ph.kinetic.abs().max() * a.amax() + ph.gv.abs().max() * (a.amax() + lambda.amax()) + ph.free_force(&v).amax();
+            for (i, r) in dynamics.iter().chain(constraints.iter()).enumerate() {
+                assert!(
+                    r.abs() <= 1e-12 * scale,
+                    "{name}, state {sample}: row {i} of [W Gᵀ; G 0] [q̈; λ] = rhs is off by {r:e} (scale {scale:e})"
+                );
+            }
+        }
+    }
+}

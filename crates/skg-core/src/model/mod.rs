@@ -140,6 +140,8 @@ pub struct Workspace {
     pub scratch: Vec<f64>,
     /// A tape's outputs.
     pub out: Vec<f64>,
+    /// The matrix `[W Gᵀ; G 0]` of [`Model::accelerations_into`], row-major.
+    pub saddle: Vec<f64>,
 }
 
 impl Model {
@@ -241,6 +243,7 @@ impl Model {
             u,
             scratch: vec![0.0; tapes.iter().map(|t| t.scratch_len()).max().unwrap_or(0)],
             out: vec![0.0; tapes.iter().map(|t| t.n_outputs()).max().unwrap_or(0)],
+            saddle: vec![0.0; (self.layout.d + self.layout.n).pow(2)],
         }
     }
 }

@@ -2,6 +2,14 @@
 //! constraint values, gaps, forces, momenta, the kinetic matrix and the derivatives the
 //! time stepping needs), and the accelerations of the index-reduced
 //! Lagrange–d'Alembert equations ([`Model::accelerations`]).
+//!
+//! The accelerations are the time stepping's right-hand side, called 10⁴–10⁶ times per
+//! integration, so [`Model::accelerations_into`] builds and solves the small dense
+//! system in the workspace by Gaussian elimination with partial pivoting, written here:
+//! nalgebra's LU takes its matrix by value and returns a new solution vector, and with
+//! the `DMatrix`es of [`Physical`] that was a dozen allocations per call (a fifth of a
+//! DOP853 integration of the chain on stiff springs went to `malloc` and `free`, a
+//! quarter to nalgebra's LU of its 8 × 8 mass matrix).
 
 use nalgebra::{DMatrix, DVector};
 use skg_expr::{Graph, Tape};
@@ -169,14 +177,9 @@ impl Model {
     /// Physical quantities at the state (q, v) at time t.
     pub fn physical(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace) -> Physical {
         let (d, n) = (self.layout.d, self.layout.n);
-        // The local variables and the time; a fit's free parameters keep their values.
-        ws.u[..self.layout.inputs() - self.layout.free].iter_mut().for_each(|x| *x = 0.0);
-        ws.u[..d].copy_from_slice(q);
-        ws.u[d..2 * d].copy_from_slice(v);
-        ws.u[self.layout.time()] = t;
+        self.evaluate_physical(t, q, v, ws);
         let pl = self.phys_layout;
-        let out = &mut ws.out[..pl.len()];
-        self.phys.eval(&ws.u, &mut ws.scratch, out);
+        let out = &ws.out[..pl.len()];
         let h = out[pl.h()..pl.h() + pl.walls].to_vec();
         let wall_energy = match self.wall_model {
             WallModel::Gaussian => {
@@ -201,13 +204,54 @@ impl Model {
         }
     }
 
+    /// The physical tape at (t, q, v), into `ws.out` in the order of [`PhysLayout`].
+    fn evaluate_physical(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace) {
+        let d = self.layout.d;
+        // The local variables and the time; a fit's free parameters keep their values.
+        ws.u[..self.layout.inputs() - self.layout.free].iter_mut().for_each(|x| *x = 0.0);
+        ws.u[..d].copy_from_slice(q);
+        ws.u[d..2 * d].copy_from_slice(v);
+        ws.u[self.layout.time()] = t;
+        self.phys.eval(&ws.u, &mut ws.scratch, &mut ws.out[..self.phys_layout.len()]);
+    }
+
     /// Accelerations and multipliers of the Lagrange–d'Alembert equations at (t, q, v):
     /// the index-reduced system
     /// `[W Gᵀ; G 0] [q̈; λ] = [f + F − (∂p/∂q) v − ∂p/∂t; −(∂g/∂q) v − ∂g/∂t]`.
     pub fn accelerations(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace) -> Result<(Vec<f64>, Vec<f64>), DynamicsError> {
         let d = self.layout.d;
-        let (_, sol) = self.saddle_point(t, q, v, ws)?;
-        Ok((sol.rows(0, d).iter().copied().collect(), sol.rows(d, self.layout.n).iter().copied().collect()))
+        let mut sol = vec![0.0; d + self.layout.n];
+        self.accelerations_into(t, q, v, ws, &mut sol)?;
+        let lambda = sol.split_off(d);
+        Ok((sol, lambda))
+    }
+
+    /// [`Model::accelerations`] into `sol = [q̈; λ]` (of length `d + n`), without
+    /// allocating (module docs).
+    pub fn accelerations_into(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace, sol: &mut [f64]) -> Result<(), DynamicsError> {
+        let (d, n) = (self.layout.d, self.layout.n);
+        let m = d + n;
+        self.evaluate_physical(t, q, v, ws);
+        let (pl, o, a) = (self.phys_layout, &ws.out, &mut ws.saddle);
+        a.fill(0.0);
+        for i in 0..d {
+            a[i * m..i * m + d].copy_from_slice(&o[pl.w() + i * d..pl.w() + (i + 1) * d]);
+            let dpdq = &o[pl.dpdq() + i * d..pl.dpdq() + (i + 1) * d];
+            sol[i] = o[pl.force() + i] - o[pl.dpdt() + i] - dot(dpdq, v);
+        }
+        for k in 0..n {
+            for j in 0..d {
+                let gkj = o[pl.gv() + k * d + j];
+                a[(d + k) * m + j] = gkj;
+                a[j * m + d + k] = gkj;
+            }
+            sol[d + k] = -o[pl.gt() + k] - dot(&o[pl.gq() + k * d..pl.gq() + (k + 1) * d], v);
+        }
+        solve_in_place(a, m, sol)?;
+        if sol.iter().any(|x| !x.is_finite()) {
+            return Err(DynamicsError::NonFinite);
+        }
+        Ok(())
     }
 
     /// The factored matrix `[W Gᵀ; G 0]` at (t, q, v) and the solution `[q̈; λ]` of the
@@ -233,5 +277,67 @@ impl Model {
     }
 }
 
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Solve `A x = b` in place (`A` row-major `m × m`, overwritten by its elimination; `b`
+/// by `x`) by Gaussian elimination with partial pivoting; a zero pivot is a singular
+/// matrix.
+fn solve_in_place(a: &mut [f64], m: usize, b: &mut [f64]) -> Result<(), DynamicsError> {
+    for c in 0..m {
+        let p = (c..m).max_by(|&i, &j| a[i * m + c].abs().total_cmp(&a[j * m + c].abs())).expect("c < m");
+        if a[p * m + c] == 0.0 {
+            return Err(DynamicsError::SingularMassMatrix);
+        }
+        if p != c {
+            for j in c..m {
+                a.swap(p * m + j, c * m + j);
+            }
+            b.swap(p, c);
+        }
+        let pivot = a[c * m + c];
+        for i in c + 1..m {
+            let f = a[i * m + c] / pivot;
+            if f != 0.0 {
+                for j in c + 1..m {
+                    a[i * m + j] -= f * a[c * m + j];
+                }
+                b[i] -= f * b[c];
+            }
+        }
+    }
+    for c in (0..m).rev() {
+        let s = dot(&a[c * m + c + 1..(c + 1) * m], &b[c + 1..]);
+        b[c] = (b[c] - s) / a[c * m + c];
+    }
+    Ok(())
+}
+
 /// The LU factorization of `[W Gᵀ; G 0]`.
 pub(super) type SaddleLu = nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gaussian_elimination_pivots_on_a_saddle_point_matrix_and_refuses_a_singular_one() {
+        // [W Gᵀ; G 0]: its last diagonal entry is zero.
+        let a = [2.0, 0.5, 1.0, 0.5, 3.0, -1.0, 1.0, -1.0, 0.0];
+        let x_true = [0.3, -1.7, 2.5];
+        let b: Vec<f64> = (0..3).map(|i| (0..3).map(|j| a[i * 3 + j] * x_true[j]).sum()).collect();
+        let (mut a_work, mut x) = (a.to_vec(), b.clone());
+        solve_in_place(&mut a_work, 3, &mut x).unwrap();
+        for (xi, ti) in x.iter().zip(x_true) {
+            assert!((xi - ti).abs() <= 1e-14 * 4.0, "{x:?} against {x_true:?}");
+        }
+        // A zero leading entry needs the row swap.
+        let (mut a2, mut b2) = (vec![0.0, 1.0, 1.0, 0.0], vec![2.0, 3.0]);
+        solve_in_place(&mut a2, 2, &mut b2).unwrap();
+        assert_eq!(b2, vec![3.0, 2.0]);
+        // Two equal rows: singular, however the right-hand side reads.
+        let (mut a3, mut b3) = (vec![1.0, 2.0, 1.0, 2.0], vec![1.0, 1.0]);
+        assert_eq!(solve_in_place(&mut a3, 2, &mut b3), Err(DynamicsError::SingularMassMatrix));
+    }
+}

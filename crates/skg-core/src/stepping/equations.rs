@@ -167,10 +167,11 @@ pub fn wall_step_accepted(model: &Model, before: &[f64], after: &[f64]) -> bool 
 /// The right-hand side `(t, q, v) ↦ (v, q̈)` of the index-reduced equations.
 pub fn rhs<'a>(model: &'a Model, ws: &'a mut Workspace) -> impl FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError> + 'a {
     let d = model.layout.d;
+    let mut sol = vec![0.0; d + model.layout.n];
     move |t, y, dy| {
-        let (a, _) = model.accelerations(t, &y[..d], &y[d..], ws)?;
+        model.accelerations_into(t, &y[..d], &y[d..], ws, &mut sol)?;
         dy[..d].copy_from_slice(&y[d..]);
-        dy[d..].copy_from_slice(&a);
+        dy[d..].copy_from_slice(&sol[..d]);
         Ok(())
     }
 }
