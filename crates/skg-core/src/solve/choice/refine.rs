@@ -201,6 +201,10 @@ impl<'a> Refiner<'a> {
     /// too short for the grid as a large acceleration).
     fn nodes_for_contacts(&mut self, adaptive: bool) -> usize {
         let nodes = self.scene.nodes;
+        // Without walls, no time stepping on the scene's grid for it.
+        if self.model.walls.is_empty() {
+            return 0;
+        }
         let Ok(p) = self.predictor.as_mut() else { return 0 };
         if adaptive && !p.has_map() {
             return 0;
