@@ -84,10 +84,15 @@ fn an_elastic_pendulum_on_a_spring_of_stiffness_1e8() {
     solved_within_tolerance_of_the_truth("elastic_pendulum");
 }
 
-/// Two masses joined by a spring of stiffness 1e6, spinning in free fall.
+/// Two masses joined by a spring of stiffness 1e6, spinning in free fall. `SBP242` on
+/// the scene's 256 nodes fails (its stiff spring's odd-even mode); no later grid starts
+/// from a solution that far from the time stepping, which had led the two after it to
+/// fail the same way (four grids, where two suffice; three allowed).
 #[test]
 fn two_masses_on_a_stiff_spring() {
-    solved_within_tolerance_of_the_truth("stiff_dumbbell");
+    let o = solved_within_tolerance_of_the_truth("stiff_dumbbell");
+    let grids = &o.refinement.as_ref().expect("refined").grids;
+    assert!(grids.len() <= 3, "{} grids: {:?}", grids.len(), grids.iter().map(|g| (&g.operator, g.nodes, &g.verdict)).collect::<Vec<_>>());
 }
 
 /// Four masses hanging from a pivot on springs of stiffness 1e6.

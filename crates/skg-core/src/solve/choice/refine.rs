@@ -39,9 +39,10 @@
 //! whichever is longer; the next grid's time estimated from the last one's, in
 //! proportion to the nodes), and at once on a grid that failed for a reason more nodes
 //! will not cure (`Refiner::incurable`): a verification that could not run, a backend
-//! that stopped at a loose `[solver] tol` above the residual a converged solve needs, or an error that did not
-//! fall on a finer grid. Every discretization solved is listed in `summary.json` (`refinement`);
-//! the reported solution is the verified one, else the most accurate converged one.
+//! that stopped at a loose `[solver] tol` above the residual a converged solve needs, or
+//! an error that did not fall on a finer grid. Every discretization solved is listed in
+//! `summary.json` (`refinement`); the reported solution is the verified one, else the
+//! most accurate converged one.
 
 use std::sync::Arc;
 use std::time::Instant;

@@ -380,6 +380,40 @@ mod tests {
         assert!(matches!(square.status(ipopt::Status::UserRequestedStop), SolverStatus::TimeLimitReached { backend: Backend::Ipopt, .. }));
     }
 
+    /// `max |c|` falling to 1e-8 and rising again: stopped as diverged at 1e3 times its
+    /// least (1e-5), not before (a rise to 9e-6 goes on).
+    #[test]
+    fn ipopt_is_stopped_once_the_residual_rises_a_thousandfold_above_its_least() {
+        let mut system = Shift;
+        let mut square = IpoptSquare {
+            system: &mut system,
+            tol: 1e-12,
+            roundoff: 0.0,
+            deadline: None,
+            last_callback: None,
+            least_inf_pr: f64::INFINITY,
+            stopped: None,
+        };
+        let stat = |iter: i32, inf_pr: f64| ipopt::IterationStat {
+            iter,
+            objective: 0.0,
+            inf_pr,
+            inf_du: 0.0,
+            mu: 0.0,
+            d_norm: 0.0,
+            regularization: 0.0,
+            alpha_pr: 0.0,
+            alpha_du: 0.0,
+            ls_trials: 1,
+            restoration: true,
+        };
+        for (iter, inf_pr) in [1e-4, 1e-6, 1e-8, 9e-6, 1e-7].into_iter().enumerate() {
+            assert!(square.intermediate(&stat(iter as i32, inf_pr)), "stopped at {inf_pr:e}");
+        }
+        assert!(!square.intermediate(&stat(5, 1.1e-5)));
+        assert_eq!(square.status(ipopt::Status::UserRequestedStop), SolverStatus::Ipopt(ipopt::Status::DivergingIterates));
+    }
+
     /// A shipped scene of `scenarios/`.
     fn shipped(name: &str) -> Scene {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(name);
