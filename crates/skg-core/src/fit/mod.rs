@@ -44,6 +44,7 @@
 mod data;
 mod files;
 mod free;
+mod multipliers;
 mod observe;
 mod problem;
 mod report;
@@ -298,8 +299,10 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let t_opt = Instant::now();
     let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol) };
     let (solution, at_kkt_point) = {
+        let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
+        let y0 = multipliers::starting_multipliers(&mut action, &plans, &observations, &settings.free, &x0, largest);
         let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free, stop);
-        let solution = ipopt::solve(&mut fit_problem, &x0, &ipopt_options(scene, settings))?;
+        let solution = ipopt::solve_warm(&mut fit_problem, &x0, &y0, &ipopt_options(scene, settings))?;
         (solution, fit_problem.stopped_at_kkt_point())
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
@@ -658,6 +661,10 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     // factored again, 2 to 3 factorizations per iteration on the disk); at 1e-3 none
     // failed on the disk (docs/benchmarks.md#fitting).
     extra.push(("mumps_pivtol".into(), ipopt::OptionValue::Num(MUMPS_PIVTOL)));
+    // The fit starts from its own least-squares multipliers (`multipliers.rs`) with
+    // Ipopt's warm start, pushing the point into its bounds as Ipopt's cold start does.
+    extra.push(("warm_start_bound_push".into(), ipopt::OptionValue::Num(1e-2)));
+    extra.push(("warm_start_bound_frac".into(), ipopt::OptionValue::Num(1e-2)));
     if settings.hessian == FitHessian::LimitedMemory {
         extra.push(("hessian_approximation".into(), ipopt::OptionValue::Str("limited-memory".into())));
     }
@@ -678,6 +685,15 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
         output_file: solver.ipopt_log.clone(),
         extra,
         ..ipopt::Options::default()
+    }
+}
+
+/// A numeric `[solver.ipopt]` value.
+fn ipopt_number(value: &crate::scene::IpoptValue) -> Option<f64> {
+    match value {
+        crate::scene::IpoptValue::Int(i) => Some(f64::from(*i)),
+        crate::scene::IpoptValue::Num(x) => Some(*x),
+        crate::scene::IpoptValue::Str(_) => None,
     }
 }
 
