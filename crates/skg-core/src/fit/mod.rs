@@ -201,7 +201,7 @@ pub const ACCEPTABLE_ITER: i32 = 5;
 
 /// MUMPS's pivot tolerance in a fit (Ipopt's `mumps_pivtol`; its default is 1e-6) unless
 /// the scene's `[solver.ipopt]` gives one.
-pub const MUMPS_PIVTOL: f64 = 1e-3;
+pub const MUMPS_PIVTOL: f64 = 0.1;
 
 /// Ipopt's iteration limit for a fit unless the scene or the caller gives one.
 pub const DEFAULT_MAX_ITER: u32 = 200;
@@ -659,7 +659,10 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     // MUMPS's default pivot tolerance (1e-6) left its solves of the fit's KKT matrix
     // inaccurate (Ipopt's iterative refinement failed, then it raised the tolerance and
     // factored again, 2 to 3 factorizations per iteration on the disk); at 1e-3 none
-    // failed on the disk (docs/benchmarks.md#fitting).
+    // failed on the disk, but with MUMPS's analysis made on the first KKT matrix (the
+    // warm start) the disk's last iterations stalled in the line search with some BLAS
+    // kernels (9 iterations instead of 6); at 0.1 (Ipopt's `mumps_pivtolmax`) none did
+    // (docs/benchmarks.md#fitting).
     extra.push(("mumps_pivtol".into(), ipopt::OptionValue::Num(MUMPS_PIVTOL)));
     // The fit starts from its own least-squares multipliers (`multipliers.rs`) with
     // Ipopt's warm start, pushing the point into its bounds as Ipopt's cold start does.
