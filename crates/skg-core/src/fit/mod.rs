@@ -24,7 +24,8 @@
 //!    which hands over to Ipopt if it fails), and the start
 //!    is that solve with the data in place of the coordinates they observe ([`FitStart`],
 //!    `start.rs`);
-//! 4. Ipopt minimizes the misfit under the constraints (`problem.rs`);
+//! 4. Ipopt minimizes the misfit under the constraints (`problem.rs`), from its own
+//!    least-squares multipliers computed here (`multipliers.rs`);
 //! 5. at the solution the trajectory's sensitivities give the Gauss–Newton curvature,
 //!    the covariance and the standard errors, and tell whether the data determine the
 //!    parameters (`statistics.rs`; the same test runs on the start, so that a fit the
