@@ -12,8 +12,9 @@
 //! the estimate) led the one-point pendulum fit of tests/fit.rs to another minimum
 //! (docs/benchmarks.md#fitting). Here the same least-squares problem is solved exactly
 //! with `J = (J_P, J_θ)`, `J_P = ∂R/∂P` square and nonsingular (a solve's Jacobian):
-//! with `B = J_P⁻¹ J_θ` and the gradient `g = ∇f − z` split as `(g_P, g_θ)`, the
-//! residual `ρ = g + Jᵀy` is zero in `P` up to the `θ` part `r = g_θ + J_θᵀ y`:
+//! with `B = J_P⁻¹ J_θ`, the gradient `g = ∇f − z` split as `(g_P, g_θ)` and `u = J_Pᵀy`,
+//! the residual is `ρ = g + Jᵀy = (g_P + u, g_θ + Bᵀu)`, least where
+//! `g_P + u = −B r` with `r = g_θ + Bᵀu`:
 //!
 //! ```text
 //! r = (I + BᵀB)⁻¹ (g_θ − Bᵀ g_P),   y = −J_P⁻ᵀ (g_P + B r),
