@@ -83,7 +83,7 @@ mod tests;
 
 pub use options::{OptionValue, Options};
 pub use problem::{EvalError, IterationStat, Problem, INFINITY_BOUND};
-pub use run::solve;
+pub use run::{solve, solve_warm, Multipliers};
 pub use solution::{EvalStat, EvalTimes, Solution, SolveError};
 pub use status::Status;
 

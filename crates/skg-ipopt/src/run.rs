@@ -15,7 +15,7 @@ use crate::callbacks::{eval_f, eval_g, eval_grad_f, eval_h, eval_jac_g, intermed
 use crate::ffi::{self, Index, Number, UserDataPtr};
 use crate::handle::Handle;
 use crate::lock::{lock_ipopt, NestGuard};
-use crate::options::Options;
+use crate::options::{OptionValue, Options};
 use crate::problem::{Problem, INFINITY_BOUND};
 use crate::solution::{Solution, SolveError};
 use crate::status::Status;
@@ -29,6 +29,51 @@ use crate::FALSE;
 /// first such error). A panic in a callback is re-raised after Ipopt returned and the
 /// problem was freed. Holds the process-wide Ipopt lock for the whole run.
 pub fn solve<P: Problem>(problem: &mut P, x0: &[f64], options: &Options) -> Result<Solution, SolveError> {
+    solve_from(problem, x0, None, options)
+}
+
+/// The multipliers a warm-started solve starts from: of the constraints (length `m`), of
+/// the variables' lower and upper bounds (length `n` each; those of an infinite bound
+/// are ignored).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Multipliers {
+    /// `y`, of Ipopt's Lagrangian `f + yᵀc`.
+    pub constraints: Vec<f64>,
+    /// `z_L`.
+    pub lower: Vec<f64>,
+    /// `z_U`.
+    pub upper: Vec<f64>,
+}
+
+/// [`solve`] from `x0` and the starting `multipliers` (Ipopt's `warm_start_init_point
+/// yes`, which skips its own estimate of the constraints' multipliers; the options'
+/// `warm_start_*` entries push the point into its bounds as for any warm start).
+pub fn solve_warm<P: Problem>(problem: &mut P, x0: &[f64], multipliers: &Multipliers, options: &Options) -> Result<Solution, SolveError> {
+    let (n, m) = (problem.num_variables(), problem.num_constraints());
+    let Multipliers { constraints, lower, upper } = multipliers;
+    if (constraints.len(), lower.len(), upper.len()) != (m, n, n) {
+        return Err(SolveError::Size(format!(
+            "starting multipliers have {}, {} and {} entries, the problem has {m} constraints and {n} variables",
+            constraints.len(),
+            lower.len(),
+            upper.len()
+        )));
+    }
+    if let Some(v) = constraints.iter().chain(lower).chain(upper).find(|v| !v.is_finite()) {
+        return Err(SolveError::Input(format!("a starting multiplier ({v}) is not finite")));
+    }
+    let mut options = options.clone();
+    options.extra.insert(0, ("warm_start_init_point".to_owned(), OptionValue::Str("yes".to_owned())));
+    solve_from(problem, x0, Some(multipliers), &options)
+}
+
+/// [`solve`], from `multipliers` too when given.
+fn solve_from<P: Problem>(
+    problem: &mut P,
+    x0: &[f64],
+    multipliers: Option<&Multipliers>,
+    options: &Options,
+) -> Result<Solution, SolveError> {
     let Some(_nest) = NestGuard::enter() else {
         return Err(SolveError::Create("ipopt::solve called from inside an Ipopt callback; nested solves are not supported".to_owned()));
     };
@@ -37,7 +82,7 @@ pub fn solve<P: Problem>(problem: &mut P, x0: &[f64], options: &Options) -> Resu
     let lock = lock_ipopt();
     let start = Instant::now();
     let created = create_problem::<P>(&dims, &mut bounds, options, lock)?;
-    let mut run = run_ipopt(created, problem, x0, &dims, options.max_iter);
+    let mut run = run_ipopt(created, problem, x0, multipliers, &dims, options.max_iter);
     let (constraint_values, max_constraint_violation) = recompute_constraints(problem, &run.x, &bounds, &mut run.record);
     if !run.status.is_success() {
         if let Some(e) = run.record.first_error {
@@ -214,15 +259,23 @@ struct Run {
     record: Record,
 }
 
-/// Runs `IpoptSolve` from `x0`, then frees the problem and releases the lock. A panic of
+/// Runs `IpoptSolve` from `x0` (and `multipliers`, read by a warm start), then frees the problem and releases the lock. A panic of
 /// a callback is re-raised here, after the problem was freed.
-fn run_ipopt<P: Problem>(created: ProblemFor<P>, problem: &mut P, x0: &[f64], dims: &Dimensions, max_iter: u32) -> Run {
+fn run_ipopt<P: Problem>(
+    created: ProblemFor<P>,
+    problem: &mut P,
+    x0: &[f64],
+    multipliers: Option<&Multipliers>,
+    dims: &Dimensions,
+    max_iter: u32,
+) -> Run {
     let (n, m) = (dims.n, dims.m);
     let mut x = x0.to_vec();
     let mut g = vec![0.0; m];
-    let mut mult_g = vec![0.0; m];
-    let mut mult_x_l = vec![0.0; n];
-    let mut mult_x_u = vec![0.0; n];
+    let (mut mult_g, mut mult_x_l, mut mult_x_u) = match multipliers {
+        Some(start) => (start.constraints.clone(), start.lower.clone(), start.upper.clone()),
+        None => (vec![0.0; m], vec![0.0; n], vec![0.0; n]),
+    };
     let mut objective = 0.0;
     let history_capacity = (max_iter as usize).saturating_add(1).min(1024);
     let mut ctx = Context::new(&mut *problem, n, m, dims.nnz_jac, dims.nnz_hess, history_capacity);

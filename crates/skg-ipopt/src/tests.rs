@@ -1,4 +1,4 @@
-//! Tests of [`crate::solve`] on small problems with known solutions (a circle meeting a
+//! Tests of [`crate::solve`] (and [`crate::solve_warm`]) on small problems with known solutions (a circle meeting a
 //! line as a square system, Hock–Schittkowski 71 with bounds, inequalities and a
 //! Hessian): convergence, panics, NaN and errors in callbacks, concurrency, options,
 //! the log file, validation of sizes and structures, stopping and nesting.
@@ -185,6 +185,36 @@ fn hs071_reaches_known_optimum() {
     // relaxation (bound_relax_factor 1e-8, relative): up to 25e-8.
     assert!(sol.max_constraint_violation < 1e-6, "viol = {}", sol.max_constraint_violation);
     assert!(sol.lower_bound_multipliers[0] > 0.1, "x0 sits on its lower bound");
+}
+
+/// HS071's optimum (Hock and Schittkowski's x* = (1, 4.743, 3.821, 1.379)) is reached
+/// from a warm start too: from a point beside it with its multipliers (the KKT
+/// conditions' `y`, `z_L` at x*: ∇f + Jᵀy − z_L = 0, solved by hand below), in fewer
+/// iterations than from the textbook start; multipliers of the wrong length are refused.
+#[test]
+fn a_warm_start_from_the_multipliers_reaches_the_optimum() {
+    let x_star = [1.0, 4.742_999_63, 3.821_149_98, 1.379_408_29];
+    // Rows 1 and 2 of ∇f + Jᵀy = 0 (x1, x2 off their bounds) give y; row 0 gives z_L[0].
+    let (a, b, c, d) = (x_star[0], x_star[1], x_star[2], x_star[3]);
+    let g = [a * d + d * (a + b + c), a * d, a * d + 1.0, a * (a + b + c)];
+    let (j1, j2) = ([b * c * d, a * c * d, a * b * d, a * b * c], [2.0 * a, 2.0 * b, 2.0 * c, 2.0 * d]);
+    let det = j1[1] * j2[2] - j1[2] * j2[1];
+    let y0 = (-g[1] * j2[2] + g[2] * j2[1]) / det;
+    let y1 = (-g[2] * j1[1] + g[1] * j1[2]) / det;
+    let z0 = g[0] + j1[0] * y0 + j2[0] * y1;
+    assert!(z0 > 0.1, "x0 sits on its lower bound: z = {z0}");
+    let multipliers = Multipliers { constraints: vec![y0, y1], lower: vec![z0, 0.0, 0.0, 0.0], upper: vec![0.0; 4] };
+    let opts = Options { tol: 1e-9, constr_viol_tol: 1e-9, ..Options::default() };
+    let cold = solve(&mut Hs071::new(), &[1.0, 5.0, 5.0, 1.0], &opts).expect("solve runs");
+    let near: Vec<f64> = x_star.iter().map(|v| v * (1.0 + 1e-4)).collect();
+    let warm = solve_warm(&mut Hs071::new(), &near, &multipliers, &opts).expect("solve runs");
+    assert_eq!(warm.status, Status::SolveSucceeded);
+    for (a, b) in warm.x.iter().zip(x_star) {
+        assert!((a - b).abs() < 1e-6, "x = {:?}", warm.x);
+    }
+    assert!(warm.iterations < cold.iterations, "warm {} against cold {} iterations", warm.iterations, cold.iterations);
+    let short = Multipliers { constraints: vec![y0], ..multipliers };
+    assert!(matches!(solve_warm(&mut Hs071::new(), &near, &short, &opts), Err(SolveError::Size(_))));
 }
 
 #[test]

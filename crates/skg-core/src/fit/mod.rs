@@ -24,7 +24,8 @@
 //!    which hands over to Ipopt if it fails), and the start
 //!    is that solve with the data in place of the coordinates they observe ([`FitStart`],
 //!    `start.rs`);
-//! 4. Ipopt minimizes the misfit under the constraints (`problem.rs`);
+//! 4. Ipopt minimizes the misfit under the constraints (`problem.rs`), from its own
+//!    least-squares multipliers computed here (`multipliers.rs`);
 //! 5. at the solution the trajectory's sensitivities give the Gauss–Newton curvature,
 //!    the covariance and the standard errors, and tell whether the data determine the
 //!    parameters (`statistics.rs`; the same test runs on the start, so that a fit the
@@ -44,6 +45,7 @@
 mod data;
 mod files;
 mod free;
+mod multipliers;
 mod observe;
 mod problem;
 mod report;
@@ -200,7 +202,7 @@ pub const ACCEPTABLE_ITER: i32 = 5;
 
 /// MUMPS's pivot tolerance in a fit (Ipopt's `mumps_pivtol`; its default is 1e-6) unless
 /// the scene's `[solver.ipopt]` gives one.
-pub const MUMPS_PIVTOL: f64 = 1e-3;
+pub const MUMPS_PIVTOL: f64 = 0.1;
 
 /// Ipopt's iteration limit for a fit unless the scene or the caller gives one.
 pub const DEFAULT_MAX_ITER: u32 = 200;
@@ -298,8 +300,10 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let t_opt = Instant::now();
     let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol) };
     let (solution, at_kkt_point) = {
+        let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
+        let y0 = multipliers::starting_multipliers(&mut action, &plans, &observations, &settings.free, &x0, largest);
         let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free, stop);
-        let solution = ipopt::solve(&mut fit_problem, &x0, &ipopt_options(scene, settings))?;
+        let solution = ipopt::solve_warm(&mut fit_problem, &x0, &y0, &ipopt_options(scene, settings))?;
         (solution, fit_problem.stopped_at_kkt_point())
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
@@ -656,8 +660,15 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     // MUMPS's default pivot tolerance (1e-6) left its solves of the fit's KKT matrix
     // inaccurate (Ipopt's iterative refinement failed, then it raised the tolerance and
     // factored again, 2 to 3 factorizations per iteration on the disk); at 1e-3 none
-    // failed on the disk (docs/benchmarks.md#fitting).
+    // failed on the disk, but with MUMPS's analysis made on the first KKT matrix (the
+    // warm start) the disk's last iterations stalled in the line search with some BLAS
+    // kernels (9 iterations instead of 6); at 0.1 (Ipopt's `mumps_pivtolmax`) none did
+    // (docs/benchmarks.md#fitting).
     extra.push(("mumps_pivtol".into(), ipopt::OptionValue::Num(MUMPS_PIVTOL)));
+    // The fit starts from its own least-squares multipliers (`multipliers.rs`) with
+    // Ipopt's warm start, pushing the point into its bounds as Ipopt's cold start does.
+    extra.push(("warm_start_bound_push".into(), ipopt::OptionValue::Num(1e-2)));
+    extra.push(("warm_start_bound_frac".into(), ipopt::OptionValue::Num(1e-2)));
     if settings.hessian == FitHessian::LimitedMemory {
         extra.push(("hessian_approximation".into(), ipopt::OptionValue::Str("limited-memory".into())));
     }
@@ -678,6 +689,15 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
         output_file: solver.ipopt_log.clone(),
         extra,
         ..ipopt::Options::default()
+    }
+}
+
+/// A numeric `[solver.ipopt]` value.
+fn ipopt_number(value: &crate::scene::IpoptValue) -> Option<f64> {
+    match value {
+        crate::scene::IpoptValue::Int(i) => Some(f64::from(*i)),
+        crate::scene::IpoptValue::Num(x) => Some(*x),
+        crate::scene::IpoptValue::Str(_) => None,
     }
 }
 
