@@ -170,7 +170,7 @@ impl SparseLu {
                 return false;
             }
         }
-        self.solve_double(rhs, stats)
+        self.solve_double(rhs, false, stats)
     }
 
     /// The numeric LU in double precision.
@@ -222,36 +222,26 @@ impl SparseLu {
         self.single = SingleLu::default();
     }
 
-    /// The direct solve with the double-precision factorization.
-    fn solve_double(&mut self, rhs: &mut [f64], stats: &mut LuStats) -> bool {
+    /// The direct solve with the double-precision factorization, of `A x = rhs` or, when
+    /// `transposed`, of `Aᵀ x = rhs`.
+    fn solve_double(&mut self, rhs: &mut [f64], transposed: bool, stats: &mut LuStats) -> bool {
         let t = Instant::now();
         let n = rhs.len();
-        LuRef::new_unchecked(&self.symbolic, &self.numeric).solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(rhs, n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.solve_work),
-        );
+        let lu = LuRef::new_unchecked(&self.symbolic, &self.numeric);
+        let (rhs_mat, stack) = (MatMut::from_column_major_slice_mut(rhs, n, 1), MemStack::new(&mut self.solve_work));
+        if transposed {
+            lu.solve_transpose_in_place_with_conj(Conj::No, rhs_mat, Par::Seq, stack);
+        } else {
+            lu.solve_in_place_with_conj(Conj::No, rhs_mat, Par::Seq, stack);
+        }
         stats.triangular_solve_s += t.elapsed().as_secs_f64();
         rhs.iter().all(|v| v.is_finite())
     }
 
-    /// The direct solve of the transposed system with the double-precision
-    /// factorization (the caller factored in double precision).
+    /// The direct solve of the transposed system, when the caller factored in double
+    /// precision.
     fn solve_transposed(&mut self, rhs: &mut [f64], stats: &mut LuStats) -> bool {
-        if self.factored != Factored::Double {
-            return false;
-        }
-        let t = Instant::now();
-        let n = rhs.len();
-        LuRef::new_unchecked(&self.symbolic, &self.numeric).solve_transpose_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(rhs, n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.solve_work),
-        );
-        stats.triangular_solve_s += t.elapsed().as_secs_f64();
-        rhs.iter().all(|v| v.is_finite())
+        self.factored == Factored::Double && self.solve_double(rhs, true, stats)
     }
 
     /// Iterative refinement with the single-precision factorization `M ≈ A`:

@@ -55,8 +55,7 @@ pub(super) fn solve<S: SquareSystem + ?Sized>(
     if let Some(d) = deadline.filter(|d| d.passed()) {
         return Ok(not_started(system, x0, d));
     }
-    let mut square =
-        IpoptSquare { system, tol: options.tol, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stopped: None };
+    let mut square = IpoptSquare::new(system, options.tol, deadline);
     let sol = ipopt::solve(&mut square, x0, options)?;
     let calls = |stat: ipopt::EvalStat| stat.calls as usize;
     Ok(IpoptOutcome {
@@ -152,7 +151,12 @@ pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
     stopped: Option<Stop>,
 }
 
-impl<S: SquareSystem + ?Sized> IpoptSquare<'_, S> {
+impl<'p, S: SquareSystem + ?Sized> IpoptSquare<'p, S> {
+    /// `system` before Ipopt's first iteration, to be stopped at `tol` or at `deadline`.
+    fn new(system: &'p mut S, tol: f64, deadline: Option<Deadline>) -> Self {
+        IpoptSquare { system, tol, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stopped: None }
+    }
+
     /// The solve's status: Ipopt's, unless the stopping test stopped it.
     fn status(&self, ipopt_status: ipopt::Status) -> SolverStatus {
         match (ipopt_status, self.stopped) {
@@ -338,6 +342,24 @@ mod tests {
         }
     }
 
+    /// Ipopt's report of iteration `iter` with `max |c|` = `inf_pr`, in its restoration
+    /// phase or not.
+    fn stat(iter: i32, inf_pr: f64, restoration: bool) -> ipopt::IterationStat {
+        ipopt::IterationStat {
+            iter,
+            objective: 0.0,
+            inf_pr,
+            inf_du: 0.0,
+            mu: 0.0,
+            d_norm: 0.0,
+            regularization: 0.0,
+            alpha_pr: 0.0,
+            alpha_du: 0.0,
+            ls_trials: 1,
+            restoration,
+        }
+    }
+
     /// Iterations of 0.3 s against a deadline 1.05 s away: the callback stops Ipopt
     /// before the iteration that would end past the deadline (at iteration 3, at 0.9 s,
     /// at the latest; a loaded machine, whose iterations take longer, stops earlier), not
@@ -346,33 +368,12 @@ mod tests {
     fn ipopt_is_stopped_before_an_iteration_that_would_pass_the_deadline() {
         let mut system = Shift;
         let deadline = Deadline::from(Instant::now(), 1.05, Bound::TimeLimit);
-        let mut square = IpoptSquare {
-            system: &mut system,
-            tol: 1e-12,
-            roundoff: 0.0,
-            deadline,
-            last_callback: None,
-            least_inf_pr: f64::INFINITY,
-            stopped: None,
-        };
-        let stat = |iter: i32| ipopt::IterationStat {
-            iter,
-            objective: 0.0,
-            inf_pr: 1.0,
-            inf_du: 0.0,
-            mu: 0.0,
-            d_norm: 0.0,
-            regularization: 0.0,
-            alpha_pr: 0.0,
-            alpha_du: 0.0,
-            ls_trials: 1,
-            restoration: false,
-        };
+        let mut square = IpoptSquare::new(&mut system, 1e-12, deadline);
         let stopped_at = (0..10).find(|&iter| {
             if iter > 0 {
                 std::thread::sleep(Duration::from_millis(300));
             }
-            !square.intermediate(&stat(iter))
+            !square.intermediate(&stat(iter, 1.0, false))
         });
         let stopped_at = stopped_at.expect("stopped");
         assert!((1..=3).contains(&stopped_at), "stopped at iteration {stopped_at}");
@@ -385,32 +386,11 @@ mod tests {
     #[test]
     fn ipopt_is_stopped_once_the_residual_rises_a_thousandfold_above_its_least() {
         let mut system = Shift;
-        let mut square = IpoptSquare {
-            system: &mut system,
-            tol: 1e-12,
-            roundoff: 0.0,
-            deadline: None,
-            last_callback: None,
-            least_inf_pr: f64::INFINITY,
-            stopped: None,
-        };
-        let stat = |iter: i32, inf_pr: f64| ipopt::IterationStat {
-            iter,
-            objective: 0.0,
-            inf_pr,
-            inf_du: 0.0,
-            mu: 0.0,
-            d_norm: 0.0,
-            regularization: 0.0,
-            alpha_pr: 0.0,
-            alpha_du: 0.0,
-            ls_trials: 1,
-            restoration: true,
-        };
+        let mut square = IpoptSquare::new(&mut system, 1e-12, None);
         for (iter, inf_pr) in [1e-4, 1e-6, 1e-8, 9e-6, 1e-7].into_iter().enumerate() {
-            assert!(square.intermediate(&stat(iter as i32, inf_pr)), "stopped at {inf_pr:e}");
+            assert!(square.intermediate(&stat(iter as i32, inf_pr, true)), "stopped at {inf_pr:e}");
         }
-        assert!(!square.intermediate(&stat(5, 1.1e-5)));
+        assert!(!square.intermediate(&stat(5, 1.1e-5, true)));
         assert_eq!(square.status(ipopt::Status::UserRequestedStop), SolverStatus::Ipopt(ipopt::Status::DivergingIterates));
     }
 
