@@ -106,7 +106,7 @@ impl Model {
             .jacobian
             .compiled
             .get_or_init(|| ResidualDerivatives::compile(self.geometry.graph().clone(), lay, &self.jacobian.mechanics));
-        // `physical` left q, v and t in the inputs and zeros in the other local slots.
+        // `saddle_point` left q, v and t in the inputs and zeros in the other local slots.
         ws.u[lay.dw(0)..lay.dw(0) + d].copy_from_slice(sol.rows(0, d).as_slice());
         ws.u[lay.lambda(0)..lay.lambda(0) + n].copy_from_slice(sol.rows(d, n).as_slice());
         if ws.scratch.len() < rd.tape.scratch_len() {

@@ -9,7 +9,9 @@
 //! nalgebra's LU takes its matrix by value and returns a new solution vector, and with
 //! the `DMatrix`es of [`Physical`] that was a dozen allocations per call (a fifth of a
 //! DOP853 integration of the chain on stiff springs went to `malloc` and `free`, a
-//! quarter to nalgebra's LU of its 8 × 8 mass matrix).
+//! quarter to nalgebra's LU of its 8 × 8 mass matrix). The implicit stepper's Jacobian
+//! ([`Model::state_jacobian`]) assembles the same system the same way and factors it with
+//! nalgebra's LU, whose factors it reuses for `2d` more right-hand sides.
 
 use nalgebra::{DMatrix, DVector};
 use skg_expr::{Graph, Tape};
@@ -229,15 +231,27 @@ impl Model {
     /// [`Model::accelerations`] into `sol = [q̈; λ]` (of length `d + n`), without
     /// allocating (module docs).
     pub fn accelerations_into(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace, sol: &mut [f64]) -> Result<(), DynamicsError> {
+        self.evaluate_physical(t, q, v, ws);
+        self.assemble_saddle_point(v, ws, sol);
+        solve_in_place(&mut ws.saddle, self.layout.d + self.layout.n, sol)?;
+        if sol.iter().any(|x| !x.is_finite()) {
+            return Err(DynamicsError::NonFinite);
+        }
+        Ok(())
+    }
+
+    /// The system of [`Model::accelerations`] from the physical tape's outputs in
+    /// `ws.out` (at velocity `v`): its matrix `[W Gᵀ; G 0]` into `ws.saddle`, row-major,
+    /// and its right-hand side into `rhs`.
+    fn assemble_saddle_point(&self, v: &[f64], ws: &mut Workspace, rhs: &mut [f64]) {
         let (d, n) = (self.layout.d, self.layout.n);
         let m = d + n;
-        self.evaluate_physical(t, q, v, ws);
         let (pl, o, a) = (self.phys_layout, &ws.out, &mut ws.saddle);
         a.fill(0.0);
         for i in 0..d {
             a[i * m..i * m + d].copy_from_slice(&o[pl.w() + i * d..pl.w() + (i + 1) * d]);
             let dpdq = &o[pl.dpdq() + i * d..pl.dpdq() + (i + 1) * d];
-            sol[i] = o[pl.force() + i] - o[pl.dpdt() + i] - dot(dpdq, v);
+            rhs[i] = o[pl.force() + i] - o[pl.dpdt() + i] - dot(dpdq, v);
         }
         for k in 0..n {
             for j in 0..d {
@@ -245,30 +259,18 @@ impl Model {
                 a[(d + k) * m + j] = gkj;
                 a[j * m + d + k] = gkj;
             }
-            sol[d + k] = -o[pl.gt() + k] - dot(&o[pl.gq() + k * d..pl.gq() + (k + 1) * d], v);
+            rhs[d + k] = -o[pl.gt() + k] - dot(&o[pl.gq() + k * d..pl.gq() + (k + 1) * d], v);
         }
-        solve_in_place(a, m, sol)?;
-        if sol.iter().any(|x| !x.is_finite()) {
-            return Err(DynamicsError::NonFinite);
-        }
-        Ok(())
     }
 
     /// The factored matrix `[W Gᵀ; G 0]` at (t, q, v) and the solution `[q̈; λ]` of the
     /// system of [`Model::accelerations`] (the Jacobian solves with the same matrix).
     pub(super) fn saddle_point(&self, t: f64, q: &[f64], v: &[f64], ws: &mut Workspace) -> Result<(SaddleLu, DVector<f64>), DynamicsError> {
-        let (d, n) = (self.layout.d, self.layout.n);
-        let ph = self.physical(t, q, v, ws);
-        let mut a = DMatrix::zeros(d + n, d + n);
-        a.view_mut((0, 0), (d, d)).copy_from(&ph.kinetic);
-        let mut rhs = DVector::zeros(d + n);
-        rhs.rows_mut(0, d).copy_from(&ph.free_force(v));
-        if n > 0 {
-            a.view_mut((0, d), (d, n)).copy_from(&ph.gv.transpose());
-            a.view_mut((d, 0), (n, d)).copy_from(&ph.gv);
-            rhs.rows_mut(d, n).copy_from(&ph.constraint_acceleration(v));
-        }
-        let lu = a.lu();
+        let m = self.layout.d + self.layout.n;
+        self.evaluate_physical(t, q, v, ws);
+        let mut rhs = DVector::zeros(m);
+        self.assemble_saddle_point(v, ws, rhs.as_mut_slice());
+        let lu = DMatrix::from_row_slice(m, m, &ws.saddle).lu();
         let sol = lu.solve(&rhs).ok_or(DynamicsError::SingularMassMatrix)?;
         if sol.iter().any(|x| !x.is_finite()) {
             return Err(DynamicsError::NonFinite);
