@@ -6,7 +6,9 @@
 //! Initial guess: the Lagrange–d'Alembert equations of the same scene are integrated
 //! by [`equations`](crate::stepping::equations) (adaptive high-order Runge–Kutta, index-reduced:
 //! accelerations and multipliers from `[W Gᵀ; G 0]`, see [`Model::accelerations`]) at a
-//! moderate tolerance and sampled at the nodes; the minus variables start at zero and the
+//! moderate tolerance and sampled at the nodes (when the solve will be verified, at the
+//! verification's tolerance and steps, so that the verification need not step again:
+//! [`NodeStepping`]); the minus variables start at zero and the
 //! boundary multipliers at the values that make their rows vanish. A global-in-time
 //! Newton solve started there converges in a few iterations (docs/solver.md: constant
 //! velocity extrapolation did not converge on the disk). If time stepping fails, the
@@ -26,10 +28,11 @@ use crate::discrete::{Action, Discretization};
 use crate::model::{Model, Physical};
 #[cfg(feature = "ipopt")]
 use crate::scene::IpoptValue;
-use crate::scene::{Formulation, Scene, SceneError, Stepper};
+use crate::scene::{Formulation, Scene, SceneError};
 use crate::solve::linalg::IterationStat;
 use crate::stepping::equations::{integrate_model, mean_spacing, step_budget, Stepped};
 use crate::stepping::ode::{OdeOptions, OdeStats};
+use crate::stepping::verify::{self, NodeStepping};
 #[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
 
@@ -93,6 +96,9 @@ pub struct Piece {
     pub max_minus_variable: Option<f64>,
     /// The time-stepping coordinates at the nodes, when the guess made them.
     pub time_stepping_q: Option<NodeSeries>,
+    /// The guess's time stepping when it is the verification's (from the scene's initial
+    /// state, with the verification's options), for the verification to take.
+    pub reference_stepping: Option<Arc<NodeStepping>>,
     /// How the initial guess was made.
     pub guess: String,
     /// Time of the guess and of the backend (setup and output are not a piece's).
@@ -113,11 +119,11 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     let deadline = solver.deadline().map(|d| d.at);
     let (made, guess_s, analysed) = std::thread::scope(|s| {
         let analysing = solver.needs_analysis(action).then(|| s.spawn(|| solver.analyse(action)));
-        let made = initial_guess(action, times, guess, scene.verify.stepper, deadline, &mut warnings);
+        let made = initial_guess(scene, action, times, guess, deadline, &mut warnings);
         let guess_s = t_guess.elapsed().as_secs_f64();
         (made, guess_s, analysing.map(|a| a.join().expect("the LU analysis panicked")))
     });
-    let (z0, guess_desc, ts_q, guess_steps) = made;
+    let Made { z0, description: guess_desc, time_stepping_q: ts_q, steps: guess_steps, reference_stepping } = made;
     let t_check = Instant::now();
     check_initial_guess(scene, action, times, &z0, &guess_desc, &warnings)?;
     let initial_guess_s = guess_s + t_check.elapsed().as_secs_f64();
@@ -152,6 +158,7 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
         max_eom_residual,
         max_minus_variable,
         time_stepping_q: ts_q,
+        reference_stepping,
         guess: match warnings.first() {
             Some(w) => format!("{guess_desc} ({w})"),
             None => guess_desc,
@@ -167,21 +174,47 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     })
 }
 
-/// Initial point Z0 and a description of how it was made; also the time-stepping
-/// coordinates when the guess made them (for the spurious-solution check) and the work
-/// of that time stepping, given up at `deadline` (the backend then stops before its
-/// first step).
+/// An initial guess: the point, how it was made, the time-stepping coordinates when
+/// the guess made them (for the spurious-solution check), the work of that time
+/// stepping, and the stepping itself when it is the verification's.
+struct Made {
+    z0: Vec<f64>,
+    description: String,
+    time_stepping_q: Option<NodeSeries>,
+    steps: OdeStats,
+    reference_stepping: Option<Arc<NodeStepping>>,
+}
+
+/// The initial point of `action` on the nodes `times` from `guess`, its time stepping
+/// given up at `deadline` (the backend then stops before its first step).
 fn initial_guess(
+    scene: &Scene,
     action: &Action,
     times: &[f64],
     guess: &Guess,
-    stepper: Stepper,
     deadline: Option<Instant>,
     warnings: &mut Vec<String>,
-) -> (Vec<f64>, String, Option<NodeSeries>, OdeStats) {
+) -> Made {
     let (d, n) = (action.layout.d, action.layout.n);
-    let (q, lambda, desc, ts_q, steps) = match guess {
-        Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None, OdeStats::default()),
+    let (q0, v0) = (action.q0(), action.v0());
+    let (states, description, reference_stepping) = match guess {
+        Guess::States { q, lambda, description } => (Ok((q.clone(), lambda.clone(), OdeStats::default())), description.clone(), None),
+        // A solve of the whole span that will be verified from the same start: the
+        // verification's own time stepping, at its tolerance and steps (at most the node
+        // spacing), which it then takes instead of stepping again (not a window's, nor
+        // the ladder's solve past the end).
+        Guess::TimeStepping
+            if scene.verify.enabled && whole_span(scene, times) && q0 == scene.initial_q.as_slice() && v0 == scene.initial_v.as_slice() =>
+        {
+            match verify::default_reference_stepping(scene, &action.model, times, deadline) {
+                Ok(ns) => {
+                    let States { q, lambda, .. } = ns.stepped.states.clone();
+                    let text = format!("the verification's time stepping ({}) sampled at the nodes", ns.stepped.method);
+                    (Ok((q, lambda, ns.stepped.stats)), text, Some(Arc::new(ns)))
+                }
+                Err(e) => (Err(e), String::new(), None),
+            }
+        }
         Guess::TimeStepping => {
             // With walls, steps at most the node spacing: a larger step can jump across a
             // thin wall that the error estimate never sees (free flight is integrated
@@ -191,25 +224,42 @@ fn initial_guess(
             // scene (docs/benchmarks.md#the-initial-guess).
             let max_step = if action.model.walls.is_empty() { None } else { mean_spacing(times) };
             let max_steps = step_budget(times.len());
-            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps, stepper, deadline, ..OdeOptions::default() };
-            let (q0, v0) = (action.q0(), action.v0());
-            match integrate_model(&action.model, q0, v0, times, &opts) {
-                Ok(Stepped { states: States { q, lambda, .. }, stats: steps, .. }) => (
-                    q.clone(),
-                    lambda,
-                    "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
-                    Some(q),
-                    steps,
-                ),
-                Err(e) => {
-                    warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
-                    let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
-                    (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None, OdeStats::default())
-                }
-            }
+            let opts = OdeOptions {
+                rtol: 1e-8,
+                atol: 1e-10,
+                max_step,
+                max_steps,
+                stepper: scene.verify.stepper,
+                deadline,
+                ..OdeOptions::default()
+            };
+            let stepped = integrate_model(&action.model, q0, v0, times, &opts)
+                .map(|Stepped { states: States { q, lambda, .. }, stats, .. }| (q, lambda, stats));
+            let text =
+                "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string();
+            (stepped, text, None)
         }
     };
-    (point_from_states(action, &q, &lambda), desc, ts_q, steps)
+    let from_stepping = matches!(guess, Guess::TimeStepping);
+    let (q, lambda, description, time_stepping_q, steps) = match states {
+        Ok((q, lambda, steps)) => {
+            let ts_q = from_stepping.then(|| q.clone());
+            (q, lambda, description, ts_q, steps)
+        }
+        Err(e) => {
+            warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
+            let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
+            (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None, OdeStats::default())
+        }
+    };
+    Made { z0: point_from_states(action, &q, &lambda), description, time_stepping_q, steps, reference_stepping }
+}
+
+/// Whether `times` are nodes from the scene's start to its end (to the rounding of a
+/// grid's last node).
+fn whole_span(scene: &Scene, times: &[f64]) -> bool {
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * (scene.t_end - scene.t_start).abs();
+    matches!((times.first(), times.last()), (Some(&a), Some(&b)) if close(a, scene.t_start) && close(b, scene.t_end))
 }
 
 /// Refuse an initial guess with a value that is not finite, naming the node, the state
