@@ -31,7 +31,7 @@ use crate::scene::IpoptValue;
 use crate::scene::{Formulation, Scene, SceneError};
 use crate::solve::linalg::IterationStat;
 use crate::stepping::equations::{integrate_model, mean_spacing, step_budget, Stepped};
-use crate::stepping::ode::{OdeOptions, OdeStats};
+use crate::stepping::ode::{OdeError, OdeOptions, OdeStats};
 use crate::stepping::verify::{self, NodeStepping};
 #[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
@@ -195,64 +195,59 @@ fn initial_guess(
     deadline: Option<Instant>,
     warnings: &mut Vec<String>,
 ) -> Made {
-    let (d, n) = (action.layout.d, action.layout.n);
-    let (q0, v0) = (action.q0(), action.v0());
-    let (states, description, reference_stepping) = match guess {
-        Guess::States { q, lambda, description } => (Ok((q.clone(), lambda.clone(), OdeStats::default())), description.clone(), None),
-        // A solve of the whole span that will be verified from the same start: the
-        // verification's own time stepping, at its tolerance and steps (at most the node
-        // spacing), which it then takes instead of stepping again (not a window's, nor
-        // the ladder's solve past the end).
-        Guess::TimeStepping
-            if scene.verify.enabled && whole_span(scene, times) && q0 == scene.initial_q.as_slice() && v0 == scene.initial_v.as_slice() =>
-        {
-            match verify::default_reference_stepping(scene, &action.model, times, deadline) {
-                Ok(ns) => {
-                    let States { q, lambda, .. } = ns.stepped.states.clone();
-                    let text = format!("the verification's time stepping ({}) sampled at the nodes", ns.stepped.method);
-                    (Ok((q, lambda, ns.stepped.stats)), text, Some(Arc::new(ns)))
-                }
-                Err(e) => (Err(e), String::new(), None),
+    let (q, lambda, description, time_stepping_q, steps, reference_stepping) = match guess {
+        Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None, OdeStats::default(), None),
+        Guess::TimeStepping => match time_stepping(scene, action, times, deadline) {
+            Ok(TimeStepped { q, lambda, description, steps, reference }) => (q.clone(), lambda, description, Some(q), steps, reference),
+            Err(e) => {
+                warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
+                let (d, n) = (action.layout.d, action.layout.n);
+                let (q0, v0) = (action.q0(), action.v0());
+                let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
+                (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None, OdeStats::default(), None)
             }
-        }
-        Guess::TimeStepping => {
-            // With walls, steps at most the node spacing: a larger step can jump across a
-            // thin wall that the error estimate never sees (free flight is integrated
-            // exactly). Without walls the step is left to the error control: at
-            // N = 16384 the capped guess cost as much as the whole Newton solve, the
-            // uncapped one a tenth, with the same Newton iterations on every shipped
-            // scene (docs/benchmarks.md#the-initial-guess).
-            let max_step = if action.model.walls.is_empty() { None } else { mean_spacing(times) };
-            let max_steps = step_budget(times.len());
-            let opts = OdeOptions {
-                rtol: 1e-8,
-                atol: 1e-10,
-                max_step,
-                max_steps,
-                stepper: scene.verify.stepper,
-                deadline,
-                ..OdeOptions::default()
-            };
-            let stepped = integrate_model(&action.model, q0, v0, times, &opts)
-                .map(|Stepped { states: States { q, lambda, .. }, stats, .. }| (q, lambda, stats));
-            let text =
-                "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string();
-            (stepped, text, None)
-        }
-    };
-    let from_stepping = matches!(guess, Guess::TimeStepping);
-    let (q, lambda, description, time_stepping_q, steps) = match states {
-        Ok((q, lambda, steps)) => {
-            let ts_q = from_stepping.then(|| q.clone());
-            (q, lambda, description, ts_q, steps)
-        }
-        Err(e) => {
-            warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
-            let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
-            (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None, OdeStats::default())
-        }
+        },
     };
     Made { z0: point_from_states(action, &q, &lambda), description, time_stepping_q, steps, reference_stepping }
+}
+
+/// A time stepping of an action's equations at its nodes: the coordinates and
+/// multipliers, how it was made, its work, and the stepping itself when it is the
+/// verification's.
+struct TimeStepped {
+    q: NodeSeries,
+    lambda: NodeSeries,
+    description: String,
+    steps: OdeStats,
+    reference: Option<Arc<NodeStepping>>,
+}
+
+/// The time stepping of `action` from its initial state sampled at `times`. For a solve
+/// of the whole span that will be verified from the same start, the verification's own
+/// (its tolerance, steps at most the node spacing), which the verification then takes
+/// instead of stepping again (not a window's, nor the ladder's solve past the end);
+/// else at rtol 1e-8. With walls, steps at most the node spacing: a larger step can
+/// jump across a thin wall that the error estimate never sees (free flight is
+/// integrated exactly). Without walls the step is left to the error control: at
+/// N = 16384 the capped guess cost as much as the whole Newton solve, the uncapped one a
+/// tenth, with the same Newton iterations on every shipped scene
+/// (docs/benchmarks.md#the-initial-guess).
+fn time_stepping(scene: &Scene, action: &Action, times: &[f64], deadline: Option<Instant>) -> Result<TimeStepped, OdeError> {
+    let (q0, v0) = (action.q0(), action.v0());
+    if scene.verify.enabled && whole_span(scene, times) && q0 == scene.initial_q.as_slice() && v0 == scene.initial_v.as_slice() {
+        let ns = verify::default_reference_stepping(scene, &action.model, times, deadline)?;
+        let States { q, lambda, .. } = ns.stepped.states.clone();
+        let description = format!("the verification's time stepping ({}) sampled at the nodes", ns.stepped.method);
+        return Ok(TimeStepped { q, lambda, description, steps: ns.stepped.stats, reference: Some(Arc::new(ns)) });
+    }
+    let max_step = if action.model.walls.is_empty() { None } else { mean_spacing(times) };
+    let max_steps = step_budget(times.len());
+    let stepper = scene.verify.stepper;
+    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps, stepper, deadline, ..OdeOptions::default() };
+    let Stepped { states: States { q, lambda, .. }, stats, .. } = integrate_model(&action.model, q0, v0, times, &opts)?;
+    let description =
+        "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string();
+    Ok(TimeStepped { q, lambda, description, steps: stats, reference: None })
 }
 
 /// Whether `times` are nodes from the scene's start to its end (to the rounding of a
