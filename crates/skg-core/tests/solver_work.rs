@@ -244,8 +244,11 @@ fn the_work_counts_what_the_solve_did() {
     assert_eq!(w.jacobian_evaluations, ipopt_log_count(&log, "equality constraint Jacobian evaluations"), "{w:?}");
     assert_eq!(w.hessian_evaluations, ipopt_log_count(&log, "Lagrangian Hessian evaluations"), "{w:?}");
     assert!(w.hessian_evaluations > 0);
-    // The verification steps at most one node spacing at a time.
-    assert!(w.verification_steps.accepted >= scene.nodes - 1, "{w:?}");
+    // The verification's time stepping steps at most one node spacing at a time; the
+    // initial guess made it, and the verification took it without stepping again.
+    assert!(w.guess_steps.accepted >= scene.nodes - 1, "{w:?}");
+    assert_eq!(w.verification_steps, skg_core::stepping::ode::OdeStats::default(), "{w:?}");
+    assert!(o.verification.reference.ends_with("(the initial guess's)"), "{}", o.verification.reference);
     assert_eq!(o.attempts.len(), 1);
     assert_eq!(o.attempts[0].work, w);
 

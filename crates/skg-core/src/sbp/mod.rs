@@ -557,16 +557,26 @@ impl SbpOperator {
     /// # Panics
     /// If `i >= self.len()`.
     pub fn row(&self, i: usize) -> Vec<(usize, f64)> {
-        assert!(i < self.n, "SbpOperator::row: row {i} of an operator on {} nodes", self.n);
-        let mut row: Vec<(usize, f64)> = match self.part(i) {
-            Part::Left(m) => self.left[m].clone(),
-            Part::Interior => self.interior.iter().map(|&(k, c)| (i + k - self.radius, c)).collect(),
-            Part::Right(m) => self.right[m].iter().rev().map(|&(j, c)| (self.n - 1 - j, c)).collect(),
-        };
-        if let Some(stretch) = &self.stretch {
-            row.iter_mut().for_each(|(_, c)| *c /= stretch[i]);
-        }
+        let mut row = Vec::new();
+        self.push_row(i, &mut row);
         row
+    }
+
+    /// [`row`](Self::row) appended to `out`, without allocating beyond `out`'s growth.
+    ///
+    /// # Panics
+    /// If `i >= self.len()`.
+    pub fn push_row(&self, i: usize, out: &mut Vec<(usize, f64)>) {
+        assert!(i < self.n, "SbpOperator::row: row {i} of an operator on {} nodes", self.n);
+        let start = out.len();
+        match self.part(i) {
+            Part::Left(m) => out.extend_from_slice(&self.left[m]),
+            Part::Interior => out.extend(self.interior.iter().map(|&(k, c)| (i + k - self.radius, c))),
+            Part::Right(m) => out.extend(self.right[m].iter().rev().map(|&(j, c)| (self.n - 1 - j, c))),
+        }
+        if let Some(stretch) = &self.stretch {
+            out[start..].iter_mut().for_each(|(_, c)| *c /= stretch[i]);
+        }
     }
 
     /// `out = D u` without allocating.

@@ -175,12 +175,62 @@ impl Verification {
 /// Verify `tr`, a solution of `scene` with model `model` by the SBP operator `operator`,
 /// against time stepping of the same scene from its initial state, sampled at `tr.t`.
 pub fn verify(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorKind) -> Verification {
-    verify_until(scene, model, tr, operator, None)
+    verify_until(scene, model, tr, operator, None, None)
+}
+
+/// The time stepping of a scene from its initial state `(q0, v0)`, sampled at `times`
+/// with the verification's options at `rtol` ([`reference_options`]): the initial guess
+/// of a solve makes it when the solve will be verified, and the verification takes it
+/// instead of stepping again when it would have stepped the same way (the same start,
+/// nodes and tolerance).
+#[derive(Debug, Clone)]
+pub struct NodeStepping {
+    /// The initial positions stepped from.
+    pub q0: Vec<f64>,
+    /// The initial velocities.
+    pub v0: Vec<f64>,
+    /// The nodes sampled.
+    pub times: Vec<f64>,
+    /// The relative tolerance.
+    pub rtol: f64,
+    /// What the stepping found and did.
+    pub stepped: Stepped<States>,
+}
+
+/// The options of the verification's time stepping sampled at `times` at the relative
+/// tolerance `rtol`: the absolute one in the same proportion as
+/// [`REFERENCE_ATOL`] to [`REFERENCE_RTOL`], steps at most the mean node spacing, the
+/// step budget of the grid, given up at `deadline`.
+pub fn reference_options(times: &[f64], rtol: f64, stepper: Stepper, deadline: Option<Instant>) -> OdeOptions {
+    let (max_step, max_steps) = (mean_spacing(times), step_budget(times.len()));
+    OdeOptions { rtol, atol: rtol * (REFERENCE_ATOL / REFERENCE_RTOL), max_step, max_steps, stepper, deadline, ..OdeOptions::default() }
+}
+
+/// The time stepping of `scene` from its initial state at `times` that the verification
+/// of a solve on those nodes starts with when the scene has no tolerance of its own
+/// (else the tolerance decides, from the solution: [`reference_rtol`]).
+pub fn default_reference_stepping(
+    scene: &Scene,
+    model: &Model,
+    times: &[f64],
+    deadline: Option<Instant>,
+) -> Result<NodeStepping, OdeError> {
+    let opts = reference_options(times, REFERENCE_RTOL, scene.verify.stepper, deadline);
+    let stepped = integrate_model(model, &scene.initial_q, &scene.initial_v, times, &opts)?;
+    Ok(NodeStepping { q0: scene.initial_q.clone(), v0: scene.initial_v.clone(), times: times.to_vec(), rtol: REFERENCE_RTOL, stepped })
 }
 
 /// [`verify`], its time stepping given up at `deadline` (if any): the solve is then
-/// unverified, and the reason says so.
-pub fn verify_until(scene: &Scene, model: &Model, tr: &Trajectory, operator: OperatorKind, deadline: Option<Instant>) -> Verification {
+/// unverified, and the reason says so. `prior` is a time stepping already made (by the
+/// initial guess), taken where it is the one the verification would make.
+pub fn verify_until(
+    scene: &Scene,
+    model: &Model,
+    tr: &Trajectory,
+    operator: OperatorKind,
+    deadline: Option<Instant>,
+    prior: Option<&NodeStepping>,
+) -> Verification {
     let base = not_compared(scene, tr);
     if let Some(bad) = first_non_finite(scene, tr) {
         return Verification { status: VerifyStatus::Failed, reason: bad, ..base };
@@ -188,7 +238,7 @@ pub fn verify_until(scene: &Scene, model: &Model, tr: &Trajectory, operator: Ope
     if !scene.verify.enabled {
         return Verification { reason: "verification switched off (--no-verify); every number is finite".into(), ..base };
     }
-    let (integrated, reference) = time_stepping_at_nodes(scene, model, tr, deadline);
+    let (integrated, reference) = time_stepping_at_nodes(scene, model, tr, deadline, prior);
     match integrated {
         Ok(Stepped { states, stats: steps, .. }) => {
             let reference_trajectory = Trajectory::with_physical_columns(model, &tr.t, states);
@@ -228,37 +278,48 @@ fn not_compared(scene: &Scene, tr: &Trajectory) -> Verification {
 /// description of the reference. A tight tolerance needs a tighter reference: a given
 /// tolerance is judged on the motion's size as the solve found it; the default ones,
 /// relative to the ranges, only once the reference has them (then a second pass, whose
-/// work adds to the first's, if they are tight).
+/// work adds to the first's, if they are tight). The first pass is `prior` where that
+/// is the same time stepping (its work then counted by whoever made it).
 fn time_stepping_at_nodes(
     scene: &Scene,
     model: &Model,
     tr: &Trajectory,
     deadline: Option<Instant>,
+    prior: Option<&NodeStepping>,
 ) -> (Result<Stepped<States>, OdeError>, String) {
     let stepper = scene.verify.stepper;
-    let integrate = |rtol: f64, atol: f64| {
-        let (max_step, max_steps) = (mean_spacing(&tr.t), step_budget(tr.t.len()));
-        let opts = OdeOptions { rtol, atol, max_step, max_steps, stepper, deadline, ..OdeOptions::default() };
+    let describe = |method: &str, rtol: f64, atol: f64| {
+        format!(
+            "time stepping of the same scene ({method}; rtol {rtol:e}, atol {atol:e}, step at most the node spacing) at the solve's nodes"
+        )
+    };
+    let integrate = |rtol: f64| {
+        let opts = reference_options(&tr.t, rtol, stepper, deadline);
         let integrated = integrate_model(model, &scene.initial_q, &scene.initial_v, &tr.t, &opts);
         let method = match &integrated {
             Ok(stepped) => stepped.method.clone(),
             Err(_) => format!("stepper {stepper}"),
         };
-        let reference = format!(
-            "time stepping of the same scene ({method}; rtol {rtol:e}, atol {atol:e}, step at most the node spacing) at the solve's nodes"
-        );
-        (integrated, reference)
+        (integrated, describe(&method, opts.rtol, opts.atol))
     };
     let first_rtol = match scene.verify.tol {
         Some(tol) => reference_rtol(&[tol], &tr.q),
         None => REFERENCE_RTOL,
     };
-    let (mut integrated, mut reference) = integrate(first_rtol, first_rtol * (REFERENCE_ATOL / REFERENCE_RTOL));
+    let same = |p: &&NodeStepping| p.rtol == first_rtol && p.times == tr.t && p.q0 == scene.initial_q && p.v0 == scene.initial_v;
+    let (mut integrated, mut reference) = match prior.filter(same) {
+        Some(p) => {
+            let atol = p.rtol * (REFERENCE_ATOL / REFERENCE_RTOL);
+            let reused = Stepped { stats: OdeStats::default(), ..p.stepped.clone() };
+            (Ok(reused), format!("{} (the initial guess's)", describe(&p.stepped.method, p.rtol, atol)))
+        }
+        None => integrate(first_rtol),
+    };
     if let Ok(stepped) = &integrated {
         let rtol = reference_rtol(&tolerances(scene, &stepped.states.q).0, &stepped.states.q);
         if rtol < 0.5 * first_rtol {
             let first = stepped.stats;
-            (integrated, reference) = integrate(rtol, rtol * (REFERENCE_ATOL / REFERENCE_RTOL));
+            (integrated, reference) = integrate(rtol);
             if let Ok(stepped) = &mut integrated {
                 stepped.stats.add(&first);
             }
@@ -471,7 +532,7 @@ mod tests {
         assert_eq!(v.status, VerifyStatus::Passed, "{}", v.reason);
         assert!(v.max_error.unwrap() < 1e-12);
         // Its time stepping given up at a deadline already passed: unverified, saying why.
-        let v = verify_until(&scene, &model, &tr, scene.operator, Some(Instant::now()));
+        let v = verify_until(&scene, &model, &tr, scene.operator, Some(Instant::now()), None);
         assert_eq!(v.status, VerifyStatus::Unverified, "{}", v.reason);
         assert!(v.reason.contains("stopped at the time limit at t = 0"), "{}", v.reason);
         tr.energy[5] = f64::NAN;

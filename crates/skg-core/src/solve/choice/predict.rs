@@ -38,7 +38,7 @@ use crate::discrete::discretization::operator_on;
 use crate::discrete::grid::{uniform_times, TimeMap};
 use crate::discrete::trajectory::{NodeSeries, Trajectory};
 use crate::model::Model;
-use crate::sbp::OperatorKind;
+use crate::sbp::{OperatorKind, SbpOperator};
 use crate::scene::{InitialVelocity, Scene};
 use crate::solve::linalg::band::solve_banded;
 use crate::solve::run::error::SolveError;
@@ -130,6 +130,9 @@ pub struct Predictor<'a> {
     /// The reference's relative tolerance ([`verify::reference_rtol`]).
     rtol: f64,
     proxies: HashMap<(Candidate, usize), f64>,
+    /// The adaptive grid's span over its finest spacing, by node count (a refinement's
+    /// search asks for the same grids again and again).
+    span_over_finest: HashMap<usize, f64>,
     /// The time stepping done for the predictions.
     pub steps: OdeStats,
 }
@@ -149,6 +152,7 @@ impl<'a> Predictor<'a> {
             fine: None,
             rtol: REFERENCE_RTOL,
             proxies: HashMap::new(),
+            span_over_finest: HashMap::new(),
             steps: OdeStats::default(),
         };
         let (mut q, mut v) = p.integrate((FINE_NODES, false), REFERENCE_RTOL)?;
@@ -174,16 +178,16 @@ impl<'a> Predictor<'a> {
     /// second-order operator on the grid times the motion's size (on the adaptive grid
     /// `(N − 1)·T/h_min`, `h_min` its finest spacing). No grid is predicted
     /// below it: beyond some N, refining makes the error worse.
-    pub fn roundoff_ratio(&self, c: Candidate, nodes: usize) -> f64 {
+    pub fn roundoff_ratio(&mut self, c: Candidate, nodes: usize) -> f64 {
         let size = self.fine.as_ref().map_or(1.0, |(q, _)| q.iter().flatten().fold(1.0_f64, |m, x| m.max(x.abs())));
         let tightest = self.tolerances.iter().copied().fold(f64::INFINITY, f64::min);
         let steps = (nodes - 1) as f64;
         // On the adaptive grid one factor of the conditioning is the finest spacing's.
         let finest = match (&self.map, c.adaptive) {
-            (Some(map), true) => {
+            (Some(map), true) => *self.span_over_finest.entry(nodes).or_insert_with(|| {
                 let t = map.times(nodes);
                 (t[nodes - 1] - t[0]) / min_spacing(&t).unwrap_or(f64::MIN_POSITIVE)
-            }
+            }),
             _ => steps,
         };
         ROUNDOFF * f64::EPSILON * steps * finest * size / tightest
@@ -374,19 +378,43 @@ fn nested(nodes: usize) -> bool {
     (2..=FINE_NODES).contains(&nodes) && (FINE_NODES - 1).is_multiple_of(nodes - 1)
 }
 
-/// Row `b` of a product `D_b D_a` given the rows of `D_a`: each column once (an
-/// interior row of `SBP484`'s product has 17 columns, where the products of the two
-/// stencils' entries are 81).
-fn product_row(b: &[(usize, f64)], da: &[Vec<(usize, f64)>]) -> Vec<(usize, f64)> {
-    let columns = || b.iter().flat_map(|&(j, _)| da[j].iter().map(|&(k, _)| k));
-    let (Some(first), Some(last)) = (columns().min(), columns().max()) else { return Vec::new() };
-    let mut dense = vec![0.0; last - first + 1];
+/// The rows of an operator, row `i` being `entries[offsets[i]..offsets[i + 1]]`.
+struct Rows {
+    offsets: Vec<usize>,
+    entries: Vec<(usize, f64)>,
+}
+
+impl Rows {
+    fn of(op: &SbpOperator) -> Rows {
+        let n = op.len();
+        let (mut offsets, mut entries) = (Vec::with_capacity(n + 1), Vec::with_capacity(n * 9));
+        offsets.push(0);
+        for i in 0..n {
+            op.push_row(i, &mut entries);
+            offsets.push(entries.len());
+        }
+        Rows { offsets, entries }
+    }
+
+    fn row(&self, i: usize) -> &[(usize, f64)] {
+        &self.entries[self.offsets[i]..self.offsets[i + 1]]
+    }
+}
+
+/// Row `i` of a product `D_b D_a`, times `scale`, appended to `out` as the entries of
+/// row `out_row`: each column once (an interior row of `SBP484`'s product has 17
+/// columns, where the products of the two stencils' entries are 81). `dense` is scratch.
+fn push_product_row(b: &[(usize, f64)], da: &Rows, scale: f64, out_row: usize, dense: &mut Vec<f64>, out: &mut Vec<(usize, usize, f64)>) {
+    let columns = || b.iter().flat_map(|&(j, _)| da.row(j).iter().map(|&(k, _)| k));
+    let (Some(first), Some(last)) = (columns().min(), columns().max()) else { return };
+    dense.clear();
+    dense.resize(last - first + 1, 0.0);
     for &(j, bj) in b {
-        for &(k, a) in &da[j] {
+        for &(k, a) in da.row(j) {
             dense[k - first] += bj * a;
         }
     }
-    dense.into_iter().enumerate().filter(|&(_, v)| v != 0.0).map(|(k, v)| (first + k, v)).collect()
+    out.extend(dense.iter().enumerate().filter(|&(_, &v)| v != 0.0).map(|(k, &v)| (out_row, first + k, scale * v)));
 }
 
 /// The proxy's error max_k |q_h − q| of each coordinate (see the module docs) on the
@@ -397,23 +425,23 @@ fn proxy_errors(s: &Samples, c: Candidate, times: &[f64]) -> (Vec<f64>, Vec<f64>
     let n = times.len();
     let singular = || (vec![f64::INFINITY; d], vec![f64::INFINITY; d]);
     let Ok(op) = operator_on(c.operator, times, c.adaptive) else { return singular() };
-    let da: Vec<Vec<(usize, f64)>> = (0..n).map(|i| op.row(i)).collect();
+    let da = Rows::of(&op);
     // The equations' operator D_b: the partner D− of a dissipative operator, D itself
     // for a centred one.
-    let partner = op.partner();
-    let db: Vec<Vec<(usize, f64)>> = (0..n).map(|i| partner.row(i)).collect();
+    let db = Rows::of(&op.partner());
     let h0 = op.norm()[0];
-    let second_row = |i: usize| product_row(&db[i], &da);
     // The rows in an order that keeps the system banded: the initial position, the
     // initial-velocity condition (the action's last row), then the interior equations.
     let natural = c.initial_velocity == InitialVelocity::Natural;
-    let mut entries: Vec<(usize, usize, f64)> = vec![(0, 0, 1.0)];
+    let mut dense = Vec::new();
+    let mut entries: Vec<(usize, usize, f64)> = Vec::with_capacity(n * 24);
+    entries.push((0, 0, 1.0));
     if natural {
-        entries.extend(second_row(0).into_iter().map(|(k, v)| (1, k, -h0 * v)));
+        push_product_row(db.row(0), &da, -h0, 1, &mut dense, &mut entries);
     }
-    entries.extend(da[0].iter().map(|&(k, v)| (1, k, if natural { -v } else { v })));
+    entries.extend(da.row(0).iter().map(|&(k, v)| (1, k, if natural { -v } else { v })));
     for i in 1..n - 1 {
-        entries.extend(second_row(i).into_iter().map(|(k, v)| (i + 1, k, v)));
+        push_product_row(db.row(i), &da, 1.0, i + 1, &mut dense, &mut entries);
     }
     // The unknown is the motion less its initial straight line, q0 + v0·(t − t0), which
     // every operator differentiates exactly: the rounding errors of the proxy then scale

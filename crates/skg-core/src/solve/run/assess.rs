@@ -35,7 +35,9 @@ pub fn outcome(scene: &Scene, model: &Model, run: Run, time_limit: Option<Deadli
         SolverStatus::TimeLimitReached { bound, limit_s, .. } if !run.status.is_converged() => {
             not_verified_after_time_limit(scene, model, &run.trajectory, disc.operator, &deadline::describe(bound, limit_s))
         }
-        _ => verify::verify_until(scene, model, &run.trajectory, disc.operator, time_limit.map(|d| d.at)),
+        _ => {
+            verify::verify_until(scene, model, &run.trajectory, disc.operator, time_limit.map(|d| d.at), run.reference_stepping.as_deref())
+        }
     };
     let mut timings = run.timings.clone();
     timings.verification_s = t.elapsed().as_secs_f64();

@@ -6,7 +6,9 @@
 //! Initial guess: the Lagrange–d'Alembert equations of the same scene are integrated
 //! by [`equations`](crate::stepping::equations) (adaptive high-order Runge–Kutta, index-reduced:
 //! accelerations and multipliers from `[W Gᵀ; G 0]`, see [`Model::accelerations`]) at a
-//! moderate tolerance and sampled at the nodes; the minus variables start at zero and the
+//! moderate tolerance and sampled at the nodes (when the solve will be verified, at the
+//! verification's tolerance and steps, so that the verification need not step again:
+//! [`NodeStepping`]); the minus variables start at zero and the
 //! boundary multipliers at the values that make their rows vanish. A global-in-time
 //! Newton solve started there converges in a few iterations (docs/solver.md: constant
 //! velocity extrapolation did not converge on the disk). If time stepping fails, the
@@ -26,10 +28,11 @@ use crate::discrete::{Action, Discretization};
 use crate::model::{Model, Physical};
 #[cfg(feature = "ipopt")]
 use crate::scene::IpoptValue;
-use crate::scene::{Formulation, Scene, SceneError, Stepper};
+use crate::scene::{Formulation, Scene, SceneError};
 use crate::solve::linalg::IterationStat;
 use crate::stepping::equations::{integrate_model, mean_spacing, step_budget, Stepped};
-use crate::stepping::ode::{OdeOptions, OdeStats};
+use crate::stepping::ode::{OdeError, OdeOptions, OdeStats};
+use crate::stepping::verify::{self, NodeStepping};
 #[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
 
@@ -93,6 +96,9 @@ pub struct Piece {
     pub max_minus_variable: Option<f64>,
     /// The time-stepping coordinates at the nodes, when the guess made them.
     pub time_stepping_q: Option<NodeSeries>,
+    /// The guess's time stepping when it is the verification's (from the scene's initial
+    /// state, with the verification's options), for the verification to take.
+    pub reference_stepping: Option<Arc<NodeStepping>>,
     /// How the initial guess was made.
     pub guess: String,
     /// Time of the guess and of the backend (setup and output are not a piece's).
@@ -113,11 +119,11 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     let deadline = solver.deadline().map(|d| d.at);
     let (made, guess_s, analysed) = std::thread::scope(|s| {
         let analysing = solver.needs_analysis(action).then(|| s.spawn(|| solver.analyse(action)));
-        let made = initial_guess(action, times, guess, scene.verify.stepper, deadline, &mut warnings);
+        let made = initial_guess(scene, action, times, guess, deadline, &mut warnings);
         let guess_s = t_guess.elapsed().as_secs_f64();
         (made, guess_s, analysing.map(|a| a.join().expect("the LU analysis panicked")))
     });
-    let (z0, guess_desc, ts_q, guess_steps) = made;
+    let Made { z0, description: guess_desc, time_stepping_q: ts_q, steps: guess_steps, reference_stepping } = made;
     let t_check = Instant::now();
     check_initial_guess(scene, action, times, &z0, &guess_desc, &warnings)?;
     let initial_guess_s = guess_s + t_check.elapsed().as_secs_f64();
@@ -152,6 +158,7 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
         max_eom_residual,
         max_minus_variable,
         time_stepping_q: ts_q,
+        reference_stepping,
         guess: match warnings.first() {
             Some(w) => format!("{guess_desc} ({w})"),
             None => guess_desc,
@@ -167,49 +174,87 @@ pub fn solve_piece(scene: &Scene, action: &Action, solver: &mut SquareSolver, ti
     })
 }
 
-/// Initial point Z0 and a description of how it was made; also the time-stepping
-/// coordinates when the guess made them (for the spurious-solution check) and the work
-/// of that time stepping, given up at `deadline` (the backend then stops before its
-/// first step).
+/// An initial guess: the point, how it was made, the time-stepping coordinates when
+/// the guess made them (for the spurious-solution check), the work of that time
+/// stepping, and the stepping itself when it is the verification's.
+struct Made {
+    z0: Vec<f64>,
+    description: String,
+    time_stepping_q: Option<NodeSeries>,
+    steps: OdeStats,
+    reference_stepping: Option<Arc<NodeStepping>>,
+}
+
+/// The initial point of `action` on the nodes `times` from `guess`, its time stepping
+/// given up at `deadline` (the backend then stops before its first step).
 fn initial_guess(
+    scene: &Scene,
     action: &Action,
     times: &[f64],
     guess: &Guess,
-    stepper: Stepper,
     deadline: Option<Instant>,
     warnings: &mut Vec<String>,
-) -> (Vec<f64>, String, Option<NodeSeries>, OdeStats) {
-    let (d, n) = (action.layout.d, action.layout.n);
-    let (q, lambda, desc, ts_q, steps) = match guess {
-        Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None, OdeStats::default()),
-        Guess::TimeStepping => {
-            // With walls, steps at most the node spacing: a larger step can jump across a
-            // thin wall that the error estimate never sees (free flight is integrated
-            // exactly). Without walls the step is left to the error control: at
-            // N = 16384 the capped guess cost as much as the whole Newton solve, the
-            // uncapped one a tenth, with the same Newton iterations on every shipped
-            // scene (docs/benchmarks.md#the-initial-guess).
-            let max_step = if action.model.walls.is_empty() { None } else { mean_spacing(times) };
-            let max_steps = step_budget(times.len());
-            let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps, stepper, deadline, ..OdeOptions::default() };
-            let (q0, v0) = (action.q0(), action.v0());
-            match integrate_model(&action.model, q0, v0, times, &opts) {
-                Ok(Stepped { states: States { q, lambda, .. }, stats: steps, .. }) => (
-                    q.clone(),
-                    lambda,
-                    "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string(),
-                    Some(q),
-                    steps,
-                ),
-                Err(e) => {
-                    warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
-                    let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
-                    (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None, OdeStats::default())
-                }
+) -> Made {
+    let (q, lambda, description, time_stepping_q, steps, reference_stepping) = match guess {
+        Guess::States { q, lambda, description } => (q.clone(), lambda.clone(), description.clone(), None, OdeStats::default(), None),
+        Guess::TimeStepping => match time_stepping(scene, action, times, deadline) {
+            Ok(TimeStepped { q, lambda, description, steps, reference }) => (q.clone(), lambda, description, Some(q), steps, reference),
+            Err(e) => {
+                warnings.push(format!("time stepping for the initial guess failed ({e}); using constant-velocity extrapolation"));
+                let (d, n) = (action.layout.d, action.layout.n);
+                let (q0, v0) = (action.q0(), action.v0());
+                let q: NodeSeries = times.iter().map(|t| (0..d).map(|i| q0[i] + v0[i] * (t - times[0])).collect()).collect();
+                (q, vec![vec![0.0; n]; times.len()], "constant-velocity extrapolation".to_string(), None, OdeStats::default(), None)
             }
-        }
+        },
     };
-    (point_from_states(action, &q, &lambda), desc, ts_q, steps)
+    Made { z0: point_from_states(action, &q, &lambda), description, time_stepping_q, steps, reference_stepping }
+}
+
+/// A time stepping of an action's equations at its nodes: the coordinates and
+/// multipliers, how it was made, its work, and the stepping itself when it is the
+/// verification's.
+struct TimeStepped {
+    q: NodeSeries,
+    lambda: NodeSeries,
+    description: String,
+    steps: OdeStats,
+    reference: Option<Arc<NodeStepping>>,
+}
+
+/// The time stepping of `action` from its initial state sampled at `times`. For a solve
+/// of the whole span that will be verified from the same start, the verification's own
+/// (its tolerance, steps at most the node spacing), which the verification then takes
+/// instead of stepping again (not a window's, nor the ladder's solve past the end);
+/// else at rtol 1e-8. With walls, steps at most the node spacing: a larger step can
+/// jump across a thin wall that the error estimate never sees (free flight is
+/// integrated exactly). Without walls the step is left to the error control: at
+/// N = 16384 the capped guess cost as much as the whole Newton solve, the uncapped one a
+/// tenth, with the same Newton iterations on every shipped scene
+/// (docs/benchmarks.md#the-initial-guess).
+fn time_stepping(scene: &Scene, action: &Action, times: &[f64], deadline: Option<Instant>) -> Result<TimeStepped, OdeError> {
+    let (q0, v0) = (action.q0(), action.v0());
+    if scene.verify.enabled && whole_span(scene, times) && q0 == scene.initial_q.as_slice() && v0 == scene.initial_v.as_slice() {
+        let ns = verify::default_reference_stepping(scene, &action.model, times, deadline)?;
+        let States { q, lambda, .. } = ns.stepped.states.clone();
+        let description = format!("the verification's time stepping ({}) sampled at the nodes", ns.stepped.method);
+        return Ok(TimeStepped { q, lambda, description, steps: ns.stepped.stats, reference: Some(Arc::new(ns)) });
+    }
+    let max_step = if action.model.walls.is_empty() { None } else { mean_spacing(times) };
+    let max_steps = step_budget(times.len());
+    let stepper = scene.verify.stepper;
+    let opts = OdeOptions { rtol: 1e-8, atol: 1e-10, max_step, max_steps, stepper, deadline, ..OdeOptions::default() };
+    let Stepped { states: States { q, lambda, .. }, stats, .. } = integrate_model(&action.model, q0, v0, times, &opts)?;
+    let description =
+        "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) sampled at the nodes".to_string();
+    Ok(TimeStepped { q, lambda, description, steps: stats, reference: None })
+}
+
+/// Whether `times` are nodes from the scene's start to its end (to the rounding of a
+/// grid's last node).
+fn whole_span(scene: &Scene, times: &[f64]) -> bool {
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * (scene.t_end - scene.t_start).abs();
+    matches!((times.first(), times.last()), (Some(&a), Some(&b)) if close(a, scene.t_start) && close(b, scene.t_end))
 }
 
 /// Refuse an initial guess with a value that is not finite, naming the node, the state

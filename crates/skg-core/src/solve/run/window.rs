@@ -263,6 +263,9 @@ impl Joined {
             max_eom_residual: self.max_eom_residual,
             max_minus_variable: self.max_minus_variable,
             time_stepping_q: self.time_stepping_q,
+            // The windows' guesses start from each window's state: none is the
+            // verification's time stepping of the whole span.
+            reference_stepping: None,
             guess: "time stepping of the Lagrange–d'Alembert equations (adaptive Runge–Kutta, rtol 1e-8) from each window's initial \
                     state"
                 .into(),

@@ -250,6 +250,10 @@ impl<'a> Refiner<'a> {
         let from = from.min(self.max_nodes);
         let backend = self.scene.solver.backend;
         let too_dear = |n: f64| cost_of(c, backend, 1) * n >= cost_cap;
+        // No grid of `from` nodes or more can cost less than the candidate already found.
+        if too_dear(from as f64) {
+            return None;
+        }
         let at_from = self.predicted(c, from)?;
         if at_from <= AIM {
             return Some((from, at_from));

@@ -24,6 +24,7 @@ use crate::scene::{Backend, ConstraintKind, IpoptValue, Scene};
 use crate::solve::linalg::roundoff::residual_roundoff_level;
 use crate::solve::linalg::{max_abs, EvalError, IterationStat, SquareSystem};
 use crate::solve::run::deadline::Deadline;
+use crate::solve::run::status::CONVERGED_RESIDUAL;
 
 /// What an Ipopt solve of a square system found.
 pub(super) struct IpoptOutcome {
@@ -111,6 +112,9 @@ enum Stop {
     Tolerance,
     /// `max |c|` at the round-off level of the last Jacobian.
     RoundOff,
+    /// `max |c|` at most [`CONVERGED_RESIDUAL`] and no longer falling
+    /// ([`STALLED_ITERATIONS`]).
+    Stalled,
     /// The deadline (reached, or to be passed by the next iteration), this many seconds
     /// after the start of what it bounds.
     TimeLimit(f64),
@@ -126,6 +130,20 @@ enum Stop {
 /// down to 3.0e-8 in the restoration phase, then up to 0.23 at its iteration 19 and to
 /// 1e4 at its limit of 100 iterations, 3 s later.)
 const DIVERGED: f64 = 1e3;
+
+/// An iteration whose `max |c|`, at most [`CONVERGED_RESIDUAL`], is above this fraction
+/// of the least before it made no progress; after [`STALLED_ITERATIONS`] such in a row
+/// Ipopt is stopped, in any phase, as converged to its round-off level. The equations
+/// of a stiff spring sum terms of size k·x, whose rounding the estimate `4 ε Σⱼ |Jᵢⱼ|
+/// |xⱼ|` does not always reach: on the stiff dumbbell (k = 1e6, `SBP242`, natural
+/// condition, 256 nodes) `max |c|` stays at 8.12e-10 from Ipopt's sixth iteration on,
+/// in its restoration phase, until the restoration fails at the 11th to the 22nd
+/// (depending on the guess's last digits); stopped at the 8th, the solve is the same
+/// (Ipopt returns the restoration phase's point, whose residual and error are those of
+/// the 22nd iteration's) at a third of the time.
+const STALLED: f64 = 0.5;
+/// See [`STALLED`].
+const STALLED_ITERATIONS: usize = 2;
 
 /// A square system seen by Ipopt, with skg-solve's stopping test in the intermediate
 /// callback (module docs): outside the restoration phase, stop once `max |c| ≤ tol`,
@@ -148,20 +166,21 @@ pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
     last_callback: Option<Instant>,
     /// The least `max |c|` so far.
     least_inf_pr: f64,
+    stalled: usize,
     stopped: Option<Stop>,
 }
 
 impl<'p, S: SquareSystem + ?Sized> IpoptSquare<'p, S> {
     /// `system` before Ipopt's first iteration, to be stopped at `tol` or at `deadline`.
     fn new(system: &'p mut S, tol: f64, deadline: Option<Deadline>) -> Self {
-        IpoptSquare { system, tol, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stopped: None }
+        IpoptSquare { system, tol, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stalled: 0, stopped: None }
     }
 
     /// The solve's status: Ipopt's, unless the stopping test stopped it.
     fn status(&self, ipopt_status: ipopt::Status) -> SolverStatus {
         match (ipopt_status, self.stopped) {
             (ipopt::Status::UserRequestedStop, Some(Stop::Tolerance)) => SolverStatus::Ipopt(ipopt::Status::SolveSucceeded),
-            (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff)) => SolverStatus::IpoptConvergedToRoundOff,
+            (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff | Stop::Stalled)) => SolverStatus::IpoptConvergedToRoundOff,
             (ipopt::Status::UserRequestedStop, Some(Stop::Diverged)) => SolverStatus::Ipopt(ipopt::Status::DivergingIterates),
             (ipopt::Status::UserRequestedStop, Some(Stop::TimeLimit(elapsed_s))) => match self.deadline {
                 Some(d) => SolverStatus::TimeLimitReached { backend: Backend::Ipopt, bound: d.bound, limit_s: d.limit_s, elapsed_s },
@@ -212,6 +231,11 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
             } else if stat.iter >= 1 && stat.inf_pr <= self.roundoff {
                 self.stopped = Some(Stop::RoundOff);
             }
+        }
+        // Stalled below the residual that counts as converged, in any phase.
+        self.stalled = if stat.inf_pr <= CONVERGED_RESIDUAL && stat.inf_pr > STALLED * self.least_inf_pr { self.stalled + 1 } else { 0 };
+        if self.stopped.is_none() && self.stalled >= STALLED_ITERATIONS {
+            self.stopped = Some(Stop::Stalled);
         }
         if stat.inf_pr > DIVERGED * self.least_inf_pr.max(self.tol) {
             self.stopped = Some(Stop::Diverged);
@@ -392,6 +416,29 @@ mod tests {
         }
         assert!(!square.intermediate(&stat(5, 1.1e-5, true)));
         assert_eq!(square.status(ipopt::Status::UserRequestedStop), SolverStatus::Ipopt(ipopt::Status::DivergingIterates));
+    }
+
+    /// `max |c|` stalling below 1e-8 in the restoration phase (the stiff dumbbell's
+    /// 8.12e-10): stopped at the second iteration without progress, as converged to the
+    /// round-off level; a residual that keeps halving, or stalls above 1e-8, goes on.
+    #[test]
+    fn ipopt_is_stopped_once_the_residual_stalls_below_the_converged_level() {
+        let mut system = Shift;
+        let mut square = IpoptSquare::new(&mut system, 1e-12, None);
+        for (iter, inf_pr) in [2e-4, 4e-8, 8.12e-10].into_iter().enumerate() {
+            assert!(square.intermediate(&stat(iter as i32, inf_pr, true)), "stopped at {inf_pr:e}");
+        }
+        assert!(square.intermediate(&stat(3, 8.13e-10, true)));
+        assert!(!square.intermediate(&stat(4, 8.12e-10, true)));
+        assert_eq!(square.status(ipopt::Status::UserRequestedStop), SolverStatus::IpoptConvergedToRoundOff);
+
+        let mut system = Shift;
+        let mut square = IpoptSquare::new(&mut system, 1e-12, None);
+        let falling = [1e-6, 4e-9, 1.9e-9, 0.9e-9, 0.4e-9, 0.19e-9];
+        let above = [2e-8, 2e-8, 2e-8, 2e-8];
+        for (iter, inf_pr) in falling.into_iter().chain(above).enumerate() {
+            assert!(square.intermediate(&stat(iter as i32, inf_pr, true)), "stopped at iteration {iter}");
+        }
     }
 
     /// A shipped scene of `scenarios/`.
