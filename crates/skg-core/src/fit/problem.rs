@@ -29,6 +29,7 @@
 //! search get the objective and the constraints only: in the 406 callbacks of the fit
 //! tests the misfit at that point was the objective Ipopt reported, to the last bit).
 
+use nalgebra::DMatrix;
 use skg_ipopt::{EvalError, IterationStat, Problem, INFINITY_BOUND};
 
 use super::barrier;
@@ -50,6 +51,11 @@ pub(super) struct Plans {
     pub parameters: ParameterPlan,
 }
 
+/// How far, relative to `max(|θ|, 1)`, the parameters may have moved since the misfit's
+/// curvature was computed for the stopping test to use it again: the test needs the
+/// curvature's size, not its digits.
+const CURVATURE_REUSE: f64 = 1e-3;
+
 /// A fit as Ipopt's problem (module documentation).
 pub(super) struct FitProblem<'a> {
     action: &'a mut Action,
@@ -70,6 +76,8 @@ pub(super) struct FitProblem<'a> {
     /// The last point of the objective's gradient: Ipopt's iterate in its intermediate
     /// callback (module documentation).
     iterate: Vec<f64>,
+    /// The misfit's curvature at the parameters of an earlier iterate (`curvature`).
+    curvature: Option<(Vec<f64>, DMatrix<f64>)>,
     /// Set when the callback stopped Ipopt at a KKT point (module documentation).
     stopped: Option<KktStop>,
 }
@@ -147,6 +155,7 @@ impl<'a> FitProblem<'a> {
             stop,
             roundoff: 0.0,
             iterate: Vec::new(),
+            curvature: None,
             stopped: None,
         }
     }
@@ -172,24 +181,38 @@ impl<'a> FitProblem<'a> {
     }
 
     /// Whether Ipopt's barrier at `mu` displaces the parameters of its iterate by at most
-    /// their tolerances (`barrier.rs`): always without bounds; the misfit's Gauss–Newton
-    /// curvature at the iterate is computed only when a parameter off its bounds feels a
-    /// force.
+    /// their tolerances (`barrier.rs`): always without bounds; judged with the misfit's
+    /// Gauss–Newton curvature only when a parameter off its bounds feels a force.
     fn barrier_negligible(&mut self, mu: f64) -> bool {
         let n_p = self.action.layout.n_p;
         if self.iterate.len() != n_p + self.free.len() {
             return false;
         }
         let hold = barrier::hold(self.free, &self.iterate[n_p..], mu, self.stop.tol, self.stop.bound_relax_factor);
-        if hold.free_of_force() {
-            return true;
+        hold.free_of_force() || self.curvature().is_some_and(|c| hold.negligible(&c))
+    }
+
+    /// The misfit's Gauss–Newton curvature `AᵀA` (`statistics.rs`) near the iterate: the
+    /// one computed at an earlier iterate whose parameters were within
+    /// [`CURVATURE_REUSE`] of these (the fit's last iterations move them far less), else
+    /// computed here, one sparse LU of `∂R/∂P`; `None` when that is singular.
+    fn curvature(&mut self) -> Option<DMatrix<f64>> {
+        let n_p = self.action.layout.n_p;
+        let theta = &self.iterate[n_p..];
+        let close = |(at, c): &(Vec<f64>, DMatrix<f64>)| {
+            at.iter().zip(theta).all(|(a, t)| (a - t).abs() <= CURVATURE_REUSE * t.abs().max(1.0)).then(|| c.clone())
+        };
+        if let Some(c) = self.curvature.as_ref().and_then(close) {
+            return Some(c);
         }
         let x = std::mem::take(&mut self.iterate);
         self.set(&x, None);
         self.iterate = x;
-        let Some(s) = sensitivities(self.action, self.plans, &self.z, &mut self.ws) else { return false };
+        let s = sensitivities(self.action, self.plans, &self.z, &mut self.ws)?;
         let a = weighted_sensitivities(self.observations, &s);
-        hold.negligible(&(a.transpose() * &a))
+        let c = a.transpose() * &a;
+        self.curvature = Some((self.iterate[n_p..].to_vec(), c.clone()));
+        Some(c)
     }
 
     /// Set the action to `x`'s parameters (when they changed) and `z` to its plus block,
