@@ -185,6 +185,9 @@ impl<'a> FitProblem<'a> {
     /// Gauss–Newton curvature only when a parameter off its bounds feels a force.
     fn barrier_negligible(&mut self, mu: f64) -> bool {
         let n_p = self.action.layout.n_p;
+        if self.free.iter().all(|p| p.lower.is_none() && p.upper.is_none()) {
+            return true;
+        }
         if self.iterate.len() != n_p + self.free.len() {
             return false;
         }
