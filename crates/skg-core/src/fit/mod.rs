@@ -42,6 +42,7 @@
 //! fit's files, `files.rs`). Only the command line and Python call it. It needs Ipopt: the
 //! module is compiled with the `ipopt` feature only.
 
+mod barrier;
 mod data;
 mod files;
 mod free;
@@ -158,7 +159,8 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let start_s = started.elapsed().as_secs_f64();
 
     let t_opt = Instant::now();
-    let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol) };
+    let bound_relax_factor = scene.solver.ipopt.get("bound_relax_factor").and_then(ipopt_number).unwrap_or(barrier::BOUND_RELAX_FACTOR);
+    let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol), bound_relax_factor };
     let (solution, at_kkt_point) = {
         let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
         let y0 = multipliers::starting_multipliers(&mut action, &plans, &observations, &settings.free, &x0, largest);

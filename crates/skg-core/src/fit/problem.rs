@@ -10,18 +10,32 @@
 //! **Stopping.** The fit stops Ipopt itself, from its intermediate callback, once the
 //! iterate is a KKT point to the fit's tolerances: outside the restoration phase, after
 //! at least one step, the dual infeasibility (unscaled, stricter than Ipopt's scaled
-//! test) at most the fit's `tol`, the barrier parameter at most `tol` when a parameter
-//! is bounded (the complementarity follows it), and the constraints at most the scene's
-//! `tol` or their round-off level `4 ε maxᵢ Σⱼ |Jᵢⱼ| |xⱼ|` (the square solve's test,
-//! docs/solver.md#how-ipopt-is-stopped). The constraints of every shipped fit stagnate
-//! at that level above the scene's `tol`, so Ipopt's own test never held: it went on
+//! test) at most the fit's `tol`, the constraints at most the scene's `tol` or their
+//! round-off level `4 ε maxᵢ Σⱼ |Jᵢⱼ| |xⱼ|` (the square solve's test,
+//! docs/solver.md#how-ipopt-is-stopped), and, when a parameter is bounded, the barrier's
+//! displacement of the parameters at most `tol` relative to their size (`barrier.rs`:
+//! the slack of a parameter on its bound, the barrier's force through the misfit's
+//! curvature for the others). The constraints of every shipped fit stagnate at their
+//! round-off level above the scene's `tol`, so Ipopt's own test never held: it went on
 //! until its acceptable level, [`ACCEPTABLE_ITER`](super::ACCEPTABLE_ITER) iterations
-//! more, each a factorization or several, at the same point (docs/benchmarks.md#fitting).
+//! more, each a factorization or several, at the same point (docs/benchmarks.md#fitting);
+//! and Ipopt's barrier parameter needs several more iterations to reach `tol` after the
+//! parameters have stopped moving.
+//!
+//! The intermediate callback is given Ipopt's statistics only (Ipopt 3.11's C interface),
+//! not its iterate: the problem keeps the last point Ipopt asked the objective's gradient
+//! at, which is the current iterate (Ipopt evaluates the gradients at an accepted point
+//! for its own convergence test, just before the callback; trial points of the line
+//! search get the objective and the constraints only: in the 406 callbacks of the fit
+//! tests the misfit at that point was the objective Ipopt reported, to the last bit).
 
+use nalgebra::DMatrix;
 use skg_ipopt::{EvalError, IterationStat, Problem, INFINITY_BOUND};
 
+use super::barrier;
 use super::free::FreeParameter;
 use super::observe::Observations;
+use super::statistics::{sensitivities, weighted_sensitivities};
 use crate::discrete::action::{Action, MatrixPlan};
 use crate::discrete::ParameterPlan;
 use crate::model::Workspace;
@@ -36,6 +50,11 @@ pub(super) struct Plans {
     /// `∂R/∂θ` and the Hessian blocks `(θ, P)`, `(θ, θ)`.
     pub parameters: ParameterPlan,
 }
+
+/// How far, relative to `max(|θ|, 1)`, the parameters may have moved since the misfit's
+/// curvature was computed for the stopping test to use it again: the test needs the
+/// curvature's size, not its digits.
+const CURVATURE_REUSE: f64 = 1e-3;
 
 /// A fit as Ipopt's problem (module documentation).
 pub(super) struct FitProblem<'a> {
@@ -54,6 +73,11 @@ pub(super) struct FitProblem<'a> {
     stop: StopTest,
     /// The round-off level of the constraints at the last Jacobian.
     roundoff: f64,
+    /// The last point of the objective's gradient: Ipopt's iterate in its intermediate
+    /// callback (module documentation).
+    iterate: Vec<f64>,
+    /// The misfit's curvature at the parameters of an earlier iterate (`curvature`).
+    curvature: Option<(Vec<f64>, DMatrix<f64>)>,
     /// Set when the callback stopped Ipopt at a KKT point (module documentation).
     stopped: Option<KktStop>,
 }
@@ -88,11 +112,15 @@ impl KktStop {
 /// The tolerances of the fit's own stopping test (module documentation).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct StopTest {
-    /// The fit's `tol`: the dual infeasibility and, with bounds, the barrier parameter.
+    /// The fit's `tol`: the dual infeasibility and, with bounds, the barrier's
+    /// displacement of the parameters relative to their size (`barrier.rs`).
     pub tol: f64,
     /// The tolerance on the constraints, the smaller of the scene's and the fit's `tol`
     /// (as Ipopt's own test); below their round-off level, that level.
     pub constraints: f64,
+    /// Ipopt's `bound_relax_factor`: its barrier acts from the bounds moved out by this
+    /// factor times `max(1, |bound|)`.
+    pub bound_relax_factor: f64,
 }
 
 impl<'a> FitProblem<'a> {
@@ -114,7 +142,22 @@ impl<'a> FitProblem<'a> {
         }
         let ws = action.model.workspace();
         let z = vec![0.0; action.layout.len()];
-        FitProblem { action, plans, observations, free, ws, z, theta: Vec::new(), jacobian, hessian, stop, roundoff: 0.0, stopped: None }
+        FitProblem {
+            action,
+            plans,
+            observations,
+            free,
+            ws,
+            z,
+            theta: Vec::new(),
+            jacobian,
+            hessian,
+            stop,
+            roundoff: 0.0,
+            iterate: Vec::new(),
+            curvature: None,
+            stopped: None,
+        }
     }
 
     /// How the callback stopped Ipopt at a KKT point, if it did (module documentation).
@@ -123,10 +166,9 @@ impl<'a> FitProblem<'a> {
     }
 
     /// Whether Ipopt's iterate is a KKT point to the fit's tolerances, and how.
-    fn at_kkt_point(&self, stat: &IterationStat) -> Option<KktStop> {
-        let bounded = self.free.iter().any(|p| p.lower.is_some() || p.upper.is_some());
-        let optimal = !stat.restoration && stat.iter >= 1 && stat.inf_du <= self.stop.tol && (!bounded || stat.mu <= self.stop.tol);
-        if !optimal {
+    fn at_kkt_point(&mut self, stat: &IterationStat) -> Option<KktStop> {
+        let stationary = !stat.restoration && stat.iter >= 1 && stat.inf_du <= self.stop.tol;
+        let stop = if !stationary {
             None
         } else if stat.inf_pr <= self.stop.constraints {
             Some(KktStop::Tolerance)
@@ -134,7 +176,46 @@ impl<'a> FitProblem<'a> {
             Some(KktStop::RoundOff)
         } else {
             None
+        };
+        stop.filter(|_| self.barrier_negligible(stat.mu))
+    }
+
+    /// Whether Ipopt's barrier at `mu` displaces the parameters of its iterate by at most
+    /// their tolerances (`barrier.rs`): always without bounds; judged with the misfit's
+    /// Gauss–Newton curvature only when a parameter off its bounds feels a force.
+    fn barrier_negligible(&mut self, mu: f64) -> bool {
+        let n_p = self.action.layout.n_p;
+        if self.free.iter().all(|p| p.lower.is_none() && p.upper.is_none()) {
+            return true;
         }
+        if self.iterate.len() != n_p + self.free.len() {
+            return false;
+        }
+        let hold = barrier::hold(self.free, &self.iterate[n_p..], mu, self.stop.tol, self.stop.bound_relax_factor);
+        hold.free_of_force() || self.curvature().is_some_and(|c| hold.negligible(&c))
+    }
+
+    /// The misfit's Gauss–Newton curvature `AᵀA` (`statistics.rs`) near the iterate: the
+    /// one computed at an earlier iterate whose parameters were within
+    /// [`CURVATURE_REUSE`] of these (the fit's last iterations move them far less), else
+    /// computed here, one sparse LU of `∂R/∂P`; `None` when that is singular.
+    fn curvature(&mut self) -> Option<DMatrix<f64>> {
+        let n_p = self.action.layout.n_p;
+        let theta = &self.iterate[n_p..];
+        let close = |(at, c): &(Vec<f64>, DMatrix<f64>)| {
+            at.iter().zip(theta).all(|(a, t)| (a - t).abs() <= CURVATURE_REUSE * t.abs().max(1.0)).then(|| c.clone())
+        };
+        if let Some(c) = self.curvature.as_ref().and_then(close) {
+            return Some(c);
+        }
+        let x = std::mem::take(&mut self.iterate);
+        self.set(&x, None);
+        self.iterate = x;
+        let s = sensitivities(self.action, self.plans, &self.z, &mut self.ws)?;
+        let a = weighted_sensitivities(self.observations, &s);
+        let c = a.transpose() * &a;
+        self.curvature = Some((self.iterate[n_p..].to_vec(), c.clone()));
+        Some(c)
     }
 
     /// Set the action to `x`'s parameters (when they changed) and `z` to its plus block,
@@ -174,6 +255,8 @@ impl Problem for FitProblem<'_> {
     }
     fn objective_gradient(&mut self, x: &[f64], grad: &mut [f64]) -> Result<(), EvalError> {
         self.observations.gradient(x, grad);
+        self.iterate.clear();
+        self.iterate.extend_from_slice(x);
         Ok(())
     }
     fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
