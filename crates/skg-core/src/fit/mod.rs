@@ -55,6 +55,7 @@ mod start;
 mod statistics;
 mod table;
 
+use std::cell::RefCell;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -151,6 +152,7 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
         jacobian: action.plan(Block::ReducedJacobian),
         hessian: (settings.hessian == FitHessian::Exact).then(|| action.plan(Block::ReducedHessian)),
         parameters: action.parameter_plan(),
+        jacobian_lu: RefCell::new(None),
     };
     let observations = Observations::new(&action, &times, data);
     let problem = Problem { scene, model: &model, plans: &plans, observations: &observations, names: &names };

@@ -31,7 +31,6 @@ use super::observe::Observations;
 use super::problem::Plans;
 use crate::discrete::Action;
 use crate::model::Workspace;
-use crate::solve::linalg::SparseFactorization;
 
 /// Ipopt's default `constr_mult_init_max`: a least-squares estimate larger than this is
 /// replaced by zero.
@@ -87,7 +86,7 @@ fn least_squares(action: &mut Action, plans: &Plans, x0: &[f64], g: &[f64]) -> O
     let mut dr = vec![0.0; plans.parameters.jacobian.len()];
     action.parameter_jacobian(&plans.parameters, &z, &mut dr, &mut ws);
 
-    let mut jp = SparseFactorization::new(n_p, &plans.jacobian.structure, &values)?;
+    let mut jp = plans.factor_jacobian(n_p, &values)?;
     let mut b = DMatrix::zeros(n_p, k);
     for j in 0..k {
         let mut column = vec![0.0; n_m];

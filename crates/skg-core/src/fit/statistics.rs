@@ -26,7 +26,6 @@ use super::observe::Observations;
 use super::problem::Plans;
 use crate::discrete::Action;
 use crate::model::Workspace;
-use crate::solve::linalg::SparseFactorization;
 
 /// An eigenvalue of the scaled curvature `C` below this fraction of its largest makes
 /// the curvature singular: the standard errors along its direction would be more than
@@ -43,7 +42,7 @@ pub(super) fn sensitivities(action: &Action, plans: &Plans, z: &[f64], ws: &mut 
     zp[lay.n_p..].fill(0.0);
     let mut values = vec![0.0; plans.jacobian.structure.len()];
     action.matrix_values(&plans.jacobian, &zp, &mut values, ws);
-    let mut lu = SparseFactorization::new(lay.n_p, &plans.jacobian.structure, &values)?;
+    let mut lu = plans.factor_jacobian(lay.n_p, &values)?;
     let free = action.model.parameters.as_ref().map_or(0, |p| p.names.len());
     let mut dr = vec![0.0; plans.parameters.jacobian.len()];
     action.parameter_jacobian(&plans.parameters, &zp, &mut dr, ws);

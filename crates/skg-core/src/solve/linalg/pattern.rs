@@ -59,6 +59,11 @@ impl CompressedPattern {
         SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
     }
 
+    /// Entries of the structure it was made from (duplicates counted).
+    pub(super) fn entries_len(&self) -> usize {
+        self.slot.len()
+    }
+
     /// Nonzeros of the pattern (duplicates merged).
     pub(super) fn nonzeros(&self) -> usize {
         self.row_idx.len()
