@@ -27,7 +27,10 @@ pub(super) struct Start {
 /// Jacobian per step instead of MUMPS's analysis and factorizations of Ipopt's KKT
 /// matrix); when that does not converge, the time stepping itself.
 pub(super) fn start_states(scene: &Scene, model: &Arc<Model>, disc: &Discretization, times: &[f64]) -> Result<Start, FitError> {
-    let newton = super::on_newton(scene);
+    // Not verified: its guess need not be the verification's time stepping
+    // (`solve::piece`), which would cost more than the solve.
+    let mut newton = super::on_newton(scene);
+    newton.verify.enabled = false;
     let run = solve_global(&newton, model, disc, &Guess::TimeStepping, None)?;
     if run.solution.status.is_converged() {
         let tr = &run.solution.trajectory;
