@@ -207,8 +207,9 @@ pub fn reference_options(times: &[f64], rtol: f64, stepper: Stepper, deadline: O
 }
 
 /// The time stepping of `scene` from its initial state at `times` that the verification
-/// of a solve on those nodes starts with when the scene has no tolerance of its own
-/// (else the tolerance decides, from the solution: [`reference_rtol`]).
+/// of a solve on those nodes starts with, at [`REFERENCE_RTOL`]: always with the default
+/// tolerances, and with a given one unless it is tight ([`reference_rtol`], from the
+/// solution's size; the verification then steps again itself).
 pub fn default_reference_stepping(
     scene: &Scene,
     model: &Model,
