@@ -7,7 +7,8 @@
 //! `max |c|` meets the tolerance (status `Solve_Succeeded`: the multipliers of a square
 //! system are not used, so the residual is the whole convergence test, as it is for
 //! Newton) or the residual's round-off level ([`roundoff`](crate::solve::linalg::roundoff);
-//! status `Ipopt_Converged_To_Round_Off`). This saves two costs Ipopt would otherwise
+//! status `Ipopt_Converged_To_Round_Off`; also where it stalls below the residual a
+//! converged solve needs, [`STALLED`]). This saves two costs Ipopt would otherwise
 //! pay: after converging on a square problem it factors the KKT matrix once more to
 //! "recompute multipliers for the feasibility problem" (it prints that this fails; the
 //! multipliers are unused here), and at large `N`, where round-off keeps `max |c|` just
@@ -110,11 +111,9 @@ fn not_started<S: SquareSystem + ?Sized>(system: &mut S, x0: &[f64], deadline: D
 enum Stop {
     /// `max |c| ≤ tol`.
     Tolerance,
-    /// `max |c|` at the round-off level of the last Jacobian.
+    /// `max |c|` at the round-off level of the last Jacobian, or at most
+    /// [`CONVERGED_RESIDUAL`] and no longer falling ([`STALLED`]).
     RoundOff,
-    /// `max |c|` at most [`CONVERGED_RESIDUAL`] and no longer falling
-    /// ([`STALLED_ITERATIONS`]).
-    Stalled,
     /// The deadline (reached, or to be passed by the next iteration), this many seconds
     /// after the start of what it bounds.
     TimeLimit(f64),
@@ -153,8 +152,10 @@ const STALLED_ITERATIONS: usize = 2;
 /// `inf_pr`: unscaled, since skg-solve turns Ipopt's NLP scaling off (a scene that turns
 /// it on under `[solver.ipopt]` is stopped on the scaled value, as Ipopt's own test
 /// would be; convergence is judged on the recomputed unscaled residual either way). In
-/// any phase, stop once the deadline has passed, or would be by an iteration as long as
-/// the last one ([`deadline`](crate::solve::run::deadline)).
+/// any phase, stop once `max |c|` has stalled below [`CONVERGED_RESIDUAL`] ([`STALLED`]),
+/// has risen [`DIVERGED`] times above its least, or once the deadline has passed, or
+/// would be by an iteration as long as the last one
+/// ([`deadline`](crate::solve::run::deadline)).
 pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
     system: &'p mut S,
     tol: f64,
@@ -180,7 +181,7 @@ impl<'p, S: SquareSystem + ?Sized> IpoptSquare<'p, S> {
     fn status(&self, ipopt_status: ipopt::Status) -> SolverStatus {
         match (ipopt_status, self.stopped) {
             (ipopt::Status::UserRequestedStop, Some(Stop::Tolerance)) => SolverStatus::Ipopt(ipopt::Status::SolveSucceeded),
-            (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff | Stop::Stalled)) => SolverStatus::IpoptConvergedToRoundOff,
+            (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff)) => SolverStatus::IpoptConvergedToRoundOff,
             (ipopt::Status::UserRequestedStop, Some(Stop::Diverged)) => SolverStatus::Ipopt(ipopt::Status::DivergingIterates),
             (ipopt::Status::UserRequestedStop, Some(Stop::TimeLimit(elapsed_s))) => match self.deadline {
                 Some(d) => SolverStatus::TimeLimitReached { backend: Backend::Ipopt, bound: d.bound, limit_s: d.limit_s, elapsed_s },
@@ -235,7 +236,7 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
         // Stalled below the residual that counts as converged, in any phase.
         self.stalled = if stat.inf_pr <= CONVERGED_RESIDUAL && stat.inf_pr > STALLED * self.least_inf_pr { self.stalled + 1 } else { 0 };
         if self.stopped.is_none() && self.stalled >= STALLED_ITERATIONS {
-            self.stopped = Some(Stop::Stalled);
+            self.stopped = Some(Stop::RoundOff);
         }
         if stat.inf_pr > DIVERGED * self.least_inf_pr.max(self.tol) {
             self.stopped = Some(Stop::Diverged);
