@@ -29,6 +29,7 @@ use skg_ipopt::Multipliers;
 use super::free::FreeParameter;
 use super::observe::Observations;
 use super::problem::Plans;
+use super::statistics::factored_sensitivities;
 use crate::discrete::Action;
 use crate::model::Workspace;
 
@@ -72,34 +73,17 @@ pub(super) fn starting_multipliers(
     Multipliers { constraints, lower, upper }
 }
 
-/// `y` minimizing `‖g + Jᵀy‖` at `x0` (module documentation); `None` when `∂R/∂P` is
-/// singular or a solve is not finite.
+/// `y` minimizing `‖g + Jᵀy‖` at `x0` (module documentation), with `B = −S`, the
+/// trajectory's sensitivities; `None` when `∂R/∂P` is singular or a solve is not finite.
 fn least_squares(action: &mut Action, plans: &Plans, x0: &[f64], g: &[f64]) -> Option<Vec<f64>> {
-    let (n_p, n_m, len) = (action.layout.n_p, action.layout.n_m, action.layout.len());
+    let n_p = action.layout.n_p;
     let k = x0.len() - n_p;
     let mut ws: Workspace = action.model.workspace();
     action.set_parameters(&x0[n_p..], &mut ws);
-    let mut z = vec![0.0; len];
+    let mut z = vec![0.0; action.layout.len()];
     z[..n_p].copy_from_slice(&x0[..n_p]);
-    let mut values = vec![0.0; plans.jacobian.structure.len()];
-    action.matrix_values(&plans.jacobian, &z, &mut values, &mut ws);
-    let mut dr = vec![0.0; plans.parameters.jacobian.len()];
-    action.parameter_jacobian(&plans.parameters, &z, &mut dr, &mut ws);
-
-    let mut jp = plans.factor_jacobian(n_p, &values)?;
-    let mut b = DMatrix::zeros(n_p, k);
-    for j in 0..k {
-        let mut column = vec![0.0; n_m];
-        for (&(r, jj), v) in plans.parameters.jacobian.iter().zip(&dr) {
-            if jj as usize == j {
-                column[r as usize] += v;
-            }
-        }
-        if !jp.solve(&mut column) {
-            return None;
-        }
-        b.set_column(j, &DVector::from_vec(column));
-    }
+    let (s, mut jp) = factored_sensitivities(action, plans, &z, &mut ws)?;
+    let b = -s;
     let (g_p, g_theta) = (DVector::from_column_slice(&g[..n_p]), DVector::from_column_slice(&g[n_p..]));
     let normal = DMatrix::identity(k, k) + b.transpose() * &b;
     let r = normal.lu().solve(&(g_theta - b.transpose() * &g_p))?;

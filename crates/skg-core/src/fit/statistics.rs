@@ -20,12 +20,15 @@
 //! below [`SINGULAR`] of its largest, is a direction of the parameters that the data do
 //! not determine, reported in words ([`undetermined`]).
 
+use std::cell::RefMut;
+
 use nalgebra::{DMatrix, DVector};
 
 use super::observe::Observations;
 use super::problem::Plans;
 use crate::discrete::Action;
 use crate::model::Workspace;
+use crate::solve::linalg::SparseFactorization;
 
 /// An eigenvalue of the scaled curvature `C` below this fraction of its largest makes
 /// the curvature singular: the standard errors along its direction would be more than
@@ -37,6 +40,17 @@ pub const SINGULAR: f64 = 1e-10;
 /// unknown vector of the action, minus block ignored) and the workspace's parameters;
 /// `None` when `∂R/∂P` is singular.
 pub(super) fn sensitivities(action: &Action, plans: &Plans, z: &[f64], ws: &mut Workspace) -> Option<DMatrix<f64>> {
+    factored_sensitivities(action, plans, z, ws).map(|(s, _)| s)
+}
+
+/// [`sensitivities`] and the factorization of `∂R/∂P` they were solved with (the fit's
+/// starting multipliers solve with its transpose too).
+pub(super) fn factored_sensitivities<'p>(
+    action: &Action,
+    plans: &'p Plans,
+    z: &[f64],
+    ws: &mut Workspace,
+) -> Option<(DMatrix<f64>, RefMut<'p, SparseFactorization>)> {
     let lay = &action.layout;
     let mut zp = z.to_vec();
     zp[lay.n_p..].fill(0.0);
@@ -59,7 +73,7 @@ pub(super) fn sensitivities(action: &Action, plans: &Plans, z: &[f64], ws: &mut 
         }
         s.set_column(j, &DVector::from_vec(column));
     }
-    Some(s)
+    Some((s, lu))
 }
 
 /// `A = W^{1/2} E S`: the weighted change of the model's values at the data per unit
