@@ -247,9 +247,8 @@ impl Problem<'_> {
         match &start.solution {
             Some(z) => {
                 let mut ws = self.model.workspace();
-                if let Some(s) = statistics::sensitivities(action, self.plans, z, &mut ws) {
-                    let a = statistics::weighted_sensitivities(self.observations, &s);
-                    if let Some(message) = undetermined(&(a.transpose() * &a), self.names, initial) {
+                if let Some(f) = statistics::curvature(action, self.plans, self.observations, z, &mut ws) {
+                    if let Some(message) = undetermined(&f, self.names, initial) {
                         return Err(FitError::NotIdentifiable(format!("{message} (at the starting values)")));
                     }
                 }
@@ -291,10 +290,7 @@ impl Problem<'_> {
         let mut z = vec![0.0; action.layout.len()];
         z[..n_p].copy_from_slice(&solution.x[..n_p]);
         let residuals = self.observations.residuals(&solution.x);
-        let curvature = statistics::sensitivities(action, self.plans, &z, &mut ws).map(|s| {
-            let a = statistics::weighted_sensitivities(self.observations, &s);
-            a.transpose() * &a
-        });
+        let curvature = statistics::curvature(action, self.plans, self.observations, &z, &mut ws);
         if converged {
             if let Some(message) = curvature.as_ref().and_then(|f| undetermined(f, self.names, &theta)) {
                 return Err(FitError::NotIdentifiable(message));

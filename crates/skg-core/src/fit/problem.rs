@@ -37,7 +37,7 @@ use skg_ipopt::{EvalError, IterationStat, Problem, INFINITY_BOUND};
 use super::barrier;
 use super::free::FreeParameter;
 use super::observe::Observations;
-use super::statistics::{sensitivities, weighted_sensitivities};
+use super::statistics;
 use crate::discrete::action::{Action, MatrixPlan};
 use crate::discrete::ParameterPlan;
 use crate::model::Workspace;
@@ -236,9 +236,7 @@ impl<'a> FitProblem<'a> {
         let x = std::mem::take(&mut self.iterate);
         self.set(&x, None);
         self.iterate = x;
-        let s = sensitivities(self.action, self.plans, &self.z, &mut self.ws)?;
-        let a = weighted_sensitivities(self.observations, &s);
-        let c = a.transpose() * &a;
+        let c = statistics::curvature(self.action, self.plans, self.observations, &self.z, &mut self.ws)?;
         self.curvature = Some((self.iterate[n_p..].to_vec(), c.clone()));
         Some(c)
     }

@@ -36,15 +36,25 @@ use crate::solve::linalg::SparseFactorization;
 /// the round-off level, about 1e-16 to 1e-20; docs/fitting.md#identifiability).
 pub const SINGULAR: f64 = 1e-10;
 
-/// The trajectory's sensitivities `dP/dθ` (one column per parameter) at `z` (the whole
-/// unknown vector of the action, minus block ignored) and the workspace's parameters;
-/// `None` when `∂R/∂P` is singular.
-pub(super) fn sensitivities(action: &Action, plans: &Plans, z: &[f64], ws: &mut Workspace) -> Option<DMatrix<f64>> {
-    factored_sensitivities(action, plans, z, ws).map(|(s, _)| s)
+/// The Gauss–Newton curvature `F = AᵀA` of the misfit in the parameters at `z` (the
+/// whole unknown vector of the action, minus block ignored) and the workspace's
+/// parameters (module documentation); `None` when `∂R/∂P` is singular.
+pub(super) fn curvature(
+    action: &Action,
+    plans: &Plans,
+    observations: &Observations,
+    z: &[f64],
+    ws: &mut Workspace,
+) -> Option<DMatrix<f64>> {
+    let (s, _) = factored_sensitivities(action, plans, z, ws)?;
+    let a = weighted_sensitivities(observations, &s);
+    Some(a.transpose() * &a)
 }
 
-/// [`sensitivities`] and the factorization of `∂R/∂P` they were solved with (the fit's
-/// starting multipliers solve with its transpose too).
+/// The trajectory's sensitivities `dP/dθ` (one column per parameter) at `z` and the
+/// workspace's parameters, and the factorization of `∂R/∂P` they were solved with (the
+/// fit's starting multipliers solve with its transpose too); `None` when `∂R/∂P` is
+/// singular.
 pub(super) fn factored_sensitivities<'p>(
     action: &Action,
     plans: &'p Plans,
@@ -78,7 +88,7 @@ pub(super) fn factored_sensitivities<'p>(
 
 /// `A = W^{1/2} E S`: the weighted change of the model's values at the data per unit
 /// change of each parameter.
-pub(super) fn weighted_sensitivities(observations: &Observations, s: &DMatrix<f64>) -> DMatrix<f64> {
+fn weighted_sensitivities(observations: &Observations, s: &DMatrix<f64>) -> DMatrix<f64> {
     let mut a = DMatrix::zeros(observations.rows.len(), s.ncols());
     for (i, (row, w)) in observations.rows.iter().zip(&observations.weights).enumerate() {
         let sw = w.sqrt();
