@@ -372,7 +372,11 @@ impl SystemSolver {
         {
             return Err(NewtonStatus::SingularJacobian);
         }
-        let (alpha, trial_norm) = line_search(it, trials).ok_or(NewtonStatus::LineSearchFailed)?;
+        // No step decreases a residual already at the round-off level of this Jacobian:
+        // that is convergence (`stop` says so from the second step on, once the level is
+        // known; a start at that level learns it here).
+        let failed = if residual <= it.floor { NewtonStatus::ConvergedToRoundOff } else { NewtonStatus::LineSearchFailed };
+        let (alpha, trial_norm) = line_search(it, trials).ok_or(failed)?;
         let last_norm = it.norm;
         it.accept(trial_norm, alpha, *trials);
         // A full step that contracted well: the Jacobian changed little along it, so
@@ -641,6 +645,42 @@ mod tests {
             v.copy_from_slice(&self.values);
             Ok(())
         }
+    }
+
+    /// `F(x) = x² − 2`: one unknown, root √2.
+    struct Sqrt2(Vec<(u32, u32)>);
+    impl SquareSystem for Sqrt2 {
+        fn size(&self) -> usize {
+            1
+        }
+        fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+            c[0] = x[0] * x[0] - 2.0;
+            Ok(())
+        }
+        fn jacobian_structure(&self) -> &[(u32, u32)] {
+            &self.0
+        }
+        fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
+            v[0] = 2.0 * x[0];
+            Ok(())
+        }
+    }
+
+    /// A start whose residual is at its round-off level (the double nearest √2: `x² − 2`
+    /// is 2.7e-16, below `4 ε |2x| |x|` = 3.6e-15, and no double decreases it) has
+    /// converged, although no step passes the line search and the tolerance is below
+    /// any residual: the fit's solve of its fitted motion starts there.
+    #[test]
+    fn a_start_at_the_round_off_level_is_converged() {
+        let mut p = Sqrt2(vec![(0, 0)]);
+        let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
+        let x0 = 2f64.sqrt();
+        assert!((x0 * x0 - 2.0).abs() > 0.0);
+        let sol = solver
+            .solve(&mut p, &[x0], &NewtonOptions { tol: 1e-30, max_iter: 20, chord: true, single_precision: false, deadline: None })
+            .unwrap();
+        assert_eq!(sol.status, NewtonStatus::ConvergedToRoundOff);
+        assert_eq!(sol.x[0], x0);
     }
 
     /// `F(x) = atan(x)`: one unknown, root 0; Newton's full step overshoots from |x| ≳ 1.39.
