@@ -6,7 +6,7 @@ mod common;
 
 use std::f64::consts::PI;
 
-use skg_core::fit::{self, fit, Data, Fit, FitError, FitSettings, FreeParameter};
+use skg_core::fit::{self, fit, Data, Fit, FitError, FitMethod, FitSettings, FreeParameter};
 use skg_core::scene::{Overrides, Scene, SceneFile};
 
 /// A damped oscillator with its initial state as parameters.
@@ -128,6 +128,13 @@ fn a_bound_the_data_push_against_holds_and_is_reported() {
     assert!((c.value - 0.5).abs() < 1e-6, "c = {}", c.value);
     assert!(c.at_bound && c.bound == [Some(0.5), None]);
     assert!(f.report.warnings.iter().any(|w| w.contains("`c` ended on its bound")), "{:?}", f.report.warnings);
+    // The reduced fit holds the same bound.
+    let mut reduced = free(&["k", "c>=0.5"]);
+    reduced.method = FitMethod::Reduced;
+    let r = run(&scene, &ov, &data, &reduced).unwrap();
+    let (k, rc) = (&r.report.parameters["k"], &r.report.parameters["c"]);
+    assert!(r.report.converged && rc.at_bound && (rc.value - 0.5).abs() < 1e-6, "{}: c = {}", r.report.status, rc.value);
+    assert!((k.value - f.report.parameters["k"].value).abs() < 1e-6, "k = {} against {}", k.value, f.report.parameters["k"].value);
     // A starting value outside the bounds is refused before the fit.
     let e = run(&scene, &ov, &data, &free(&["c in [0, 0.4]"])).unwrap_err();
     assert!(e.to_string().contains("the starting value of `c` (0.6) is outside its bounds [0, 0.4]"), "{e}");
@@ -163,6 +170,16 @@ fn settings_that_do_not_fit_the_scene_are_refused() {
     ] {
         let e = run(&scene, &ov, &data, &free(items)).unwrap_err();
         assert!(e.to_string().contains(expected), "{items:?}: {e}");
+    }
+    // What only the all-at-once fit does.
+    for (hessian, start, expected) in [
+        ("limited-memory", "auto", "the reduced fit gives Ipopt the exact Hessian"),
+        ("exact", "data", "starting from the data is for the all-at-once fit"),
+    ] {
+        let mut settings = free(&["k"]);
+        (settings.method, settings.hessian, settings.start) = (FitMethod::Reduced, hessian.parse().unwrap(), start.parse().unwrap());
+        let e = run(&scene, &ov, &data, &settings).unwrap_err();
+        assert!(e.to_string().contains(expected), "{hessian}, {start}: {e}");
     }
 }
 
@@ -222,6 +239,25 @@ fn a_rolling_disks_incline_and_speed_are_recovered_from_its_track() {
     assert_recovered(&f, &[("alpha", alpha), ("v0", v0)], 1e-6);
     assert!(f.trusted(), "verification: {}", f.outcome.verification.reason);
     assert_stopped_at_a_kkt_point(&f, 10);
+    assert_eq!(f.report.method, FitMethod::AllAtOnce);
+
+    // The reduced fit: the same discrete optimum, each Ipopt iterate one factorization of
+    // ∂R/∂P for its derivatives (and none for its solves, which chord steps on that
+    // factorization finish).
+    let mut reduced = free(&["alpha in [0, 1.5]", "v0"]);
+    reduced.method = FitMethod::Reduced;
+    let r = run(&scene, &ov, &data, &reduced).unwrap();
+    assert_recovered(&r, &[("alpha", alpha), ("v0", v0)], 1e-6);
+    assert!(r.trusted(), "verification: {}", r.outcome.verification.reason);
+    assert_stopped_at_a_kkt_point(&r, 12);
+    for name in ["alpha", "v0"] {
+        let (a, b) = (f.report.parameters[name].value, r.report.parameters[name].value);
+        assert!((a - b).abs() <= 1e-9 * a.abs(), "{name}: all at once {a}, reduced {b}");
+    }
+    let work = r.report.equations_of_motion.expect("the reduced fit's solves");
+    assert_eq!((r.report.sizes.variables, r.report.sizes.constraints), (2, 0));
+    assert!(work.solves >= r.report.iterations && work.failures == 0, "{work:?}");
+    assert!(work.derivatives <= r.report.iterations + 2, "{work:?}");
 }
 
 /// The fit stopped itself at a KKT point (docs/fitting.md, "Stopping") within `most`

@@ -55,7 +55,7 @@ pub(crate) enum DataArg {
 /// Fit `free` parameters of a scene to `data` as `skg-solve fit` does (each, when `None`,
 /// from the scene's `[fit]` table); with `out`, into that directory.
 #[pyfunction]
-#[pyo3(signature = (path, data=None, free=None, *, out=None, nodes=None, set=None, operator=None, hessian=None, start=None, tol=None, max_iter=None))]
+#[pyo3(signature = (path, data=None, free=None, *, out=None, nodes=None, set=None, operator=None, method=None, hessian=None, start=None, tol=None, max_iter=None))]
 #[pyo3(name = "fit")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fit_scene(
@@ -67,6 +67,7 @@ pub(crate) fn fit_scene(
     nodes: Option<usize>,
     set: Option<&Bound<'_, PyDict>>,
     operator: Option<&str>,
+    method: Option<&str>,
     hessian: Option<&str>,
     start: Option<&str>,
     tol: Option<f64>,
@@ -80,7 +81,7 @@ pub(crate) fn fit_scene(
         Some(free) => free,
         None => fit::free_of_scene(&scene.file).map_err(|e| scene_err(py, &e))?,
     };
-    let settings = settings(free, hessian, start, tol, max_iter)?;
+    let settings = settings(free, method, hessian, start, tol, max_iter)?;
     let data = match data {
         Some(data) => data,
         None => match fit::data_of_scene(&scene.file).map_err(|e| scene_err(py, &e))? {
@@ -114,12 +115,16 @@ fn parse_free(items: &[String]) -> PyResult<Vec<FreeParameter>> {
 /// The settings from the keyword arguments (a `ValueError` names the wrong one).
 fn settings(
     free: Vec<FreeParameter>,
+    method: Option<&str>,
     hessian: Option<&str>,
     start: Option<&str>,
     tol: Option<f64>,
     max_iter: Option<u32>,
 ) -> PyResult<FitSettings> {
     let mut settings = FitSettings::new(free);
+    if let Some(m) = method {
+        settings.method = m.parse().map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
+    }
     if let Some(h) = hessian {
         settings.hessian = h.parse().map_err(|e| PyValueError::new_err(format!("hessian: {e}")))?;
     }

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 
-use skg_core::fit::{self, Data, Fit, FitHessian, FitSettings, FitStart, FitWritten, FreeParameter};
+use skg_core::fit::{self, Data, Fit, FitHessian, FitMethod, FitSettings, FitStart, FitWritten, FreeParameter};
 use skg_core::scene::Scene;
 use skg_core::stepping::verify::VerifyStatus;
 
@@ -40,6 +40,13 @@ pub struct FitArgs {
     /// Number of time nodes N (overrides the scene's time.nodes).
     #[arg(long, value_name = "N")]
     pub nodes: Option<usize>,
+    /// How the fit is handed to Ipopt: `all-at-once` (default; the trajectory and the
+    /// parameters together, the equations of motion as constraints) or `reduced` (the
+    /// parameters alone, the trajectory solved from the equations at every point: single
+    /// shooting on the discrete equations, faster, but it can stop where shooting does;
+    /// docs/fitting.md#two-ways-to-hand-the-fit-to-ipopt).
+    #[arg(long = "fit-method", value_name = "METHOD", default_value = "all-at-once", value_parser = super::by_name::<FitMethod>(["all-at-once", "reduced"]))]
+    pub fit_method: FitMethod,
     /// Hessian of the Lagrangian given to Ipopt: `exact` (default; second derivatives of
     /// the stationarity equations) or `limited-memory` (Ipopt's quasi-Newton approximation).
     #[arg(long = "fit-hessian", value_name = "MODE", default_value = "exact", value_parser = super::by_name::<FitHessian>(["exact", "limited-memory"]))]
@@ -98,6 +105,7 @@ fn settings(args: &FitArgs, scene: &Scene) -> Result<FitSettings> {
         return Err(UsageError(format!("{}: {message}", args.scenario.display())).into());
     }
     let mut settings = FitSettings::new(free);
+    settings.method = args.fit_method;
     settings.hessian = args.fit_hessian;
     settings.start = args.start;
     settings.tol = args.tol;
@@ -160,8 +168,12 @@ fn report_untrusted(f: &Fit, written: &FitWritten) -> Option<ExitCode> {
 /// standard error, the misfit, the verification and the files written.
 fn print_report(f: &Fit, written: &FitWritten) {
     let r = &f.report;
+    let method = match &r.equations_of_motion {
+        Some(w) => format!(" of the reduced fit ({} solves of the equations of motion)", w.solves),
+        None => String::new(),
+    };
     out!(
-        "{}: fit converged in {} Ipopt iterations ({}), {} values, {:.3} s",
+        "{}: fit converged in {} Ipopt iterations{method} ({}), {} values, {:.3} s",
         f.outcome.scene,
         r.iterations,
         r.status,

@@ -49,6 +49,7 @@ mod free;
 mod multipliers;
 mod observe;
 mod problem;
+mod reduced;
 mod report;
 mod settings;
 mod start;
@@ -72,13 +73,15 @@ use crate::solve::backend::mumps_options;
 use crate::solve::{action_on, outcome, point_from_states, solve_global, Guess, Outcome, SolveError};
 use observe::Observations;
 use problem::{FitProblem, Plans, StopTest};
+use reduced::ReducedFit;
 use start::{put_data, start_states, Start};
 
 pub use data::{Data, DataError, DataPlace, Observation, SIGMA_PREFIX};
 pub use files::{fit_into, write_fit, FitIntoError, FitWritten, DATA_FILE, FITTED_SCENE_FILE};
 pub use free::{split_list, FreeParameter, FreeParameterError};
 pub use report::{CovarianceReport, DataReport, FitReport, MisfitReport, ParameterReport};
-pub use settings::{FitHessian, FitSettings, FitStart, ParseFitSettingError, ACCEPTABLE_ITER, DEFAULT_MAX_ITER, DEFAULT_TOL, MUMPS_PIVTOL};
+pub use reduced::InnerWork;
+pub use settings::{FitHessian, FitMethod, FitSettings, FitStart, ParseFitSettingError, ACCEPTABLE_ITER, DEFAULT_MAX_ITER, DEFAULT_TOL, MUMPS_PIVTOL};
 pub use statistics::{covariance, undetermined, SINGULAR};
 pub use table::{data_of_scene, free_of_scene};
 
@@ -163,12 +166,27 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let t_opt = Instant::now();
     let bound_relax_factor = scene.solver.ipopt.get("bound_relax_factor").and_then(ipopt_number).unwrap_or(barrier::BOUND_RELAX_FACTOR);
     let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol), bound_relax_factor };
-    let (solution, at_kkt_point) = {
-        let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
-        let y0 = multipliers::starting_multipliers(&mut action, &plans, &observations, &settings.free, &x0, largest);
-        let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free, stop);
-        let solution = ipopt::solve_warm(&mut fit_problem, &x0, &y0, &ipopt_options(scene, settings))?;
-        (solution, fit_problem.stopped_at_kkt_point())
+    let mut inner = None;
+    let (solution, at_kkt_point) = match settings.method {
+        FitMethod::Reduced => {
+            let mut reduced = ReducedFit::new(&mut action, &plans, &observations, &settings.free, &x0, stop)
+                .map_err(|e| FitError::Settings(format!("the reduced fit cannot start: {e}")))?;
+            let mut solution = ipopt::solve(&mut reduced, &initial, &ipopt_options(scene, settings))?;
+            // Ipopt's point is the parameters: the trajectory solved there goes with them.
+            let (x, residual) = reduced.point(&solution.x).map_err(|e| FitError::Settings(format!("the reduced fit's last point: {e}")))?;
+            solution.x = x;
+            solution.max_constraint_violation = residual;
+            inner = Some(reduced.work);
+            (solution, reduced.stopped_at_kkt_point())
+        }
+        FitMethod::AllAtOnce => {
+            let largest =
+                scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
+            let y0 = multipliers::starting_multipliers(&mut action, &plans, &observations, &settings.free, &x0, largest);
+            let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free, stop);
+            let solution = ipopt::solve_warm(&mut fit_problem, &x0, &y0, &ipopt_options(scene, settings))?;
+            (solution, fit_problem.stopped_at_kkt_point())
+        }
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
     let converged = at_kkt_point.is_some() || converged(&solution, scene.solver.tol, &mut warnings);
@@ -197,7 +215,7 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
         Some(stop) => (stop.status().to_string(), stop.text().to_string()),
         None => (solution.status.name().to_string(), solution.status.to_string()),
     };
-    let report = problem.report(&action, &solution, (converged, status), settings, start, parameters, at, data, timings, warnings);
+    let report = problem.report(&action, &solution, (converged, status), settings, start, parameters, at, data, timings, inner, warnings);
     let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
     let data_table = report::data_table(scene, data, &outcome.trajectory);
     Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
@@ -258,8 +276,17 @@ impl Problem<'_> {
                 start.description
             )),
         }
+        if settings.method == FitMethod::Reduced && start.solution.is_none() {
+            return Err(FitError::Settings(format!(
+                "the reduced fit starts from the solve at the starting values, which did not converge ({}): choose other \
+                 starting values, or fit all at once (--fit-method all-at-once)",
+                start.description
+            )));
+        }
         let mut q = start.q.clone();
         let start_from_data = match settings.start {
+            // The reduced fit's trajectory solves the equations at every point.
+            _ if settings.method == FitMethod::Reduced => false,
             FitStart::Auto => self.scene.constraints.is_empty() || data.coordinates.len() == self.scene.coordinates.len(),
             FitStart::Data => true,
             FitStart::Solve => false,
@@ -322,14 +349,37 @@ impl Problem<'_> {
         at: AtSolution,
         data: &Data,
         timings: report::Timings,
+        inner: Option<InnerWork>,
         warnings: Vec<String>,
     ) -> FitReport {
         let plans = self.plans;
+        let k = self.names.len();
+        let sizes = match settings.method {
+            FitMethod::AllAtOnce => report::Sizes {
+                variables: action.layout.n_p + k,
+                constraints: action.layout.n_m,
+                jacobian_nonzeros: plans.jacobian.structure.len() + plans.parameters.jacobian.len(),
+                hessian_nonzeros: plans
+                    .hessian
+                    .as_ref()
+                    .map_or(0, |h| h.structure.len() + self.observations.hessian.len() + plans.parameters.hessian.len()),
+                observations: self.observations.values.len(),
+            },
+            FitMethod::Reduced => report::Sizes {
+                variables: k,
+                constraints: 0,
+                jacobian_nonzeros: 0,
+                hessian_nonzeros: k * (k + 1) / 2,
+                observations: self.observations.values.len(),
+            },
+        };
         FitReport {
             converged,
             status,
             status_text,
             iterations: solution.iterations,
+            method: settings.method,
+            equations_of_motion: inner,
             hessian: settings.hessian,
             start: settings.start,
             start_solve: start.description,
@@ -340,16 +390,7 @@ impl Problem<'_> {
             data: DataReport::new(data, self.scene),
             max_constraint_violation: solution.max_constraint_violation,
             objective: solution.objective,
-            sizes: report::Sizes {
-                variables: action.layout.n_p + self.names.len(),
-                constraints: action.layout.n_m,
-                jacobian_nonzeros: plans.jacobian.structure.len() + plans.parameters.jacobian.len(),
-                hessian_nonzeros: plans
-                    .hessian
-                    .as_ref()
-                    .map_or(0, |h| h.structure.len() + self.observations.hessian.len() + plans.parameters.hessian.len()),
-                observations: self.observations.values.len(),
-            },
+            sizes,
             work: report::Work {
                 constraint_evaluations: solution.eval.constraints.calls as usize,
                 jacobian_evaluations: solution.eval.jacobian.calls as usize,
@@ -466,6 +507,22 @@ fn check_settings(scene: &Scene, overrides: &Overrides, settings: &FitSettings) 
     }
     if scene.formulation == crate::scene::Formulation::Full {
         notes.push("the fit's constraints are the reduced system: the full formulation is not used".into());
+    }
+    if settings.method == FitMethod::Reduced {
+        if settings.hessian == FitHessian::LimitedMemory {
+            return Err(FitError::Settings(
+                "the reduced fit gives Ipopt the exact Hessian of the misfit in the parameters: the limited-memory Hessian is \
+                 for the all-at-once fit"
+                    .into(),
+            ));
+        }
+        if settings.start == FitStart::Data {
+            return Err(FitError::Settings(
+                "the reduced fit starts from the solve at the starting values (its trajectory solves the equations of motion \
+                 at every point): starting from the data is for the all-at-once fit"
+                    .into(),
+            ));
+        }
     }
     if settings.tol.is_nan() || settings.tol <= 0.0 || settings.max_iter == 0 {
         return Err(FitError::Settings(format!("the fit's tol ({}) and max_iter ({}) must be positive", settings.tol, settings.max_iter)));

@@ -82,7 +82,7 @@ fn least_squares(action: &mut Action, plans: &Plans, x0: &[f64], g: &[f64]) -> O
     action.set_parameters(&x0[n_p..], &mut ws);
     let mut z = vec![0.0; action.layout.len()];
     z[..n_p].copy_from_slice(&x0[..n_p]);
-    let (s, mut jp) = factored_sensitivities(action, plans, &z, &mut ws)?;
+    let (s, mut jp, _) = factored_sensitivities(action, plans, &z, &mut ws)?;
     let b = -s;
     let (g_p, g_theta) = (DVector::from_column_slice(&g[..n_p]), DVector::from_column_slice(&g[n_p..]));
     let normal = DMatrix::identity(k, k) + b.transpose() * &b;

@@ -10,7 +10,7 @@ use serde::Serialize;
 use super::data::{Data, SIGMA_PREFIX};
 use super::free::FreeParameter;
 use super::observe::Observations;
-use super::{rows, FitHessian, FitStart};
+use super::{rows, FitHessian, FitMethod, FitStart, InnerWork};
 use crate::discrete::interpolate::hermite;
 use crate::discrete::Trajectory;
 use crate::scene::provenance;
@@ -124,7 +124,8 @@ impl DataReport {
 /// The sizes of the problem handed to Ipopt.
 #[derive(Debug, Clone, Serialize)]
 pub struct Sizes {
-    /// Unknowns: the trajectory's and the free parameters.
+    /// Unknowns: the trajectory's and the free parameters (the parameters alone in the
+    /// reduced fit, whose constraints and Jacobian are then empty).
     pub variables: usize,
     /// Equality constraints: the stationarity equations.
     pub constraints: usize,
@@ -178,6 +179,10 @@ pub struct FitReport {
     pub status_text: String,
     /// Ipopt's iterations.
     pub iterations: usize,
+    /// How the fit was handed to Ipopt.
+    pub method: FitMethod,
+    /// The reduced fit's solves of the equations of motion (`null` all at once).
+    pub equations_of_motion: Option<InnerWork>,
     /// The Hessian given to Ipopt.
     pub hessian: FitHessian,
     /// Where the trajectory started.

@@ -1,4 +1,4 @@
-//! How a fit is run: its free parameters, the Hessian given to Ipopt, where the
+//! How a fit is run: its free parameters, how it is handed to Ipopt, the Hessian, where the
 //! trajectory starts, and Ipopt's tolerance and limits ([`FitSettings`]), with their
 //! defaults and their names on the command line and in Python.
 
@@ -40,6 +40,19 @@ pub enum FitStart {
     Solve,
 }
 
+/// How the fit is handed to Ipopt (docs/fitting.md#two-ways-to-hand-the-fit-to-ipopt).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FitMethod {
+    /// The trajectory and the parameters at once, the equations of motion as Ipopt's
+    /// constraints (`problem.rs`).
+    #[default]
+    AllAtOnce,
+    /// The parameters alone, the trajectory solved from the equations of motion at every
+    /// point Ipopt evaluates (`reduced.rs`): single shooting on the discrete equations.
+    Reduced,
+}
+
 /// An unknown name of a fit's setting.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("`{given}` is not one of {expected}")]
@@ -70,6 +83,33 @@ impl FromStr for FitHessian {
 }
 
 impl fmt::Display for FitHessian {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FitMethod {
+    /// The setting's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            FitMethod::AllAtOnce => "all-at-once",
+            FitMethod::Reduced => "reduced",
+        }
+    }
+}
+
+impl FromStr for FitMethod {
+    type Err = ParseFitSettingError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "all-at-once" => Ok(FitMethod::AllAtOnce),
+            "reduced" => Ok(FitMethod::Reduced),
+            _ => Err(ParseFitSettingError { given: s.to_string(), expected: "all-at-once, reduced" }),
+        }
+    }
+}
+
+impl fmt::Display for FitMethod {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
@@ -109,6 +149,8 @@ impl fmt::Display for FitStart {
 pub struct FitSettings {
     /// The free parameters and their bounds, in the order of the report.
     pub free: Vec<FreeParameter>,
+    /// How the fit is handed to Ipopt.
+    pub method: FitMethod,
     /// The Hessian given to Ipopt.
     pub hessian: FitHessian,
     /// Where the trajectory starts.
@@ -136,10 +178,10 @@ pub const MUMPS_PIVTOL: f64 = 0.1;
 pub const DEFAULT_MAX_ITER: u32 = 200;
 
 impl FitSettings {
-    /// The defaults for these free parameters: exact Hessian, [`FitStart::Auto`],
-    /// [`DEFAULT_TOL`], [`DEFAULT_MAX_ITER`].
+    /// The defaults for these free parameters: [`FitMethod::AllAtOnce`], exact Hessian,
+    /// [`FitStart::Auto`], [`DEFAULT_TOL`], [`DEFAULT_MAX_ITER`].
     pub fn new(free: Vec<FreeParameter>) -> FitSettings {
-        FitSettings { free, hessian: FitHessian::Exact, start: FitStart::Auto, tol: DEFAULT_TOL, max_iter: DEFAULT_MAX_ITER }
+        FitSettings { free, method: FitMethod::AllAtOnce, hessian: FitHessian::Exact, start: FitStart::Auto, tol: DEFAULT_TOL, max_iter: DEFAULT_MAX_ITER }
     }
 
     /// The names of the free parameters.

@@ -28,6 +28,7 @@ use super::observe::Observations;
 use super::problem::Plans;
 use crate::discrete::Action;
 use crate::model::Workspace;
+use crate::solve::linalg::roundoff::residual_roundoff_level;
 use crate::solve::linalg::SparseFactorization;
 
 /// An eigenvalue of the scaled curvature `C` below this fraction of its largest makes
@@ -46,26 +47,29 @@ pub(super) fn curvature(
     z: &[f64],
     ws: &mut Workspace,
 ) -> Option<DMatrix<f64>> {
-    let (s, _) = factored_sensitivities(action, plans, z, ws)?;
+    let (s, _, _) = factored_sensitivities(action, plans, z, ws)?;
     let a = weighted_sensitivities(observations, &s);
     Some(a.transpose() * &a)
 }
 
 /// The trajectory's sensitivities `dP/dθ` (one column per parameter) at `z` and the
-/// workspace's parameters, and the factorization of `∂R/∂P` they were solved with (the
-/// fit's starting multipliers solve with its transpose too); `None` when `∂R/∂P` is
-/// singular.
+/// workspace's parameters, the factorization of `∂R/∂P` they were solved with (the
+/// fit's starting multipliers solve with its transpose too) and the round-off level
+/// `4 ε maxᵢ Σⱼ |∂Rᵢ/∂Pⱼ| |Pⱼ|` of `R` there (the reduced fit's solves stop at it);
+/// `None` when `∂R/∂P` is singular.
 pub(super) fn factored_sensitivities<'p>(
     action: &Action,
     plans: &'p Plans,
     z: &[f64],
     ws: &mut Workspace,
-) -> Option<(DMatrix<f64>, RefMut<'p, SparseFactorization>)> {
+) -> Option<(DMatrix<f64>, RefMut<'p, SparseFactorization>, f64)> {
     let lay = &action.layout;
     let mut zp = z.to_vec();
     zp[lay.n_p..].fill(0.0);
     let mut values = vec![0.0; plans.jacobian.structure.len()];
     action.matrix_values(&plans.jacobian, &zp, &mut values, ws);
+    let entries = plans.jacobian.structure.iter().zip(&values).map(|(&(r, c), &v)| (r as usize, c as usize, v));
+    let roundoff = residual_roundoff_level(entries, &zp[..lay.n_p], lay.n_m);
     let mut lu = plans.factor_jacobian(lay.n_p, &values)?;
     let free = action.model.parameters.as_ref().map_or(0, |p| p.names.len());
     let mut dr = vec![0.0; plans.parameters.jacobian.len()];
@@ -83,7 +87,7 @@ pub(super) fn factored_sensitivities<'p>(
         }
         s.set_column(j, &DVector::from_vec(column));
     }
-    Some((s, lu))
+    Some((s, lu, roundoff))
 }
 
 /// `A = W^{1/2} E S`: the weighted change of the model's values at the data per unit

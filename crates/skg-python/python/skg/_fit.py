@@ -116,6 +116,7 @@ def fit(
     nodes: Optional[int] = None,
     set: Optional[Mapping[str, Any]] = None,
     operator: Optional[str] = None,
+    method: Optional[str] = None,
     hessian: Optional[str] = None,
     start: Optional[str] = None,
     tol: Optional[float] = None,
@@ -130,6 +131,9 @@ def fit(
     (NaN: a value not measured). ``free``: names, or the command line's items with
     bounds (``"c>=0"``, ``"mu in [0, 2]"``); ``bounds`` adds bounds by name
     (``{"c": (0, None)}``). The scene's values (with ``set``) are the starting values.
+    ``method``: ``"all-at-once"`` (default: the trajectory and the parameters together)
+    or ``"reduced"`` (the parameters alone, the trajectory solved at every point: faster,
+    but it can stop where single shooting does; docs/fitting.md).
     ``hessian``: ``"exact"`` (default) or ``"limited-memory"``; ``start``: ``"auto"``
     (default: the data for a scene without constraints or data of every coordinate,
     else the solve), ``"data"`` or
@@ -152,6 +156,7 @@ def fit(
         nodes=nodes,
         set=None if set is None else plain(dict(set), "set"),
         operator=operator,
+        method=method,
         hessian=hessian,
         start=start,
         tol=tol,

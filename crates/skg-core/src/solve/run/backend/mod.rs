@@ -48,10 +48,11 @@ use skg_ipopt as ipopt;
 #[cfg(feature = "ipopt")]
 mod ipopt_square;
 mod systems;
+pub(crate) use systems::Reduced;
 
 #[cfg(feature = "ipopt")]
 pub use ipopt_square::mumps_options;
-use systems::{Full, Reduced};
+use systems::Full;
 
 /// The status of the backend that ended a solve: Ipopt's or Newton's own.
 ///

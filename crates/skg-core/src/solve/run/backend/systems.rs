@@ -8,7 +8,7 @@ use crate::model::Workspace;
 use crate::solve::linalg::{EvalError, SquareSystem};
 
 /// The reduced system R(P) = ∂S/∂M = 0.
-pub(super) struct Reduced<'a> {
+pub(crate) struct Reduced<'a> {
     action: &'a Action,
     /// The whole unknown vector: the plus block set from `x`, the minus block zero (or
     /// the Hessian's weights).
@@ -21,8 +21,18 @@ pub(super) struct Reduced<'a> {
 impl<'a> Reduced<'a> {
     /// The reduced system of `action` with the plans `jac` (and `hess`), starting from
     /// the whole unknown vector `z0` (its minus block is not used).
-    pub(super) fn new(action: &'a Action, z0: &[f64], jac: &'a MatrixPlan, hess: Option<&'a MatrixPlan>) -> Self {
-        Reduced { action, z: z0.to_vec(), ws: action.model.workspace(), jac, hess }
+    pub(crate) fn new(action: &'a Action, z0: &[f64], jac: &'a MatrixPlan, hess: Option<&'a MatrixPlan>) -> Self {
+        Reduced::with_workspace(action, z0, jac, hess, action.model.workspace())
+    }
+
+    /// The same, evaluated with `ws` (a fit's workspace, which holds its parameters).
+    pub(crate) fn with_workspace(action: &'a Action, z0: &[f64], jac: &'a MatrixPlan, hess: Option<&'a MatrixPlan>, ws: Workspace) -> Self {
+        Reduced { action, z: z0.to_vec(), ws, jac, hess }
+    }
+
+    /// The workspace back.
+    pub(crate) fn into_workspace(self) -> Workspace {
+        self.ws
     }
 
     fn set(&mut self, x: &[f64], minus: Option<&[f64]>) {
