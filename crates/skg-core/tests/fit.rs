@@ -295,6 +295,27 @@ fn a_double_pendulums_release_angles_are_recovered_where_shooting_stops_short() 
     assert_eq!(fitted.fit.as_ref().and_then(|t| t.data.as_ref()).map(|d| d.get_ref().as_str()), Some("data.csv"));
 }
 
+/// The reduced fit is single shooting on the discrete equations: on the double
+/// pendulum it stops in the wrong minimum where scipy's shooting stops (a1 = 2.1656,
+/// a2 = 2.3065, docs/benchmarks.md#fitting), and verifies there; its trial points far
+/// from Ipopt's iterate, where Newton's method fails, cost a bounded number of solves
+/// (each trial starts from the iterate, not from a rejected farther trial).
+#[test]
+fn the_reduced_fit_of_the_double_pendulum_stops_where_shooting_does() {
+    let path = common::root().join("examples/fit/double_pendulum.toml");
+    let file = SceneFile::load(&path).unwrap();
+    let mut settings = FitSettings::new(fit::free_of_scene(&file).unwrap());
+    settings.method = FitMethod::Reduced;
+    let data_path = fit::data_of_scene(&file).unwrap().unwrap();
+    let scene = file.resolve(&Overrides::default()).unwrap();
+    let data = Data::read(&data_path, &scene).unwrap();
+    let f = fit(&scene, &Overrides::default(), &data, &settings).unwrap();
+    assert_recovered(&f, &[("a1", 2.1656), ("a2", 2.3065)], 5e-3);
+    assert!(f.report.misfit.sum_of_squares > 100.0, "misfit {}", f.report.misfit.sum_of_squares);
+    let work = f.report.equations_of_motion.unwrap();
+    assert!(work.solves <= 400 && work.failures <= 60, "{work:?}");
+}
+
 #[test]
 fn a_friction_coefficient_is_recovered_from_a_sliding_block() {
     // The block of friction_stop observed while it slides (the span ends before it stops).

@@ -79,9 +79,11 @@ use start::{put_data, start_states, Start};
 pub use data::{Data, DataError, DataPlace, Observation, SIGMA_PREFIX};
 pub use files::{fit_into, write_fit, FitIntoError, FitWritten, DATA_FILE, FITTED_SCENE_FILE};
 pub use free::{split_list, FreeParameter, FreeParameterError};
-pub use report::{CovarianceReport, DataReport, FitReport, MisfitReport, ParameterReport};
 pub use reduced::InnerWork;
-pub use settings::{FitHessian, FitMethod, FitSettings, FitStart, ParseFitSettingError, ACCEPTABLE_ITER, DEFAULT_MAX_ITER, DEFAULT_TOL, MUMPS_PIVTOL};
+pub use report::{CovarianceReport, DataReport, FitReport, MisfitReport, ParameterReport};
+pub use settings::{
+    FitHessian, FitMethod, FitSettings, FitStart, ParseFitSettingError, ACCEPTABLE_ITER, DEFAULT_MAX_ITER, DEFAULT_TOL, MUMPS_PIVTOL,
+};
 pub use statistics::{covariance, undetermined, SINGULAR};
 pub use table::{data_of_scene, free_of_scene};
 

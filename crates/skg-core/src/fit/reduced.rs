@@ -43,14 +43,14 @@ use crate::solve::backend::Reduced;
 use crate::solve::linalg::{max_abs, NewtonOptions, NewtonStatus, SparseFactorization, SystemSolver};
 
 /// The iteration limit of each solve of the equations of motion.
-const NEWTON_MAX_ITER: u32 = 50;
+const NEWTON_MAX_ITER: u32 = 20;
 
 /// At most this many chord steps begin a solve (`ReducedFit::chord_steps`), each
 /// reducing `max |R|` at least by [`CHORD_CONTRACTION`].
 const CHORD_STEPS: usize = 12;
 const CHORD_CONTRACTION: f64 = 0.5;
 
-/// The trajectory solved at one point `θ`, and the derivatives there once asked for.
+/// The trajectory solved at one point `θ`.
 struct Solved {
     theta: Vec<f64>,
     /// `(P, θ)`: the trajectory's unknowns, then the parameters.
@@ -58,10 +58,22 @@ struct Solved {
     /// `max |R|` there, and whether that is the round-off level above the tolerance.
     residual: f64,
     at_roundoff: bool,
-    /// `∇F` and `∇²F` (module documentation), and the sensitivities `S = dP/dθ`.
-    derivatives: Option<(DVector<f64>, DMatrix<f64>)>,
-    sensitivities: Option<DMatrix<f64>>,
-    /// The round-off level of `R` at `∂R/∂P` there, once the derivatives are computed.
+}
+
+/// The last point whose derivatives were asked for: Ipopt's iterate. The solves of the
+/// points Ipopt tries next start from it (its trial points lie on a line from it; a
+/// rejected trial farther away is no start for a shorter one: on the double pendulum
+/// Newton's method failed from one).
+struct Anchor {
+    theta: Vec<f64>,
+    /// Its trajectory's unknowns `P`.
+    p: Vec<f64>,
+    /// `∇F` and `∇²F` (module documentation).
+    gradient: DVector<f64>,
+    hessian: DMatrix<f64>,
+    /// The sensitivities `S = dP/dθ`.
+    sensitivities: DMatrix<f64>,
+    /// The round-off level of `R` at `∂R/∂P` there.
     roundoff: f64,
 }
 
@@ -98,6 +110,7 @@ pub(super) struct ReducedFit<'a> {
     ws: Option<Workspace>,
     /// The last point solved.
     solved: Solved,
+    anchor: Option<Anchor>,
     hessian: Vec<(u32, u32)>,
     stop: StopTest,
     stopped: Option<KktStop>,
@@ -117,7 +130,8 @@ impl<'a> ReducedFit<'a> {
         stop: StopTest,
     ) -> Result<Self, String> {
         let n_p = action.layout.n_p;
-        let options = NewtonOptions { tol: stop.constraints, max_iter: NEWTON_MAX_ITER, chord: true, single_precision: false, deadline: None };
+        let options =
+            NewtonOptions { tol: stop.constraints, max_iter: NEWTON_MAX_ITER, chord: true, single_precision: false, deadline: None };
         let k = free.len() as u32;
         let hessian = (0..k).flat_map(|i| (0..=i).map(move |j| (i, j))).collect();
         let theta0 = x0[n_p..].to_vec();
@@ -128,17 +142,23 @@ impl<'a> ReducedFit<'a> {
         let mut r = vec![0.0; n_p];
         action.gradient(&z, true, &mut r, &mut ws);
         let residual = max_abs(&r);
-        let solved = Solved {
-            theta: theta0.clone(),
-            x: x0.to_vec(),
-            residual,
-            at_roundoff: residual > options.tol,
-            derivatives: None,
-            sensitivities: None,
-            roundoff: 0.0,
-        };
+        let solved = Solved { theta: theta0.clone(), x: x0.to_vec(), residual, at_roundoff: residual > options.tol };
         let work = InnerWork::default();
-        let mut fit = ReducedFit { action, plans, observations, free, newton: None, options, ws: Some(ws), solved, hessian, stop, stopped: None, work };
+        let mut fit = ReducedFit {
+            action,
+            plans,
+            observations,
+            free,
+            newton: None,
+            options,
+            ws: Some(ws),
+            solved,
+            anchor: None,
+            hessian,
+            stop,
+            stopped: None,
+            work,
+        };
         fit.derivatives_at(&theta0).map_err(|e| e.0)?;
         Ok(fit)
     }
@@ -192,34 +212,27 @@ impl<'a> ReducedFit<'a> {
         };
         self.ws = Some(ws);
         self.work.solve_s += t.elapsed().as_secs_f64();
-        self.solved = Solved {
-            theta: theta.to_vec(),
-            x: x.into_iter().chain(theta.iter().copied()).collect(),
-            residual,
-            at_roundoff,
-            derivatives: None,
-            sensitivities: None,
-            roundoff: 0.0,
-        };
+        self.solved = Solved { theta: theta.to_vec(), x: x.into_iter().chain(theta.iter().copied()).collect(), residual, at_roundoff };
         Ok(())
     }
 
-    /// The whole unknown vector at `theta` predicted from the last point solved: its
-    /// trajectory moved along its sensitivities when known (off by `O(|δθ|²)` instead of
-    /// `O(|δθ|)`).
+    /// The whole unknown vector at `theta` predicted from Ipopt's iterate (the anchor): its
+    /// trajectory moved along its sensitivities (off by `O(|δθ|²)` instead of `O(|δθ|)`).
     fn predicted(&self, theta: &[f64]) -> Vec<f64> {
         let n_p = self.action.layout.n_p;
         let mut z = vec![0.0; self.action.layout.len()];
-        z[..n_p].copy_from_slice(&self.solved.x[..n_p]);
-        if let Some(s) = &self.solved.sensitivities {
-            let step = DVector::from_iterator(theta.len(), theta.iter().zip(&self.solved.theta).map(|(a, b)| a - b));
-            z[..n_p].iter_mut().zip((s * step).iter()).for_each(|(p, d)| *p += d);
+        match &self.anchor {
+            Some(a) => {
+                let step = DVector::from_iterator(theta.len(), theta.iter().zip(&a.theta).map(|(t, t0)| t - t0));
+                z[..n_p].iter_mut().zip(a.p.iter().zip((&a.sensitivities * step).iter())).for_each(|(z, (p, d))| *z = p + d);
+            }
+            None => z[..n_p].copy_from_slice(&self.solved.x[..n_p]),
         }
         z
     }
 
     /// Chord steps `J₀ δP = −R(P)` from `z` on the factorization of `∂R/∂P` the
-    /// derivatives at the last point solved made (`J₀`, the Jacobian there): near that
+    /// derivatives at Ipopt's iterate made (`J₀`, the Jacobian there): near that
     /// point they converge without a new factorization, linearly. They go on while each
     /// at least halves `max |R|`, as far as they take it: a solve ends as Newton's method
     /// ends, at the tolerance or where `R` stops decreasing below its round-off level
@@ -228,11 +241,9 @@ impl<'a> ReducedFit<'a> {
     /// its standard errors). The end `(max |R|, at the round-off level)`, `z` the better
     /// of the last two points; `None` for Newton's method to go on from `z`.
     fn chord_steps(&mut self, z: &mut [f64], ws: &mut Workspace) -> Option<(f64, bool)> {
-        if self.solved.sensitivities.is_none() {
-            return None;
-        }
+        let roundoff = self.anchor.as_ref()?.roundoff;
         let n_p = self.action.layout.n_p;
-        let (tol, roundoff) = (self.options.tol, self.solved.roundoff);
+        let tol = self.options.tol;
         let mut lu = self.plans.jacobian_lu.borrow_mut();
         let lu = lu.as_mut()?;
         let mut r = vec![0.0; n_p];
@@ -265,23 +276,21 @@ impl<'a> ReducedFit<'a> {
         None
     }
 
-    /// `∇F` and `∇²F` at `theta` (module documentation).
-    fn derivatives_at(&mut self, theta: &[f64]) -> Result<&(DVector<f64>, DMatrix<f64>), EvalError> {
+    /// The derivatives at `theta`, which becomes the anchor (module documentation).
+    fn derivatives_at(&mut self, theta: &[f64]) -> Result<&Anchor, EvalError> {
         self.solve_at(theta)?;
-        if self.solved.derivatives.is_none() {
+        if self.anchor.as_ref().is_none_or(|a| a.theta != theta) {
             let t = std::time::Instant::now();
             let found = self.derivatives();
             self.work.derivatives += 1;
             self.work.derivatives_s += t.elapsed().as_secs_f64();
-            let (d, s, roundoff) = found.ok_or_else(|| EvalError("∂R/∂P is singular at the solved trajectory".into()))?;
-            self.solved.derivatives = Some(d);
-            self.solved.sensitivities = Some(s);
-            self.solved.roundoff = roundoff;
+            self.anchor = Some(found.ok_or_else(|| EvalError("∂R/∂P is singular at the solved trajectory".into()))?);
         }
-        Ok(self.solved.derivatives.as_ref().expect("just set"))
+        Ok(self.anchor.as_ref().expect("just set"))
     }
 
-    fn derivatives(&mut self) -> Option<((DVector<f64>, DMatrix<f64>), DMatrix<f64>, f64)> {
+    /// The derivatives at the last point solved, `None` where `∂R/∂P` is singular.
+    fn derivatives(&mut self) -> Option<Anchor> {
         let lay = &self.action.layout;
         let (n_p, k) = (lay.n_p, self.free.len());
         let mut ws = self.ws.take().expect("the workspace is returned after each solve");
@@ -290,8 +299,7 @@ impl<'a> ReducedFit<'a> {
         let found = statistics::factored_sensitivities(self.action, self.plans, &z, &mut ws).and_then(|(s, mut lu, roundoff)| {
             let mut grad_f = vec![0.0; n_p + k];
             self.observations.gradient(&self.solved.x, &mut grad_f);
-            let grad_p = DVector::from_column_slice(&grad_f[..n_p]);
-            let gradient = s.tr_mul(&grad_p);
+            let gradient = s.tr_mul(&DVector::from_column_slice(&grad_f[..n_p]));
             let mut y: Vec<f64> = grad_f[..n_p].iter().map(|g| -g).collect();
             if !lu.solve_transposed(&mut y) {
                 return None;
@@ -299,7 +307,8 @@ impl<'a> ReducedFit<'a> {
             drop(lu);
             z[n_p..].copy_from_slice(&y);
             let hessian = self.reduced_hessian(&s, &z, &mut ws);
-            Some(((gradient, hessian), s, roundoff))
+            let (theta, p) = (self.solved.theta.clone(), self.solved.x[..n_p].to_vec());
+            Some(Anchor { theta, p, gradient, hessian, sensitivities: s, roundoff })
         });
         self.ws = Some(ws);
         found
@@ -323,7 +332,15 @@ impl<'a> ReducedFit<'a> {
             .chain(self.observations.hessian.iter().zip(&misfit))
             .chain(self.plans.parameters.hessian.iter().zip(&params));
         // Row `i` of Z.
-        let row = |i: usize, j: usize| if i < n_p { s[(i, j)] } else if i - n_p == j { 1.0 } else { 0.0 };
+        let row = |i: usize, j: usize| {
+            if i < n_p {
+                s[(i, j)]
+            } else if i - n_p == j {
+                1.0
+            } else {
+                0.0
+            }
+        };
         let mut h = DMatrix::zeros(k, k);
         for (&(r, c), &v) in entries {
             let (r, c) = (r as usize, c as usize);
@@ -356,8 +373,7 @@ impl Problem for ReducedFit<'_> {
         Ok(self.observations.misfit(&self.solved.x))
     }
     fn objective_gradient(&mut self, theta: &[f64], grad: &mut [f64]) -> Result<(), EvalError> {
-        let (g, _) = self.derivatives_at(theta)?;
-        grad.copy_from_slice(g.as_slice());
+        grad.copy_from_slice(self.derivatives_at(theta)?.gradient.as_slice());
         Ok(())
     }
     fn constraints(&mut self, _theta: &[f64], _c: &mut [f64]) -> Result<(), EvalError> {
@@ -374,7 +390,7 @@ impl Problem for ReducedFit<'_> {
     }
     fn hessian_values(&mut self, theta: &[f64], obj_factor: f64, _lambda: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
         self.derivatives_at(theta)?;
-        let (_, h) = self.solved.derivatives.as_ref().expect("just computed");
+        let h = &self.anchor.as_ref().expect("just computed").hessian;
         for (v, &(i, j)) in values.iter_mut().zip(&self.hessian) {
             *v = obj_factor * h[(i as usize, j as usize)];
         }
@@ -384,10 +400,11 @@ impl Problem for ReducedFit<'_> {
         let stationary = !stat.restoration && stat.iter >= 1 && stat.inf_du <= self.stop.tol;
         self.stopped = None;
         if stationary {
-            let theta = self.solved.theta.clone();
-            let hold = barrier::hold(self.free, &theta, stat.mu, self.stop.tol, self.stop.bound_relax_factor);
-            let negligible = hold.free_of_force()
-                || self.solved.derivatives.as_ref().is_some_and(|(_, h)| hold.negligible(h));
+            // Ipopt's iterate is the last point of the gradient: the anchor.
+            let negligible = self.anchor.as_ref().is_some_and(|a| {
+                let hold = barrier::hold(self.free, &a.theta, stat.mu, self.stop.tol, self.stop.bound_relax_factor);
+                hold.negligible(&a.hessian)
+            });
             if negligible {
                 self.stopped = Some(if self.solved.at_roundoff { KktStop::RoundOff } else { KktStop::Tolerance });
             }
@@ -448,7 +465,8 @@ mod tests {
         let mut fit = ReducedFit::new(&mut action, &plans, &observations, &free, &x0, stop).unwrap();
 
         let theta = [2.3, 0.7];
-        let (g, h) = fit.derivatives_at(&theta).unwrap().clone();
+        let at = fit.derivatives_at(&theta).unwrap();
+        let (g, h) = (at.gradient.clone(), at.hessian.clone());
         let mut misfit = |t: [f64; 2]| fit.objective(&t).unwrap();
         let step = 1e-5;
         for j in 0..2 {
@@ -458,15 +476,20 @@ mod tests {
             let fd = (misfit(up) - misfit(down)) / (2.0 * step);
             assert!((g[j] - fd).abs() <= 1e-6 * g[j].abs().max(1.0), "gradient {j}: {} against {fd}", g[j]);
         }
-        let mut gradient = |t: [f64; 2]| fit.derivatives_at(&t).unwrap().0.clone();
-        
+        let mut gradient = |t: [f64; 2]| fit.derivatives_at(&t).unwrap().gradient.clone();
+
         for j in 0..2 {
             let (mut up, mut down) = (theta, theta);
             up[j] += step;
             down[j] -= step;
             let fd = (gradient(up) - gradient(down)) / (2.0 * step);
             for i in 0..2 {
-                assert!((h[(i, j)] - fd[i]).abs() <= 1e-5 * h[(i, j)].abs().max(1.0), "Hessian ({i}, {j}): {} against {}", h[(i, j)], fd[i]);
+                assert!(
+                    (h[(i, j)] - fd[i]).abs() <= 1e-5 * h[(i, j)].abs().max(1.0),
+                    "Hessian ({i}, {j}): {} against {}",
+                    h[(i, j)],
+                    fd[i]
+                );
             }
         }
         // Residuals far from zero, so that the Hessian's terms beyond Gauss–Newton's count.

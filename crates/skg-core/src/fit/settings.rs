@@ -181,7 +181,14 @@ impl FitSettings {
     /// The defaults for these free parameters: [`FitMethod::AllAtOnce`], exact Hessian,
     /// [`FitStart::Auto`], [`DEFAULT_TOL`], [`DEFAULT_MAX_ITER`].
     pub fn new(free: Vec<FreeParameter>) -> FitSettings {
-        FitSettings { free, method: FitMethod::AllAtOnce, hessian: FitHessian::Exact, start: FitStart::Auto, tol: DEFAULT_TOL, max_iter: DEFAULT_MAX_ITER }
+        FitSettings {
+            free,
+            method: FitMethod::AllAtOnce,
+            hessian: FitHessian::Exact,
+            start: FitStart::Auto,
+            tol: DEFAULT_TOL,
+            max_iter: DEFAULT_MAX_ITER,
+        }
     }
 
     /// The names of the free parameters.
