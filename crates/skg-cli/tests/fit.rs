@@ -29,6 +29,29 @@ fn the_example_fits_writes_its_files_and_exits_by_the_convention() {
     }
     assert!(std::fs::read_to_string(dir.path().join("fit/fitted.toml")).unwrap().starts_with("# Fitted by skg-solve"));
 
+    // The reduced fit reaches the same values; it says so on its first line and in the
+    // summary; what only the all-at-once fit does is refused naming the flag's value.
+    let o = run(&["--free", "k>=0,c>=0,x0,v0", "--fit-method", "reduced", "-o", "reduced"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.lines().next().unwrap().contains("Ipopt iterations of the reduced fit ("), "{t}");
+    let reduced: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("reduced/summary.json")).unwrap()).unwrap();
+    assert_eq!(reduced["fit"]["method"], "reduced");
+    assert!(reduced["fit"]["equations_of_motion"]["solves"].as_u64().unwrap() >= 1);
+    assert_eq!(fit["method"], "all-at-once");
+    assert!(fit["equations_of_motion"].is_null());
+    for name in ["k", "c", "x0", "v0"] {
+        let (a, b) = (fit["parameters"][name]["value"].as_f64().unwrap(), reduced["fit"]["parameters"][name]["value"].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-7 * a.abs(), "{name}: {a} against {b}");
+    }
+    let o = run(&["--free", "k", "--fit-method", "reduced", "--fit-hessian", "limited-memory", "-o", "refused"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("the limited-memory Hessian is for the all-at-once fit"), "{t}");
+    let o = run(&["--free", "k", "--fit-method", "shooting", "-o", "usage"]);
+    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
+
     let o = run(&["--free", "m,k,c", "-o", "undetermined"]);
     let t = common::text(&o);
     assert_eq!(o.status.code(), Some(1), "{t}");

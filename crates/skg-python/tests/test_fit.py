@@ -52,6 +52,18 @@ def test_a_mapping_of_arrays_is_fitted_to_the_closed_form():
     np.testing.assert_allclose(f.solution.t[[0, -1]], [0, 6])
 
 
+def test_the_reduced_fit_reaches_the_same_values():
+    scene = skg.Scene.from_toml(OSCILLATOR)
+    data = {"t": T, "x": oscillator(T, 4.0, 0.3, 1.2, -0.5)}
+    f = skg.fit(scene, data, ["k", "c", "x0", "v0"], method="reduced")
+    assert f.trusted and f.report["method"] == "reduced"
+    assert f.report["equations_of_motion"]["solves"] >= 1
+    for name, truth in {"k": 4.0, "c": 0.3, "x0": 1.2, "v0": -0.5}.items():
+        assert f.parameters[name] == pytest.approx(truth, rel=1e-6)
+    with pytest.raises(ValueError, match="method: `shooting` is not one of all-at-once, reduced"):
+        skg.fit(scene, data, ["k"], method="shooting")
+
+
 def test_bounds_a_csv_file_and_files_written(tmp_path):
     scene = skg.Scene.from_toml(OSCILLATOR)
     path = tmp_path / "data.csv"
