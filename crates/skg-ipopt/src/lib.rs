@@ -56,8 +56,10 @@
 //! * **Errors from callbacks.** A callback returning `Err` reports failure to Ipopt,
 //!   which may recover by cutting the step. The first such error is kept: if Ipopt did
 //!   not succeed ([`Status::is_success`]) [`solve`] returns [`SolveError::Eval`] with it
-//!   (like cyipopt); if Ipopt recovered and converged anyway, [`solve`] returns `Ok` and
-//!   the error is only recorded in [`Solution::first_eval_error`].
+//!   (like cyipopt); if Ipopt recovered and converged anyway, or the intermediate
+//!   callback stopped it ([`Status::UserRequestedStop`]: the caller's verdict on the
+//!   iterate), [`solve`] returns `Ok` and the error is only recorded in
+//!   [`Solution::first_eval_error`].
 //! * **A non-converged Ipopt status is not an `Err`**: it is a [`Solution`] whose
 //!   [`Solution::status`] tells what happened; the caller decides.
 #![warn(missing_docs, unsafe_op_in_unsafe_fn)]

@@ -84,7 +84,9 @@ fn solve_from<P: Problem>(
     let created = create_problem::<P>(&dims, &mut bounds, options, lock)?;
     let mut run = run_ipopt(created, problem, x0, multipliers, &dims, options.max_iter);
     let (constraint_values, max_constraint_violation) = recompute_constraints(problem, &run.x, &bounds, &mut run.record);
-    if !run.status.is_success() {
+    // A stop the caller's intermediate callback asked for is the caller's verdict on the
+    // iterate, which it needs, whatever failed on the way.
+    if !run.status.is_success() && run.status != Status::UserRequestedStop {
         if let Some(e) = run.record.first_error {
             return Err(SolveError::Eval(e));
         }

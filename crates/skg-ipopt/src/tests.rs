@@ -267,6 +267,38 @@ fn callback_error_at_a_trial_point_is_recorded_when_ipopt_recovers() {
     assert!((sol.x[0] - 2.0_f64.sqrt()).abs() < 1e-10);
 }
 
+/// [`Circle`] with the domain error, stopped by its intermediate callback at iteration 3.
+struct StoppedAfterAnError(Circle);
+impl Problem for StoppedAfterAnError {
+    fn num_variables(&self) -> usize {
+        self.0.num_variables()
+    }
+    fn num_constraints(&self) -> usize {
+        self.0.num_constraints()
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.0.constraints(x, c)
+    }
+    fn jacobian_structure(&self) -> &[(u32, u32)] {
+        self.0.jacobian_structure()
+    }
+    fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
+        self.0.jacobian_values(x, v)
+    }
+    fn intermediate(&mut self, stat: &IterationStat) -> bool {
+        stat.iter < 3
+    }
+}
+
+#[test]
+fn a_stop_the_callback_asks_for_returns_the_iterate_after_a_callback_error() {
+    let sol = solve(&mut StoppedAfterAnError(Circle::new(2.0, Mode::DomainError)), &[0.3, 0.3], &Options::default())
+        .expect("the caller's stop is not an error");
+    assert_eq!(sol.status, Status::UserRequestedStop);
+    assert!(sol.first_eval_error.as_ref().is_some_and(|e| e.0.contains("outside the domain")), "{:?}", sol.first_eval_error);
+    assert!(sol.x.iter().all(|v| v.is_finite() && *v < 3.0), "{:?}", sol.x);
+}
+
 #[test]
 fn concurrent_solves_are_serialized_and_correct() {
     let failures = AtomicUsize::new(0);
