@@ -5,7 +5,7 @@ shooting, finite-difference Jacobian).
     python examples/fit/shooting.py [path/to/skg-solve]
 
 Writes rolling_disk.csv (the closed-form track) and double_pendulum.csv (a tight
-integration of the double pendulum's hand-derived equations), runs both on each case and
+integration of the double pendulum's hand-derived equations), runs the fits of VARIANTS and scipy's on each case and
 prints one table row per method: iterations (Ipopt's) or function evaluations (scipy's), wall time,
 the recovered values. Also times one verified solve of the fitted scene.
 """
@@ -118,6 +118,15 @@ def skg_fit(exe, scene, data=None, free=None, extra=()):
     return values, fit["iterations"], wall, solve, fit["misfit"]["sum_of_squares"]
 
 
+# The fits compared: all at once with the exact and the limited-memory Hessian, and the
+# reduced fit (docs/fitting.md#two-ways-to-hand-the-fit-to-ipopt).
+VARIANTS = [
+    ("exact Hessian", ["--fit-hessian", "exact"]),
+    ("limited-memory Hessian", ["--fit-hessian", "limited-memory"]),
+    ("reduced", ["--fit-method", "reduced"]),
+]
+
+
 def row(case, method, work, wall, values, misfit):
     vals = ", ".join(f"{v:.9g}" for v in values)
     print(f"| {case} | {method} | {work} | {wall:.3f} | {vals} | {misfit:.3g} |")
@@ -132,26 +141,26 @@ def main():
     )
     print("| case | method | iterations / evaluations | wall s | values | misfit |")
     print("|---|---|---:|---:|---|---:|")
-    for hessian in ("exact", "limited-memory"):
-        values, it, wall, solve, misfit = skg_fit(exe, str(HERE / "rolling_disk.toml"), str(HERE / "rolling_disk.csv"), "alpha in [0, 1.5],v0", ["--fit-hessian", hessian])
-        row("rolling disk", f"skg-solve fit, {hessian} Hessian (one verified solve: {solve:.3f} s)", it, wall, values, misfit)
+    for label, flags in VARIANTS:
+        values, it, wall, solve, misfit = skg_fit(exe, str(HERE / "rolling_disk.toml"), str(HERE / "rolling_disk.csv"), "alpha in [0, 1.5],v0", flags)
+        row("rolling disk", f"skg-solve fit, {label} (one verified solve: {solve:.3f} s)", it, wall, values, misfit)
     p, n, wall, misfit = scipy_fit(disk_shoot, [0.4, 4.0], t, np.concatenate([x, y]))
     row("rolling disk", "least_squares + solve_ivp", n, wall, p, misfit)
 
     lines = [l for l in (HERE / "oscillator.csv").read_text().splitlines() if not l.startswith("#")][1:]
     arr = np.array([[float(v) for v in l.split(",")] for l in lines])
-    for hessian in ("exact", "limited-memory"):
-        values, it, wall, solve, misfit = skg_fit(exe, str(HERE / "oscillator.toml"), extra=["--fit-hessian", hessian])
-        row("oscillator", f"skg-solve fit, {hessian} Hessian (one verified solve: {solve:.3f} s)", it, wall, values, misfit)
+    for label, flags in VARIANTS:
+        values, it, wall, solve, misfit = skg_fit(exe, str(HERE / "oscillator.toml"), extra=flags)
+        row("oscillator", f"skg-solve fit, {label} (one verified solve: {solve:.3f} s)", it, wall, values, misfit)
     p, n, wall, misfit = scipy_fit(oscillator_shoot, [3.0, 0.2, 1.0, 0.0], arr[:, 0], arr[:, 1], arr[:, 2])
     row("oscillator", "least_squares + solve_ivp", n, wall, p, misfit)
 
     t = write_double_pendulum()
     lines = [l for l in (HERE / "double_pendulum.csv").read_text().splitlines() if not l.startswith("#")][1:]
     data = np.array([[float(v) for v in l.split(",")] for l in lines])[:, 1:].T.ravel()
-    for hessian in ("exact", "limited-memory"):
-        values, it, wall, solve, misfit = skg_fit(exe, str(HERE / "double_pendulum.toml"), extra=["--fit-hessian", hessian])
-        row("double pendulum", f"skg-solve fit, {hessian} Hessian (one verified solve: {solve:.3f} s)", it, wall, values, misfit)
+    for label, flags in VARIANTS:
+        values, it, wall, solve, misfit = skg_fit(exe, str(HERE / "double_pendulum.toml"), extra=flags)
+        row("double pendulum", f"skg-solve fit, {label} (one verified solve: {solve:.3f} s)", it, wall, values, misfit)
     p, n, wall, misfit = scipy_fit(pendulum_positions, [1.9, 2.4], t, data)
     row("double pendulum", "least_squares + solve_ivp", n, wall, p, misfit)
 
