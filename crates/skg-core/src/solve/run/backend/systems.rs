@@ -30,7 +30,8 @@ impl<'a> Reduced<'a> {
         Reduced { action, z: z0.to_vec(), ws, jac, hess }
     }
 
-    /// The workspace back.
+    /// The workspace back (the reduced fit's, `fit/reduced.rs`).
+    #[cfg(feature = "ipopt")]
     pub(crate) fn into_workspace(self) -> Workspace {
         self.ws
     }
