@@ -25,7 +25,9 @@
 //!    is that solve with the data in place of the coordinates they observe ([`FitStart`],
 //!    `start.rs`);
 //! 4. Ipopt minimizes the misfit under the constraints (`problem.rs`), from its own
-//!    least-squares multipliers computed here (`multipliers.rs`);
+//!    least-squares multipliers computed here (`multipliers.rs`); or, with
+//!    [`FitMethod::Reduced`], in the parameters alone, the trajectory solved from the
+//!    equations at every point (`reduced.rs`);
 //! 5. at the solution the trajectory's sensitivities give the Gauss–Newton curvature,
 //!    the covariance and the standard errors, and tell whether the data determine the
 //!    parameters (`statistics.rs`; the same test runs on the start, so that a fit the
@@ -168,27 +170,9 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let t_opt = Instant::now();
     let bound_relax_factor = scene.solver.ipopt.get("bound_relax_factor").and_then(ipopt_number).unwrap_or(barrier::BOUND_RELAX_FACTOR);
     let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol), bound_relax_factor };
-    let mut inner = None;
-    let (solution, at_kkt_point) = match settings.method {
-        FitMethod::Reduced => {
-            let mut reduced = ReducedFit::new(&mut action, &plans, &observations, &settings.free, &x0, stop)
-                .map_err(|e| FitError::Settings(format!("the reduced fit cannot start: {e}")))?;
-            let mut solution = ipopt::solve(&mut reduced, &initial, &ipopt_options(scene, settings))?;
-            // Ipopt's point is the parameters: the trajectory solved there goes with them.
-            let (x, residual) = reduced.point(&solution.x).map_err(|e| FitError::Settings(format!("the reduced fit's last point: {e}")))?;
-            solution.x = x;
-            solution.max_constraint_violation = residual;
-            inner = Some(reduced.work);
-            (solution, reduced.stopped_at_kkt_point())
-        }
-        FitMethod::AllAtOnce => {
-            let largest =
-                scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
-            let y0 = multipliers::starting_multipliers(&mut action, &plans, &observations, &settings.free, &x0, largest);
-            let mut fit_problem = FitProblem::new(&mut action, &plans, &observations, &settings.free, stop);
-            let solution = ipopt::solve_warm(&mut fit_problem, &x0, &y0, &ipopt_options(scene, settings))?;
-            (solution, fit_problem.stopped_at_kkt_point())
-        }
+    let (solution, at_kkt_point, inner) = match settings.method {
+        FitMethod::Reduced => optimize_reduced(scene, settings, &mut action, &plans, &observations, &x0, stop)?,
+        FitMethod::AllAtOnce => optimize_all_at_once(scene, settings, &mut action, &plans, &observations, &x0, stop)?,
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
     let converged = at_kkt_point.is_some() || converged(&solution, scene.solver.tol, &mut warnings);
@@ -221,6 +205,49 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
     let data_table = report::data_table(scene, data, &outcome.trajectory);
     Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
+}
+
+/// What Ipopt's optimization returns: its solution (`x = (P, θ)`), how the fit's own
+/// test stopped it, and the reduced fit's solves of the equations of motion.
+type Optimized = (ipopt::Solution, Option<problem::KktStop>, Option<InnerWork>);
+
+/// The all-at-once fit from `x0 = (P, θ)` (`problem.rs`), with its own least-squares
+/// starting multipliers (`multipliers.rs`).
+fn optimize_all_at_once(
+    scene: &Scene,
+    settings: &FitSettings,
+    action: &mut Action,
+    plans: &Plans,
+    observations: &Observations,
+    x0: &[f64],
+    stop: StopTest,
+) -> Result<Optimized, FitError> {
+    let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
+    let y0 = multipliers::starting_multipliers(action, plans, observations, &settings.free, x0, largest);
+    let mut problem = FitProblem::new(action, plans, observations, &settings.free, stop);
+    let solution = ipopt::solve_warm(&mut problem, x0, &y0, &ipopt_options(scene, settings))?;
+    Ok((solution, problem.stopped_at_kkt_point(), None))
+}
+
+/// The reduced fit from `x0 = (P, θ)`, a solution at the starting values (`reduced.rs`):
+/// Ipopt's point is the parameters, and the trajectory solved there is put beside them.
+fn optimize_reduced(
+    scene: &Scene,
+    settings: &FitSettings,
+    action: &mut Action,
+    plans: &Plans,
+    observations: &Observations,
+    x0: &[f64],
+    stop: StopTest,
+) -> Result<Optimized, FitError> {
+    let theta0 = x0[action.layout.n_p..].to_vec();
+    let mut reduced = ReducedFit::new(action, plans, observations, &settings.free, x0, stop)
+        .map_err(|e| FitError::Settings(format!("the reduced fit cannot start: {e}")))?;
+    let mut solution = ipopt::solve(&mut reduced, &theta0, &ipopt_options(scene, settings))?;
+    let (x, residual) = reduced.point(&solution.x).map_err(|e| FitError::Settings(format!("the reduced fit's last point: {e}")))?;
+    solution.x = x;
+    solution.max_constraint_violation = residual;
+    Ok((solution, reduced.stopped_at_kkt_point(), Some(reduced.work)))
 }
 
 /// What the steps of a fit share: the scene at the starting values, its model with the
