@@ -105,6 +105,27 @@ fn an_oscillators_stiffness_damping_and_initial_state_are_recovered() {
     assert_eq!(refit.parameters["k"], f.report.parameters["k"].value);
 }
 
+/// Standard deviations that explain the residuals give no warning; ten times too small,
+/// the misfit is a hundred times what they explain, and the fit says so (a local minimum,
+/// or a model or standard deviations that do not describe the data).
+#[test]
+fn a_misfit_the_standard_deviations_do_not_explain_is_warned() {
+    let ov = Overrides::default();
+    let scene = scene_of(OSCILLATOR, &ov);
+    // Residuals of rms 0.01/√2 about the closed form: deterministic, not fitted away.
+    let noisy = |t: f64| oscillator(t, 1.0, 4.0, 0.3, 1.2, -0.5) + 0.01 * (37.0 * t).sin();
+    for (sigma, warned) in [(0.01, false), (0.001, true)] {
+        let data = csv(&oscillator_times(), &[("x", &noisy), ("sigma_x", &|_| sigma)]);
+        let f = run(&scene, &ov, &data, &free(&["k", "c", "x0", "v0"])).unwrap();
+        let chi2 = f.report.misfit.reduced_chi_square.unwrap();
+        let warning = f.report.warnings.iter().find(|w| w.contains("times what the data's standard deviations explain"));
+        assert_eq!(warning.is_some(), warned, "σ = {sigma}: reduced chi-square {chi2}, {:?}", f.report.warnings);
+        if let Some(w) = warning {
+            assert!(w.contains("local minimum") && chi2 > 20.0, "{w}");
+        }
+    }
+}
+
 #[test]
 fn the_limited_memory_hessian_reaches_the_same_values() {
     let ov = Overrides::default();

@@ -179,6 +179,7 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
 
     let t_stat = Instant::now();
     let at = problem.statistics_at(&mut action, &solution, converged, data, &mut warnings)?;
+    warnings.extend(beyond_the_noise(&at.misfit, settings.method));
     let statistics_s = t_stat.elapsed().as_secs_f64();
 
     let t_verify = Instant::now();
@@ -455,6 +456,26 @@ fn on_newton(scene: &Scene) -> Scene {
     let mut newton = scene.clone();
     newton.solver.backend = crate::scene::Backend::Newton;
     newton
+}
+
+/// A warning when the data's standard deviations do not explain the misfit
+/// ([`MisfitReport::beyond_the_noise`]): a local minimum, or a model or standard
+/// deviations that do not describe the data.
+fn beyond_the_noise(misfit: &MisfitReport, method: FitMethod) -> Option<String> {
+    let (x, spread) = misfit.beyond_the_noise()?;
+    let times = if x >= 10.0 { format!("{x:.0}") } else { format!("{x:.1}") };
+    let minimum = match method {
+        FitMethod::Reduced => "the reduced fit may have stopped in a local minimum, as single shooting does (--fit-method all-at-once)",
+        FitMethod::AllAtOnce => {
+            "the fit may have stopped in a local minimum (other starting values; --start data where the data observe the motion)"
+        }
+    };
+    Some(format!(
+        "the weighted misfit is {times} times what the data's standard deviations explain (the reduced chi-square over {} degrees \
+         of freedom, 1 ± {spread:.2} for data the model and the standard deviations describe): {minimum}, or the model or the \
+         standard deviations do not describe the data",
+        misfit.dof
+    ))
 }
 
 /// A warning for each parameter that ended on its bound.

@@ -84,6 +84,16 @@ impl MisfitReport {
     pub fn defines_covariance(&self) -> bool {
         self.weighted || self.dof > 0
     }
+
+    /// The reduced chi-square and its spread `√(2/ν)` when the data's standard
+    /// deviations do not explain it: above 2 and more than five spreads above 1 (the
+    /// chi-square per degree of freedom of data the model and the standard deviations
+    /// describe is 1 ± `√(2/ν)`).
+    pub fn beyond_the_noise(&self) -> Option<(f64, f64)> {
+        let x = self.reduced_chi_square?;
+        let spread = (2.0 / self.dof as f64).sqrt();
+        (x > 2.0 && x > 1.0 + 5.0 * spread).then_some((x, spread))
+    }
 }
 
 /// The data a fit used.
