@@ -307,9 +307,9 @@ impl<'a> ReducedFit<'a> {
         let mut z = vec![0.0; lay.len()];
         z[..n_p].copy_from_slice(&self.solved.x[..n_p]);
         let found = statistics::factored_sensitivities(self.action, self.plans, &z, &mut ws).and_then(|(s, mut lu, roundoff)| {
+            let gradient = statistics::misfit_gradient(self.observations, &s, &self.solved.x);
             let mut grad_f = vec![0.0; n_p + k];
             self.observations.gradient(&self.solved.x, &mut grad_f);
-            let gradient = s.tr_mul(&DVector::from_column_slice(&grad_f[..n_p]));
             let mut y: Vec<f64> = grad_f[..n_p].iter().map(|g| -g).collect();
             if !lu.solve_transposed(&mut y) {
                 return None;

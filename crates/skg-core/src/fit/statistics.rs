@@ -90,6 +90,32 @@ pub(super) fn factored_sensitivities<'p>(
     Some((s, lu, roundoff))
 }
 
+/// The misfit's gradient in the parameters along the motions, `∇F = Sᵀ ∇_P f`, from the
+/// sensitivities `s` at `x = (P, θ)` (the reduced fit's gradient).
+pub(super) fn misfit_gradient(observations: &Observations, s: &DMatrix<f64>, x: &[f64]) -> DVector<f64> {
+    let n_p = s.nrows();
+    let mut grad = vec![0.0; x.len()];
+    observations.gradient(x, &mut grad);
+    s.tr_mul(&DVector::from_column_slice(&grad[..n_p]))
+}
+
+/// The misfit's gradient along the motions and its Gauss–Newton curvature `AᵀA` at
+/// `x = (P, θ)` and the workspace's parameters: one sparse LU of `∂R/∂P` (the fit's
+/// stopping test away from `μ ≤ tol`); `None` when that is singular.
+pub(super) fn reduced_gradient(
+    action: &Action,
+    plans: &Plans,
+    observations: &Observations,
+    x: &[f64],
+    ws: &mut Workspace,
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    let mut z = vec![0.0; action.layout.len()];
+    z[..action.layout.n_p].copy_from_slice(&x[..action.layout.n_p]);
+    let (s, _, _) = factored_sensitivities(action, plans, &z, ws)?;
+    let a = weighted_sensitivities(observations, &s);
+    Some((misfit_gradient(observations, &s, x), a.transpose() * &a))
+}
+
 /// `A = W^{1/2} E S`: the weighted change of the model's values at the data per unit
 /// change of each parameter.
 fn weighted_sensitivities(observations: &Observations, s: &DMatrix<f64>) -> DMatrix<f64> {
