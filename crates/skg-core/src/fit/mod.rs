@@ -85,6 +85,7 @@ pub use reduced::InnerWork;
 pub use report::{CovarianceReport, DataReport, FitReport, MisfitReport, ParameterReport};
 pub use settings::{
     FitHessian, FitMethod, FitSettings, FitStart, ParseFitSettingError, ACCEPTABLE_ITER, DEFAULT_MAX_ITER, DEFAULT_TOL, MUMPS_PIVTOL,
+    MUMPS_PIVTOL_LINEAR,
 };
 pub use statistics::{covariance, undetermined, SINGULAR};
 pub use table::{data_of_scene, free_of_scene};
@@ -226,7 +227,9 @@ fn optimize_all_at_once(
     let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
     let y0 = multipliers::starting_multipliers(action, plans, observations, &settings.free, x0, largest);
     let mut problem = FitProblem::new(action, plans, observations, &settings.free, stop);
-    let solution = ipopt::solve_warm(&mut problem, x0, &y0, &ipopt_options(scene, settings))?;
+    let nonlinear = plans.hessian.as_ref().is_some_and(|h| !h.structure.is_empty());
+    let pivtol = if nonlinear { MUMPS_PIVTOL } else { MUMPS_PIVTOL_LINEAR };
+    let solution = ipopt::solve_warm(&mut problem, x0, &y0, &ipopt_options(scene, settings, pivtol))?;
     Ok((solution, problem.stopped_at_kkt_point(), None))
 }
 
@@ -244,7 +247,7 @@ fn optimize_reduced(
     let theta0 = x0[action.layout.n_p..].to_vec();
     let mut reduced = ReducedFit::new(action, plans, observations, &settings.free, x0, stop)
         .map_err(|e| FitError::Settings(format!("the reduced fit cannot start: {e}")))?;
-    let mut solution = ipopt::solve(&mut reduced, &theta0, &ipopt_options(scene, settings))?;
+    let mut solution = ipopt::solve(&mut reduced, &theta0, &ipopt_options(scene, settings, MUMPS_PIVTOL))?;
     let (x, residual) = reduced.point(&solution.x).map_err(|e| FitError::Settings(format!("the reduced fit's last point: {e}")))?;
     solution.x = x;
     solution.max_constraint_violation = residual;
@@ -614,9 +617,10 @@ fn fitted_scene(scene: &Scene, overrides: &Overrides, names: &[String], theta: &
 
 /// Ipopt's options for a fit of `scene`: the scene's linear solver, print level and
 /// MUMPS settings as for a solve, the fit's tolerance and iteration limit, the
-/// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], [`MUMPS_PIVTOL`],
-/// the Hessian, then the scene's `[solver.ipopt]` options.
-fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
+/// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], MUMPS's pivot
+/// tolerance `pivtol` ([`MUMPS_PIVTOL`] or [`MUMPS_PIVTOL_LINEAR`]), the Hessian, then the
+/// scene's `[solver.ipopt]` options.
+fn ipopt_options(scene: &Scene, settings: &FitSettings, pivtol: f64) -> ipopt::Options {
     let solver = &scene.solver;
     let mut extra: Vec<(String, ipopt::OptionValue)> =
         mumps_options(scene).into_iter().map(|(k, v)| (k.to_string(), ipopt::OptionValue::Int(v))).collect();
@@ -630,8 +634,9 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings) -> ipopt::Options {
     // failed on the disk, but with MUMPS's analysis made on the first KKT matrix (the
     // warm start) the disk's last iterations stalled in the line search with some BLAS
     // kernels (9 iterations instead of 6); at 0.1 (Ipopt's `mumps_pivtolmax`) none did
-    // (docs/benchmarks.md#fitting).
-    extra.push(("mumps_pivtol".into(), ipopt::OptionValue::Num(MUMPS_PIVTOL)));
+    // (docs/benchmarks.md#fitting). Where the trajectory block holds the misfit's
+    // curvature alone, 1e-4 ([`MUMPS_PIVTOL_LINEAR`]).
+    extra.push(("mumps_pivtol".into(), ipopt::OptionValue::Num(pivtol)));
     // The fit starts from its own least-squares multipliers (`multipliers.rs`) with
     // Ipopt's warm start, pushing the point into its bounds as Ipopt's cold start does.
     extra.push(("warm_start_bound_push".into(), ipopt::OptionValue::Num(1e-2)));

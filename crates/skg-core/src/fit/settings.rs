@@ -170,9 +170,18 @@ pub const DEFAULT_TOL: f64 = 1e-10;
 /// which it stops (its default is 15).
 pub const ACCEPTABLE_ITER: i32 = 5;
 
-/// MUMPS's pivot tolerance in a fit (Ipopt's `mumps_pivtol`; its default is 1e-6) unless
-/// the scene's `[solver.ipopt]` gives one.
+/// MUMPS's pivot tolerance in an all-at-once fit whose equations of motion are
+/// nonlinear in the trajectory (Ipopt's `mumps_pivtol`; its default is 1e-6) unless the
+/// scene's `[solver.ipopt]` gives one.
 pub const MUMPS_PIVTOL: f64 = 0.1;
+
+/// MUMPS's pivot tolerance where the KKT matrix's trajectory block holds the misfit's
+/// curvature alone: equations linear in the trajectory, or the limited-memory Hessian.
+/// Its saddle point has a zero diagonal almost everywhere, and at 0.1 MUMPS delayed
+/// pivots until its factor held a quarter of a dense matrix (two masses on springs,
+/// 1003 unknowns: 3.6 s, against 0.65 s at 1e-4 and 1.3 s at 1e-6;
+/// docs/benchmarks.md#the-reduced-fit).
+pub const MUMPS_PIVTOL_LINEAR: f64 = 1e-4;
 
 /// Ipopt's iteration limit for a fit unless the scene or the caller gives one.
 pub const DEFAULT_MAX_ITER: u32 = 200;
