@@ -172,8 +172,8 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let bound_relax_factor = scene.solver.ipopt.get("bound_relax_factor").and_then(ipopt_number).unwrap_or(barrier::BOUND_RELAX_FACTOR);
     let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol), bound_relax_factor };
     let (solution, at_kkt_point, inner) = match settings.method {
-        FitMethod::Reduced => optimize_reduced(scene, settings, &mut action, &plans, &observations, &x0, stop)?,
-        FitMethod::AllAtOnce => optimize_all_at_once(scene, settings, &mut action, &plans, &observations, &x0, stop)?,
+        FitMethod::Reduced => problem.optimize_reduced(&mut action, settings, &x0, stop)?,
+        FitMethod::AllAtOnce => problem.optimize_all_at_once(&mut action, settings, &x0, stop)?,
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
     let converged = at_kkt_point.is_some() || converged(&solution, scene.solver.tol, &mut warnings);
@@ -213,47 +213,6 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
 /// test stopped it, and the reduced fit's solves of the equations of motion.
 type Optimized = (ipopt::Solution, Option<problem::KktStop>, Option<InnerWork>);
 
-/// The all-at-once fit from `x0 = (P, θ)` (`problem.rs`), with its own least-squares
-/// starting multipliers (`multipliers.rs`).
-fn optimize_all_at_once(
-    scene: &Scene,
-    settings: &FitSettings,
-    action: &mut Action,
-    plans: &Plans,
-    observations: &Observations,
-    x0: &[f64],
-    stop: StopTest,
-) -> Result<Optimized, FitError> {
-    let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
-    let y0 = multipliers::starting_multipliers(action, plans, observations, &settings.free, x0, largest);
-    let mut problem = FitProblem::new(action, plans, observations, &settings.free, stop);
-    let nonlinear = plans.hessian.as_ref().is_some_and(|h| !h.structure.is_empty());
-    let pivtol = if nonlinear { MUMPS_PIVTOL } else { MUMPS_PIVTOL_LINEAR };
-    let solution = ipopt::solve_warm(&mut problem, x0, &y0, &ipopt_options(scene, settings, pivtol))?;
-    Ok((solution, problem.stopped_at_kkt_point(), None))
-}
-
-/// The reduced fit from `x0 = (P, θ)`, a solution at the starting values (`reduced.rs`):
-/// Ipopt's point is the parameters, and the trajectory solved there is put beside them.
-fn optimize_reduced(
-    scene: &Scene,
-    settings: &FitSettings,
-    action: &mut Action,
-    plans: &Plans,
-    observations: &Observations,
-    x0: &[f64],
-    stop: StopTest,
-) -> Result<Optimized, FitError> {
-    let theta0 = x0[action.layout.n_p..].to_vec();
-    let mut reduced = ReducedFit::new(action, plans, observations, &settings.free, x0, stop)
-        .map_err(|e| FitError::Settings(format!("the reduced fit cannot start: {e}")))?;
-    let mut solution = ipopt::solve(&mut reduced, &theta0, &ipopt_options(scene, settings, MUMPS_PIVTOL))?;
-    let (x, residual) = reduced.point(&solution.x).map_err(|e| FitError::Settings(format!("the reduced fit's last point: {e}")))?;
-    solution.x = x;
-    solution.max_constraint_violation = residual;
-    Ok((solution, reduced.stopped_at_kkt_point(), Some(reduced.work)))
-}
-
 /// What the steps of a fit share: the scene at the starting values, its model with the
 /// free parameters symbolic, the derivative plans, the observations and the free
 /// parameters' names.
@@ -279,6 +238,33 @@ struct AtSolution {
 }
 
 impl Problem<'_> {
+    /// The all-at-once fit from `x0 = (P, θ)` (`problem.rs`), with its own least-squares
+    /// starting multipliers (`multipliers.rs`).
+    fn optimize_all_at_once(&self, action: &mut Action, settings: &FitSettings, x0: &[f64], stop: StopTest) -> Result<Optimized, FitError> {
+        let (scene, plans) = (self.scene, self.plans);
+        let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
+        let y0 = multipliers::starting_multipliers(action, plans, self.observations, &settings.free, x0, largest);
+        let mut problem = FitProblem::new(action, plans, self.observations, &settings.free, stop);
+        let nonlinear = plans.hessian.as_ref().is_some_and(|h| !h.structure.is_empty());
+        let pivtol = if nonlinear { MUMPS_PIVTOL } else { MUMPS_PIVTOL_LINEAR };
+        let solution = ipopt::solve_warm(&mut problem, x0, &y0, &ipopt_options(scene, settings, pivtol))?;
+        Ok((solution, problem.stopped_at_kkt_point(), None))
+    }
+
+    /// The reduced fit from `x0 = (P, θ)`, a solution at the starting values
+    /// (`reduced.rs`): Ipopt's point is the parameters, and the trajectory solved there is
+    /// put beside them.
+    fn optimize_reduced(&self, action: &mut Action, settings: &FitSettings, x0: &[f64], stop: StopTest) -> Result<Optimized, FitError> {
+        let theta0 = x0[action.layout.n_p..].to_vec();
+        let mut reduced = ReducedFit::new(action, self.plans, self.observations, &settings.free, x0, stop)
+            .map_err(|e| FitError::Settings(format!("the reduced fit cannot start: {e}")))?;
+        let mut solution = ipopt::solve(&mut reduced, &theta0, &ipopt_options(self.scene, settings, MUMPS_PIVTOL))?;
+        let (x, residual) = reduced.point(&solution.x).map_err(|e| FitError::Settings(format!("the reduced fit's last point: {e}")))?;
+        solution.x = x;
+        solution.max_constraint_violation = residual;
+        Ok((solution, reduced.stopped_at_kkt_point(), Some(reduced.work)))
+    }
+
     /// The starting point of the optimization, the trajectory's unknowns and then the
     /// parameters: a solve at the starting values (refused if the data cannot determine
     /// the parameters there), with the data in place of what they observe where the

@@ -302,15 +302,13 @@ impl<'a> ReducedFit<'a> {
     /// The derivatives at the last point solved, `None` where `∂R/∂P` is singular.
     fn derivatives(&mut self) -> Option<Anchor> {
         let lay = &self.action.layout;
-        let (n_p, k) = (lay.n_p, self.free.len());
+        let n_p = lay.n_p;
         let mut ws = self.ws.take().expect("the workspace is returned after each solve");
         let mut z = vec![0.0; lay.len()];
         z[..n_p].copy_from_slice(&self.solved.x[..n_p]);
         let found = statistics::factored_sensitivities(self.action, self.plans, &z, &mut ws).and_then(|(s, mut lu, roundoff)| {
-            let gradient = statistics::misfit_gradient(self.observations, &s, &self.solved.x);
-            let mut grad_f = vec![0.0; n_p + k];
-            self.observations.gradient(&self.solved.x, &mut grad_f);
-            let mut y: Vec<f64> = grad_f[..n_p].iter().map(|g| -g).collect();
+            let (gradient, mut y) = statistics::misfit_gradient(self.observations, &s, &self.solved.x);
+            y.iter_mut().for_each(|g| *g = -*g);
             if !lu.solve_transposed(&mut y) {
                 return None;
             }

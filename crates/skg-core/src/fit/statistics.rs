@@ -91,12 +91,13 @@ pub(super) fn factored_sensitivities<'p>(
 }
 
 /// The misfit's gradient in the parameters along the motions, `∇F = Sᵀ ∇_P f`, from the
-/// sensitivities `s` at `x = (P, θ)` (the reduced fit's gradient).
-pub(super) fn misfit_gradient(observations: &Observations, s: &DMatrix<f64>, x: &[f64]) -> DVector<f64> {
-    let n_p = s.nrows();
+/// sensitivities `s` at `x = (P, θ)`, and its gradient `∇_P f` in the trajectory (the
+/// reduced fit's adjoint needs it too).
+pub(super) fn misfit_gradient(observations: &Observations, s: &DMatrix<f64>, x: &[f64]) -> (DVector<f64>, Vec<f64>) {
     let mut grad = vec![0.0; x.len()];
     observations.gradient(x, &mut grad);
-    s.tr_mul(&DVector::from_column_slice(&grad[..n_p]))
+    grad.truncate(s.nrows());
+    (s.tr_mul(&DVector::from_column_slice(&grad)), grad)
 }
 
 /// The misfit's gradient along the motions and its Gauss–Newton curvature `AᵀA` at
@@ -113,7 +114,7 @@ pub(super) fn reduced_gradient(
     z[..action.layout.n_p].copy_from_slice(&x[..action.layout.n_p]);
     let (s, _, _) = factored_sensitivities(action, plans, &z, ws)?;
     let a = weighted_sensitivities(observations, &s);
-    Some((misfit_gradient(observations, &s, x), a.transpose() * &a))
+    Some((misfit_gradient(observations, &s, x).0, a.transpose() * &a))
 }
 
 /// `A = W^{1/2} E S`: the weighted change of the model's values at the data per unit
