@@ -18,6 +18,7 @@
 //! twice the numbers in a SIMD register: on the chain of 16 rods at N = 1024 it takes
 //! 0.17 s against 0.24 s, and the process's peak memory falls from 273 to 182 MB.
 
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -53,14 +54,18 @@ const SUPERNODE_RELAX: &[(usize, f64)] = &[(8, 1.0), (32, 0.8), (96, 0.2), (usiz
 
 /// The choice between faer's simplicial (column by column) and supernodal (dense
 /// blocks) numeric LU: supernodal when the analysis's estimate of flops per factor
-/// nonzero exceeds `40 · SUPERNODAL_THRESHOLD` (faer's default threshold is 1). At 1 the
-/// chain of 8 rods (24 unknowns per node) was factored simplicially, at 0.13 s per
-/// numeric LU at N = 1024 where the supernodal LU takes 0.06 s (0.51 → 0.24 s at
-/// N = 4096, for 24 % more memory: 74 → 91 MB, 261 → 324 MB peak); the chains of 16 and
-/// 32 were supernodal already. The rolling disk (N = 16384, 65536), the tumbler, the
-/// pendulum (65536), the knife edge (32768), chain4 and the drum stay simplicial (the
-/// same peak memory; times within the noise of the measurement).
-const SUPERNODAL_THRESHOLD: f64 = 0.5;
+/// nonzero exceeds `40 · SUPERNODAL_THRESHOLD`, i.e. 10 (faer's default threshold is 1,
+/// i.e. 40). Measured per numeric LU, best of 20, simplicial → supernodal, with the
+/// estimate in brackets: chain4 at N = 1024 (13.7) 21.4 → 9.4 ms and at N = 8192
+/// 167 → 101 ms; the rolling disk with `SBP484` at N = 512 (17.1; the fit's example)
+/// 4.3 → 2.5 ms, with `SBP363` at N = 2048 (13.5) 15.2 → 13.1 ms; the tumbler with
+/// `SBP484` (10.6) 4.4 → 2.7 ms. Below 10 the simplicial LU is as fast or faster: the
+/// knife edge (8.3) 13.9 against 16.8 ms at N = 8192, the rolling disk with `SBP242`
+/// (6.4) 20.1 against 24.1 ms, the pendulum (4.6) 5.9 against 7.4 ms, the damped
+/// oscillator (3.1) 0.9 against 1.9 ms. The chain of 8 rods (24 unknowns per node) was
+/// the reason for the first lowering from 1 to 0.5: 0.13 s simplicial per numeric LU at
+/// N = 1024, 0.06 s supernodal.
+const SUPERNODAL_THRESHOLD: f64 = 0.25;
 
 /// Counts and wall times of an LU's factorizations and solves, in seconds.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
@@ -98,11 +103,40 @@ struct SingleLu {
     solve_work: Option<MemBuffer>,
 }
 
-/// The sparse LU of one structure: its pattern, symbolic analysis, numeric
-/// factorizations and work buffers.
-pub(super) struct SparseLu {
+/// The analysis of one structure: its compressed pattern and symbolic LU.
+struct Analysis {
     pattern: CompressedPattern,
     symbolic: SymbolicLu<u32>,
+}
+
+/// The last analysis made, kept for the next structure that is the same: a fit's start
+/// solves the equations of motion with the Jacobian its own factorizations then analyse
+/// again (the rolling disk's fit at N = 512: two COLAMD orderings of 7–13 ms each, a
+/// tenth of the fit). One analysis is kept, the size of one factorization's index
+/// arrays; a structure is compared with its pattern entry by entry, not by a hash.
+static LAST_ANALYSIS: Mutex<Option<Arc<Analysis>>> = Mutex::new(None);
+
+impl Analysis {
+    /// The analysis of the `n × n` `structure`: the last one when its structure is the
+    /// same, else a new one, kept in its place.
+    fn of(n: usize, structure: &[(u32, u32)]) -> Result<Arc<Analysis>, String> {
+        // Not held during an analysis: threads analysing other structures do not wait.
+        let last = || LAST_ANALYSIS.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some(a) = last().as_ref().filter(|a| a.pattern.is_of(n, structure)) {
+            return Ok(Arc::clone(a));
+        }
+        let pattern = CompressedPattern::new(n, structure);
+        let symbolic = factorize_symbolic_lu(pattern.symbolic(), lu_params()).map_err(|e| format!("{e:?}"))?;
+        let analysis = Arc::new(Analysis { pattern, symbolic });
+        *last() = Some(Arc::clone(&analysis));
+        Ok(analysis)
+    }
+}
+
+/// The sparse LU of one structure: its analysis (shared with the next LU of the same
+/// structure), numeric factorizations and work buffers.
+pub(super) struct SparseLu {
+    analysis: Arc<Analysis>,
     numeric: NumericLu<u32, f64>,
     factor_work: MemBuffer,
     solve_work: MemBuffer,
@@ -119,13 +153,11 @@ impl SparseLu {
     /// The symbolic analysis of the `n × n` `structure` (entries inside the matrix,
     /// checked by the caller); the error is faer's.
     pub(super) fn analyse(n: usize, structure: &[(u32, u32)]) -> Result<SparseLu, String> {
-        let pattern = CompressedPattern::new(n, structure);
-        let symbolic = factorize_symbolic_lu(pattern.symbolic(), lu_params()).map_err(|e| format!("{e:?}"))?;
-        let factor_req = symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
-        let solve_req: StackReq = symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
+        let analysis = Analysis::of(n, structure)?;
+        let factor_req = analysis.symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
+        let solve_req: StackReq = analysis.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
         Ok(SparseLu {
-            pattern,
-            symbolic,
+            analysis,
             numeric: NumericLu::new(),
             factor_work: MemBuffer::new(factor_req),
             solve_work: MemBuffer::new(solve_req),
@@ -137,7 +169,7 @@ impl SparseLu {
 
     /// The compressed pattern.
     pub(super) fn pattern(&self) -> &CompressedPattern {
-        &self.pattern
+        &self.analysis.pattern
     }
 
     /// Factor the compressed matrix with `values`: in single precision when `single` and
@@ -176,9 +208,10 @@ impl SparseLu {
     /// The numeric LU in double precision.
     fn factor_double(&mut self, values: &[f64], stats: &mut LuStats) -> bool {
         let t = Instant::now();
-        let factored = self.symbolic.factorize_numeric_lu(
+        let Analysis { pattern, symbolic, .. } = &*self.analysis;
+        let factored = symbolic.factorize_numeric_lu(
             &mut self.numeric,
-            SparseColMatRef::new(self.pattern.symbolic(), values),
+            SparseColMatRef::new(pattern.symbolic(), values),
             Par::Seq,
             MemStack::new(&mut self.factor_work),
             Default::default(),
@@ -198,13 +231,13 @@ impl SparseLu {
         if single.values.iter().any(|v| !v.is_finite()) {
             return false;
         }
-        let symbolic = &self.symbolic;
+        let Analysis { pattern, symbolic, .. } = &*self.analysis;
         let work = single
             .factor_work
             .get_or_insert_with(|| MemBuffer::new(symbolic.factorize_numeric_lu_scratch::<f32>(Par::Seq, Default::default())));
         let factored = symbolic.factorize_numeric_lu(
             &mut single.numeric,
-            SparseColMatRef::new(self.pattern.symbolic(), &single.values),
+            SparseColMatRef::new(pattern.symbolic(), &single.values),
             Par::Seq,
             MemStack::new(work),
             Default::default(),
@@ -227,7 +260,7 @@ impl SparseLu {
     fn solve_double(&mut self, rhs: &mut [f64], transposed: bool, stats: &mut LuStats) -> bool {
         let t = Instant::now();
         let n = rhs.len();
-        let lu = LuRef::new_unchecked(&self.symbolic, &self.numeric);
+        let lu = LuRef::new_unchecked(&self.analysis.symbolic, &self.numeric);
         let (rhs_mat, stack) = (MatMut::from_column_major_slice_mut(rhs, n, 1), MemStack::new(&mut self.solve_work));
         if transposed {
             lu.solve_transpose_in_place_with_conj(Conj::No, rhs_mat, Par::Seq, stack);
@@ -255,7 +288,7 @@ impl SparseLu {
         let t = Instant::now();
         let n = rhs.len();
         let single = &mut self.single;
-        let symbolic = &self.symbolic;
+        let Analysis { pattern, symbolic, .. } = &*self.analysis;
         let work = single.solve_work.get_or_insert_with(|| MemBuffer::new(symbolic.solve_in_place_scratch::<f32>(1, Par::Seq)));
         let mut x = vec![0.0; n];
         let mut r = rhs.to_vec();
@@ -277,7 +310,7 @@ impl SparseLu {
             stats.refinement_solves += 1;
             x.iter_mut().zip(&single.rhs).for_each(|(xi, di)| *xi += last * f64::from(*di));
             r.copy_from_slice(rhs);
-            self.pattern.subtract_product(values, &x, &mut r);
+            pattern.subtract_product(values, &x, &mut r);
             let now = max_abs(&r);
             if now.is_nan() || now > REFINEMENT_CONTRACTION * last {
                 break;
@@ -311,7 +344,11 @@ fn lu_params() -> LuSymbolicParams<'static> {
 pub struct SparseFactorization {
     n: usize,
     lu: SparseLu,
+    /// The compressed values of the matrix factored last.
     values: Vec<f64>,
+    /// The compressed values asked for by `refactor`, compared with `values`.
+    incoming: Vec<f64>,
+    factorizations: usize,
     stats: LuStats,
 }
 
@@ -328,19 +365,32 @@ impl SparseFactorization {
         let mut values = vec![0.0; lu.pattern().nonzeros()];
         lu.pattern().gather(entries, &mut values);
         let mut stats = LuStats::default();
-        lu.factor(&values, false, &mut stats).then_some(SparseFactorization { n, lu, values, stats })
+        let incoming = values.clone();
+        lu.factor(&values, false, &mut stats).then_some(SparseFactorization { n, lu, values, incoming, factorizations: 1, stats })
     }
 
     /// Factor the matrix of the same structure with other `entries`, on the analysis
     /// already made (a fit factors `∂R/∂P` at several points: its COLAMD ordering cost as
-    /// much as the numeric factorization); `false` when the matrix is singular or
-    /// `entries` has another length.
+    /// much as the numeric factorization); nothing to do when they are the entries of
+    /// the factorization in hand (a fit's start, its first derivatives and its last
+    /// statistics each factor at a point factored before). `false` when the matrix is
+    /// singular or `entries` has another length.
     pub fn refactor(&mut self, entries: &[f64]) -> bool {
         if entries.len() != self.lu.pattern().entries_len() {
             return false;
         }
-        self.lu.pattern().gather(entries, &mut self.values);
+        self.lu.pattern().gather(entries, &mut self.incoming);
+        if self.incoming == self.values && self.lu.factored == Factored::Double {
+            return true;
+        }
+        std::mem::swap(&mut self.incoming, &mut self.values);
+        self.factorizations += 1;
         self.lu.factor(&self.values, false, &mut self.stats)
+    }
+
+    /// The numeric factorizations made, the first included.
+    pub fn factorizations(&self) -> usize {
+        self.factorizations
     }
 
     /// Overwrite `rhs` (of length `n`) with the solution of `A x = rhs`; `false` when it
@@ -410,6 +460,9 @@ mod tests {
         // built with it.
         let halved: Vec<f64> = structure.iter().zip(&entries).map(|(&(r, c), v)| if r == c { *v } else { 0.5 * v }).collect();
         assert!(lu.refactor(&halved));
+        assert_eq!(lu.factorizations(), 2);
+        assert!(lu.refactor(&halved));
+        assert_eq!(lu.factorizations(), 2, "the same entries are not factored again");
         let exact: Vec<f64> = (0..n).map(|i| 1.0 + (i as f64 * 0.2).cos()).collect();
         let mut x = a(&halved, &exact);
         assert!(lu.solve(&mut x));
