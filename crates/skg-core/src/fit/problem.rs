@@ -46,6 +46,7 @@ use super::statistics;
 use crate::discrete::action::{Action, MatrixPlan};
 use crate::discrete::ParameterPlan;
 use crate::model::Workspace;
+use crate::solve::backend;
 use crate::solve::linalg::roundoff::residual_roundoff_level;
 use crate::solve::linalg::SparseFactorization;
 
@@ -66,7 +67,10 @@ impl Plans {
     /// structure for the whole fit: the starting multipliers, the stopping test's
     /// curvature and the statistics each factor it at another point, and each analysis
     /// (its COLAMD ordering) cost as much as the numeric factorization (the rolling
-    /// disk's fit: 7–12 ms each of four). `None` when it is singular.
+    /// disk's fit: 7–12 ms each of four). That analysis is the start solve's, kept on
+    /// this thread by Newton's solver (`solve::backend`), when it is of the same
+    /// structure; a second factorization at the same point is skipped
+    /// ([`SparseFactorization::refactor`]). `None` when it is singular.
     pub fn factor_jacobian(&self, n_p: usize, values: &[f64]) -> Option<RefMut<'_, SparseFactorization>> {
         let mut slot = self.jacobian_lu.borrow_mut();
         match slot.as_mut() {
@@ -75,7 +79,11 @@ impl Plans {
                     return None;
                 }
             }
-            None => *slot = Some(SparseFactorization::new(n_p, &self.jacobian.structure, values)?),
+            None => {
+                let structure = &self.jacobian.structure;
+                let kept = backend::factorization_on_kept_analysis(n_p, structure, values);
+                *slot = Some(kept.or_else(|| SparseFactorization::new(n_p, structure, values))?);
+            }
         }
         RefMut::filter_map(slot, Option::as_mut).ok()
     }

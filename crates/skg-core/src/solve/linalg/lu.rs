@@ -18,7 +18,7 @@
 //! twice the numbers in a SIMD register: on the chain of 16 rods at N = 1024 it takes
 //! 0.17 s against 0.24 s, and the process's peak memory falls from 273 to 182 MB.
 
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -109,32 +109,17 @@ struct Analysis {
     symbolic: SymbolicLu<u32>,
 }
 
-/// The last analysis made, kept for the next structure that is the same: a fit's start
-/// solves the equations of motion with the Jacobian its own factorizations then analyse
-/// again (the rolling disk's fit at N = 512: two COLAMD orderings of 7–13 ms each, a
-/// tenth of the fit). One analysis is kept, the size of one factorization's index
-/// arrays; a structure is compared with its pattern entry by entry, not by a hash.
-static LAST_ANALYSIS: Mutex<Option<Arc<Analysis>>> = Mutex::new(None);
-
 impl Analysis {
-    /// The analysis of the `n × n` `structure`: the last one when its structure is the
-    /// same, else a new one, kept in its place.
-    fn of(n: usize, structure: &[(u32, u32)]) -> Result<Arc<Analysis>, String> {
-        // Not held during an analysis: threads analysing other structures do not wait.
-        let last = || LAST_ANALYSIS.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-        if let Some(a) = last().as_ref().filter(|a| a.pattern.is_of(n, structure)) {
-            return Ok(Arc::clone(a));
-        }
+    /// The analysis of the `n × n` `structure`.
+    fn of(n: usize, structure: &[(u32, u32)]) -> Result<Analysis, String> {
         let pattern = CompressedPattern::new(n, structure);
         let symbolic = factorize_symbolic_lu(pattern.symbolic(), lu_params()).map_err(|e| format!("{e:?}"))?;
-        let analysis = Arc::new(Analysis { pattern, symbolic });
-        *last() = Some(Arc::clone(&analysis));
-        Ok(analysis)
+        Ok(Analysis { pattern, symbolic })
     }
 }
 
-/// The sparse LU of one structure: its analysis (shared with the next LU of the same
-/// structure), numeric factorizations and work buffers.
+/// The sparse LU of one structure: its analysis (which other LUs of the structure may
+/// share, [`SparseLu::sharing`]), numeric factorizations and work buffers.
 pub(super) struct SparseLu {
     analysis: Arc<Analysis>,
     numeric: NumericLu<u32, f64>,
@@ -153,10 +138,19 @@ impl SparseLu {
     /// The symbolic analysis of the `n × n` `structure` (entries inside the matrix,
     /// checked by the caller); the error is faer's.
     pub(super) fn analyse(n: usize, structure: &[(u32, u32)]) -> Result<SparseLu, String> {
-        let analysis = Analysis::of(n, structure)?;
+        Ok(SparseLu::on(Arc::new(Analysis::of(n, structure)?)))
+    }
+
+    /// Another LU of this one's structure, on the same analysis (nothing factored yet).
+    pub(super) fn sharing(&self) -> SparseLu {
+        SparseLu::on(Arc::clone(&self.analysis))
+    }
+
+    /// An LU on `analysis`, with its buffers.
+    fn on(analysis: Arc<Analysis>) -> SparseLu {
         let factor_req = analysis.symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
         let solve_req: StackReq = analysis.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
-        Ok(SparseLu {
+        SparseLu {
             analysis,
             numeric: NumericLu::new(),
             factor_work: MemBuffer::new(factor_req),
@@ -164,7 +158,7 @@ impl SparseLu {
             single: SingleLu::default(),
             factored: Factored::None,
             single_failed: false,
-        })
+        }
     }
 
     /// The compressed pattern.
@@ -361,7 +355,15 @@ impl SparseFactorization {
         if structure.iter().any(|&(r, c)| r as usize >= n || c as usize >= n) || structure.len() != entries.len() {
             return None;
         }
-        let mut lu = SparseLu::analyse(n, structure).ok()?;
+        SparseFactorization::factor_on(n, SparseLu::analyse(n, structure).ok()?, entries)
+    }
+
+    /// The factorization of the matrix with `entries` on `lu`'s analysis (their number
+    /// checked); `None` when it is singular.
+    pub(super) fn factor_on(n: usize, mut lu: SparseLu, entries: &[f64]) -> Option<SparseFactorization> {
+        if entries.len() != lu.pattern().entries_len() {
+            return None;
+        }
         let mut values = vec![0.0; lu.pattern().nonzeros()];
         lu.pattern().gather(entries, &mut values);
         let mut stats = LuStats::default();

@@ -62,7 +62,7 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-use super::lu::{LuStats, SparseLu};
+use super::lu::{LuStats, SparseFactorization, SparseLu};
 use super::roundoff::residual_roundoff_level;
 use super::{max_abs, EvalError, IterationStat, SquareSystem};
 
@@ -239,6 +239,14 @@ impl SystemSolver {
         }
         let lu = SparseLu::analyse(n, structure).map_err(NewtonError::Analysis)?;
         Ok(SystemSolver { n, structure: structure.to_vec(), lu, analysis_s: start.elapsed().as_secs_f64() })
+    }
+
+    /// The factorization of the matrix of this solver's structure with `entries` (one
+    /// per structure entry), on its analysis: what a fit factors after its start solve
+    /// made the analysis. `None` when the matrix is singular or `entries` has another
+    /// length.
+    pub fn factorization(&self, entries: &[f64]) -> Option<SparseFactorization> {
+        SparseFactorization::factor_on(self.n, self.lu.sharing(), entries)
     }
 
     /// The size `n` of the systems this solver handles.

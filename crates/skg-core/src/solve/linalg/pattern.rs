@@ -54,17 +54,6 @@ impl CompressedPattern {
         CompressedPattern { n, col_ptr, row_idx, slot }
     }
 
-    /// Whether this is the pattern of the `n × n` `structure`, with its entries in the
-    /// same order (the slots hold for it).
-    pub(super) fn is_of(&self, n: usize, structure: &[(u32, u32)]) -> bool {
-        n == self.n
-            && structure.len() == self.slot.len()
-            && structure.iter().zip(&self.slot).all(|(&(r, c), &k)| {
-                let c = c as usize;
-                c < n && (self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize).contains(&k) && self.row_idx[k] == r
-            })
-    }
-
     /// The pattern as faer's symbolic matrix.
     pub(super) fn symbolic(&self) -> SymbolicSparseColMatRef<'_, u32> {
         SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
@@ -103,31 +92,5 @@ impl CompressedPattern {
                 r[self.row_idx[k] as usize] -= values[k] * xc;
             }
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::CompressedPattern;
-
-    /// A pattern recognizes its own structure, duplicates included, and no other: other
-    /// entries, another order (the slots would be wrong), another size.
-    #[test]
-    fn a_pattern_is_of_its_structure_alone() {
-        let structure = [(0, 0), (2, 0), (1, 1), (0, 2), (2, 2), (0, 0)];
-        let pattern = CompressedPattern::new(3, &structure);
-        assert!(pattern.is_of(3, &structure));
-        assert!(!pattern.is_of(4, &structure), "another size");
-        assert!(!pattern.is_of(3, &structure[..5]), "an entry fewer");
-        let mut swapped = structure;
-        swapped.swap(1, 2);
-        assert!(!pattern.is_of(3, &swapped), "the same entries in another order");
-        let mut moved = structure;
-        moved[1] = (1, 0);
-        assert!(!pattern.is_of(3, &moved), "an entry in another row");
-        moved[1] = (2, 1);
-        assert!(!pattern.is_of(3, &moved), "an entry in another column");
-        moved[1] = (2, 7);
-        assert!(!pattern.is_of(3, &moved), "an entry outside the matrix");
     }
 }

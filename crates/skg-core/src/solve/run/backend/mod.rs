@@ -18,7 +18,8 @@
 //! [`SystemSolver::fits`]); otherwise it is dropped and the structure analysed anew. So
 //! every path that solves several systems of equal structure one after the other reuses
 //! it without being told: the attempts of the fallback ladder, the points a sweep worker
-//! runs one after the other, and repeated `skg.solve` calls from one Python thread. The
+//! runs one after the other, and repeated `skg.solve` calls from one Python thread; a
+//! fit factors its Jacobian on it ([`factorization_on_kept_analysis`]). The
 //! slot is per thread, not one process-wide mutex, so solves on parallel threads (e.g.
 //! `cargo test`) neither wait for each other nor take each other's analysis, and a
 //! report's `analysis_reused` depends only on what ran before on the same thread. The
@@ -40,7 +41,9 @@ use serde::Serialize;
 use crate::discrete::action::{Action, Block, MatrixPlan};
 use crate::scene::{Backend, Formulation, HessianMode, Scene};
 use crate::solve::linalg::roundoff::row_roundoff_levels;
-use crate::solve::linalg::{IterationStat, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SquareSystem, SystemSolver};
+use crate::solve::linalg::{
+    IterationStat, NewtonError, NewtonOptions, NewtonStats, NewtonStatus, SparseFactorization, SquareSystem, SystemSolver,
+};
 use crate::solve::run::deadline::{self, Bound, Deadline};
 #[cfg(feature = "ipopt")]
 use skg_ipopt as ipopt;
@@ -460,6 +463,15 @@ impl Drop for SquareSolver {
 thread_local! {
     /// The LU analysis of the last Newton solver dropped on this thread (module docs).
     static KEPT_ANALYSIS: RefCell<Option<SystemSolver>> = const { RefCell::new(None) };
+}
+
+/// The factorization of the `n × n` matrix of `structure` with `entries` on the LU
+/// analysis kept on this thread, if it is of that structure ([`SystemSolver::fits`]),
+/// which stays kept: a fit factors `∂R/∂P` of the structure its start solve analysed,
+/// and its verification solves with it again. `None` when none fits or the matrix is
+/// singular.
+pub fn factorization_on_kept_analysis(n: usize, structure: &[(u32, u32)], entries: &[f64]) -> Option<SparseFactorization> {
+    KEPT_ANALYSIS.with_borrow(|kept| kept.as_ref().filter(|lu| lu.fits(n, structure)).and_then(|lu| lu.factorization(entries)))
 }
 
 /// Free the LU analysis kept for the next Newton solve of this thread (its memory; the
