@@ -16,7 +16,9 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use skg_core::discrete::interpolate::hermite;
-use skg_core::scene::{Overrides, Scene, SceneFile};
+use skg_core::sbp::OperatorKind;
+use skg_core::scene::{Backend, InitialVelocity, Overrides, Scene, SceneFile};
+use skg_core::solve::newton::NewtonStatus;
 use skg_core::solve::{self, Outcome};
 
 fn stiff_scene(name: &str) -> PathBuf {
@@ -93,6 +95,34 @@ fn two_masses_on_a_stiff_spring() {
     let o = solved_within_tolerance_of_the_truth("stiff_dumbbell");
     let grids = &o.refinement.as_ref().expect("refined").grids;
     assert!(grids.len() <= 3, "{} grids: {:?}", grids.len(), grids.iter().map(|g| (&g.operator, g.nodes, &g.verdict)).collect::<Vec<_>>());
+}
+
+/// The dumbbell on Newton's method (`--backend newton`, `SBP242` with the natural
+/// condition on 256 nodes, the grid its refinement verifies on): the line search crawls
+/// there (every step cut to about 2⁻¹¹, `max |F|` 3.5e-4 → 3.1e-4 in 100 steps), so
+/// Newton stops as stalled after 10 steps, where it ran to its limit of 100 (0.3 s),
+/// and Ipopt solves the same system; the answer is verified and within its tolerance of
+/// the truth.
+#[test]
+fn newton_crawling_on_a_stiff_spring_hands_over_to_ipopt_after_ten_steps() {
+    let ov = Overrides {
+        backend: Some(Backend::Newton),
+        operator: Some(OperatorKind::Sbp242),
+        initial_velocity: Some(InitialVelocity::Natural),
+        nodes: Some(256),
+        ..Overrides::default()
+    };
+    let scene = load("stiff_dumbbell", &ov);
+    let o = solve::solve_scene(&scene).unwrap();
+    let newton = o.backend.newton.as_ref().expect("Newton ran first");
+    assert_eq!(newton.status, NewtonStatus::Stalled, "{newton:?}");
+    assert_eq!(newton.iterations, 10);
+    assert!(o.backend.handed_over_to_ipopt);
+    assert!(o.trusted(), "{} / {}", o.status, o.verification.reason);
+    let tolerances = &o.verification.tolerances;
+    for (coordinate, error) in errors(&scene, &o, &truth("stiff_dumbbell")) {
+        assert!(error <= tolerances[&coordinate], "{coordinate}: {error:e} from the truth");
+    }
 }
 
 /// Four masses hanging from a pivot on springs of stiffness 1e6.

@@ -77,6 +77,9 @@ class SolverStatus(_StrEnum):
     NEWTON_CONVERGED = "Newton_Converged"
     NEWTON_CONVERGED_TO_ROUND_OFF = "Newton_Converged_To_Round_Off"
     NEWTON_MAXIMUM_ITERATIONS_EXCEEDED = "Newton_Maximum_Iterations_Exceeded"
+    NEWTON_STALLED = "Newton_Stalled"
+    """The residual norm fell by less than half in 10 steps (a crawling line search);
+    the system went to Ipopt."""
     NEWTON_LINE_SEARCH_FAILED = "Newton_Line_Search_Failed"
     NEWTON_SINGULAR_JACOBIAN = "Newton_Singular_Jacobian"
     NEWTON_INVALID_NUMBER = "Newton_Invalid_Number"
