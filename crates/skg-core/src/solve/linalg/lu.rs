@@ -202,7 +202,7 @@ impl SparseLu {
     /// The numeric LU in double precision.
     fn factor_double(&mut self, values: &[f64], stats: &mut LuStats) -> bool {
         let t = Instant::now();
-        let Analysis { pattern, symbolic, .. } = &*self.analysis;
+        let Analysis { pattern, symbolic } = &*self.analysis;
         let factored = symbolic.factorize_numeric_lu(
             &mut self.numeric,
             SparseColMatRef::new(pattern.symbolic(), values),
@@ -225,7 +225,7 @@ impl SparseLu {
         if single.values.iter().any(|v| !v.is_finite()) {
             return false;
         }
-        let Analysis { pattern, symbolic, .. } = &*self.analysis;
+        let Analysis { pattern, symbolic } = &*self.analysis;
         let work = single
             .factor_work
             .get_or_insert_with(|| MemBuffer::new(symbolic.factorize_numeric_lu_scratch::<f32>(Par::Seq, Default::default())));
@@ -282,7 +282,7 @@ impl SparseLu {
         let t = Instant::now();
         let n = rhs.len();
         let single = &mut self.single;
-        let Analysis { pattern, symbolic, .. } = &*self.analysis;
+        let Analysis { pattern, symbolic } = &*self.analysis;
         let work = single.solve_work.get_or_insert_with(|| MemBuffer::new(symbolic.solve_in_place_scratch::<f32>(1, Par::Seq)));
         let mut x = vec![0.0; n];
         let mut r = rhs.to_vec();
