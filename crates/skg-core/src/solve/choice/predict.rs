@@ -130,6 +130,9 @@ pub struct Predictor<'a> {
     /// The reference's relative tolerance ([`verify::reference_rtol`]).
     rtol: f64,
     proxies: HashMap<(Candidate, usize), f64>,
+    /// The motion's size, `max |q|` over the fine grid (at least 1), for the rounding
+    /// error ([`Predictor::roundoff_ratio`], asked for at every prediction).
+    size: f64,
     /// The adaptive grid's span over its finest spacing, by node count (a refinement's
     /// search asks for the same grids again and again).
     span_over_finest: HashMap<usize, f64>,
@@ -150,6 +153,7 @@ impl<'a> Predictor<'a> {
             tolerance_source: String::new(),
             samples: HashMap::new(),
             fine: None,
+            size: 1.0,
             rtol: REFERENCE_RTOL,
             proxies: HashMap::new(),
             span_over_finest: HashMap::new(),
@@ -162,6 +166,7 @@ impl<'a> Predictor<'a> {
             (q, v) = p.integrate((FINE_NODES, false), rtol)?;
         }
         p.rtol = rtol;
+        p.size = q.iter().flatten().fold(1.0_f64, |m, x| m.max(x.abs()));
         p.fine = Some((q, v));
         p.tolerances = tolerances;
         p.tolerance_source = source;
@@ -179,7 +184,6 @@ impl<'a> Predictor<'a> {
     /// `(N − 1)·T/h_min`, `h_min` its finest spacing). No grid is predicted
     /// below it: beyond some N, refining makes the error worse.
     pub fn roundoff_ratio(&mut self, c: Candidate, nodes: usize) -> f64 {
-        let size = self.fine.as_ref().map_or(1.0, |(q, _)| q.iter().flatten().fold(1.0_f64, |m, x| m.max(x.abs())));
         let tightest = self.tolerances.iter().copied().fold(f64::INFINITY, f64::min);
         let steps = (nodes - 1) as f64;
         // On the adaptive grid one factor of the conditioning is the finest spacing's.
@@ -190,7 +194,7 @@ impl<'a> Predictor<'a> {
             }),
             _ => steps,
         };
-        ROUNDOFF * f64::EPSILON * steps * finest * size / tightest
+        ROUNDOFF * f64::EPSILON * steps * finest * self.size / tightest
     }
 
     /// Whether the adaptive candidates can be predicted (a map was given).
