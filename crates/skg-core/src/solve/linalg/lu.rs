@@ -62,7 +62,9 @@ const SUPERNODE_RELAX: &[(usize, f64)] = &[(8, 1.0), (32, 0.8), (96, 0.2), (usiz
 /// `SBP484` (10.6) 4.4 → 2.7 ms. Below 10 the simplicial LU is as fast or faster: the
 /// knife edge (8.3) 13.9 against 16.8 ms at N = 8192, the rolling disk with `SBP242`
 /// (6.4) 20.1 against 24.1 ms, the pendulum (4.6) 5.9 against 7.4 ms, the damped
-/// oscillator (3.1) 0.9 against 1.9 ms. The chain of 8 rods (24 unknowns per node) was
+/// oscillator (3.1) 0.9 against 1.9 ms. The supernodal factors take more memory: peak
+/// 197 → 245 MB for chain4 at N = 8192, 244 → 306 MB for the `SBP484` disk at 16384
+/// (within the memory estimate, `tests/memory.rs`). The chain of 8 rods (24 unknowns per node) was
 /// the reason for the first lowering from 1 to 0.5: 0.13 s simplicial per numeric LU at
 /// N = 1024, 0.06 s supernodal.
 const SUPERNODAL_THRESHOLD: f64 = 0.25;
