@@ -20,10 +20,11 @@
 //! every parameter off its bounds by at most `tol` relative (the reduced fit's test,
 //! `reduced.rs`): with noisy data weighted by `1/σ²` the dual infeasibility stalls at the
 //! gradient's rounding above `tol` (a damped pendulum, σ = 0.01: at 1e-9, and Ipopt went
-//! on to its acceptable level, 11 iterations where this test stops after 6). The constraints of every shipped fit stagnate at their
-//! round-off level above the scene's `tol`, so Ipopt's own test never held: it went on
-//! until its acceptable level, [`ACCEPTABLE_ITER`](super::ACCEPTABLE_ITER) iterations
-//! more, each a factorization or several, at the same point (docs/benchmarks.md#fitting);
+//! on to its acceptable level, 11 iterations where this test stops after 6). The
+//! constraints of every shipped fit stagnate at their round-off level above the scene's
+//! `tol`, so Ipopt's own test never held: it went on until its acceptable level,
+//! [`ACCEPTABLE_ITER`](super::ACCEPTABLE_ITER) iterations more, each a factorization or
+//! several, at the same point (docs/benchmarks.md#fitting);
 //! and Ipopt's barrier parameter needs several more iterations to reach `tol` after the
 //! parameters have stopped moving.
 //!

@@ -112,8 +112,9 @@ pub(super) struct ReducedFit<'a> {
     plans: &'a Plans,
     observations: &'a Observations,
     free: &'a [FreeParameter],
-    /// Newton's method, for a solve the chord steps do not finish (made at the first:
-    /// its symbolic analysis costs as much as a factorization).
+    /// Newton's method, for a solve the chord steps do not finish (made at the first, on
+    /// the analysis of the factorizations of `∂R/∂P`: an analysis costs as much as a
+    /// factorization).
     newton: Option<SystemSolver>,
     options: NewtonOptions,
     ws: Option<Workspace>,
@@ -203,7 +204,12 @@ impl<'a> ReducedFit<'a> {
                 let mut system = Reduced::with_workspace(self.action, &z, &self.plans.jacobian, None, ws);
                 let newton = match self.newton.as_mut() {
                     Some(newton) => Ok(newton),
-                    None => SystemSolver::new(n_p, &self.plans.jacobian.structure).map(|s| self.newton.insert(s)),
+                    None => {
+                        // On the analysis of the anchor's factorization, when there is one.
+                        let structure = &self.plans.jacobian.structure;
+                        let shared = self.plans.jacobian_lu.borrow().as_ref().and_then(|f| SystemSolver::on_analysis_of(f, n_p, structure));
+                        shared.map_or_else(|| SystemSolver::new(n_p, structure), Ok).map(|s| self.newton.insert(s))
+                    }
                 };
                 let result = newton.and_then(|newton| newton.solve(&mut system, &z[..n_p], &self.options));
                 ws = system.into_workspace();

@@ -392,6 +392,16 @@ impl SparseFactorization {
         self.lu.factor(&self.values, false, &mut self.stats)
     }
 
+    /// A new LU on this factorization's analysis (nothing factored yet), for the
+    /// `n × n` matrices of `structure`; `None` unless the analysis is of that structure
+    /// (the same entries in the same order).
+    pub(super) fn sharing_analysis(&self, n: usize, structure: &[(u32, u32)]) -> Option<SparseLu> {
+        (n == self.n
+            && structure.iter().all(|&(r, c)| (r as usize) < n && (c as usize) < n)
+            && *self.lu.pattern() == CompressedPattern::new(n, structure))
+        .then(|| self.lu.sharing())
+    }
+
     /// The numeric factorizations made, the first included.
     pub fn factorizations(&self) -> usize {
         self.factorizations

@@ -256,6 +256,15 @@ impl SystemSolver {
         Ok(SystemSolver { n, structure: structure.to_vec(), lu, analysis_s: start.elapsed().as_secs_f64() })
     }
 
+    /// A solver for the `n × n` systems of `structure` on the analysis of `factored`, a
+    /// factorization of that structure's matrix: no second analysis of one structure (a
+    /// reduced fit's Newton steps beside its factorizations of `∂R/∂P`). `None` when
+    /// `factored` is of another structure.
+    pub fn on_analysis_of(factored: &SparseFactorization, n: usize, structure: &[(u32, u32)]) -> Option<SystemSolver> {
+        let lu = factored.sharing_analysis(n, structure)?;
+        Some(SystemSolver { n, structure: structure.to_vec(), lu, analysis_s: 0.0 })
+    }
+
     /// The factorization of the matrix of this solver's structure with `entries` (one
     /// per structure entry), on its analysis: what a fit factors after its start solve
     /// made the analysis. `None` when the matrix is singular or `entries` has another
@@ -683,23 +692,44 @@ mod tests {
         }
     }
 
-    /// `F(x) = x² − 2`: one unknown, root √2.
-    struct Sqrt2(Vec<(u32, u32)>);
-    impl SquareSystem for Sqrt2 {
+    /// One equation in one unknown, `F(x) = f(x)` with its derivative `df`, each
+    /// residual taking `delay`.
+    struct Scalar {
+        f: fn(f64) -> f64,
+        df: fn(f64) -> f64,
+        delay: Duration,
+        structure: [(u32, u32); 1],
+    }
+
+    impl Scalar {
+        fn new(f: fn(f64) -> f64, df: fn(f64) -> f64) -> Scalar {
+            Scalar { f, df, delay: Duration::ZERO, structure: [(0, 0)] }
+        }
+    }
+
+    impl SquareSystem for Scalar {
         fn size(&self) -> usize {
             1
         }
         fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-            c[0] = x[0] * x[0] - 2.0;
+            if !self.delay.is_zero() {
+                std::thread::sleep(self.delay);
+            }
+            c[0] = (self.f)(x[0]);
             Ok(())
         }
         fn jacobian_structure(&self) -> &[(u32, u32)] {
-            &self.0
+            &self.structure
         }
         fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
-            v[0] = 2.0 * x[0];
+            v[0] = (self.df)(x[0]);
             Ok(())
         }
+    }
+
+    /// `F(x) = x² − 2`: one unknown, root √2.
+    fn sqrt2() -> Scalar {
+        Scalar::new(|x| x * x - 2.0, |x| 2.0 * x)
     }
 
     /// A start whose residual is at its round-off level (the double nearest √2: `x² − 2`
@@ -708,7 +738,7 @@ mod tests {
     /// any residual: the fit's solve of its fitted motion starts there.
     #[test]
     fn a_start_at_the_round_off_level_is_converged() {
-        let mut p = Sqrt2(vec![(0, 0)]);
+        let mut p = sqrt2();
         let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
         let x0 = 2f64.sqrt();
         assert!((x0 * x0 - 2.0).abs() > 0.0);
@@ -720,43 +750,14 @@ mod tests {
     }
 
     /// `F(x) = atan(x)`: one unknown, root 0; Newton's full step overshoots from |x| ≳ 1.39.
-    struct Atan(Vec<(u32, u32)>);
-    impl SquareSystem for Atan {
-        fn size(&self) -> usize {
-            1
-        }
-        fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-            c[0] = x[0].atan();
-            Ok(())
-        }
-        fn jacobian_structure(&self) -> &[(u32, u32)] {
-            &self.0
-        }
-        fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
-            v[0] = 1.0 / (1.0 + x[0] * x[0]);
-            Ok(())
-        }
+    fn atan() -> Scalar {
+        Scalar::new(f64::atan, |x| 1.0 / (1.0 + x * x))
     }
 
     /// `F(x) = x⁹`, whose every residual takes 0.3 s: Newton's steps contract it by
     /// (8/9)⁹ ≈ 0.35 (no chord steps), so it needs dozens.
-    struct SlowPower(Vec<(u32, u32)>);
-    impl SquareSystem for SlowPower {
-        fn size(&self) -> usize {
-            1
-        }
-        fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-            std::thread::sleep(Duration::from_millis(300));
-            c[0] = x[0].powi(9);
-            Ok(())
-        }
-        fn jacobian_structure(&self) -> &[(u32, u32)] {
-            &self.0
-        }
-        fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
-            v[0] = 9.0 * x[0].powi(8);
-            Ok(())
-        }
+    fn slow_power() -> Scalar {
+        Scalar { delay: Duration::from_millis(300), ..Scalar::new(|x| x.powi(9), |x| 9.0 * x.powi(8)) }
     }
 
     /// Steps of at least 0.3 s against a deadline 1.05 s away: Newton stops before the
@@ -765,8 +766,8 @@ mod tests {
     /// (3 steps, 1.2 s).
     #[test]
     fn newton_stops_before_a_step_that_would_pass_the_deadline() {
-        let mut p = SlowPower(vec![(0, 0)]);
-        let mut solver = SystemSolver::new(1, &p.0.clone()).unwrap();
+        let mut p = slow_power();
+        let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
         let deadline = Some(Instant::now() + Duration::from_millis(1050));
         let opts = NewtonOptions { tol: 1e-300, max_iter: 100, chord: true, single_precision: false, deadline };
         let sol = solver.solve(&mut p, &[1.0], &opts).unwrap();
@@ -851,7 +852,7 @@ mod tests {
     /// `ls_trials`.
     #[test]
     fn a_chord_step_that_does_not_contract_is_replaced_by_a_newton_step() {
-        let mut p = Atan(vec![(0, 0)]);
+        let mut p = atan();
         let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
         let full = solver
             .solve(&mut p, &[0.35], &NewtonOptions { tol: 3e-3, max_iter: 10, chord: false, single_precision: false, deadline: None })
@@ -875,7 +876,7 @@ mod tests {
     /// diverges; the line search must damp it and converge to 0.
     #[test]
     fn line_search_rescues_a_diverging_newton_iteration() {
-        let mut p = Atan(vec![(0, 0)]);
+        let mut p = atan();
         let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
         let sol = solver
             .solve(&mut p, &[3.0], &NewtonOptions { tol: 1e-12, max_iter: 50, chord: true, single_precision: false, deadline: None })
@@ -914,22 +915,8 @@ mod tests {
 
     /// `F(x) = ∛x`: the Newton step `−3x` overshoots, the line search halves it, and
     /// every step reduces `|F|` by `2^(−1/3)`: slow, linear, but steady.
-    struct CubeRoot(Vec<(u32, u32)>);
-    impl SquareSystem for CubeRoot {
-        fn size(&self) -> usize {
-            1
-        }
-        fn residual(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-            c[0] = x[0].cbrt();
-            Ok(())
-        }
-        fn jacobian_structure(&self) -> &[(u32, u32)] {
-            &self.0
-        }
-        fn jacobian_values(&mut self, x: &[f64], v: &mut [f64]) -> Result<(), EvalError> {
-            v[0] = 1.0 / (3.0 * x[0].cbrt().powi(2));
-            Ok(())
-        }
+    fn cube_root() -> Scalar {
+        Scalar::new(f64::cbrt, |x| 1.0 / (3.0 * x.cbrt().powi(2)))
     }
 
     /// A line search that crawls stops after 10 steps as stalled (the backend then hands
@@ -950,7 +937,7 @@ mod tests {
         assert!(sol.history[1..].iter().all(|h| h.alpha_pr < 1e-2), "{:?}", sol.history);
         assert!(sol.x[0] > 9.0, "{:?}", sol.x);
 
-        let mut cube = CubeRoot(vec![(0, 0)]);
+        let mut cube = cube_root();
         let mut solver = SystemSolver::new(1, &[(0, 0)]).unwrap();
         let opts = NewtonOptions { tol: 1e-10, max_iter: 200, chord: true, single_precision: false, deadline: None };
         let sol = solver.solve(&mut cube, &[1.0], &opts).unwrap();
@@ -979,6 +966,43 @@ mod tests {
         let mut other = SystemSolver::new(2, &[(0, 0), (1, 1)]).unwrap();
         assert!(matches!(other.solve(&mut c, &[1.0, 0.5], &opts), Err(NewtonError::OtherStructure)));
         assert!(matches!(SystemSolver::new(2, &[(0, 2)]), Err(NewtonError::Structure(_))));
+    }
+
+    /// A solver on a factorization's analysis (the reduced fit's Newton steps) solves as
+    /// one with an analysis of its own, and is refused for another structure: the same
+    /// entries in another order, or another size.
+    #[test]
+    fn a_solver_on_a_factorizations_analysis_needs_its_structure() {
+        let n = 5;
+        let mut structure = Vec::new();
+        let mut values = Vec::new();
+        for i in 0..n as u32 {
+            structure.push((i, i));
+            values.push(4.0 + f64::from(i));
+            if i + 1 < n as u32 {
+                structure.extend([(i, i + 1), (i + 1, i)]);
+                values.extend([1.0, -2.0]);
+            }
+        }
+        let exact: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
+        let mut b = vec![0.0; n];
+        for (&(r, c), v) in structure.iter().zip(&values) {
+            b[r as usize] += v * exact[c as usize];
+        }
+        let factored = SparseFactorization::new(n, &structure, &values).unwrap();
+        let mut shared = SystemSolver::on_analysis_of(&factored, n, &structure).expect("its own structure");
+        assert_eq!(shared.analysis_seconds(), 0.0);
+        let mut p = Linear { structure: structure.clone(), values: values.clone(), b: b.clone() };
+        let opts = NewtonOptions { tol: 1e-13, max_iter: 5, chord: true, single_precision: false, deadline: None };
+        let sol = shared.solve(&mut p, &[0.0; 5], &opts).unwrap();
+        let own = SystemSolver::new(n, &structure).unwrap().solve(&mut p, &[0.0; 5], &opts).unwrap();
+        assert!(sol.status.is_success(), "{:?}", sol.status);
+        assert_eq!(sol.x, own.x, "the same analysis as its own");
+        assert!(sol.x.iter().zip(&exact).all(|(x, e)| (x - e).abs() < 1e-13), "{:?}", sol.x);
+        let mut swapped = structure.clone();
+        swapped.swap(0, 1);
+        assert!(SystemSolver::on_analysis_of(&factored, n, &swapped).is_none(), "another order");
+        assert!(SystemSolver::on_analysis_of(&factored, n + 1, &structure).is_none(), "another size");
     }
 
     /// An analysis is shared only by systems of the same pattern: equal sizes and equal

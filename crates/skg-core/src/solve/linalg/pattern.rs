@@ -5,6 +5,7 @@ use faer::sparse::SymbolicSparseColMatRef;
 
 /// A structure's compressed-column pattern (rows sorted within each column, duplicates
 /// merged) and the position in it of each entry of the structure.
+#[derive(PartialEq)]
 pub(super) struct CompressedPattern {
     n: usize,
     col_ptr: Vec<u32>,
