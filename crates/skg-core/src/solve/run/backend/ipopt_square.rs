@@ -112,7 +112,8 @@ enum Stop {
     /// `max |c| ≤ tol`.
     Tolerance,
     /// `max |c|` at the round-off level of the last Jacobian, or at most
-    /// [`CONVERGED_RESIDUAL`] and no longer falling ([`STALLED`]).
+    /// [`CONVERGED_RESIDUAL`] and no longer falling ([`STALLED`]) or falling ever
+    /// slower ([`DECELERATED`]).
     RoundOff,
     /// The deadline (reached, or to be passed by the next iteration), this many seconds
     /// after the start of what it bounds.
@@ -144,6 +145,19 @@ const STALLED: f64 = 0.5;
 /// See [`STALLED`].
 const STALLED_ITERATIONS: usize = 2;
 
+/// A full step of Ipopt's main phase that brings `max |c|` to at most
+/// [`CONVERGED_RESIDUAL`] but contracts it by a factor more than this many times the
+/// full step before it did stops Ipopt as converged to the floor of its equations:
+/// Newton's steps accelerate on a regular system (each factor at most the one before
+/// it, down to round-off), and the next iteration of one that decelerates has not made
+/// progress on the shipped and test scenes, only cost. The chain on stiff springs
+/// (`SBP242-AD`, natural condition, 512 nodes, a nearly singular Jacobian on which
+/// Ipopt regularizes its steps) falls from 3.8e-4 to 2.1e-9 (a factor 5.5e-6) and to
+/// 6.9e-11 (0.033) above its tolerance of 1e-11; its third iteration, 0.55 of the
+/// solve's 0.66 s, failed its line search in 22 trials with 11 factorizations of the
+/// KKT matrix before Ipopt stopped at its acceptable level at the same point.
+const DECELERATED: f64 = 100.0;
+
 /// A square system seen by Ipopt, with skg-solve's stopping test in the intermediate
 /// callback (module docs): outside the restoration phase, stop once `max |c| ≤ tol`,
 /// or, after at least one step, once it is at the round-off level of the last Jacobian
@@ -168,13 +182,29 @@ pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
     /// The least `max |c|` so far.
     least_inf_pr: f64,
     stalled: usize,
+    /// `max |c|` at the last callback (infinite before the first).
+    last_inf_pr: f64,
+    /// The factor by which the last iteration's step contracted `max |c|`, if it was a
+    /// full step of the main phase ([`DECELERATED`]).
+    contraction: Option<f64>,
     stopped: Option<Stop>,
 }
 
 impl<'p, S: SquareSystem + ?Sized> IpoptSquare<'p, S> {
     /// `system` before Ipopt's first iteration, to be stopped at `tol` or at `deadline`.
     fn new(system: &'p mut S, tol: f64, deadline: Option<Deadline>) -> Self {
-        IpoptSquare { system, tol, roundoff: 0.0, deadline, last_callback: None, least_inf_pr: f64::INFINITY, stalled: 0, stopped: None }
+        IpoptSquare {
+            system,
+            tol,
+            roundoff: 0.0,
+            deadline,
+            last_callback: None,
+            least_inf_pr: f64::INFINITY,
+            stalled: 0,
+            last_inf_pr: f64::INFINITY,
+            contraction: None,
+            stopped: None,
+        }
     }
 
     /// The solve's status: Ipopt's, unless the stopping test stopped it.
@@ -238,6 +268,16 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
         if self.stopped.is_none() && self.stalled >= STALLED_ITERATIONS {
             self.stopped = Some(Stop::RoundOff);
         }
+        // A full Newton step of the main phase that contracted far less than the one before.
+        let full_step = !stat.restoration && stat.iter >= 1 && stat.alpha_pr == 1.0 && self.last_inf_pr.is_finite();
+        let contraction = full_step.then(|| stat.inf_pr / self.last_inf_pr);
+        if let (Some(now), Some(before)) = (contraction, self.contraction) {
+            if self.stopped.is_none() && stat.inf_pr <= CONVERGED_RESIDUAL && now > DECELERATED * before {
+                self.stopped = Some(Stop::RoundOff);
+            }
+        }
+        self.contraction = contraction;
+        self.last_inf_pr = stat.inf_pr;
         if stat.inf_pr > DIVERGED * self.least_inf_pr.max(self.tol) {
             self.stopped = Some(Stop::Diverged);
         }
@@ -440,6 +480,38 @@ mod tests {
         for (iter, inf_pr) in falling.into_iter().chain(above).enumerate() {
             assert!(square.intermediate(&stat(iter as i32, inf_pr, true)), "stopped at iteration {iter}");
         }
+    }
+
+    /// Ipopt's report of a full step of its main phase to `max |c|` = `inf_pr`.
+    fn full_step(iter: i32, inf_pr: f64) -> ipopt::IterationStat {
+        ipopt::IterationStat { alpha_pr: 1.0, ..stat(iter, inf_pr, false) }
+    }
+
+    /// Full steps whose contraction worsens a hundredfold below 1e-8 (the stiff chain's
+    /// 3.8e-4 → 2.1e-9 → 6.9e-11): stopped as converged to the round-off level at once.
+    /// Steps that accelerate (Newton's on a regular system), that contract steadily, that
+    /// decelerate above 1e-8, or that the line search cut, go on.
+    #[test]
+    fn ipopt_is_stopped_once_its_full_steps_decelerate_below_the_converged_level() {
+        let mut system = Shift;
+        let mut square = IpoptSquare::new(&mut system, 1e-12, None);
+        assert!(square.intermediate(&stat(0, 3.8e-4, false)));
+        assert!(square.intermediate(&full_step(1, 2.09e-9)));
+        assert!(!square.intermediate(&full_step(2, 6.85e-11)));
+        assert_eq!(square.status(ipopt::Status::UserRequestedStop), SolverStatus::IpoptConvergedToRoundOff);
+
+        let goes_on = |residuals: &[f64], cut: Option<usize>| {
+            let mut system = Shift;
+            let mut square = IpoptSquare::new(&mut system, 1e-14, None);
+            residuals.iter().enumerate().all(|(i, &r)| {
+                let step = if i == 0 { stat(0, r, false) } else { full_step(i as i32, r) };
+                square.intermediate(&ipopt::IterationStat { alpha_pr: if Some(i) == cut { 0.5 } else { step.alpha_pr }, ..step })
+            })
+        };
+        assert!(goes_on(&[1e-2, 1e-5, 1e-10, 1e-13], None), "accelerating");
+        assert!(goes_on(&[1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13], None), "steady");
+        assert!(goes_on(&[1e-1, 1e-6, 1e-7, 1e-9, 1e-13], None), "decelerating above 1e-8");
+        assert!(goes_on(&[3.8e-4, 2.09e-9, 6.85e-11, 1e-13], Some(2)), "a step cut by the line search");
     }
 
     /// A shipped scene of `scenarios/`.
