@@ -374,3 +374,19 @@ fn hostile_settings_are_refused_at_their_line_in_words() {
     assert_eq!(code, Some(1), "{t}");
     assert!(t.contains("sweep.toml:4:") && t.contains("a grid axis is a value") && !t.contains("untagged enum"), "{t}");
 }
+
+/// `--quiet` prints only errors and warnings: a verified solve whose refinement chose
+/// the natural initial-velocity condition says so in a note without it, and prints
+/// nothing with it.
+#[test]
+fn a_quiet_verified_solve_prints_no_notes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::test_scene("stiff/overdamped_1e5");
+    let args = [s(&scene), "--refine", "--operator", "auto", "-o", "out"];
+    let (code, t) = run(&args, dir.path());
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("note: the initial velocity is imposed by the natural condition"), "{t}");
+    let (code, t) = run(&[&args[..], &["-q"]].concat(), dir.path());
+    assert_eq!(code, Some(0), "{t}");
+    assert_eq!(t, "", "printed with --quiet");
+}

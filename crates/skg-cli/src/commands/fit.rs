@@ -67,8 +67,10 @@ pub struct FitArgs {
 pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
     let ov = args.scene.overrides(args.nodes)?;
     let mut scene = load(&args.scenario, &ov)?;
-    for n in &scene.notes {
-        note!("note: {}: {n}", args.scenario.display());
+    if !quiet {
+        for n in &scene.notes {
+            note!("note: {}: {n}", args.scenario.display());
+        }
     }
     let settings = settings(&args, &scene)?;
     let data = Data::read(&data_path(&args, &scene)?, &scene)?;

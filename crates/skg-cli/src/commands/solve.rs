@@ -61,16 +61,21 @@ fn solver_name(outcome: &solve::Outcome) -> &'static str {
 pub fn run(args: SolveArgs, quiet: bool) -> Result<ExitCode> {
     let path = args.scenario.clone().expect("clap requires the scenario");
     let mut scene = load(&path, &overrides(&args)?)?;
-    for n in &scene.notes {
-        note!("note: {n}");
+    if !quiet {
+        for n in &scene.notes {
+            note!("note: {n}");
+        }
     }
     let dir = args.output.unwrap_or_else(|| {
         let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from("out").join(stem)
     });
     let (outcome, written) = solve_with_progress(&dir, &mut scene, quiet)?;
-    for n in &outcome.notes {
-        note!("note: {n}");
+    // With --quiet a trusted solve's notes are left out, as its ladder and refinement are.
+    if !quiet || !outcome.trusted() {
+        for n in &outcome.notes {
+            note!("note: {n}");
+        }
     }
     for w in &outcome.warnings {
         note!("warning: {w}");

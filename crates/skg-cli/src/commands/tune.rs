@@ -66,8 +66,10 @@ pub fn run(args: TuneArgs, quiet: bool) -> Result<ExitCode> {
             s.wall_s
         );
     })?;
-    for n in &r.notes {
-        note!("note: {n}");
+    if !quiet {
+        for n in &r.notes {
+            note!("note: {n}");
+        }
     }
     let out = args.output.unwrap_or_else(|| skg_core::tune::default_output(&args.scenario));
     output::write_json(&out, &r)?;

@@ -86,6 +86,20 @@ pub fn readable_number(x: f64) -> String {
     }
 }
 
+/// A computed number as a message shows it: three significant digits, in exponent form
+/// below 1e-3 and from 1e4 on (`0.0495`, `15.9`, `1.00e-5`); `readable_number` for
+/// zero, infinities and NaN. Values a user wrote are shown by [`readable_number`], whole.
+pub fn rounded_number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        readable_number(x)
+    } else if (1e-3..1e4).contains(&x.abs()) {
+        let decimals = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.2e}")
+    }
+}
+
 /// A text as a message quotes it (`"…"`, escapes for control characters), its first 60
 /// characters only when it is longer, with its length: a message never echoes a huge
 /// value whole.
@@ -93,5 +107,23 @@ pub(crate) fn quoted_excerpt(text: &str) -> String {
     match text.char_indices().nth(60) {
         Some((cut, _)) => format!("{:?}… ({} characters)", &text[..cut], text.chars().count()),
         None => format!("{text:?}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The initial layer's times as its note showed them (`9.998412826381873e-6 s`,
+    /// `15.873015873015873 s`), and the ends of the plain range.
+    #[test]
+    fn computed_numbers_are_shown_to_three_significant_digits() {
+        let shown: Vec<String> = [9.998412826381873e-6, 15.873015873015873, 0.04947390005, 2.4999999e-4, 1234.6, -0.5, 12345.0]
+            .into_iter()
+            .map(rounded_number)
+            .collect();
+        assert_eq!(shown, ["1.00e-5", "15.9", "0.0495", "2.50e-4", "1235", "-0.500", "1.23e4"]);
+        assert_eq!(rounded_number(0.0), "0");
+        assert_eq!(rounded_number(f64::NAN), "NaN");
     }
 }

@@ -58,7 +58,7 @@ mod time;
 #[cfg(test)]
 mod tests;
 
-pub use error::{readable_number, SceneError};
+pub use error::{readable_number, rounded_number, SceneError};
 pub use file::{
     ConstraintSpec, CoordinateSpec, DiscretizationSpec, FitSpec, IpoptValue, NumOrExpr, SceneFile, SceneMeta, SolverSpec, TimeSpec,
     VerifySpec, WallSpec,

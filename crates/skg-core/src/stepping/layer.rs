@@ -17,7 +17,7 @@
 //! change below the velocity's rounding is none).
 
 use crate::model::Model;
-use crate::scene::{readable_number, Scene};
+use crate::scene::{rounded_number, Scene};
 use crate::stepping::equations::integrate_states;
 use crate::stepping::ode::OdeOptions;
 
@@ -38,8 +38,8 @@ impl std::fmt::Display for InitialLayer {
         write!(
             f,
             "a fast initial layer: the velocity relaxes within {} s of the start, where the grid's first step is {} s",
-            readable_number(self.relaxation),
-            readable_number(self.step)
+            rounded_number(self.relaxation),
+            rounded_number(self.step)
         )
     }
 }
