@@ -72,6 +72,9 @@ class SolverStatus(_StrEnum):
     """An Ipopt return code skg-solve does not know (``summary.json`` writes it as
     ``Unknown(<code>)``, which stays a plain string)."""
     IPOPT_CONVERGED_TO_ROUND_OFF = "Ipopt_Converged_To_Round_Off"
+    IPOPT_STALLED = "Ipopt_Stalled"
+    """Ipopt's restoration phase made no progress for 5 iterations with the residual
+    between 1e-8 and 1e-6: not converged."""
     IPOPT_TIME_LIMIT_REACHED = "Ipopt_Time_Limit_Reached"
     """Ipopt stopped at the solve's ``time_limit`` before it converged."""
     NEWTON_CONVERGED = "Newton_Converged"

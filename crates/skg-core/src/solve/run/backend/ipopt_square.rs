@@ -120,6 +120,9 @@ enum Stop {
     TimeLimit(f64),
     /// `max |c|` rose to [`DIVERGED`] times the least it had been.
     Diverged,
+    /// `max |c|` made no progress in the restoration phase above [`CONVERGED_RESIDUAL`]
+    /// ([`RESTORATION_STALLED_ITERATIONS`]).
+    Stalled,
 }
 
 /// A solve whose `max |c|` rises to this many times the least it had been (or the
@@ -144,6 +147,22 @@ const DIVERGED: f64 = 1e3;
 const STALLED: f64 = 0.5;
 /// See [`STALLED`].
 const STALLED_ITERATIONS: usize = 2;
+
+/// After this many iterations in a row of the restoration phase with `max |c|` above
+/// [`CONVERGED_RESIDUAL`], at most [`STALLED_BAND`] times it, and above [`STALLED`]
+/// times the least before it, Ipopt is stopped as stalled (not converged): the
+/// restoration phase has come close to a solution it cannot reach, the floor of a nearly
+/// singular system. On the chain on stiff springs with `SBP242`, the natural condition
+/// and 512 nodes `max |c|` stayed at 3.0e-8 to 4.4e-8 from the restoration phase's
+/// fourth iteration to its 17th, and rose to 3.4e-2 at the 18th (stopped there as
+/// diverged): 0.65 CPU s to the same verdict, not converged.
+const RESTORATION_STALLED_ITERATIONS: usize = 5;
+
+/// See [`RESTORATION_STALLED_ITERATIONS`]. Far from a solution the restoration phase
+/// may wander without progress and still find one: the tumbler on 48 nodes (too coarse
+/// for its contacts) stayed at `max |c|` of 1.2 to 6 for its first 20 restoration
+/// iterations, then converged in 7 more.
+const STALLED_BAND: f64 = 100.0;
 
 /// A full step of Ipopt's main phase that brings `max |c|` to at most
 /// [`CONVERGED_RESIDUAL`] but contracts it by a factor more than this many times the
@@ -182,6 +201,8 @@ pub(super) struct IpoptSquare<'p, S: SquareSystem + ?Sized> {
     /// The least `max |c|` so far.
     least_inf_pr: f64,
     stalled: usize,
+    /// Restoration iterations in a row without progress above [`CONVERGED_RESIDUAL`].
+    stalled_above: usize,
     /// `max |c|` at the last callback (infinite before the first).
     last_inf_pr: f64,
     /// The factor by which the last iteration's step contracted `max |c|`, if it was a
@@ -201,6 +222,7 @@ impl<'p, S: SquareSystem + ?Sized> IpoptSquare<'p, S> {
             last_callback: None,
             least_inf_pr: f64::INFINITY,
             stalled: 0,
+            stalled_above: 0,
             last_inf_pr: f64::INFINITY,
             contraction: None,
             stopped: None,
@@ -213,6 +235,7 @@ impl<'p, S: SquareSystem + ?Sized> IpoptSquare<'p, S> {
             (ipopt::Status::UserRequestedStop, Some(Stop::Tolerance)) => SolverStatus::Ipopt(ipopt::Status::SolveSucceeded),
             (ipopt::Status::UserRequestedStop, Some(Stop::RoundOff)) => SolverStatus::IpoptConvergedToRoundOff,
             (ipopt::Status::UserRequestedStop, Some(Stop::Diverged)) => SolverStatus::Ipopt(ipopt::Status::DivergingIterates),
+            (ipopt::Status::UserRequestedStop, Some(Stop::Stalled)) => SolverStatus::IpoptStalled,
             (ipopt::Status::UserRequestedStop, Some(Stop::TimeLimit(elapsed_s))) => match self.deadline {
                 Some(d) => SolverStatus::TimeLimitReached { backend: Backend::Ipopt, bound: d.bound, limit_s: d.limit_s, elapsed_s },
                 None => SolverStatus::Ipopt(ipopt::Status::UserRequestedStop),
@@ -267,6 +290,13 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
         self.stalled = if stat.inf_pr <= CONVERGED_RESIDUAL && stat.inf_pr > STALLED * self.least_inf_pr { self.stalled + 1 } else { 0 };
         if self.stopped.is_none() && self.stalled >= STALLED_ITERATIONS {
             self.stopped = Some(Stop::RoundOff);
+        }
+        // Stalled above it in the restoration phase.
+        let near = stat.inf_pr > CONVERGED_RESIDUAL && stat.inf_pr <= STALLED_BAND * CONVERGED_RESIDUAL;
+        let no_progress = stat.restoration && near && stat.inf_pr > STALLED * self.least_inf_pr;
+        self.stalled_above = if no_progress { self.stalled_above + 1 } else { 0 };
+        if self.stopped.is_none() && self.stalled_above >= RESTORATION_STALLED_ITERATIONS {
+            self.stopped = Some(Stop::Stalled);
         }
         // A full Newton step of the main phase that contracted far less than the one before.
         let full_step = !stat.restoration && stat.iter >= 1 && stat.alpha_pr == 1.0 && self.last_inf_pr.is_finite();
@@ -478,6 +508,40 @@ mod tests {
         let falling = [1e-6, 4e-9, 1.9e-9, 0.9e-9, 0.4e-9, 0.19e-9];
         let above = [2e-8, 2e-8, 2e-8, 2e-8];
         for (iter, inf_pr) in falling.into_iter().chain(above).enumerate() {
+            assert!(square.intermediate(&stat(iter as i32, inf_pr, true)), "stopped at iteration {iter}");
+        }
+    }
+
+    /// The stiff chain's restoration phase (`SBP242`, natural, 512 nodes): `max |c|` at
+    /// 3.0e-8 to 4.4e-8 from its fourth iteration on: stopped as stalled at the fifth
+    /// iteration in a row without progress, not converged. A restoration phase that stalls
+    /// for four iterations and then progresses goes on, as does one that wanders far from a
+    /// solution (the tumbler on 48 nodes) before it finds one.
+    #[test]
+    fn ipopt_is_stopped_once_its_restoration_phase_stalls_above_the_converged_level() {
+        let mut system = Shift;
+        let mut square = IpoptSquare::new(&mut system, 1e-12, None);
+        let chain = [1.76e-4, 1.76e-4, 4.44e-5, 3.68e-7, 3.07e-8, 2.99e-8, 3.12e-8, 4.17e-8, 4.04e-8];
+        for (iter, inf_pr) in chain.into_iter().enumerate() {
+            assert!(square.intermediate(&stat(iter as i32, inf_pr, iter > 0)), "stopped at iteration {iter}");
+        }
+        assert!(!square.intermediate(&stat(9, 4.03e-8, true)));
+        assert_eq!(square.status(ipopt::Status::UserRequestedStop), SolverStatus::IpoptStalled);
+        assert!(!square.status(ipopt::Status::UserRequestedStop).is_success());
+
+        let mut system = Shift;
+        let mut square = IpoptSquare::new(&mut system, 1e-12, None);
+        let recovering = [1e-4, 4e-8, 4e-8, 4e-8, 4e-8, 4e-8, 1.9e-8, 1.9e-8, 1.9e-8, 1.9e-8, 0.9e-8];
+        for (iter, inf_pr) in recovering.into_iter().enumerate() {
+            assert!(square.intermediate(&stat(iter as i32, inf_pr, true)), "stopped at iteration {iter}");
+        }
+
+        // The tumbler on 48 nodes: 20 restoration iterations at 1.2 to 6, then a solution.
+        let mut system = Shift;
+        let mut square = IpoptSquare::new(&mut system, 1e-12, None);
+        let wandering = [1.04, 6.03, 5.99, 5.86, 1.77, 1.87, 1.31, 2.63, 1.20, 5.45, 4.62, 4.30, 1.74, 1.20, 1.18, 4.97, 3.73, 2.80];
+        let found = [1.56, 8.9e-2, 2.0e-3, 9.2e-7, 3.8e-7, 1.1e-8];
+        for (iter, inf_pr) in wandering.into_iter().chain(found).enumerate() {
             assert!(square.intermediate(&stat(iter as i32, inf_pr, true)), "stopped at iteration {iter}");
         }
     }

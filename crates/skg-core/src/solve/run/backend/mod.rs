@@ -70,6 +70,10 @@ pub enum SolverStatus {
     /// a success.
     #[cfg(feature = "ipopt")]
     IpoptConvergedToRoundOff,
+    /// Ipopt stopped by its intermediate callback in its restoration phase, where `max |c|`
+    /// made no progress above the converged residual (`Ipopt_Stalled`): not converged.
+    #[cfg(feature = "ipopt")]
+    IpoptStalled,
     /// Newton's status.
     Newton(NewtonStatus),
     /// The backend was stopped at a [`Deadline`] (the time limit or a budget) before it
@@ -94,6 +98,8 @@ impl SolverStatus {
             SolverStatus::Ipopt(s) => s.is_success(),
             #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => true,
+            #[cfg(feature = "ipopt")]
+            SolverStatus::IpoptStalled => false,
             SolverStatus::Newton(s) => s.is_success(),
             SolverStatus::TimeLimitReached { .. } => false,
         }
@@ -106,6 +112,8 @@ impl SolverStatus {
             SolverStatus::Ipopt(s) => s.name(),
             #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => "Ipopt_Converged_To_Round_Off",
+            #[cfg(feature = "ipopt")]
+            SolverStatus::IpoptStalled => "Ipopt_Stalled",
             SolverStatus::Newton(s) => s.name(),
             SolverStatus::TimeLimitReached { backend: Backend::Ipopt, .. } => "Ipopt_Time_Limit_Reached",
             SolverStatus::TimeLimitReached { backend: Backend::Newton, .. } => "Newton_Time_Limit_Reached",
@@ -121,6 +129,10 @@ impl fmt::Display for SolverStatus {
             #[cfg(feature = "ipopt")]
             SolverStatus::IpoptConvergedToRoundOff => {
                 f.write_str("Ipopt converged to the round-off level of the residual (above the requested tolerance)")
+            }
+            #[cfg(feature = "ipopt")]
+            SolverStatus::IpoptStalled => {
+                f.write_str("Ipopt stalled in its restoration phase: the residual made no progress above the converged level")
             }
             SolverStatus::Newton(s) => write!(f, "{s}"),
             SolverStatus::TimeLimitReached { backend, bound, limit_s, elapsed_s } => {
@@ -141,7 +153,7 @@ impl Serialize for SolverStatus {
             #[cfg(feature = "ipopt")]
             SolverStatus::Ipopt(s) => s.serialize(serializer),
             #[cfg(feature = "ipopt")]
-            SolverStatus::IpoptConvergedToRoundOff => serializer.serialize_str(self.name()),
+            SolverStatus::IpoptConvergedToRoundOff | SolverStatus::IpoptStalled => serializer.serialize_str(self.name()),
             SolverStatus::Newton(s) => s.serialize(serializer),
             SolverStatus::TimeLimitReached { .. } => serializer.serialize_str(self.name()),
         }
