@@ -358,3 +358,22 @@ fn hard_wall_reference_follows_a_time_dependent_force() {
         assert!((r.trajectory.q[k][0] - y).abs() < 1e-10 && (r.trajectory.v[k][0] - v).abs() < 1e-9, "t = {t}");
     }
 }
+
+/// A grid of uneven steps, as an adaptive solve's (here one step of 1e-9 s, then 255
+/// of about 0.012 s): the reference's step is capped at the mean spacing, not the
+/// smallest, which would ask for 3e9 steps against its budget of 2e7 (the damped spring
+/// of scenarios/damped_spring_stiffness.toml on its adaptive grid at c = 1292 ran out of
+/// them after 50 s). It agrees with the checked-in reference at the nodes they share.
+#[test]
+fn a_grid_with_one_tiny_step_is_sampled_without_tiny_steps() {
+    let scene = common::load("pendulum", &Overrides::default());
+    let table = checked_in("pendulum.csv");
+    let uniform = table.times();
+    let times: Vec<f64> = std::iter::once(0.0).chain(std::iter::once(1e-9)).chain(uniform[1..].iter().copied()).collect();
+    let r = reference::regularized(&scene, &times, &ReferenceOptions::default()).unwrap();
+    let steps = r.stats.accepted + r.stats.rejected;
+    assert!(steps < 100_000, "{steps} steps");
+    let x = col(&table, "x");
+    let e = (1..uniform.len()).map(|k| (r.trajectory.q[k + 1][0] - x[k]).abs()).fold(0.0_f64, f64::max);
+    assert!(e < 1e-9, "{e:e} from the checked-in reference");
+}
