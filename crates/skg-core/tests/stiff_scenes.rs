@@ -197,6 +197,28 @@ fn the_stiffness_scene_at_ratios_1e7_and_1e8_is_verified_refined() {
     }
 }
 
+/// The same scene in the middle of the range, c = 464 (ratio 2.2e5) at tolerance 1e-6,
+/// where the natural condition's departure from the layer (about 0.4/c² = 1.9e-6) is
+/// beyond the tolerance and only a grid that resolves the initial layer verifies: on the
+/// adaptive grid, which does, with a few thousand nodes. (With the rounding bound that
+/// counted every adaptive step as the finest, every adaptive grid above 3743 nodes was
+/// predicted beyond the tolerance, and the refinement went on on the uniform grid to
+/// 264 663 nodes, 11 s.)
+#[test]
+fn the_stiffness_scene_in_the_middle_of_its_range_refines_on_the_adaptive_grid() {
+    let c = 464.159_f64;
+    let ov = Overrides { set: vec![("c".to_string(), c.to_string())], verify_tol: Some(1e-6), ..refined() };
+    let o = solve::solve_scene(&common::load("damped_spring_stiffness", &ov)).unwrap();
+    assert!(o.trusted(), "{}", o.verification.reason);
+    assert_eq!(o.settings.grid, "adaptive");
+    assert!(o.settings.nodes <= 10_000, "{} nodes", o.settings.nodes);
+    let s = (c * c - 4.0).sqrt();
+    let (r1, r2) = (-2.0 / (c + s), -(c + s) / 2.0);
+    let exact = |t: f64| vec![(r1 * (r2 * t).exp() - r2 * (r1 * t).exp()) / (r1 - r2)];
+    let error = common::max_error(&o, &[0], 0, exact);
+    assert!(error <= 1e-6, "{error:e} from the closed form, beyond the tolerance 1e-6");
+}
+
 /// The shipped stiff test scene (crates/skg-core/tests/scenes/stiff_overdamped.toml) is
 /// trusted refined too (as written: tests/trust.rs).
 #[test]
