@@ -120,8 +120,8 @@ enum Stop {
     TimeLimit(f64),
     /// `max |c|` rose to [`DIVERGED`] times the least it had been.
     Diverged,
-    /// `max |c|` made no progress in the restoration phase above [`CONVERGED_RESIDUAL`]
-    /// ([`RESTORATION_STALLED_ITERATIONS`]).
+    /// `max |c|` made no progress in the restoration phase just above
+    /// [`CONVERGED_RESIDUAL`] ([`RESTORATION_STALLED_ITERATIONS`]).
     Stalled,
 }
 
@@ -243,6 +243,31 @@ impl<'p, S: SquareSystem + ?Sized> IpoptSquare<'p, S> {
             (status, _) => SolverStatus::Ipopt(status),
         }
     }
+
+    /// The stop for a lack of progress shown by the iteration `stat` (called once per
+    /// iteration, before `least_inf_pr` takes it in): stalled below
+    /// [`CONVERGED_RESIDUAL`] in any phase ([`STALLED`]), stalled just above it in the
+    /// restoration phase ([`RESTORATION_STALLED_ITERATIONS`]), or a full step of the main
+    /// phase that contracted far less than the full step before it ([`DECELERATED`]).
+    fn without_progress(&mut self, stat: &ipopt::IterationStat) -> Option<Stop> {
+        let r = stat.inf_pr;
+        let no_progress = r > STALLED * self.least_inf_pr;
+        self.stalled = if r <= CONVERGED_RESIDUAL && no_progress { self.stalled + 1 } else { 0 };
+        let near = r > CONVERGED_RESIDUAL && r <= STALLED_BAND * CONVERGED_RESIDUAL;
+        self.stalled_above = if stat.restoration && near && no_progress { self.stalled_above + 1 } else { 0 };
+        let full_step = !stat.restoration && stat.iter >= 1 && stat.alpha_pr == 1.0 && self.last_inf_pr.is_finite();
+        let contraction = full_step.then(|| r / self.last_inf_pr);
+        let decelerated =
+            matches!((contraction, self.contraction), (Some(now), Some(before)) if r <= CONVERGED_RESIDUAL && now > DECELERATED * before);
+        (self.contraction, self.last_inf_pr) = (contraction, r);
+        if self.stalled >= STALLED_ITERATIONS || decelerated {
+            Some(Stop::RoundOff)
+        } else if self.stalled_above >= RESTORATION_STALLED_ITERATIONS {
+            Some(Stop::Stalled)
+        } else {
+            None
+        }
+    }
 }
 
 /// Our evaluation error as Ipopt's (the wrapper keeps the first for its report).
@@ -286,28 +311,8 @@ impl<S: SquareSystem + ?Sized> Problem for IpoptSquare<'_, S> {
                 self.stopped = Some(Stop::RoundOff);
             }
         }
-        // Stalled below the residual that counts as converged, in any phase.
-        self.stalled = if stat.inf_pr <= CONVERGED_RESIDUAL && stat.inf_pr > STALLED * self.least_inf_pr { self.stalled + 1 } else { 0 };
-        if self.stopped.is_none() && self.stalled >= STALLED_ITERATIONS {
-            self.stopped = Some(Stop::RoundOff);
-        }
-        // Stalled above it in the restoration phase.
-        let near = stat.inf_pr > CONVERGED_RESIDUAL && stat.inf_pr <= STALLED_BAND * CONVERGED_RESIDUAL;
-        let no_progress = stat.restoration && near && stat.inf_pr > STALLED * self.least_inf_pr;
-        self.stalled_above = if no_progress { self.stalled_above + 1 } else { 0 };
-        if self.stopped.is_none() && self.stalled_above >= RESTORATION_STALLED_ITERATIONS {
-            self.stopped = Some(Stop::Stalled);
-        }
-        // A full Newton step of the main phase that contracted far less than the one before.
-        let full_step = !stat.restoration && stat.iter >= 1 && stat.alpha_pr == 1.0 && self.last_inf_pr.is_finite();
-        let contraction = full_step.then(|| stat.inf_pr / self.last_inf_pr);
-        if let (Some(now), Some(before)) = (contraction, self.contraction) {
-            if self.stopped.is_none() && stat.inf_pr <= CONVERGED_RESIDUAL && now > DECELERATED * before {
-                self.stopped = Some(Stop::RoundOff);
-            }
-        }
-        self.contraction = contraction;
-        self.last_inf_pr = stat.inf_pr;
+        // (Evaluated at every iteration: it counts them.)
+        self.stopped = self.stopped.or(self.without_progress(stat));
         if stat.inf_pr > DIVERGED * self.least_inf_pr.max(self.tol) {
             self.stopped = Some(Stop::Diverged);
         }
