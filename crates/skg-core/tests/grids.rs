@@ -6,6 +6,7 @@
 
 mod common;
 
+use skg_core::sbp::OperatorKind;
 use skg_core::scene::{GridChoice, InitialVelocity, Overrides};
 use skg_core::solve;
 use skg_core::stepping::reference::{self, ReferenceOptions};
@@ -142,4 +143,38 @@ fn an_initial_layer_is_resolved_by_the_adaptive_grid() {
     };
     let (uniform, adaptive) = (error_on(GridChoice::Uniform), error_on(GridChoice::Adaptive));
     assert!(adaptive < 0.1 * uniform, "adaptive {adaptive:e} against uniform {uniform:e}");
+}
+
+/// `SBP484`'s boundary closures need a smoother grid than the lower orders: on the
+/// adaptive grid of the thin wall's 64 nodes its stretch is negative at node 2, where
+/// `SBP363` takes the same nodes. The solve says which operator and what avoids it,
+/// instead of a bare "stretch" (it was an error without a remedy).
+#[test]
+fn an_adaptive_grid_too_uneven_for_a_high_order_operator_is_refused_with_a_remedy() {
+    let with = |operator: OperatorKind| Overrides { grid: Some(GridChoice::Adaptive), operator: Some(operator), ..Overrides::default() };
+    let scene = common::load_test_scene("thin_wall", &with(OperatorKind::Sbp484));
+    let message = solve::solve_scene(&scene).expect_err("SBP484 on the thin wall's adaptive 64 nodes").to_string();
+    for part in ["SBP484", "node 2", "more nodes", "lower-order operator", "uniform grid"] {
+        assert!(message.contains(part), "{part:?} not in: {message}");
+    }
+    let scene = common::load_test_scene("thin_wall", &with(OperatorKind::Sbp363));
+    assert!(solve::solve_scene(&scene).is_ok(), "SBP363 on the same nodes");
+}
+
+/// A rung of the fallback ladder whose grid the operator cannot take ends the ladder with
+/// a warning, not the solve with an error: the damped yaw disk with `SBP484-AD` on its
+/// adaptive grid of 128 nodes converges and fails its verification, and the windows of
+/// 1.57 s, each with its own boundary closures, are too uneven for `SBP484-AD` at the
+/// first window's node 2 (it was exit 1, the solve's answer and its verdict lost).
+#[test]
+fn a_fallback_rung_whose_grid_the_operator_cannot_take_ends_the_ladder() {
+    let ov = Overrides { grid: Some(GridChoice::Adaptive), operator: Some(OperatorKind::Sbp484Ad), ..Overrides::default() };
+    let path = common::root().join("crates/skg-core/tests/scenes/stiff/damped_yaw_disk.toml");
+    let scene = skg_core::scene::SceneFile::load(&path).unwrap().resolve(&ov).unwrap();
+    let o = solve::solve_scene(&scene).expect("an outcome, not an error");
+    assert!(o.status.is_converged(), "{}", o.status);
+    // Its error is 1.2 times the tolerance (theta): the discretization's, not rounding.
+    assert!(!o.trusted(), "{}", o.verification.reason);
+    let warning = o.warnings.iter().find(|w| w.contains("fallback ladder stopped before windows"));
+    assert!(warning.is_some_and(|w| w.contains("SBP484-AD") && w.contains("spread too unevenly")), "warnings: {:?}", o.warnings);
 }

@@ -368,9 +368,15 @@ pub enum SbpError {
         previous: f64,
     },
     /// A mapped grid's nodes are not increasing smoothly enough: the stretch `D_ξ t` is
-    /// not positive at a node.
-    #[error("the grid's nodes do not follow a smooth increasing map: at node {node} (t = {time}) the stretch D t is {stretch}")]
+    /// not positive at a node. (A high-order operator's boundary closure is the most
+    /// sensitive: an adaptive grid that `SBP363` takes can be too uneven for `SBP484`.)
+    #[error(
+        "the grid's nodes are spread too unevenly for {}: at node {node} (t = {time:.6}) its stretch D t is {stretch:.3}, where it must be positive; more nodes, a lower-order operator or the uniform grid avoid this",
+        kind.name()
+    )]
     BadStretch {
+        /// The operator.
+        kind: OperatorKind,
         /// The node (from 0).
         node: usize,
         /// Its time.
@@ -478,7 +484,7 @@ impl SbpOperator {
         let mut stretch = vec![0.0; n];
         SbpOperator::new(kind.centred(), n, dt)?.apply(&relative, &mut stretch);
         if let Some(k) = stretch.iter().position(|j| !(j.is_finite() && *j > 0.0)) {
-            return Err(SbpError::BadStretch { node: k, time: times[k], stretch: stretch[k] });
+            return Err(SbpError::BadStretch { kind, node: k, time: times[k], stretch: stretch[k] });
         }
         for (h, j) in op.h.iter_mut().zip(&stretch) {
             *h *= j;

@@ -200,7 +200,17 @@ impl Ladder<'_> {
         }
         self.announce(description);
         let start = Instant::now();
-        let run = run()?;
+        let run = match run() {
+            Ok(run) => run,
+            // A later rung whose operator cannot be made on its grid (an adaptive grid's
+            // windows, each with its own boundary closures, too uneven for a high-order
+            // operator) is not tried: the ladder ends with what it has.
+            Err(SolveError::Sbp(e)) if !self.tried.is_empty() => {
+                self.stopped = Some(format!("the fallback ladder stopped before {description}: {e}"));
+                return Ok(false);
+            }
+            Err(e) => return Err(e),
+        };
         let mut outcome = super::run::assess::outcome(self.scene, self.model, run, self.limits.time_limit);
         outcome.work.add(&std::mem::take(&mut self.preliminary));
         let go_on = !ends_the_ladder(&outcome);
