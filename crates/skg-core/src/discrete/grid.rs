@@ -22,7 +22,9 @@
 //!    the fewest nodes the map is made for; two passes `s_j ← min(s_j, s_{j∓1} + slope
 //!    |t_j − t_{j∓1}|)`, repeated as `S` grows), so that on every grid of at least `N_min`
 //!    nodes neighbouring spacings differ by at most about `1 + κ` and the boundary
-//!    closures' stretch stays positive;
+//!    closures' stretch stays positive for `SBP363` and the orders below (`SBP484`'s
+//!    closures can still meet a negative one where the growth of the spacing changes
+//!    within a few nodes: 10 of the 37 shipped and test scenes, docs/grids.md#limits);
 //! 4. linear in `t` between the steps' midpoints.
 //!
 //! `ξ(t) = ∫ dt/s / ∫ dt/s` over the span is then continuous with a continuous,
