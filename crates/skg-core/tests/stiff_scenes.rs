@@ -17,7 +17,8 @@ use std::path::PathBuf;
 
 use skg_core::discrete::interpolate::hermite;
 use skg_core::sbp::OperatorKind;
-use skg_core::scene::{Backend, InitialVelocity, Overrides, Scene, SceneFile};
+use skg_core::scene::{Backend, GridChoice, InitialVelocity, Overrides, Scene, SceneFile};
+use skg_core::solve::choice::refine::TOO_UNEVEN;
 use skg_core::solve::newton::NewtonStatus;
 use skg_core::solve::{self, Outcome};
 
@@ -120,6 +121,26 @@ fn two_masses_on_a_stiff_spring() {
     let o = solved_within_tolerance_of_the_truth("stiff_dumbbell");
     let grids = &o.refinement.as_ref().expect("refined").grids;
     assert!(grids.len() <= 3, "{} grids: {:?}", grids.len(), grids.iter().map(|g| (&g.operator, g.nodes, &g.verdict)).collect::<Vec<_>>());
+}
+
+/// The dumbbell refined with `SBP484-AD` on its adaptive grid (`--refine --grid adaptive
+/// --operator SBP484-AD`): on the scene's 256 nodes the grid is too uneven for the
+/// operator's boundary closures (its stretch is negative at node 251), so the refinement
+/// passes over it to twice the nodes, where the map is graded more gently, and verifies
+/// within the tolerance of the truth. (It was exit 1, an error, before any grid was
+/// solved.)
+#[test]
+fn a_grid_too_uneven_for_the_operator_is_passed_over_by_the_refinement() {
+    let ov = Overrides { refine: true, grid: Some(GridChoice::Adaptive), operator: Some(OperatorKind::Sbp484Ad), ..Overrides::default() };
+    let scene = load("stiff_dumbbell", &ov);
+    let o = solve::solve_scene(&scene).unwrap();
+    let grids = &o.refinement.as_ref().expect("refined").grids;
+    assert_eq!((grids[0].nodes, grids[0].verdict.as_str(), grids[0].wall_s), (256, TOO_UNEVEN, 0.0), "{grids:?}");
+    assert!(o.trusted(), "{} / {}: {grids:?}", o.status, o.verification.reason);
+    assert!(o.settings.nodes > 256);
+    for (coordinate, error) in errors(&scene, &o, &truth("stiff_dumbbell")) {
+        assert!(error <= o.verification.tolerances[&coordinate], "{coordinate}: {error:e} from the truth");
+    }
 }
 
 /// The dumbbell on Newton's method (`--backend newton`, `SBP242` with the natural

@@ -51,11 +51,12 @@ use super::adapt;
 use super::estimate::{calibration, cost_of, proxy_ratio};
 use super::predict::{observed_order, Candidate, Predictor};
 use crate::discrete::contact::{self, MIN_STEPS};
+use crate::discrete::discretization::operator_on;
 use crate::discrete::interpolate::{hermite, linear};
 use crate::discrete::{Discretization, Grid, TimeMap};
 use crate::memory;
 use crate::model::Model;
-use crate::sbp::OperatorKind;
+use crate::sbp::{OperatorKind, SbpError};
 use crate::scene::Scene;
 use crate::solve::ladder::{self, Rungs};
 use crate::solve::run::deadline::{Bound, Deadline, Limits};
@@ -72,6 +73,9 @@ pub const REFINE_COST_FACTOR: f64 = 30.0;
 /// The least time a refinement without `--time-limit` may take, seconds.
 pub const REFINE_FLOOR_S: f64 = 60.0;
 /// The bound of the refinement's budget, for its deadline and its messages.
+/// The verdict of a grid the refinement passed over: an adaptive grid too uneven for the
+/// operator's boundary closures (docs/grids.md#limits).
+pub const TOO_UNEVEN: &str = "not solved: the grid is too uneven for the operator's boundary closures";
 const REFINE_BUDGET: Bound = Bound::Budget { of: "the refinement", first: "grid", factor: REFINE_COST_FACTOR, floor_s: REFINE_FLOOR_S };
 
 /// What to do when the refinement stopped at its time limit.
@@ -415,6 +419,20 @@ impl<'a> Refiner<'a> {
                 }
                 break (format!("stopped before grid {number} ({what}): {e}"), Some("loosen the tolerance".to_string()));
             }
+            // An adaptive grid too uneven for the operator's boundary closures is passed
+            // over for a finer one (the map is graded for the scene's nodes and gentler
+            // on more), unless nothing finer is left.
+            if let Err(e) = self.operator_fits(c, nodes) {
+                self.passed_over(c, nodes, predicted);
+                match self.next().or_else(|| self.uncalibrated_retry(c)) {
+                    Some(next) => {
+                        (c, nodes, predicted) = next;
+                        continue;
+                    }
+                    None if self.first.is_none() => return Err(e.into()),
+                    None => break self.out_of_budget(),
+                }
+            }
             progress(&format!("grid {number}: {what}"));
             let outcome = self.solve_on(c, nodes, predicted, &mut |step: &str| progress(&format!("grid {number} ({what}), {step}")))?;
             let trusted = outcome.trusted();
@@ -490,6 +508,31 @@ impl<'a> Refiner<'a> {
             }
         };
         Ok(outcome)
+    }
+
+    /// Whether the operator of `c` can be made on its grid of `nodes` nodes.
+    fn operator_fits(&self, c: Candidate, nodes: usize) -> Result<(), SbpError> {
+        match (&self.map, c.adaptive) {
+            (Some(map), true) => operator_on(c.operator, &map.times(nodes), true).map(|_| ()),
+            _ => Ok(()),
+        }
+    }
+
+    /// Record a grid not solved because its operator cannot be made on it: its line in
+    /// the refinement and the floor of its candidate's next grid (twice the nodes).
+    fn passed_over(&mut self, c: Candidate, nodes: usize, predicted: Option<f64>) {
+        self.grids.push(RefinedGrid {
+            nodes,
+            operator: c.operator.name().to_string(),
+            initial_velocity: c.initial_velocity,
+            grid: if c.adaptive { "adaptive" } else { "uniform" },
+            predicted,
+            measured: None,
+            max_error: None,
+            verdict: TOO_UNEVEN.to_string(),
+            wall_s: 0.0,
+        });
+        self.floor.push((c, 2 * (nodes - 1) + 1));
     }
 
     /// Record a solve: its line in the refinement, the calibration of its candidate, the
