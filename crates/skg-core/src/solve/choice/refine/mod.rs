@@ -521,18 +521,14 @@ impl<'a> Refiner<'a> {
     /// Record a grid not solved because its operator cannot be made on it: its line in
     /// the refinement and the floor of its candidate's next grid (twice the nodes).
     fn passed_over(&mut self, c: Candidate, nodes: usize, predicted: Option<f64>) {
-        self.grids.push(RefinedGrid {
-            nodes,
-            operator: c.operator.name().to_string(),
-            initial_velocity: c.initial_velocity,
-            grid: if c.adaptive { "adaptive" } else { "uniform" },
-            predicted,
-            measured: None,
-            max_error: None,
-            verdict: TOO_UNEVEN.to_string(),
-            wall_s: 0.0,
-        });
-        self.floor.push((c, 2 * (nodes - 1) + 1));
+        self.grids.push(RefinedGrid { verdict: TOO_UNEVEN.to_string(), ..grid_line(c, nodes, predicted) });
+        self.raise_floor(c, nodes, 2.0);
+    }
+
+    /// The next grid of `c` after one of `nodes` nodes has at least `growth` times its
+    /// steps.
+    fn raise_floor(&mut self, c: Candidate, nodes: usize, growth: f64) {
+        self.floor.push((c, ((nodes - 1) as f64 * growth).ceil() as usize + 1));
     }
 
     /// Record a solve: its line in the refinement, the calibration of its candidate, the
@@ -553,15 +549,11 @@ impl<'a> Refiner<'a> {
         };
         let wall_s = outcome.attempts.iter().map(|a| a.wall_s).sum::<f64>();
         self.grids.push(RefinedGrid {
-            nodes,
-            operator: c.operator.name().to_string(),
-            initial_velocity: c.initial_velocity,
-            grid: if c.adaptive { "adaptive" } else { "uniform" },
-            predicted,
             measured,
             max_error: v.max_error,
             verdict: verdict.to_string(),
             wall_s,
+            ..grid_line(c, nodes, predicted)
         });
         let proxy = match (measured, self.predictor.as_mut()) {
             (Some(_), Ok(p)) => proxy_ratio(p, c, nodes).ok(),
@@ -573,8 +565,7 @@ impl<'a> Refiner<'a> {
             }
         }
         self.work.add(&outcome.work);
-        let growth = if outcome.converged() { MIN_GROWTH } else { 2.0 };
-        self.floor.push((c, ((nodes - 1) as f64 * growth).ceil() as usize + 1));
+        self.raise_floor(c, nodes, if outcome.converged() { MIN_GROWTH } else { 2.0 });
         if self.first.is_none() {
             self.first = Some(outcome.clone());
         }
@@ -617,6 +608,21 @@ impl<'a> Refiner<'a> {
             prediction_s: self.prediction_s,
         });
         outcome
+    }
+}
+
+/// The refinement's line of `c` on `nodes` nodes, before its solve says how it ended.
+fn grid_line(c: Candidate, nodes: usize, predicted: Option<f64>) -> RefinedGrid {
+    RefinedGrid {
+        nodes,
+        operator: c.operator.name().to_string(),
+        initial_velocity: c.initial_velocity,
+        grid: if c.adaptive { "adaptive" } else { "uniform" },
+        predicted,
+        measured: None,
+        max_error: None,
+        verdict: String::new(),
+        wall_s: 0.0,
     }
 }
 
