@@ -111,3 +111,32 @@ fn the_scene_s_fit_table_replaces_the_flags_and_the_flags_override_it() {
     assert_eq!(o.status.code(), Some(2), "{t}");
     assert!(t.contains("no free parameter"), "{t}");
 }
+
+/// On a discretization too coarse for the fitted motion the fit prints its values, then
+/// the failed verification and a remedy naming --refine, and exits 4; with --refine it
+/// prints the discretization the refinement chose, refits the scene it wrote from its own
+/// directory (fitted.toml's data.csv) and exits 0.
+#[test]
+fn a_coarse_fit_exits_4_with_its_values_and_the_refined_one_verifies() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = common::root();
+    let scene = root.join("examples/fit/oscillator.toml");
+    let scene = scene.to_str().unwrap();
+    let coarse = ["--nodes", "64", "--operator", "SBP121", "--fit-method", "reduced"];
+    let o = common::skg(&[&["fit", scene], &coarse[..], &["-o", "coarse"]].concat(), dir.path());
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(4), "{t}");
+    assert!(t.contains("  k  = ") && t.contains("verified: failed"), "the values before the error: {t}");
+    assert!(t.contains("remedy: let the refinement choose the discretization: --refine"), "{t}");
+
+    let o = common::skg(&[&["fit", scene], &coarse[..], &["--refine", "-o", "refined"]].concat(), dir.path());
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(
+        t.contains("discretization: SBP121 (strong initial velocity) on ") && t.contains("chosen by the refinement at the starting values"),
+        "{t}"
+    );
+    let fitted = dir.path().join("refined/fitted.toml");
+    let o = common::skg(&["fit", fitted.to_str().unwrap(), "-o", "again"], dir.path());
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+}

@@ -478,3 +478,109 @@ fn standard_errors_describe_the_scatter_of_repeated_noisy_fits() {
         assert!((se / spread - 1.0).abs() < 0.3, "parameter {j}: standard error {se:e}, Monte-Carlo spread {spread:e}");
     }
 }
+
+/// A discretization too coarse for the fitted motion (SBP121 on 64 nodes; the data of
+/// an oscillator three times faster than at the starting values): the fit converges but
+/// its motion fails the verification, and the remedy names `--refine`. With the
+/// refinement, the nodes are chosen at the starting values (too few for the fitted
+/// motion), then again at the fitted values, and the second fit verifies; its values
+/// are within the verification's tolerance (1e-4 of the motion's range) of the closed
+/// form's, where the coarse grid's are 3 % off.
+#[test]
+fn the_refinement_chooses_the_nodes_at_the_starting_and_at_the_fitted_values() {
+    let coarse = OSCILLATOR.replace("nodes = 512", "nodes = 64").replace("\"SBP484\"", "\"SBP121\"");
+    let (k, c, x0, v0) = (9.0, 0.3, 1.2, -0.5);
+    let data = csv(&oscillator_times(), &[("x", &|t| oscillator(t, 1.0, k, c, x0, v0))]);
+    let mut settings = free(&["k", "c", "x0", "v0"]);
+    settings.method = FitMethod::Reduced;
+    let truth = [("k", k), ("c", c), ("x0", x0), ("v0", v0)];
+
+    let ov = Overrides::default();
+    let f = run(&scene_of(&coarse, &ov), &ov, &data, &settings).unwrap();
+    assert!(f.report.converged && !f.trusted(), "{}", f.outcome.verification.reason);
+    assert!((f.report.parameters["k"].value - k).abs() > 0.01 * k, "k = {}", f.report.parameters["k"].value);
+    let remedy = f.outcome.remedy.as_deref().unwrap_or_default();
+    assert!(remedy.contains("--refine"), "{remedy}");
+    assert!(f.report.discretization.is_empty());
+
+    let ov = Overrides { refine: true, ..Overrides::default() };
+    let f = run(&scene_of(&coarse, &ov), &ov, &data, &settings).unwrap();
+    assert!(f.trusted(), "{}", f.outcome.verification.reason);
+    assert_recovered(&f, &truth, 1e-3);
+    let chosen = &f.report.discretization;
+    assert_eq!(chosen.len(), 2, "{chosen:?}");
+    assert!(chosen[0].nodes < chosen[1].nodes && chosen.iter().all(|d| d.operator == "SBP121"), "{chosen:?}");
+    assert_eq!((f.fitted.nodes, f.fitted.operator.name()), (chosen[1].nodes, "SBP121"));
+    // The starting values reported are the scene's, not the first fit's.
+    assert_eq!(f.report.parameters["k"].initial, 3.0);
+    assert!(f.fitted_toml.contains(&format!("--operator SBP121 --initial-velocity strong --nodes {}", chosen[1].nodes)));
+}
+
+/// `fitted.toml` names its directory's `data.csv` as its data, and a fit reads that file
+/// back: the data with their gaps (a row that does not observe `y` is an empty cell, not
+/// NaN) and the fitted and residual columns passed over. Fitted again from there, the
+/// fit starts at its solution and ends there.
+#[test]
+fn a_fitted_scene_is_fitted_again_from_its_own_directory() {
+    let text = r#"
+[scene]
+name = "two damped oscillators"
+lagrangian = "1/2*(x_dot^2 + y_dot^2) - 1/2*k*(x^2 + 4*y^2)"
+[parameters]
+k = 3.0
+c = 0.2
+[[coordinates]]
+name = "x"
+initial = 1
+velocity = 0
+[[coordinates]]
+name = "y"
+initial = 0.5
+velocity = 0
+[forces]
+x = "-c*x_dot"
+y = "-c*y_dot"
+[time]
+start = 0
+end = 6
+nodes = 400
+[discretization]
+operator = "SBP484"
+[fit]
+free = ["k>=0", "c>=0"]
+data = "data.csv"
+"#;
+    let (k, c) = (4.0, 0.3);
+    let dir = tempfile::tempdir().unwrap();
+    let mut data = String::from("t,x,y\n");
+    for (i, t) in oscillator_times().into_iter().enumerate() {
+        let y = if i % 3 == 0 { String::new() } else { format!("{:?}", oscillator(t, 1.0, 4.0 * k, c, 0.5, 0.0)) };
+        data += &format!("{t:?},{:?},{y}\n", oscillator(t, 1.0, k, c, 1.0, 0.0));
+    }
+    std::fs::write(dir.path().join("data.csv"), data).unwrap();
+    std::fs::write(dir.path().join("scene.toml"), text).unwrap();
+    let first = dir.path().join("first");
+    let fit_dir = |scene_path: &std::path::Path, out: &std::path::Path| {
+        let ov = Overrides::default();
+        let mut scene = SceneFile::load(scene_path).unwrap().resolve(&ov).unwrap();
+        let data = Data::read(&fit::data_of_scene(&scene.file).unwrap().unwrap(), &scene).unwrap();
+        let settings = FitSettings::new(fit::free_of_scene(&scene.file).unwrap());
+        fit::fit_into(out, &mut scene, &ov, &data, &settings).unwrap().0
+    };
+    let f = fit_dir(&dir.path().join("scene.toml"), &first);
+    assert!(f.trusted(), "{}", f.outcome.verification.reason);
+    assert_recovered(&f, &[("k", k), ("c", c)], 1e-6);
+    let written = std::fs::read_to_string(first.join(fit::DATA_FILE)).unwrap();
+    let row: Vec<&str> = written.lines().nth(1).unwrap().split(',').collect();
+    // t, x, fitted_x, residual_x, y, fitted_y, residual_y: no y, no residual of it.
+    assert!(row.len() == 7 && row[4].is_empty() && row[6].is_empty() && !row[5].is_empty(), "a row without y: {row:?}");
+    assert!(!written.contains("NaN"));
+
+    let again = fit_dir(&first.join(fit::FITTED_SCENE_FILE), &dir.path().join("again"));
+    assert!(again.trusted(), "{}", again.outcome.verification.reason);
+    assert_eq!(again.report.misfit.points, f.report.misfit.points);
+    for name in ["k", "c"] {
+        let (a, b) = (again.report.parameters[name].value, f.report.parameters[name].value);
+        assert!((a - b).abs() <= 1e-9 * b, "{name}: {a} against {b}");
+    }
+}

@@ -55,7 +55,7 @@ pub(crate) enum DataArg {
 /// Fit `free` parameters of a scene to `data` as `skg-solve fit` does (each, when `None`,
 /// from the scene's `[fit]` table); with `out`, into that directory.
 #[pyfunction]
-#[pyo3(signature = (path, data=None, free=None, *, out=None, nodes=None, set=None, operator=None, method=None, hessian=None, start=None, tol=None, max_iter=None))]
+#[pyo3(signature = (path, data=None, free=None, *, out=None, nodes=None, set=None, operator=None, refine=false, method=None, hessian=None, start=None, tol=None, max_iter=None))]
 #[pyo3(name = "fit")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fit_scene(
@@ -67,14 +67,19 @@ pub(crate) fn fit_scene(
     nodes: Option<usize>,
     set: Option<&Bound<'_, PyDict>>,
     operator: Option<&str>,
+    refine: bool,
     method: Option<&str>,
     hessian: Option<&str>,
     start: Option<&str>,
     tol: Option<f64>,
     max_iter: Option<u32>,
 ) -> PyResult<NativeFit> {
-    let mut ov = Overrides { nodes, set: assignments(set)?, ..Overrides::default() };
-    ov.operator = operator.map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("operator: {e}")))).transpose()?;
+    let mut ov = Overrides { nodes, set: assignments(set)?, refine, ..Overrides::default() };
+    ov.auto_operator = operator.is_some_and(|s| s.trim().eq_ignore_ascii_case("auto"));
+    ov.operator = operator
+        .filter(|_| !ov.auto_operator)
+        .map(|s| s.parse().map_err(|e| PyValueError::new_err(format!("operator: {e}"))))
+        .transpose()?;
     let free = free.map(|items| parse_free(&items)).transpose()?;
     let mut scene = load(py, &path, &ov)?;
     let free = match free {

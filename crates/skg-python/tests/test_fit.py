@@ -64,6 +64,22 @@ def test_the_reduced_fit_reaches_the_same_values():
         skg.fit(scene, data, ["k"], method="shooting")
 
 
+def test_the_operator_and_the_nodes_chosen_by_the_refinement():
+    """SBP121 on 64 nodes is too coarse for the fitted motion: operator="auto" with
+    refine=True fits on what the refinement chooses, and the fitted motion verifies."""
+    coarse = OSCILLATOR.replace("nodes = 512", "nodes = 64").replace('"SBP484"', '"SBP121"')
+    scene = skg.Scene.from_toml(coarse)
+    data = {"t": T, "x": oscillator(T, 4.0, 0.3, 1.2, -0.5)}
+    assert not skg.fit(scene, data, ["k", "c", "x0", "v0"], method="reduced").trusted
+    f = skg.fit(scene, data, ["k", "c", "x0", "v0"], method="reduced", operator="auto", refine=True)
+    assert f.trusted
+    chosen = f.report["discretization"]
+    assert chosen and chosen[0]["chosen_at"] == "the starting values" and chosen[-1]["verified"]
+    assert len(f.solution.t) == chosen[-1]["nodes"]
+    for name, truth in {"k": 4.0, "c": 0.3, "x0": 1.2, "v0": -0.5}.items():
+        assert f.parameters[name] == pytest.approx(truth, rel=1e-3)
+
+
 def test_bounds_a_csv_file_and_files_written(tmp_path):
     scene = skg.Scene.from_toml(OSCILLATOR)
     path = tmp_path / "data.csv"

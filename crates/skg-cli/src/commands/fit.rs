@@ -40,6 +40,16 @@ pub struct FitArgs {
     /// Number of time nodes N (overrides the scene's time.nodes).
     #[arg(long, value_name = "N")]
     pub nodes: Option<usize>,
+    /// Fit on the discretization the solve's refinement chooses (docs/trust.md#refinement):
+    /// the nodes and, unless --operator names one, the operator predicted to verify at the
+    /// least cost; chosen at the starting values, and again at the fitted values when the
+    /// fitted motion does not verify (docs/fitting.md#the-discretization).
+    #[arg(long)]
+    pub refine: bool,
+    /// The largest grid --refine may use [default: the scene's [verify] max_nodes, else
+    /// the largest the available memory allows, at most 1048576].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(2..=100_000_000))]
+    pub max_nodes: Option<u64>,
     /// How the fit is handed to Ipopt: `all-at-once` (default; the trajectory and the
     /// parameters together, the equations of motion as constraints) or `reduced` (the
     /// parameters alone, the trajectory solved from the equations at every point: single
@@ -65,7 +75,9 @@ pub struct FitArgs {
 }
 
 pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
-    let ov = args.scene.overrides(args.nodes)?;
+    let mut ov = args.scene.overrides(args.nodes)?;
+    ov.refine = args.refine;
+    ov.max_nodes = args.max_nodes.map(|n| n as usize);
     let mut scene = load(&args.scenario, &ov)?;
     if !quiet {
         for n in &scene.notes {
@@ -75,18 +87,25 @@ pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
     let settings = settings(&args, &scene)?;
     let data = Data::read(&data_path(&args, &scene)?, &scene)?;
     let dir = args.output.clone().unwrap_or_else(|| default_dir(&args.scenario));
-    let (fitted, written) = fit::fit_into(&dir, &mut scene, &ov, &data, &settings)?;
+    let spinner = super::solve::progress_spinner(quiet, &scene.name);
+    spinner.set_message(if scene.choose_operator || scene.verify.refine {
+        "choosing the discretization by the refinement, then fitting"
+    } else {
+        "fitting"
+    });
+    let result = fit::fit_into(&dir, &mut scene, &ov, &data, &settings);
+    spinner.finish_and_clear();
+    let (fitted, written) = result?;
     let fit_warnings = &fitted.report.warnings;
     for w in fit_warnings.iter().chain(fitted.outcome.warnings.iter().filter(|w| !fit_warnings.contains(w))) {
         note!("warning: {w}");
     }
-    if let Some(code) = report_untrusted(&fitted, &written) {
-        return Ok(code);
-    }
-    if !quiet {
+    // A converged fit's values are shown even when its motion does not verify: the
+    // error and the remedy follow them.
+    if !quiet && fitted.report.converged {
         print_report(&fitted, &written);
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(report_untrusted(&fitted, &written).unwrap_or(ExitCode::SUCCESS))
 }
 
 /// The fit's settings from the command line, the free parameters from the scene's
@@ -159,6 +178,9 @@ fn report_untrusted(f: &Fit, written: &FitWritten) -> Option<ExitCode> {
             "error: {scene}: the fit converged but the verification of the fitted motion {verdict}: {}; summary in {summary}",
             f.outcome.verification.reason
         );
+        if let Some(r) = &f.outcome.remedy {
+            note!("  remedy: {r}");
+        }
         EXIT_NOT_VERIFIED
     } else {
         return None;
@@ -166,8 +188,9 @@ fn report_untrusted(f: &Fit, written: &FitWritten) -> Option<ExitCode> {
     Some(ExitCode::from(code))
 }
 
-/// The report of a trusted fit on stdout: the iterations, each parameter with its
-/// standard error, the misfit, the verification and the files written.
+/// The report of a converged fit on stdout: the iterations, each parameter with its
+/// standard error, the misfit, the discretization the refinement chose (if it did), the
+/// verification and the files written.
 fn print_report(f: &Fit, written: &FitWritten) {
     let r = &f.report;
     let method = match &r.equations_of_motion {
@@ -195,6 +218,10 @@ fn print_report(f: &Fit, written: &FitWritten) {
         m.max_abs_residual,
         m.sum_of_squares
     );
+    for d in &r.discretization {
+        let verified = if d.verified { "" } else { ", where it did not verify" };
+        out!("  discretization: {}, chosen by the refinement at {}{verified}", d.describe(), d.chosen_at);
+    }
     out!("  verified: {} ({})", f.outcome.verification.status, f.outcome.verification.reason);
     for path in written.paths() {
         out!("  wrote {}", path.display());

@@ -204,7 +204,7 @@ fn energy_drift_note(outcome: &solve::Outcome, scene: &Scene) -> String {
 /// A spinner on stderr naming the attempt under way, with the time so far (drawn only
 /// when stderr is a terminal and not `--quiet`): a fallback ladder that fails can take
 /// a minute.
-fn progress_spinner(quiet: bool, scene: &str) -> ProgressBar {
+pub(super) fn progress_spinner(quiet: bool, scene: &str) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }

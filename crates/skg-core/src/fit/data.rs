@@ -26,6 +26,11 @@ use crate::scene::{readable_number, Scene, VELOCITY_SUFFIX};
 /// The prefix of a standard deviation's column: `sigma_x` for coordinate `x`.
 pub const SIGMA_PREFIX: &str = "sigma_";
 
+/// The prefixes of the columns a fit's `data.csv` adds to the data (the fitted motion
+/// and the residual at the data's times, `report.rs`): read back as data, they are
+/// passed over, so that `fitted.toml` can be fitted again from its own directory.
+pub const WRITTEN_PREFIXES: [&str; 2] = ["fitted_", "residual_"];
+
 /// One measured value.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Observation {
@@ -240,6 +245,8 @@ impl RawTable {
                 values.push((i, k));
             } else if let Some(i) = c.strip_prefix(SIGMA_PREFIX).and_then(index) {
                 sigmas.push((i, k));
+            } else if WRITTEN_PREFIXES.iter().any(|p| c.strip_prefix(p).and_then(index).is_some()) {
+                continue;
             } else {
                 let why = if c.strip_suffix(VELOCITY_SUFFIX).and_then(index).is_some() {
                     "is a velocity: a fit compares coordinates only"

@@ -15,7 +15,9 @@
 //! 1. the settings are checked against the scene: the free parameters are parameters,
 //!    their starting values lie within their bounds, and they do not move the time grid
 //!    ([`FitSettings`], `settings.rs`; [`FreeParameter`], `free.rs`; the scene's `[fit]` table,
-//!    read by `table.rs`, gives them when the caller does not);
+//!    read by `table.rs`, gives them when the caller does not); with `--refine` or
+//!    `--operator auto` the refinement chooses the discretization at the starting values
+//!    (`choose.rs`; again at the fitted values when the fitted motion does not verify);
 //! 2. the data are read and checked against the scene ([`Data`], `data.rs`) and become
 //!    rows of weights over the trajectory's unknowns, interpolated at the data's times
 //!    consistently with the operator (`observe.rs`);
@@ -45,6 +47,7 @@
 //! module is compiled with the `ipopt` feature only.
 
 mod barrier;
+mod choose;
 mod data;
 mod files;
 mod free;
@@ -78,6 +81,7 @@ use problem::{FitProblem, Plans, StopTest};
 use reduced::ReducedFit;
 use start::{put_data, start_states, Start};
 
+pub use choose::ChosenDiscretization;
 pub use data::{Data, DataError, DataPlace, Observation, SIGMA_PREFIX};
 pub use files::{fit_into, write_fit, FitIntoError, FitWritten, DATA_FILE, FITTED_SCENE_FILE};
 pub use free::{split_list, FreeParameter, FreeParameterError};
@@ -142,16 +146,104 @@ impl Fit {
     pub fn converged(&self) -> bool {
         self.report.converged && self.outcome.converged()
     }
+
+    /// Converged, but the fitted motion failed its verification (a discretization too
+    /// coarse for it, where a finer one is the remedy).
+    fn failed_verification(&self) -> bool {
+        self.converged() && self.outcome.verification.status == crate::stepping::verify::VerifyStatus::Failed
+    }
 }
 
 /// Fit the free parameters of `scene` (resolved from its file with `overrides`, at the
 /// starting values) to `data` (module documentation): the start, Ipopt's optimization,
 /// the statistics at its solution, and the fitted scene solved and verified.
+///
+/// With `--operator auto` or a refinement asked for, the discretization is the one the
+/// refinement chooses at the starting values (`choose.rs`); when the fitted motion fails
+/// its verification on it, the refinement chooses again at the fitted values, and the
+/// fit starts again from them on that discretization, once.
 pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSettings) -> Result<Fit, FitError> {
+    if !(scene.choose_operator || scene.verify.refine) {
+        return fit_on(scene, overrides, data, settings, &[], None).map(with_remedy);
+    }
+    let started = Instant::now();
+    let mut named = scene.clone();
+    choose::fixed(&mut named);
+    check_settings(&named, overrides, settings)?;
+    let (chosen, ov, first) = choose::discretization(scene, overrides, "the starting values")?;
+    let mut choosing = started.elapsed();
+    let fit = fit_on(&chosen, &ov, data, settings, std::slice::from_ref(&first), None)?;
+    let fit = if fit.failed_verification() {
+        let names = settings.names();
+        let theta: Vec<f64> = fit.report.parameters.values().map(|p| p.value).collect();
+        let (at_fitted, ov_fitted) = fitted_scene(scene, overrides, &names, &theta)?;
+        let t = Instant::now();
+        let (chosen, ov, second) = choose::discretization(&at_fitted, &ov_fitted, "the fitted values of a first fit")?;
+        choosing += t.elapsed();
+        if second.same_as(&first) {
+            fit
+        } else {
+            let initial: Vec<f64> = names.iter().map(|n| scene.parameters[n]).collect();
+            fit_on(&chosen, &ov, data, settings, &[first, second], Some(&initial))?
+        }
+    } else {
+        fit
+    };
+    let mut fit = with_remedy(fit);
+    fit.report.timings.discretization_s = choosing.as_secs_f64();
+    fit.report.timings.total_s = started.elapsed().as_secs_f64();
+    Ok(fit)
+}
+
+/// `fit` with the fitted motion's remedy when the fit converged but the motion failed
+/// its verification: what to fit on instead.
+fn with_remedy(mut fit: Fit) -> Fit {
+    if !fit.failed_verification() {
+        return fit;
+    }
+    let nodes = 2 * fit.fitted.nodes - 1;
+    fit.outcome.remedy = Some(match fit.report.discretization.last() {
+        None => format!(
+            "let the refinement choose the discretization: --refine (the nodes and the operator, chosen at the starting values \
+             and again at the fitted values when the motion does not verify there); or fit on a finer one (--nodes {nodes}, or \
+             an -AD operator, which damps the odd-even mode)"
+        ),
+        Some(last) if !last.refinement.as_ref().is_some_and(|r| r.refine) => {
+            format!("the operator was chosen at {} for the scene's {} nodes: --refine chooses the nodes too", last.chosen_at, last.nodes)
+        }
+        Some(last) if !last.verified => format!(
+            "at {} the refinement found no discretization that verifies ({}): let it use more nodes (--max-nodes), or state \
+             the accuracy you need (--verify-tol)",
+            last.chosen_at,
+            last.refinement.as_ref().map_or("see fit.discretization in summary.json", |r| r.result.as_str())
+        ),
+        Some(last) => format!(
+            "the discretization chosen at {} ({}) verified there but not at the fitted values: fit on a finer one \
+             (--operator {} --initial-velocity {} --nodes {nodes})",
+            last.chosen_at,
+            last.describe(),
+            last.operator,
+            last.initial_velocity
+        ),
+    });
+    fit
+}
+
+/// [`fit`] on the discretization `scene` names, which `chosen` says how it was chosen
+/// (empty: as the scene and the command line name it); `initial` the starting values
+/// to report when the scene's are not them (a fit started again from a first fit's).
+fn fit_on(
+    scene: &Scene,
+    overrides: &Overrides,
+    data: &Data,
+    settings: &FitSettings,
+    chosen: &[ChosenDiscretization],
+    initial: Option<&[f64]>,
+) -> Result<Fit, FitError> {
     let started = Instant::now();
     let mut warnings = check_settings(scene, overrides, settings)?;
     let names = settings.names();
-    let initial: Vec<f64> = names.iter().map(|n| scene.parameters[n]).collect();
+    let starting: Vec<f64> = names.iter().map(|n| scene.parameters[n]).collect();
     let model = Arc::new(Model::with_free_parameters(scene, &names)?);
     let disc = Discretization::of(scene);
     let times = disc.times(scene);
@@ -165,7 +257,7 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     let observations = Observations::new(&action, &times, data);
     let problem = Problem { scene, model: &model, plans: &plans, observations: &observations, names: &names };
 
-    let (x0, start) = problem.starting_point(&action, &disc, &times, data, settings, &initial, &mut warnings)?;
+    let (x0, start) = problem.starting_point(&action, &disc, &times, data, settings, &starting, &mut warnings)?;
     let start_s = started.elapsed().as_secs_f64();
 
     let t_opt = Instant::now();
@@ -189,7 +281,7 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     outcome.warnings.extend(warnings.iter().cloned());
     let verification_s = t_verify.elapsed().as_secs_f64();
 
-    let parameters = report::parameters(&settings.free, &at.theta, &initial, at.covariance.as_ref());
+    let parameters = report::parameters(&settings.free, &at.theta, initial.unwrap_or(&starting), at.covariance.as_ref());
     warnings.extend(bound_warnings(&parameters));
     let timings = report::Timings {
         start_s,
@@ -197,13 +289,16 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
         ipopt_internal_s: solution.ipopt_seconds,
         statistics_s,
         verification_s,
+        discretization_s: 0.0,
         total_s: started.elapsed().as_secs_f64(),
     };
     let status = match at_kkt_point {
         Some(stop) => (stop.status().to_string(), stop.text().to_string()),
         None => (solution.status.name().to_string(), solution.status.to_string()),
     };
-    let report = problem.report(&action, &solution, (converged, status), settings, start, parameters, at, data, timings, inner, warnings);
+    let mut report =
+        problem.report(&action, &solution, (converged, status), settings, start, parameters, at, data, timings, inner, warnings);
+    report.discretization = chosen.to_vec();
     let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
     let data_table = report::data_table(scene, data, &outcome.trajectory);
     Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
@@ -420,6 +515,7 @@ impl Problem<'_> {
             history: solution.history.clone(),
             warnings,
             fitted_scene: None,
+            discretization: Vec::new(),
         }
     }
 }
@@ -536,10 +632,12 @@ fn check_settings(scene: &Scene, overrides: &Overrides, settings: &FitSettings) 
             )));
         }
     }
-    if scene.choose_operator || scene.verify.refine {
-        return Err(FitError::Settings(
-            "a fit solves one discretization: name the operator (not `auto`) and do not ask for a refinement".into(),
-        ));
+    if scene.grid == crate::scene::GridChoice::Adaptive {
+        notes.push(
+            "the fit keeps its grid fixed while the parameters move the motion: it uses the uniform grid, not the adaptive one, \
+             whose map follows the motion at one set of values"
+                .into(),
+        );
     }
     if scene.windows.is_some() {
         notes.push("the fit optimizes the whole span at once: the scene's [time] window is not used".into());
@@ -597,7 +695,10 @@ fn fitted_scene(scene: &Scene, overrides: &Overrides, names: &[String], theta: &
     let mut ov = overrides.clone();
     ov.set.retain(|(n, _)| !names.contains(n));
     ov.set.extend(names.iter().zip(theta).map(|(n, x)| (n.clone(), format!("{x:?}"))));
-    let fitted = scene.file.clone().resolve(&ov)?;
+    let mut fitted = scene.file.clone().resolve(&ov)?;
+    if !(scene.choose_operator || scene.verify.refine) {
+        choose::fixed(&mut fitted);
+    }
     Ok((fitted, ov))
 }
 

@@ -7,10 +7,10 @@ use indexmap::IndexMap;
 use nalgebra::DMatrix;
 use serde::Serialize;
 
-use super::data::{Data, SIGMA_PREFIX};
+use super::data::{Data, SIGMA_PREFIX, WRITTEN_PREFIXES};
 use super::free::FreeParameter;
 use super::observe::Observations;
-use super::{rows, FitHessian, FitMethod, FitStart, InnerWork};
+use super::{rows, ChosenDiscretization, FitHessian, FitMethod, FitStart, InnerWork};
 use crate::discrete::interpolate::hermite;
 use crate::discrete::Trajectory;
 use crate::scene::provenance;
@@ -173,7 +173,11 @@ pub struct Timings {
     pub statistics_s: f64,
     /// The solve at the fitted values and its verification.
     pub verification_s: f64,
-    /// The whole fit.
+    /// The refinements that chose the discretization (`--refine`, `--operator auto`);
+    /// 0 where it was named.
+    pub discretization_s: f64,
+    /// The whole fit (with a first fit, when the discretization was chosen again at its
+    /// fitted values).
     pub total_s: f64,
 }
 
@@ -227,6 +231,10 @@ pub struct FitReport {
     pub warnings: Vec<String>,
     /// The fitted scene's file and its SHA-256, once written.
     pub fitted_scene: Option<FittedSceneFile>,
+    /// How the refinement chose the discretization (`--operator auto`, `--refine`): at
+    /// the starting values, and again at the fitted values of a first fit whose motion
+    /// did not verify; empty where the scene and the command line name it.
+    pub discretization: Vec<ChosenDiscretization>,
 }
 
 /// The fitted scene as written beside the run.
@@ -338,8 +346,18 @@ pub(super) fn fitted_toml(scene: &Scene, overrides: &Overrides, report: &FitRepo
             format!("#   {n} = {:?}{se} (from {:?})", p.value, p.initial)
         })
         .collect();
+    let on = format!(
+        "#   on {} ({} initial velocity), {} nodes: skg-solve {} --operator {} --initial-velocity {} --nodes {} solves it",
+        scene.operator.name(),
+        scene.initial_velocity,
+        scene.nodes,
+        super::FITTED_SCENE_FILE,
+        scene.operator.name(),
+        scene.initial_velocity,
+        scene.nodes
+    );
     format!(
-        "# Fitted by skg-solve {} to {} ({} values; Ipopt: {}, {} iterations):\n{}\n{out}",
+        "# Fitted by skg-solve {} to {} ({} values; Ipopt: {}, {} iterations):\n{}\n{on}\n{out}",
         provenance::VERSION,
         report.data.origin,
         report.data.points,
@@ -353,7 +371,8 @@ pub(super) fn fitted_toml(scene: &Scene, overrides: &Overrides, report: &FitRepo
 /// coordinate `c` its data `c`, their standard deviation `sigma_c` (when given), the
 /// fitted motion `fitted_c` (the trajectory's cubic Hermite interpolation, as the fit
 /// compared them) and the residual `residual_c` (fitted − data); NaN where a coordinate
-/// was not observed.
+/// was not observed (an empty cell in `data.csv`, which a fit reads back as data, the
+/// fitted and residual columns passed over).
 pub(super) fn data_table(scene: &Scene, data: &Data, tr: &Trajectory) -> (Vec<String>, Vec<Vec<f64>>) {
     let mut header = vec!["t".to_string()];
     for &i in &data.coordinates {
@@ -362,8 +381,7 @@ pub(super) fn data_table(scene: &Scene, data: &Data, tr: &Trajectory) -> (Vec<St
         if data.sigma_given {
             header.push(format!("{SIGMA_PREFIX}{c}"));
         }
-        header.push(format!("fitted_{c}"));
-        header.push(format!("residual_{c}"));
+        header.extend(WRITTEN_PREFIXES.iter().map(|p| format!("{p}{c}")));
     }
     let fitted = hermite(tr, &data.times);
     let rows = data

@@ -116,6 +116,17 @@ impl Write for Digesting<'_> {
 /// Write a numeric table as CSV, full precision (shortest round-trip representation).
 /// Returns its row count and hash, as a summary lists it.
 pub fn write_csv(path: &Path, comment: Option<&str>, header: &[String], rows: &[Vec<f64>]) -> Result<DataFile, OutputError> {
+    write_table(path, comment, header, rows, false)
+}
+
+/// [`write_csv`] with each NaN written as an empty cell: a table with gaps (a fit's
+/// data where a coordinate was not observed), which a fit's data file and pandas read
+/// back as gaps.
+pub fn write_csv_with_gaps(path: &Path, comment: Option<&str>, header: &[String], rows: &[Vec<f64>]) -> Result<DataFile, OutputError> {
+    write_table(path, comment, header, rows, true)
+}
+
+fn write_table(path: &Path, comment: Option<&str>, header: &[String], rows: &[Vec<f64>], gaps: bool) -> Result<DataFile, OutputError> {
     let mut digest = None;
     write_atomic(path, |w| {
         let mut w = Digesting { inner: w, hasher: Sha256::new() };
@@ -127,7 +138,8 @@ pub fn write_csv(path: &Path, comment: Option<&str>, header: &[String], rows: &[
         let mut csv = csv::Writer::from_writer(&mut w);
         csv.write_record(header).map_err(std::io::Error::other)?;
         for row in rows {
-            csv.write_record(row.iter().map(|x| format!("{x:?}"))).map_err(std::io::Error::other)?;
+            let cell = |x: &f64| if gaps && x.is_nan() { String::new() } else { format!("{x:?}") };
+            csv.write_record(row.iter().map(cell)).map_err(std::io::Error::other)?;
         }
         csv.flush()?;
         drop(csv);

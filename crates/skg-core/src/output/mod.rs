@@ -51,7 +51,7 @@ mod solution;
 
 use std::path::{Path, PathBuf};
 
-pub use atomic::{remove_stale_temporaries, temporary_beside, write_atomic, write_csv, write_json};
+pub use atomic::{remove_stale_temporaries, temporary_beside, write_atomic, write_csv, write_csv_with_gaps, write_json};
 pub use lock::OutputDir;
 pub use pairing::{verify_pairing, DataFile, Pairing};
 pub use solution::{

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use indexmap::IndexMap;
 use serde::Serialize;
 
-use super::atomic::{write_atomic, write_csv, write_json};
+use super::atomic::{write_atomic, write_csv, write_csv_with_gaps, write_json};
 use super::lock::OutputDir;
 use super::pairing::DataFile;
 use super::{io_err, OutputError, REFERENCE_FILE, SUMMARY_FILE, TRAJECTORY_FILE};
@@ -48,7 +48,7 @@ pub type CsvTable = (Vec<String>, Vec<Vec<f64>>);
 /// summary; further top-level fields of the summary.
 #[derive(Debug, Clone, Default)]
 pub struct RunExtras {
-    /// CSV files: name, header, rows.
+    /// CSV files: name, header, rows (a NaN written as an empty cell).
     pub csv: Vec<(&'static str, CsvTable)>,
     /// Text files: name, text.
     pub texts: Vec<(&'static str, String)>,
@@ -147,7 +147,7 @@ pub fn write_outcome_with(dir: &Path, outcome: &mut Outcome, scene: &Scene, extr
         }
     };
     for (name, (header, rows)) in &extras.csv {
-        files.insert(name, write_csv(&dir.join(name), None, header, rows)?);
+        files.insert(name, write_csv_with_gaps(&dir.join(name), None, header, rows)?);
     }
     for (name, text) in &extras.texts {
         let path = dir.join(name);

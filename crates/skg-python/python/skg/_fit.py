@@ -116,6 +116,7 @@ def fit(
     nodes: Optional[int] = None,
     set: Optional[Mapping[str, Any]] = None,
     operator: Optional[str] = None,
+    refine: bool = False,
     method: Optional[str] = None,
     hessian: Optional[str] = None,
     start: Optional[str] = None,
@@ -134,6 +135,10 @@ def fit(
     ``method``: ``"all-at-once"`` (default: the trajectory and the parameters together)
     or ``"reduced"`` (the parameters alone, the trajectory solved at every point: faster,
     but it can stop where single shooting does; docs/fitting.md).
+    ``operator``: an SBP operator's name, or ``"auto"`` (the one the refinement predicts
+    to verify at the least cost); ``refine=True``: the nodes chosen by the refinement
+    too. A chosen discretization is chosen at the starting values, and again at the
+    fitted values when the fitted motion does not verify (``report["discretization"]``).
     ``hessian``: ``"exact"`` (default) or ``"limited-memory"``; ``start``: ``"auto"``
     (default: the data for a scene without constraints or data of every coordinate,
     else the solve), ``"data"`` or
@@ -156,6 +161,7 @@ def fit(
         nodes=nodes,
         set=None if set is None else plain(dict(set), "set"),
         operator=operator,
+        refine=refine,
         method=method,
         hessian=hessian,
         start=start,
