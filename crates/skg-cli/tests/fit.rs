@@ -115,7 +115,7 @@ fn the_scene_s_fit_table_replaces_the_flags_and_the_flags_override_it() {
 /// On a discretization too coarse for the fitted motion the fit prints its values, then
 /// the failed verification and a remedy naming --refine, and exits 4; with --refine it
 /// prints the discretization the refinement chose, refits the scene it wrote from its own
-/// directory (fitted.toml's data.csv) and exits 0.
+/// directory (fitted.toml's data.csv) and exits 0; a time limit ends a fit with exit 3.
 #[test]
 fn a_coarse_fit_exits_4_with_its_values_and_the_refined_one_verifies() {
     let dir = tempfile::tempdir().unwrap();
@@ -139,4 +139,10 @@ fn a_coarse_fit_exits_4_with_its_values_and_the_refined_one_verifies() {
     let fitted = dir.path().join("refined/fitted.toml");
     let o = common::skg(&["fit", fitted.to_str().unwrap(), "-o", "again"], dir.path());
     assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+
+    // A time limit already passed at Ipopt's first iteration: not converged, exit 3.
+    let o = common::skg(&["fit", scene, "--time-limit", "0.000001", "-o", "limited"], dir.path());
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(3), "{t}");
+    assert!(t.contains("the fit did not converge: the time limit of 0.000001 s (--time-limit) was reached"), "{t}");
 }

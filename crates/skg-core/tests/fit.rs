@@ -584,3 +584,22 @@ data = "data.csv"
         assert!((a - b).abs() <= 1e-9 * b, "{name}: {a} against {b}");
     }
 }
+
+/// The user's time limit ends a fit as not converged, with its status and the limit
+/// named, also while the refinement chooses the discretization: here a limit already
+/// passed when Ipopt first calls back.
+#[test]
+fn a_fit_ends_at_its_time_limit() {
+    let data = csv(&oscillator_times(), &[("x", &|t| oscillator(t, 1.0, 4.0, 0.3, 1.2, -0.5))]);
+    for (refine, method) in [(false, FitMethod::AllAtOnce), (false, FitMethod::Reduced), (true, FitMethod::Reduced)] {
+        let ov = Overrides { time_limit: Some(1e-6), refine, ..Overrides::default() };
+        let mut settings = free(&["k", "c", "x0", "v0"]);
+        settings.method = method;
+        let f = run(&scene_of(OSCILLATOR, &ov), &ov, &data, &settings).unwrap();
+        let what = format!("refine {refine}, {method:?}");
+        assert!(!f.report.converged && !f.trusted(), "{what}");
+        assert_eq!(f.report.status, fit::TIME_LIMIT_REACHED, "{what}");
+        assert!(f.report.status_text.contains("the time limit of 0.000001 s"), "{what}: {}", f.report.status_text);
+        assert!(f.report.iterations <= 1, "{what}: {} iterations", f.report.iterations);
+    }
+}

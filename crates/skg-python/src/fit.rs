@@ -55,7 +55,7 @@ pub(crate) enum DataArg {
 /// Fit `free` parameters of a scene to `data` as `skg-solve fit` does (each, when `None`,
 /// from the scene's `[fit]` table); with `out`, into that directory.
 #[pyfunction]
-#[pyo3(signature = (path, data=None, free=None, *, out=None, nodes=None, set=None, operator=None, refine=false, method=None, hessian=None, start=None, tol=None, max_iter=None))]
+#[pyo3(signature = (path, data=None, free=None, *, out=None, nodes=None, set=None, operator=None, refine=false, method=None, hessian=None, start=None, tol=None, max_iter=None, time_limit=None))]
 #[pyo3(name = "fit")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fit_scene(
@@ -73,8 +73,9 @@ pub(crate) fn fit_scene(
     start: Option<&str>,
     tol: Option<f64>,
     max_iter: Option<u32>,
+    time_limit: Option<f64>,
 ) -> PyResult<NativeFit> {
-    let mut ov = Overrides { nodes, set: assignments(set)?, refine, ..Overrides::default() };
+    let mut ov = Overrides { nodes, set: assignments(set)?, refine, time_limit, ..Overrides::default() };
     ov.auto_operator = operator.is_some_and(|s| s.trim().eq_ignore_ascii_case("auto"));
     ov.operator = operator
         .filter(|_| !ov.auto_operator)

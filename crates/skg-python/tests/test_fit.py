@@ -80,6 +80,14 @@ def test_the_operator_and_the_nodes_chosen_by_the_refinement():
         assert f.parameters[name] == pytest.approx(truth, rel=1e-3)
 
 
+def test_a_time_limit_ends_the_fit_not_converged():
+    scene = skg.Scene.from_toml(OSCILLATOR)
+    data = {"t": T, "x": oscillator(T, 4.0, 0.3, 1.2, -0.5)}
+    f = skg.fit(scene, data, ["k", "c"], time_limit=1e-6)
+    assert not f.converged and not f.trusted
+    assert f.report["status"] == "Time_Limit_Reached"
+
+
 def test_bounds_a_csv_file_and_files_written(tmp_path):
     scene = skg.Scene.from_toml(OSCILLATOR)
     path = tmp_path / "data.csv"

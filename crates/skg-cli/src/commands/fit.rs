@@ -50,6 +50,12 @@ pub struct FitArgs {
     /// the largest the available memory allows, at most 1048576].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(2..=100_000_000))]
     pub max_nodes: Option<u64>,
+    /// Seconds the whole fit may take (the refinement's choice of the discretization
+    /// included; default: the scene's [solver] time_limit, else none), checked at every
+    /// Ipopt iteration: the fit then ends as not converged (exit 3), its last values in
+    /// summary.json.
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = super::positive)]
+    pub time_limit: Option<f64>,
     /// How the fit is handed to Ipopt: `all-at-once` (default; the trajectory and the
     /// parameters together, the equations of motion as constraints) or `reduced` (the
     /// parameters alone, the trajectory solved from the equations at every point: single
@@ -78,6 +84,7 @@ pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
     let mut ov = args.scene.overrides(args.nodes)?;
     ov.refine = args.refine;
     ov.max_nodes = args.max_nodes.map(|n| n as usize);
+    ov.time_limit = args.time_limit;
     let mut scene = load(&args.scenario, &ov)?;
     if !quiet {
         for n in &scene.notes {

@@ -15,7 +15,7 @@ use serde::Serialize;
 
 use super::FitError;
 use crate::scene::{GridChoice, InitialVelocity, Overrides, Scene};
-use crate::solve::{solve_scene, Refinement};
+use crate::solve::{solve_scene, Deadline, Refinement};
 
 /// The discretization a refinement chose for a fit, as `summary.json`'s
 /// `fit.discretization` lists it.
@@ -50,12 +50,22 @@ impl ChosenDiscretization {
 
 /// The scene (and the overrides that resolve its file to it) on the discretization the
 /// refinement chooses for `scene` at its parameter values (`at` names them), with what
-/// was chosen. A scene the refinement cannot verify at these values keeps the grid its
-/// refinement ended on, and the choice says so (`verified: false`).
-pub(super) fn discretization(scene: &Scene, overrides: &Overrides, at: &str) -> Result<(Scene, Overrides, ChosenDiscretization), FitError> {
+/// was chosen, the refinement ending by `deadline`. A scene the refinement cannot verify
+/// at these values keeps the grid its refinement ended on, and the choice says so
+/// (`verified: false`).
+pub(super) fn discretization(
+    scene: &Scene,
+    overrides: &Overrides,
+    at: &str,
+    deadline: Option<Deadline>,
+) -> Result<(Scene, Overrides, ChosenDiscretization), FitError> {
     let mut probe = scene.clone();
     probe.grid = GridChoice::Uniform;
     probe.choose_grid = false;
+    // The refinement runs under what is left of the fit's time limit.
+    if let Some(d) = deadline {
+        probe.solver.time_limit = Some(d.left_s());
+    }
     let outcome = solve_scene(&probe)?;
     let s = &outcome.settings;
     let operator = s.operator.parse().map_err(|e| FitError::Settings(format!("the refinement's operator `{}`: {e}", s.operator)))?;

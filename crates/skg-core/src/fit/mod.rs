@@ -75,7 +75,7 @@ use crate::discrete::{Action, Discretization};
 use crate::model::Model;
 use crate::scene::{Overrides, Scene, SceneError};
 use crate::solve::backend::mumps_options;
-use crate::solve::{action_on, outcome, point_from_states, solve_global, Guess, Outcome, SolveError};
+use crate::solve::{action_on, outcome, point_from_states, solve_global, Deadline, Guess, Outcome, SolveError};
 use observe::Observations;
 use problem::{FitProblem, Plans, StopTest};
 use reduced::ReducedFit;
@@ -163,28 +163,29 @@ impl Fit {
 /// its verification on it, the refinement chooses again at the fitted values, and the
 /// fit starts again from them on that discretization, once.
 pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSettings) -> Result<Fit, FitError> {
+    let deadline = Deadline::after(scene.solver.time_limit);
     if !(scene.choose_operator || scene.verify.refine) {
-        return fit_on(scene, overrides, data, settings, &[], None).map(with_remedy);
+        return fit_on(scene, overrides, data, settings, &Round { deadline, ..Round::default() }).map(with_remedy);
     }
     let started = Instant::now();
     let mut named = scene.clone();
     choose::fixed(&mut named);
     check_settings(&named, overrides, settings)?;
-    let (chosen, ov, first) = choose::discretization(scene, overrides, "the starting values")?;
+    let (chosen, ov, first) = choose::discretization(scene, overrides, "the starting values", deadline)?;
     let mut choosing = started.elapsed();
-    let fit = fit_on(&chosen, &ov, data, settings, std::slice::from_ref(&first), None)?;
-    let fit = if fit.failed_verification() {
+    let fit = fit_on(&chosen, &ov, data, settings, &Round { chosen: std::slice::from_ref(&first), initial: None, deadline })?;
+    let fit = if fit.failed_verification() && !deadline.is_some_and(|d| d.passed()) {
         let names = settings.names();
         let theta: Vec<f64> = fit.report.parameters.values().map(|p| p.value).collect();
         let (at_fitted, ov_fitted) = fitted_scene(scene, overrides, &names, &theta)?;
         let t = Instant::now();
-        let (chosen, ov, second) = choose::discretization(&at_fitted, &ov_fitted, "the fitted values of a first fit")?;
+        let (chosen, ov, second) = choose::discretization(&at_fitted, &ov_fitted, "the fitted values of a first fit", deadline)?;
         choosing += t.elapsed();
         if second.same_as(&first) {
             fit
         } else {
             let initial: Vec<f64> = names.iter().map(|n| scene.parameters[n]).collect();
-            fit_on(&chosen, &ov, data, settings, &[first, second], Some(&initial))?
+            fit_on(&chosen, &ov, data, settings, &Round { chosen: &[first, second], initial: Some(&initial), deadline })?
         }
     } else {
         fit
@@ -229,17 +230,21 @@ fn with_remedy(mut fit: Fit) -> Fit {
     fit
 }
 
-/// [`fit`] on the discretization `scene` names, which `chosen` says how it was chosen
-/// (empty: as the scene and the command line name it); `initial` the starting values
-/// to report when the scene's are not them (a fit started again from a first fit's).
-fn fit_on(
-    scene: &Scene,
-    overrides: &Overrides,
-    data: &Data,
-    settings: &FitSettings,
-    chosen: &[ChosenDiscretization],
-    initial: Option<&[f64]>,
-) -> Result<Fit, FitError> {
+/// What one fit on one discretization is given besides the scene and the data.
+#[derive(Default)]
+struct Round<'a> {
+    /// How the refinement chose the discretization (empty: as the scene and the command
+    /// line name it).
+    chosen: &'a [ChosenDiscretization],
+    /// The starting values to report when the scene's are not them (a fit started again
+    /// from a first fit's).
+    initial: Option<&'a [f64]>,
+    /// The user's time limit, from the start of the whole fit.
+    deadline: Option<Deadline>,
+}
+
+/// [`fit`] on the discretization `scene` names.
+fn fit_on(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSettings, round: &Round) -> Result<Fit, FitError> {
     let started = Instant::now();
     let mut warnings = check_settings(scene, overrides, settings)?;
     let names = settings.names();
@@ -262,13 +267,15 @@ fn fit_on(
 
     let t_opt = Instant::now();
     let bound_relax_factor = scene.solver.ipopt.get("bound_relax_factor").and_then(ipopt_number).unwrap_or(barrier::BOUND_RELAX_FACTOR);
-    let stop = StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol), bound_relax_factor };
-    let (solution, at_kkt_point, inner) = match settings.method {
+    let stop =
+        StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol), bound_relax_factor, deadline: round.deadline };
+    let (solution, at_kkt_point, inner, ran_out) = match settings.method {
         FitMethod::Reduced => problem.optimize_reduced(&mut action, settings, &x0, stop)?,
         FitMethod::AllAtOnce => problem.optimize_all_at_once(&mut action, settings, &x0, stop)?,
     };
     let optimization_s = t_opt.elapsed().as_secs_f64();
-    let converged = at_kkt_point.is_some() || converged(&solution, scene.solver.tol, &mut warnings);
+    let timed_out = ran_out && at_kkt_point.is_none();
+    let converged = !timed_out && (at_kkt_point.is_some() || converged(&solution, scene.solver.tol, &mut warnings));
 
     let t_stat = Instant::now();
     let at = problem.statistics_at(&mut action, &solution, converged, data, &mut warnings)?;
@@ -277,11 +284,11 @@ fn fit_on(
 
     let t_verify = Instant::now();
     let (fitted, fitted_overrides) = fitted_scene(scene, overrides, &names, &at.theta)?;
-    let mut outcome = solved_from_the_fit(&fitted, &action, &disc, &at.z)?;
+    let mut outcome = solved_from_the_fit(&fitted, &action, &disc, &at.z, round.deadline)?;
     outcome.warnings.extend(warnings.iter().cloned());
     let verification_s = t_verify.elapsed().as_secs_f64();
 
-    let parameters = report::parameters(&settings.free, &at.theta, initial.unwrap_or(&starting), at.covariance.as_ref());
+    let parameters = report::parameters(&settings.free, &at.theta, round.initial.unwrap_or(&starting), at.covariance.as_ref());
     warnings.extend(bound_warnings(&parameters));
     let timings = report::Timings {
         start_s,
@@ -292,21 +299,27 @@ fn fit_on(
         discretization_s: 0.0,
         total_s: started.elapsed().as_secs_f64(),
     };
-    let status = match at_kkt_point {
-        Some(stop) => (stop.status().to_string(), stop.text().to_string()),
-        None => (solution.status.name().to_string(), solution.status.to_string()),
+    let status = match (at_kkt_point, round.deadline.filter(|_| timed_out)) {
+        (Some(stop), _) => (stop.status().to_string(), stop.text().to_string()),
+        (None, Some(d)) => (TIME_LIMIT_REACHED.to_string(), format!("{} was reached", d.describe())),
+        (None, None) => (solution.status.name().to_string(), solution.status.to_string()),
     };
     let mut report =
         problem.report(&action, &solution, (converged, status), settings, start, parameters, at, data, timings, inner, warnings);
-    report.discretization = chosen.to_vec();
+    report.discretization = round.chosen.to_vec();
     let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
     let data_table = report::data_table(scene, data, &outcome.trajectory);
     Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
 }
 
+/// The fit's status when the user's time limit stopped Ipopt (`summary.json`'s
+/// `fit.status`).
+pub const TIME_LIMIT_REACHED: &str = "Time_Limit_Reached";
+
 /// What Ipopt's optimization returns: its solution (`x = (P, θ)`), how the fit's own
-/// test stopped it, and the reduced fit's solves of the equations of motion.
-type Optimized = (ipopt::Solution, Option<problem::KktStop>, Option<InnerWork>);
+/// test stopped it, the reduced fit's solves of the equations of motion, and whether the
+/// time limit stopped it.
+type Optimized = (ipopt::Solution, Option<problem::KktStop>, Option<InnerWork>, bool);
 
 /// What the steps of a fit share: the scene at the starting values, its model with the
 /// free parameters symbolic, the derivative plans, the observations and the free
@@ -343,7 +356,7 @@ impl Problem<'_> {
         let nonlinear = plans.hessian.as_ref().is_some_and(|h| !h.structure.is_empty());
         let pivtol = if nonlinear { MUMPS_PIVTOL } else { MUMPS_PIVTOL_LINEAR };
         let solution = ipopt::solve_warm(&mut problem, x0, &y0, &ipopt_options(scene, settings, pivtol))?;
-        Ok((solution, problem.stopped_at_kkt_point(), None))
+        Ok((solution, problem.stopped_at_kkt_point(), None, problem.clock.ran_out))
     }
 
     /// The reduced fit from `x0 = (P, θ)`, a solution at the starting values
@@ -357,7 +370,7 @@ impl Problem<'_> {
         let (x, residual) = reduced.point(&solution.x).map_err(|e| FitError::Settings(format!("the reduced fit's last point: {e}")))?;
         solution.x = x;
         solution.max_constraint_violation = residual;
-        Ok((solution, reduced.stopped_at_kkt_point(), Some(reduced.work)))
+        Ok((solution, reduced.stopped_at_kkt_point(), Some(reduced.work), reduced.clock.ran_out))
     }
 
     /// The starting point of the optimization, the trajectory's unknowns and then the
@@ -526,13 +539,20 @@ impl Problem<'_> {
 /// accepts after one step; Ipopt's filter line search can fail to decrease a residual at
 /// that level, and on the double pendulum it then went through its restoration phase
 /// (8 iterations, 1.6 s) where Newton takes one step (docs/benchmarks.md#fitting).
-fn solved_from_the_fit(fitted: &Scene, action: &Action, disc: &Discretization, z: &[f64]) -> Result<Outcome, FitError> {
+/// The fit's time limit bounds it and its verification, as it bounds a solve's.
+fn solved_from_the_fit(
+    fitted: &Scene,
+    action: &Action,
+    disc: &Discretization,
+    z: &[f64],
+    deadline: Option<Deadline>,
+) -> Result<Outcome, FitError> {
     let fitted = on_newton(fitted);
     let fitted_model = Arc::new(Model::build(&fitted)?);
     let (q, lambda) = states_of(action, z);
     let guess = Guess::States { q, lambda, description: "the fit's trajectory".into() };
-    let run = solve_global(&fitted, &fitted_model, disc, &guess, None)?;
-    Ok(outcome(&fitted, &fitted_model, run, None))
+    let run = solve_global(&fitted, &fitted_model, disc, &guess, deadline)?;
+    Ok(outcome(&fitted, &fitted_model, run, deadline))
 }
 
 /// `scene` solved by Newton's method (which hands over to Ipopt if it fails): the fit's

@@ -37,6 +37,7 @@
 
 use nalgebra::DMatrix;
 use std::cell::{RefCell, RefMut};
+use std::time::Instant;
 
 use skg_ipopt::{EvalError, IterationStat, Problem, INFINITY_BOUND};
 
@@ -50,6 +51,7 @@ use crate::model::Workspace;
 use crate::solve::backend;
 use crate::solve::linalg::roundoff::residual_roundoff_level;
 use crate::solve::linalg::SparseFactorization;
+use crate::solve::Deadline;
 
 /// The plans of the derivatives a fit's problem fills.
 pub(super) struct Plans {
@@ -119,6 +121,7 @@ pub(super) struct FitProblem<'a> {
     curvature: Option<(Vec<f64>, DMatrix<f64>)>,
     /// Set when the callback stopped Ipopt at a KKT point (module documentation).
     stopped: Option<KktStop>,
+    pub(super) clock: Clock,
 }
 
 /// How the callback stopped Ipopt at a KKT point: the constraints within the scene's
@@ -160,6 +163,35 @@ pub(super) struct StopTest {
     /// Ipopt's `bound_relax_factor`: its barrier acts from the bounds moved out by this
     /// factor times `max(1, |bound|)`.
     pub bound_relax_factor: f64,
+    /// The user's time limit (`--time-limit`, `[solver] time_limit`), at which Ipopt's
+    /// iterations ([`Clock`]) and the reduced fit's Newton solves end.
+    pub deadline: Option<Deadline>,
+}
+
+/// The time limit at Ipopt's iterations: Ipopt is stopped before an iteration that would
+/// end past the deadline if it took as long as the last one (as a solve's backends are,
+/// `solve/run/deadline.rs`).
+#[derive(Debug)]
+pub(super) struct Clock {
+    deadline: Option<Deadline>,
+    last: Option<Instant>,
+    /// Set when the time limit stopped Ipopt.
+    pub ran_out: bool,
+}
+
+impl Clock {
+    pub fn new(deadline: Option<Deadline>) -> Clock {
+        Clock { deadline, last: None, ran_out: false }
+    }
+
+    /// At an iteration: whether the time limit stops Ipopt here.
+    pub fn out_of_time(&mut self) -> bool {
+        let Some(d) = self.deadline else { return false };
+        let now = Instant::now();
+        let last_s = self.last.replace(now).map_or(0.0, |t| now.duration_since(t).as_secs_f64());
+        self.ran_out = d.would_pass(last_s);
+        self.ran_out
+    }
 }
 
 impl<'a> FitProblem<'a> {
@@ -196,6 +228,7 @@ impl<'a> FitProblem<'a> {
             iterate: Vec::new(),
             curvature: None,
             stopped: None,
+            clock: Clock::new(stop.deadline),
         }
     }
 
@@ -351,6 +384,6 @@ impl Problem for FitProblem<'_> {
     }
     fn intermediate(&mut self, stat: &IterationStat) -> bool {
         self.stopped = self.at_kkt_point(stat);
-        self.stopped.is_none()
+        self.stopped.is_none() && !self.clock.out_of_time()
     }
 }

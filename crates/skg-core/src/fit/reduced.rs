@@ -43,7 +43,7 @@ use skg_ipopt::{EvalError, IterationStat, Problem, INFINITY_BOUND};
 use super::barrier;
 use super::free::FreeParameter;
 use super::observe::Observations;
-use super::problem::{KktStop, Plans, StopTest};
+use super::problem::{Clock, KktStop, Plans, StopTest};
 use super::statistics;
 use crate::discrete::action::Action;
 use crate::model::Workspace;
@@ -124,6 +124,7 @@ pub(super) struct ReducedFit<'a> {
     hessian: Vec<(u32, u32)>,
     stop: StopTest,
     stopped: Option<KktStop>,
+    pub(super) clock: Clock,
     pub(super) work: InnerWork,
 }
 
@@ -140,8 +141,13 @@ impl<'a> ReducedFit<'a> {
         stop: StopTest,
     ) -> Result<Self, String> {
         let n_p = action.layout.n_p;
-        let options =
-            NewtonOptions { tol: stop.constraints, max_iter: NEWTON_MAX_ITER, chord: true, single_precision: false, deadline: None };
+        let options = NewtonOptions {
+            tol: stop.constraints,
+            max_iter: NEWTON_MAX_ITER,
+            chord: true,
+            single_precision: false,
+            deadline: stop.deadline.map(|d| d.at),
+        };
         let k = free.len() as u32;
         let hessian = (0..k).flat_map(|i| (0..=i).map(move |j| (i, j))).collect();
         let theta0 = x0[n_p..].to_vec();
@@ -167,6 +173,7 @@ impl<'a> ReducedFit<'a> {
             hessian,
             stop,
             stopped: None,
+            clock: Clock::new(stop.deadline),
             work,
         };
         fit.derivatives_at(&theta0).map_err(|e| e.0)?;
@@ -420,7 +427,7 @@ impl Problem for ReducedFit<'_> {
                 self.stopped = Some(if a.at_roundoff { KktStop::RoundOff } else { KktStop::Tolerance });
             }
         }
-        self.stopped.is_none()
+        self.stopped.is_none() && !self.clock.out_of_time()
     }
 }
 
@@ -472,7 +479,7 @@ mod tests {
         let start = start_states(&scene, &model, &disc, &times).unwrap();
         let mut x0 = start.solution.unwrap()[..action.layout.n_p].to_vec();
         x0.extend([2.0, 0.8]);
-        let stop = StopTest { tol: 1e-10, constraints: 1e-12, bound_relax_factor: 1e-8 };
+        let stop = StopTest { tol: 1e-10, constraints: 1e-12, bound_relax_factor: 1e-8, deadline: None };
         let mut fit = ReducedFit::new(&mut action, &plans, &observations, &free, &x0, stop).unwrap();
 
         let theta = [2.3, 0.7];

@@ -122,6 +122,7 @@ def fit(
     start: Optional[str] = None,
     tol: Optional[float] = None,
     max_iter: Optional[int] = None,
+    time_limit: Optional[float] = None,
 ) -> FitResult:
     """Fit the scene parameters ``free`` to ``data`` as ``skg-solve fit`` does; either,
     when not given, from the scene's ``[fit]`` table (``free``, and ``data`` relative to
@@ -142,7 +143,9 @@ def fit(
     ``hessian``: ``"exact"`` (default) or ``"limited-memory"``; ``start``: ``"auto"``
     (default: the data for a scene without constraints or data of every coordinate,
     else the solve), ``"data"`` or
-    ``"solve"``; ``tol``, ``max_iter``: Ipopt's. With ``out`` the files of
+    ``"solve"``; ``tol``, ``max_iter``: Ipopt's; ``time_limit``: seconds the whole fit
+    may take (``--time-limit``: then not converged, ``report["status"]`` is
+    ``"Time_Limit_Reached"``). With ``out`` the files of
     the command line are written there (trajectory.csv, reference.csv, data.csv,
     fitted.toml, summary.json).
 
@@ -167,5 +170,6 @@ def fit(
         start=start,
         tol=tol,
         max_iter=max_iter,
+        time_limit=time_limit,
     )
     return FitResult(native)
