@@ -140,6 +140,18 @@ fn a_coarse_fit_exits_4_with_its_values_and_the_refined_one_verifies() {
     let o = common::skg(&["fit", fitted.to_str().unwrap(), "-o", "again"], dir.path());
     assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
 
+    // A damping undefined just inside the bound the reduced fit starts on: Ipopt's first
+    // point cannot be evaluated, the fit did not converge (exit 3), with a remedy.
+    let text = std::fs::read_to_string(scene).unwrap().replace("x = \"-c*x_dot\"", "x = \"-sqrt(c - 0.295)*x_dot\"");
+    std::fs::write(dir.path().join("sqrt.toml"), text).unwrap();
+    let data = root.join("examples/fit/oscillator.csv");
+    let args = ["fit", "sqrt.toml", "--data", data.to_str().unwrap(), "--free", "k,c<=0.3", "--set", "c=0.3", "--fit-method", "reduced"];
+    let o = common::skg(&args, dir.path());
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(3), "{t}");
+    assert!(t.contains("the fit did not converge: Ipopt tried a point where the fit cannot be evaluated"), "{t}");
+    assert!(t.contains("remedy: fit all at once"), "{t}");
+
     // A time limit already passed at Ipopt's first iteration: not converged, exit 3.
     let o = common::skg(&["fit", scene, "--time-limit", "0.000001", "-o", "limited"], dir.path());
     let t = common::text(&o);

@@ -603,3 +603,22 @@ fn a_fit_ends_at_its_time_limit() {
         assert!(f.report.iterations <= 1, "{what}: {} iterations", f.report.iterations);
     }
 }
+
+/// A damping `√(c − 0.295)` undefined below c = 0.295, the reduced fit started on the
+/// bound c ≤ 0.3, which Ipopt's first point moves inside: the equations of motion cannot
+/// be evaluated there, and the error says the fit did not converge (exit 3), not that
+/// its input was wrong.
+#[test]
+fn a_point_where_the_fit_cannot_be_evaluated_is_a_fit_not_converged() {
+    let text = OSCILLATOR.replace("x = \"-c*x_dot\"", "x = \"-sqrt(c - 0.295)*x_dot\"").replace("c = 0.2", "c = 0.3");
+    let ov = Overrides::default();
+    let data = csv(&oscillator_times(), &[("x", &|t| oscillator(t, 1.0, 4.0, 0.3, 1.2, -0.5))]);
+    let mut settings = free(&["k", "c<=0.3"]);
+    settings.method = FitMethod::Reduced;
+    let e = run(&scene_of(&text, &ov), &ov, &data, &settings).unwrap_err();
+    let why = e.not_converged().unwrap_or_else(|| panic!("an input error: {e}"));
+    assert!(why.starts_with("Ipopt tried a point where the fit cannot be evaluated"), "{why}");
+    // An input error is not.
+    let e = run(&scene_of(OSCILLATOR, &ov), &ov, &data, &free(&["kk"])).unwrap_err();
+    assert!(e.not_converged().is_none(), "{e}");
+}

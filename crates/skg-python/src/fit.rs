@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 use skg_core::fit::{self, Data, Fit, FitError, FitIntoError, FitSettings, FreeParameter};
 use skg_core::scene::Overrides;
 
-use crate::errors::{output_err, raise, scene_err, solve_err};
+use crate::errors::{output_err, raise, raise_text, scene_err, solve_err};
 use crate::scene::{assignments, load, SceneArg};
 use crate::solve::NativeSolution;
 
@@ -161,6 +161,9 @@ fn fit_err(py: Python<'_>, e: &FitIntoError) -> PyErr {
         FitIntoError::Fit(FitError::Scene(s)) => scene_err(py, s),
         FitIntoError::Fit(FitError::Data(d)) => raise(py, "InputError", d),
         FitIntoError::Fit(FitError::Solve(s)) => solve_err(py, s),
-        FitIntoError::Fit(other) => raise(py, "FitError", other),
+        FitIntoError::Fit(other) => match other.not_converged() {
+            Some(why) => raise_text(py, "FitError", format!("the fit did not converge: {why}")),
+            None => raise(py, "FitError", other),
+        },
     }
 }

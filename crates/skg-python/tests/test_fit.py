@@ -88,6 +88,14 @@ def test_a_time_limit_ends_the_fit_not_converged():
     assert f.report["status"] == "Time_Limit_Reached"
 
 
+def test_values_where_the_fit_cannot_be_evaluated_raise_not_converged():
+    """A damping undefined just inside the bound the reduced fit starts on."""
+    text = OSCILLATOR.replace('x = "-c*x_dot"', 'x = "-sqrt(c - 0.295)*x_dot"').replace("c = 0.2", "c = 0.3")
+    data = {"t": T, "x": oscillator(T, 4.0, 0.3, 1.2, -0.5)}
+    with pytest.raises(skg.FitError, match="the fit did not converge: Ipopt tried a point where the fit cannot be evaluated"):
+        skg.fit(skg.Scene.from_toml(text), data, ["k", "c<=0.3"], method="reduced")
+
+
 def test_bounds_a_csv_file_and_files_written(tmp_path):
     scene = skg.Scene.from_toml(OSCILLATOR)
     path = tmp_path / "data.csv"

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 
-use skg_core::fit::{self, Data, Fit, FitHessian, FitMethod, FitSettings, FitStart, FitWritten, FreeParameter};
+use skg_core::fit::{self, Data, Fit, FitHessian, FitIntoError, FitMethod, FitSettings, FitStart, FitWritten, FreeParameter};
 use skg_core::scene::Scene;
 use skg_core::stepping::verify::VerifyStatus;
 
@@ -102,7 +102,15 @@ pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
     });
     let result = fit::fit_into(&dir, &mut scene, &ov, &data, &settings);
     spinner.finish_and_clear();
-    let (fitted, written) = result?;
+    let (fitted, written) = match result {
+        Ok(done) => done,
+        Err(FitIntoError::Fit(e)) if e.not_converged().is_some() => {
+            note!("error: {}: the fit did not converge: {}", scene.name, e.not_converged().unwrap_or_default());
+            note!("  remedy: {}", not_evaluated_remedy(settings.method));
+            return Ok(ExitCode::from(EXIT_NOT_CONVERGED));
+        }
+        Err(e) => return Err(e.into()),
+    };
     let fit_warnings = &fitted.report.warnings;
     for w in fit_warnings.iter().chain(fitted.outcome.warnings.iter().filter(|w| !fit_warnings.contains(w))) {
         note!("warning: {w}");
@@ -113,6 +121,21 @@ pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
         print_report(&fitted, &written);
     }
     Ok(report_untrusted(&fitted, &written).unwrap_or(ExitCode::SUCCESS))
+}
+
+/// What to do when Ipopt tried a point where the fit could not be evaluated.
+fn not_evaluated_remedy(method: FitMethod) -> &'static str {
+    match method {
+        FitMethod::Reduced => {
+            "fit all at once (--fit-method all-at-once: its trajectory need not solve the equations of motion at every point \
+             Ipopt tries), start nearer the values the data suggest (--set NAME=VALUE), or bound the parameters to where the \
+             equations can be solved (--free 'NAME in [LO, HI]')"
+        }
+        FitMethod::AllAtOnce => {
+            "start nearer the values the data suggest (--set NAME=VALUE), or bound the parameters to where the scene's \
+             expressions are defined (--free 'NAME in [LO, HI]')"
+        }
+    }
 }
 
 /// The fit's settings from the command line, the free parameters from the scene's

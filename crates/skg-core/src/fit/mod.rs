@@ -118,6 +118,19 @@ pub enum FitError {
     NotIdentifiable(String),
 }
 
+impl FitError {
+    /// Why the fit did not converge, when Ipopt ended because the fit could not be
+    /// evaluated at a point it tried (the equations of motion not solvable there, a
+    /// derivative not finite): a fit not converged (exit 3), where the other errors are
+    /// the input's (exit 1).
+    pub fn not_converged(&self) -> Option<String> {
+        match self {
+            FitError::Ipopt(ipopt::SolveError::Eval(e)) => Some(format!("Ipopt tried a point where the fit cannot be evaluated: {e}")),
+            _ => None,
+        }
+    }
+}
+
 /// A fit's result.
 #[derive(Debug, Clone)]
 pub struct Fit {

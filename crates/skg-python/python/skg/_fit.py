@@ -152,7 +152,9 @@ def fit(
     Raises :class:`InputError` for unusable data (with the line or row and column),
     :class:`FitError` for free parameters the scene or the data cannot support (an
     undetermined combination is named), :class:`SceneError`, :class:`SolveError`. A fit
-    that did not converge or verify is returned: check ``trusted``.
+    that did not converge or verify is returned: check ``trusted``; one whose Ipopt
+    tried values where the fit cannot be evaluated raises :class:`FitError` (the
+    command line's exit 3), saying so.
     """
     if free is None and bounds:
         raise ValueError("bounds: give free as well (the bounds of the scene's [fit] free are written in it)")
