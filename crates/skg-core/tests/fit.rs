@@ -622,3 +622,41 @@ fn a_point_where_the_fit_cannot_be_evaluated_is_a_fit_not_converged() {
     let e = run(&scene_of(OSCILLATOR, &ov), &ov, &data, &free(&["kk"])).unwrap_err();
     assert!(e.not_converged().is_none(), "{e}");
 }
+
+/// Without standard deviations, a fitted motion whose residuals are as large as the
+/// data's own spread is warned of: the oscillator with only its damping free (k = 3)
+/// against data oscillating at ω = 3 explains little of them; the same scene with k free
+/// explains them and is not warned of.
+#[test]
+fn a_fit_that_explains_little_of_the_data_is_warned() {
+    let ov = Overrides::default();
+    let scene = scene_of(OSCILLATOR, &ov);
+    let data = csv(&oscillator_times(), &[("x", &|t| oscillator(t, 1.0, 9.0, 0.3, 1.0, 0.0))]);
+    let warned = |f: &Fit| f.report.warnings.iter().any(|w| w.contains("of the data's variation about their means"));
+    let f = run(&scene, &ov, &data, &free(&["c>=0"])).unwrap();
+    assert!(warned(&f), "c = {}: {:?}", f.report.parameters["c"].value, f.report.warnings);
+    let f = run(&scene, &ov, &data, &free(&["k", "c>=0"])).unwrap();
+    assert_recovered(&f, &[("k", 9.0), ("c", 0.3)], 1e-6);
+    assert!(!warned(&f), "{:?}", f.report.warnings);
+}
+
+/// `--grid adaptive`: the fit runs on the grid whose map follows the motion at the
+/// starting values (nodes not equally spaced), keeps it, and recovers the closed form's
+/// values within the verification's tolerance (1e-4 of the motion's range; v0 is 8e-6
+/// off on it, within 1e-6 on the uniform grid of as many nodes: the test above).
+#[test]
+fn a_fit_on_an_adaptive_grid_recovers_the_closed_form() {
+    let ov = Overrides { grid: Some(skg_core::scene::GridChoice::Adaptive), ..Overrides::default() };
+    let scene = scene_of(OSCILLATOR, &ov);
+    let (k, c, x0, v0) = (4.0, 0.3, 1.2, -0.5);
+    let data = csv(&oscillator_times(), &[("x", &|t| oscillator(t, 1.0, k, c, x0, v0))]);
+    let f = run(&scene, &ov, &data, &free(&["k", "c", "x0", "v0"])).unwrap();
+    assert!(f.trusted(), "{}", f.outcome.verification.reason);
+    assert_recovered(&f, &[("k", k), ("c", c), ("x0", x0), ("v0", v0)], 1e-4);
+    assert_eq!(f.outcome.settings.grid, "adaptive");
+    let t = &f.outcome.trajectory.t;
+    let spacings: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let (lo, hi) = spacings.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), &h| (lo.min(h), hi.max(h)));
+    assert!(hi / lo > 1.01, "spacings from {lo} to {hi}: not the motion's map");
+    assert!(f.report.warnings.iter().any(|w| w.contains("the adaptive grid's map follows the motion")), "{:?}", f.report.warnings);
+}

@@ -7,9 +7,9 @@
 //! operator, its initial-velocity condition and the node count that verify at the
 //! scene's tolerance; it does so for one set of parameter values, so the fit asks for it
 //! at the starting values and, when the fitted motion then fails its verification, once
-//! more at the fitted values (`fit` in the module above). The grid is uniform: an
-//! adaptive grid's map follows the motion at the values it was made for, and the fit
-//! keeps the grid fixed while the motion changes.
+//! more at the fitted values (`fit` in the module above). An adaptive grid chosen is
+//! made from the motion at the values it was chosen at, and kept while the fit moves
+//! the parameters.
 
 use serde::Serialize;
 
@@ -30,6 +30,8 @@ pub struct ChosenDiscretization {
     pub nodes: usize,
     /// How the initial velocity is imposed.
     pub initial_velocity: InitialVelocity,
+    /// `uniform` or `adaptive`.
+    pub grid: &'static str,
     /// Whether the solve at those values verified on it.
     pub verified: bool,
     /// The refinement's grids and result at those values.
@@ -37,14 +39,20 @@ pub struct ChosenDiscretization {
 }
 
 impl ChosenDiscretization {
-    /// The same discretization as `other` (operator, nodes and initial velocity).
+    /// The same discretization as `other`: the same operator, initial velocity and
+    /// nodes on a uniform grid (an adaptive grid's map follows the motion it was chosen
+    /// at, so two chosen at different values differ).
     pub fn same_as(&self, other: &ChosenDiscretization) -> bool {
-        self.operator == other.operator && self.nodes == other.nodes && self.initial_velocity == other.initial_velocity
+        self.operator == other.operator
+            && self.nodes == other.nodes
+            && self.initial_velocity == other.initial_velocity
+            && self.grid == "uniform"
+            && other.grid == "uniform"
     }
 
-    /// `SBP363-AD (natural initial velocity) on 2000 nodes`.
+    /// `SBP363-AD (natural initial velocity) on 2000 uniform nodes`.
     pub fn describe(&self) -> String {
-        format!("{} ({} initial velocity) on {} nodes", self.operator, self.initial_velocity, self.nodes)
+        format!("{} ({} initial velocity) on {} {} nodes", self.operator, self.initial_velocity, self.nodes, self.grid)
     }
 }
 
@@ -60,8 +68,6 @@ pub(super) fn discretization(
     deadline: Option<Deadline>,
 ) -> Result<(Scene, Overrides, ChosenDiscretization), FitError> {
     let mut probe = scene.clone();
-    probe.grid = GridChoice::Uniform;
-    probe.choose_grid = false;
     // The refinement runs under what is left of the fit's time limit.
     if let Some(d) = deadline {
         probe.solver.time_limit = Some(d.left_s());
@@ -75,8 +81,7 @@ pub(super) fn discretization(
     ov.refine = false;
     ov.nodes = Some(s.nodes);
     ov.initial_velocity = Some(s.initial_velocity);
-    // An adaptive grid named stays named (the fit notes that it uses the uniform one).
-    ov.grid = ov.grid.filter(|g| *g != GridChoice::Auto);
+    ov.grid = Some(if s.grid == "adaptive" { GridChoice::Adaptive } else { GridChoice::Uniform });
     let mut chosen = scene.file.clone().resolve(&ov)?;
     fixed(&mut chosen);
     let report = ChosenDiscretization {
@@ -84,6 +89,7 @@ pub(super) fn discretization(
         operator: s.operator.clone(),
         nodes: s.nodes,
         initial_velocity: s.initial_velocity,
+        grid: s.grid,
         verified: outcome.trusted(),
         refinement: outcome.refinement.clone(),
     };

@@ -243,6 +243,23 @@ fn with_remedy(mut fit: Fit) -> Fit {
     fit
 }
 
+/// The discretization a fit runs on: the scene's, on the adaptive grid when the scene
+/// asks for one (its map made from the motion at the starting values, `solve::adapt`,
+/// and kept while the parameters move), else on the uniform grid.
+fn discretization_of(scene: &Scene, warnings: &mut Vec<String>) -> Result<Discretization, FitError> {
+    let disc = Discretization::of(scene);
+    if scene.grid != crate::scene::GridChoice::Adaptive {
+        return Ok(disc);
+    }
+    match crate::solve::adapt::motion_map(scene, &Model::build(scene)?) {
+        Ok((map, _)) => Ok(disc.with_grid(crate::discrete::Grid::Mapped(Arc::new(map)))),
+        Err(why) => {
+            warnings.push(format!("the grid is uniform: {why}"));
+            Ok(disc)
+        }
+    }
+}
+
 /// What one fit on one discretization is given besides the scene and the data.
 #[derive(Default)]
 struct Round<'a> {
@@ -263,7 +280,7 @@ fn fit_on(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSetti
     let names = settings.names();
     let starting: Vec<f64> = names.iter().map(|n| scene.parameters[n]).collect();
     let model = Arc::new(Model::with_free_parameters(scene, &names)?);
-    let disc = Discretization::of(scene);
+    let disc = discretization_of(scene, &mut warnings)?;
     let times = disc.times(scene);
     let mut action = action_on(&model, scene, &disc, &times)?;
     let plans = Plans {
@@ -293,6 +310,7 @@ fn fit_on(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSetti
     let t_stat = Instant::now();
     let at = problem.statistics_at(&mut action, &solution, converged, data, &mut warnings)?;
     warnings.extend(beyond_the_noise(&at.misfit, settings.method));
+    warnings.extend(explains_little(&at.misfit, data, settings.method));
     let statistics_s = t_stat.elapsed().as_secs_f64();
 
     let t_verify = Instant::now();
@@ -582,12 +600,7 @@ fn on_newton(scene: &Scene) -> Scene {
 fn beyond_the_noise(misfit: &MisfitReport, method: FitMethod) -> Option<String> {
     let (x, spread) = misfit.beyond_the_noise()?;
     let times = if x >= 10.0 { format!("{x:.0}") } else { format!("{x:.1}") };
-    let minimum = match method {
-        FitMethod::Reduced => "the reduced fit may have stopped in a local minimum, as single shooting does (--fit-method all-at-once)",
-        FitMethod::AllAtOnce => {
-            "the fit may have stopped in a local minimum (other starting values; --start data where the data observe the motion)"
-        }
-    };
+    let minimum = local_minimum(method);
     Some(format!(
         "the weighted misfit is {times} times what the data's standard deviations explain (the reduced chi-square over {} degrees \
          of freedom, 1 ± {spread:.2} for data the model and the standard deviations describe): {minimum}, or the model or the \
@@ -595,6 +608,45 @@ fn beyond_the_noise(misfit: &MisfitReport, method: FitMethod) -> Option<String> 
         misfit.dof
     ))
 }
+
+/// Where a fit whose misfit is too large may have stopped, and what to try.
+fn local_minimum(method: FitMethod) -> &'static str {
+    match method {
+        FitMethod::Reduced => "the reduced fit may have stopped in a local minimum, as single shooting does (--fit-method all-at-once)",
+        FitMethod::AllAtOnce => {
+            "the fit may have stopped in a local minimum (other starting values; --start data where the data observe the motion)"
+        }
+    }
+}
+
+/// Without standard deviations, a warning when the fitted motion explains less than
+/// half of the data's variation about each observed coordinate's mean, `1 − Σ r² /
+/// Σ (d − d̄)²` (the coefficient of determination): the misfit cannot be weighed against
+/// a noise, but residuals as large as the data's own spread are not a fit.
+fn explains_little(misfit: &MisfitReport, data: &Data, method: FitMethod) -> Option<String> {
+    if data.sigma_given || misfit.weighted {
+        return None;
+    }
+    let mut total = 0.0;
+    for &c in &data.coordinates {
+        let values: Vec<f64> = data.observations.iter().filter(|o| o.coordinate == c).map(|o| o.value).collect();
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        total += values.iter().map(|d| (d - mean).powi(2)).sum::<f64>();
+    }
+    let share = 1.0 - misfit.sum_of_squares / total;
+    (total > 0.0 && share < EXPLAINED_AT_LEAST).then(|| {
+        format!(
+            "the fitted motion explains {:.0} % of the data's variation about their means (1 − Σ r²/Σ (d − d̄)² = {share:.2}): {}, or \
+             the model does not describe the data",
+            100.0 * share.max(0.0),
+            local_minimum(method)
+        )
+    })
+}
+
+/// The share of the data's variation below which a fit without standard deviations is
+/// warned of ([`explains_little`]).
+const EXPLAINED_AT_LEAST: f64 = 0.5;
 
 /// A warning for each parameter that ended on its bound.
 fn bound_warnings(parameters: &IndexMap<String, report::ParameterReport>) -> Vec<String> {
@@ -667,8 +719,8 @@ fn check_settings(scene: &Scene, overrides: &Overrides, settings: &FitSettings) 
     }
     if scene.grid == crate::scene::GridChoice::Adaptive {
         notes.push(
-            "the fit keeps its grid fixed while the parameters move the motion: it uses the uniform grid, not the adaptive one, \
-             whose map follows the motion at one set of values"
+            "the adaptive grid's map follows the motion at the values the fit starts from; the fit keeps that grid while the \
+             parameters move the motion"
                 .into(),
         );
     }

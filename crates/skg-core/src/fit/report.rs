@@ -14,7 +14,7 @@ use super::{rows, ChosenDiscretization, FitHessian, FitMethod, FitStart, InnerWo
 use crate::discrete::interpolate::hermite;
 use crate::discrete::Trajectory;
 use crate::scene::provenance;
-use crate::scene::{NumOrExpr, Overrides, Scene};
+use crate::scene::{GridChoice, NumOrExpr, Overrides, Scene};
 use skg_ipopt::IterationStat;
 
 /// One fitted parameter.
@@ -346,15 +346,21 @@ pub(super) fn fitted_toml(scene: &Scene, overrides: &Overrides, report: &FitRepo
             format!("#   {n} = {:?}{se} (from {:?})", p.value, p.initial)
         })
         .collect();
+    let grid = match scene.grid {
+        GridChoice::Adaptive => "an adaptive grid (its map from the motion at the starting values)",
+        _ => "a uniform grid",
+    };
     let on = format!(
-        "#   on {} ({} initial velocity), {} nodes: skg-solve {} --operator {} --initial-velocity {} --nodes {} solves it",
+        "#   on {} ({} initial velocity), {} nodes of {grid}: skg-solve {} --operator {} --initial-velocity {} --nodes {} --grid {} \
+         solves it",
         scene.operator.name(),
         scene.initial_velocity,
         scene.nodes,
         super::FITTED_SCENE_FILE,
         scene.operator.name(),
         scene.initial_velocity,
-        scene.nodes
+        scene.nodes,
+        if scene.grid == GridChoice::Adaptive { "adaptive" } else { "uniform" }
     );
     format!(
         "# Fitted by skg-solve {} to {} ({} values; Ipopt: {}, {} iterations):\n{}\n{on}\n{out}",
