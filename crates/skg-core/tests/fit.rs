@@ -660,3 +660,26 @@ fn a_fit_on_an_adaptive_grid_recovers_the_closed_form() {
     assert!(hi / lo > 1.01, "spacings from {lo} to {hi}: not the motion's map");
     assert!(f.report.warnings.iter().any(|w| w.contains("the adaptive grid's map follows the motion")), "{:?}", f.report.warnings);
 }
+
+/// A fit takes the discretization a solve takes: on the stiff overdamped spring
+/// (c = 1e4, 64 nodes, no condition named) the natural initial-velocity condition, since
+/// the motion starts with a fast layer; with the strong one the fitted motion failed its
+/// verification (1.1e-4 against a tolerance of 1e-6) where the solve passes. The data
+/// are the closed form at c = 1e4, the fit starts from 5000.
+#[test]
+fn a_fit_imposes_the_initial_velocity_as_a_solve_does_over_an_initial_layer() {
+    let ov = Overrides { set: vec![("c".into(), "5000".into())], ..Overrides::default() };
+    let scene = common::load_test_scene("stiff_overdamped", &ov);
+    let (c, k) = (1e4_f64, 1.0_f64);
+    let d = (c * c - 4.0 * k).sqrt();
+    let (r1, r2) = ((-c + d) / 2.0, (-c - d) / 2.0);
+    let exact = |t: f64| (r2 * (r1 * t).exp() - r1 * (r2 * t).exp()) / (r2 - r1);
+    let times: Vec<f64> = (0..40).map(|i| 1.0 + 2.5 * i as f64).collect();
+    let data = csv(&times, &[("x", &exact)]);
+    let f = run(&scene, &ov, &data, &free(&["c>=0"])).unwrap();
+    assert!(f.trusted(), "{}", f.outcome.verification.reason);
+    assert_recovered(&f, &[("c", c)], 1e-4);
+    assert_eq!(f.outcome.settings.initial_velocity, skg_core::scene::InitialVelocity::Natural);
+    assert!(f.report.warnings.iter().any(|w| w.contains("natural condition")), "{:?}", f.report.warnings);
+    assert!(f.fitted_toml.contains("--initial-velocity natural --nodes 64"));
+}

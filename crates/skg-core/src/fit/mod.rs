@@ -243,19 +243,22 @@ fn with_remedy(mut fit: Fit) -> Fit {
     fit
 }
 
-/// The discretization a fit runs on: the scene's, on the adaptive grid when the scene
-/// asks for one (its map made from the motion at the starting values, `solve::adapt`,
-/// and kept while the parameters move), else on the uniform grid.
-fn discretization_of(scene: &Scene, warnings: &mut Vec<String>) -> Result<Discretization, FitError> {
-    let disc = Discretization::of(scene);
+/// The discretization a fit runs on: the scene's as a solve takes it (with the natural
+/// initial-velocity condition where the motion starts with a fast layer and the scene
+/// names none, `solve::own_discretization`), on the adaptive grid when the scene asks for
+/// one (its map made from the motion at the starting values, `solve::adapt`, and kept
+/// while the parameters move), else on the uniform grid.
+fn discretization_of(scene: &Scene, model: &Model, warnings: &mut Vec<String>) -> Discretization {
+    let (disc, note) = crate::solve::own_discretization(scene, model);
+    warnings.extend(note);
     if scene.grid != crate::scene::GridChoice::Adaptive {
-        return Ok(disc);
+        return disc;
     }
-    match crate::solve::adapt::motion_map(scene, &Model::build(scene)?) {
-        Ok((map, _)) => Ok(disc.with_grid(crate::discrete::Grid::Mapped(Arc::new(map)))),
+    match crate::solve::adapt::motion_map(scene, model) {
+        Ok((map, _)) => disc.with_grid(crate::discrete::Grid::Mapped(Arc::new(map))),
         Err(why) => {
             warnings.push(format!("the grid is uniform: {why}"));
-            Ok(disc)
+            disc
         }
     }
 }
@@ -280,7 +283,7 @@ fn fit_on(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSetti
     let names = settings.names();
     let starting: Vec<f64> = names.iter().map(|n| scene.parameters[n]).collect();
     let model = Arc::new(Model::with_free_parameters(scene, &names)?);
-    let disc = discretization_of(scene, &mut warnings)?;
+    let disc = discretization_of(scene, &model, &mut warnings);
     let times = disc.times(scene);
     let mut action = action_on(&model, scene, &disc, &times)?;
     let plans = Plans {
@@ -338,7 +341,7 @@ fn fit_on(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSetti
     let mut report =
         problem.report(&action, &solution, (converged, status), settings, start, parameters, at, data, timings, inner, warnings);
     report.discretization = round.chosen.to_vec();
-    let fitted_toml = report::fitted_toml(scene, &fitted_overrides, &report);
+    let fitted_toml = report::fitted_toml(scene, &disc, &fitted_overrides, &report);
     let data_table = report::data_table(scene, data, &outcome.trajectory);
     Ok(Fit { outcome, fitted, report, fitted_toml, data_table })
 }

@@ -12,9 +12,9 @@ use super::free::FreeParameter;
 use super::observe::Observations;
 use super::{rows, ChosenDiscretization, FitHessian, FitMethod, FitStart, InnerWork};
 use crate::discrete::interpolate::hermite;
-use crate::discrete::Trajectory;
+use crate::discrete::{Discretization, Trajectory};
 use crate::scene::provenance;
-use crate::scene::{GridChoice, NumOrExpr, Overrides, Scene};
+use crate::scene::{NumOrExpr, Overrides, Scene};
 use skg_ipopt::IterationStat;
 
 /// One fitted parameter.
@@ -312,8 +312,8 @@ pub(super) fn scaled_condition(f: &DMatrix<f64>) -> f64 {
 
 /// The scene file's text with the fitted values in place of the free parameters'
 /// definitions (and the command line's `--set` values in place of theirs), with a
-/// comment at the top saying what was fitted.
-pub(super) fn fitted_toml(scene: &Scene, overrides: &Overrides, report: &FitReport) -> String {
+/// comment at the top saying what was fitted and on which discretization `disc`.
+pub(super) fn fitted_toml(scene: &Scene, disc: &Discretization, overrides: &Overrides, report: &FitReport) -> String {
     let file = &scene.file;
     let text = &file.origin.text;
     let mut edits: Vec<(std::ops::Range<usize>, String)> = Vec::new();
@@ -346,21 +346,16 @@ pub(super) fn fitted_toml(scene: &Scene, overrides: &Overrides, report: &FitRepo
             format!("#   {n} = {:?}{se} (from {:?})", p.value, p.initial)
         })
         .collect();
-    let grid = match scene.grid {
-        GridChoice::Adaptive => "an adaptive grid (its map from the motion at the starting values)",
+    let grid = match disc.grid.name() {
+        "adaptive" => "an adaptive grid (its map from the motion at the starting values)",
         _ => "a uniform grid",
     };
+    let (operator, velocity, nodes) = (disc.operator.name(), disc.initial_velocity, disc.nodes);
     let on = format!(
-        "#   on {} ({} initial velocity), {} nodes of {grid}: skg-solve {} --operator {} --initial-velocity {} --nodes {} --grid {} \
-         solves it",
-        scene.operator.name(),
-        scene.initial_velocity,
-        scene.nodes,
+        "#   on {operator} ({velocity} initial velocity), {nodes} nodes of {grid}: skg-solve {} --operator {operator} \
+         --initial-velocity {velocity} --nodes {nodes} --grid {} solves it",
         super::FITTED_SCENE_FILE,
-        scene.operator.name(),
-        scene.initial_velocity,
-        scene.nodes,
-        if scene.grid == GridChoice::Adaptive { "adaptive" } else { "uniform" }
+        disc.grid.name()
     );
     format!(
         "# Fitted by skg-solve {} to {} ({} values; Ipopt: {}, {} iterations):\n{}\n{on}\n{out}",

@@ -93,7 +93,7 @@ pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) 
 /// The discretization the scene asks for, with the natural initial-velocity condition in
 /// place of the default strong one when the scene names none and its motion starts with
 /// a fast layer the grid does not resolve ([`initial_layer`]); the note that says so.
-fn own_discretization(scene: &Scene, model: &Model) -> (Discretization, Option<String>) {
+pub(crate) fn own_discretization(scene: &Scene, model: &Model) -> (Discretization, Option<String>) {
     let mut own = Discretization::of(scene);
     if scene.initial_velocity_named || own.initial_velocity == InitialVelocity::Natural {
         return (own, None);
