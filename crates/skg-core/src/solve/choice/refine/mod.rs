@@ -72,10 +72,10 @@ mod stop;
 pub const REFINE_COST_FACTOR: f64 = 30.0;
 /// The least time a refinement without `--time-limit` may take, seconds.
 pub const REFINE_FLOOR_S: f64 = 60.0;
-/// The bound of the refinement's budget, for its deadline and its messages.
 /// The verdict of a grid the refinement passed over: an adaptive grid too uneven for the
 /// operator's boundary closures (docs/grids.md#limits).
 pub const TOO_UNEVEN: &str = "not solved: the grid is too uneven for the operator's boundary closures";
+/// The bound of the refinement's budget, for its deadline and its messages.
 const REFINE_BUDGET: Bound = Bound::Budget { of: "the refinement", first: "grid", factor: REFINE_COST_FACTOR, floor_s: REFINE_FLOOR_S };
 
 /// What to do when the refinement stopped at its time limit.
