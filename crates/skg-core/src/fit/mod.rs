@@ -243,26 +243,6 @@ fn with_remedy(mut fit: Fit) -> Fit {
     fit
 }
 
-/// The discretization a fit runs on: the scene's as a solve takes it (with the natural
-/// initial-velocity condition where the motion starts with a fast layer and the scene
-/// names none, `solve::own_discretization`), on the adaptive grid when the scene asks for
-/// one (its map made from the motion at the starting values, `solve::adapt`, and kept
-/// while the parameters move), else on the uniform grid.
-fn discretization_of(scene: &Scene, model: &Model, warnings: &mut Vec<String>) -> Discretization {
-    let (disc, note) = crate::solve::own_discretization(scene, model);
-    warnings.extend(note);
-    if scene.grid != crate::scene::GridChoice::Adaptive {
-        return disc;
-    }
-    match crate::solve::adapt::motion_map(scene, model) {
-        Ok((map, _)) => disc.with_grid(crate::discrete::Grid::Mapped(Arc::new(map))),
-        Err(why) => {
-            warnings.push(format!("the grid is uniform: {why}"));
-            disc
-        }
-    }
-}
-
 /// What one fit on one discretization is given besides the scene and the data.
 #[derive(Default)]
 struct Round<'a> {
@@ -283,7 +263,12 @@ fn fit_on(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSetti
     let names = settings.names();
     let starting: Vec<f64> = names.iter().map(|n| scene.parameters[n]).collect();
     let model = Arc::new(Model::with_free_parameters(scene, &names)?);
-    let disc = discretization_of(scene, &model, &mut warnings);
+    // The scene's own discretization, as a solve takes it (the natural initial-velocity
+    // condition over a fast initial layer when none is named; an adaptive grid's map made
+    // from the motion at the values the fit starts from, and kept while the parameters
+    // move).
+    let (disc, note) = crate::solve::scene_discretization(scene, &model);
+    warnings.extend(note);
     let times = disc.times(scene);
     let mut action = action_on(&model, scene, &disc, &times)?;
     let plans = Plans {

@@ -72,14 +72,7 @@ pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) 
         memory::check(scene, "the solve", scene.nodes, memory::solve_bytes(scene))?;
     }
     let model = Arc::new(Model::build(scene)?);
-    let (own, mut note) = own_discretization(scene, &model);
-    let own = match adaptive_grid(scene, &model, &own) {
-        Ok(own) => own,
-        Err(why) => {
-            note = Some(note.map_or(why.clone(), |n| format!("{n}; {why}")));
-            own
-        }
-    };
+    let (own, note) = scene_discretization(scene, &model);
     let mut outcome = if chooses {
         refine::refine(scene, &model, &own, deadline, progress)?
     } else {
@@ -90,10 +83,21 @@ pub fn solve_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&str)) 
     Ok(outcome)
 }
 
+/// The discretization a scene is solved (or fitted) on before any choice: the one it asks
+/// for ([`own_discretization`]) on the grid it asks for ([`adaptive_grid`]), with the
+/// note of what was changed or could not be made.
+pub(crate) fn scene_discretization(scene: &Scene, model: &Model) -> (Discretization, Option<String>) {
+    let (own, note) = own_discretization(scene, model);
+    match adaptive_grid(scene, model, &own) {
+        Ok(own) => (own, note),
+        Err(why) => (own, Some(note.map_or(why.clone(), |n| format!("{n}; {why}")))),
+    }
+}
+
 /// The discretization the scene asks for, with the natural initial-velocity condition in
 /// place of the default strong one when the scene names none and its motion starts with
 /// a fast layer the grid does not resolve ([`initial_layer`]); the note that says so.
-pub(crate) fn own_discretization(scene: &Scene, model: &Model) -> (Discretization, Option<String>) {
+fn own_discretization(scene: &Scene, model: &Model) -> (Discretization, Option<String>) {
     let mut own = Discretization::of(scene);
     if scene.initial_velocity_named || own.initial_velocity == InitialVelocity::Natural {
         return (own, None);
