@@ -14,7 +14,7 @@
 //! In the order of a fit:
 //! 1. the settings are checked against the scene: the free parameters are parameters,
 //!    their starting values lie within their bounds, and they do not move the time grid
-//!    ([`FitSettings`], `settings.rs`; [`FreeParameter`], `free.rs`; the scene's `[fit]` table,
+//!    ([`FitSettings`] and its checks, `settings.rs`; [`FreeParameter`], `free.rs`; the scene's `[fit]` table,
 //!    read by `table.rs`, gives them when the caller does not); with `--refine` or
 //!    `--operator auto` the refinement chooses the discretization at the starting values
 //!    (`choose.rs`; again at the fitted values when the fitted motion does not verify);
@@ -38,7 +38,9 @@
 //!    which hands over to Ipopt if it fails) and verified against time stepping like any
 //!    solve: its [`Outcome`] is the fitted motion;
 //! 7. the report ([`FitReport`], the `fit` object of `summary.json`), the fitted scene's
-//!    text and the data beside the fitted values (`report.rs`).
+//!    text and the data beside the fitted values (`report.rs`), with what the result
+//!    means in words: warnings and the remedy of a motion that did not verify
+//!    (`advice.rs`).
 //!
 //! **Place in the flow.** After the solve and the output: it uses the scene, the model,
 //! the discrete action (its parameter derivatives, the interpolation), the time stepping
@@ -46,6 +48,7 @@
 //! fit's files, `files.rs`). Only the command line and Python call it. It needs Ipopt: the
 //! module is compiled with the `ipopt` feature only.
 
+mod advice;
 mod barrier;
 mod choose;
 mod data;
@@ -76,9 +79,11 @@ use crate::model::Model;
 use crate::scene::{Overrides, Scene, SceneError};
 use crate::solve::backend::mumps_options;
 use crate::solve::{action_on, outcome, point_from_states, solve_global, Deadline, Guess, Outcome, SolveError};
+use advice::{beyond_the_noise, bound_warnings, converged, explains_little, with_remedy};
 use observe::Observations;
 use problem::{FitProblem, Plans, StopTest};
 use reduced::ReducedFit;
+use settings::check_settings;
 use start::{put_data, start_states, Start};
 
 pub use choose::ChosenDiscretization;
@@ -207,40 +212,6 @@ pub fn fit(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSett
     fit.report.timings.discretization_s = choosing.as_secs_f64();
     fit.report.timings.total_s = started.elapsed().as_secs_f64();
     Ok(fit)
-}
-
-/// `fit` with the fitted motion's remedy when the fit converged but the motion failed
-/// its verification: what to fit on instead.
-fn with_remedy(mut fit: Fit) -> Fit {
-    if !fit.failed_verification() {
-        return fit;
-    }
-    let nodes = 2 * fit.fitted.nodes - 1;
-    fit.outcome.remedy = Some(match fit.report.discretization.last() {
-        None => format!(
-            "let the refinement choose the discretization: --refine (the nodes and the operator, chosen at the starting values \
-             and again at the fitted values when the motion does not verify there); or fit on a finer one (--nodes {nodes}, or \
-             an -AD operator, which damps the odd-even mode)"
-        ),
-        Some(last) if !last.refinement.as_ref().is_some_and(|r| r.refine) => {
-            format!("the operator was chosen at {} for the scene's {} nodes: --refine chooses the nodes too", last.chosen_at, last.nodes)
-        }
-        Some(last) if !last.verified => format!(
-            "at {} the refinement found no discretization that verifies ({}): let it use more nodes (--max-nodes), or state \
-             the accuracy you need (--verify-tol)",
-            last.chosen_at,
-            last.refinement.as_ref().map_or("see fit.discretization in summary.json", |r| r.result.as_str())
-        ),
-        Some(last) => format!(
-            "the discretization chosen at {} ({}) verified there but not at the fitted values: fit on a finer one \
-             (--operator {} --initial-velocity {} --nodes {nodes})",
-            last.chosen_at,
-            last.describe(),
-            last.operator,
-            last.initial_velocity
-        ),
-    });
-    fit
 }
 
 /// What one fit on one discretization is given besides the scene and the data.
@@ -580,176 +551,6 @@ fn on_newton(scene: &Scene) -> Scene {
     let mut newton = scene.clone();
     newton.solver.backend = crate::scene::Backend::Newton;
     newton
-}
-
-/// A warning when the data's standard deviations do not explain the misfit
-/// ([`MisfitReport::beyond_the_noise`]): a local minimum, or a model or standard
-/// deviations that do not describe the data.
-fn beyond_the_noise(misfit: &MisfitReport, method: FitMethod) -> Option<String> {
-    let (x, spread) = misfit.beyond_the_noise()?;
-    let times = if x >= 10.0 { format!("{x:.0}") } else { format!("{x:.1}") };
-    let minimum = local_minimum(method);
-    Some(format!(
-        "the weighted misfit is {times} times what the data's standard deviations explain (the reduced chi-square over {} degrees \
-         of freedom, 1 ± {spread:.2} for data the model and the standard deviations describe): {minimum}, or the model or the \
-         standard deviations do not describe the data",
-        misfit.dof
-    ))
-}
-
-/// Where a fit whose misfit is too large may have stopped, and what to try.
-fn local_minimum(method: FitMethod) -> &'static str {
-    match method {
-        FitMethod::Reduced => "the reduced fit may have stopped in a local minimum, as single shooting does (--fit-method all-at-once)",
-        FitMethod::AllAtOnce => {
-            "the fit may have stopped in a local minimum (other starting values; --start data where the data observe the motion)"
-        }
-    }
-}
-
-/// Without standard deviations, a warning when the fitted motion explains less than
-/// half of the data's variation about each observed coordinate's mean, `1 − Σ r² /
-/// Σ (d − d̄)²` (the coefficient of determination): the misfit cannot be weighed against
-/// a noise, but residuals as large as the data's own spread are not a fit.
-fn explains_little(misfit: &MisfitReport, data: &Data, method: FitMethod) -> Option<String> {
-    if data.sigma_given || misfit.weighted {
-        return None;
-    }
-    let mut total = 0.0;
-    for &c in &data.coordinates {
-        let values: Vec<f64> = data.observations.iter().filter(|o| o.coordinate == c).map(|o| o.value).collect();
-        let mean = values.iter().sum::<f64>() / values.len() as f64;
-        total += values.iter().map(|d| (d - mean).powi(2)).sum::<f64>();
-    }
-    let share = 1.0 - misfit.sum_of_squares / total;
-    (total > 0.0 && share < EXPLAINED_AT_LEAST).then(|| {
-        format!(
-            "the fitted motion explains {:.0} % of the data's variation about their means (1 − Σ r²/Σ (d − d̄)² = {share:.2}): {}, or \
-             the model does not describe the data",
-            100.0 * share.max(0.0),
-            local_minimum(method)
-        )
-    })
-}
-
-/// The share of the data's variation below which a fit without standard deviations is
-/// warned of ([`explains_little`]).
-const EXPLAINED_AT_LEAST: f64 = 0.5;
-
-/// A warning for each parameter that ended on its bound.
-fn bound_warnings(parameters: &IndexMap<String, report::ParameterReport>) -> Vec<String> {
-    parameters
-        .iter()
-        .filter(|(_, p)| p.at_bound)
-        .map(|(name, p)| {
-            format!("`{name}` ended on its bound ({}): its standard error describes the curvature there, not a symmetric interval", p.value)
-        })
-        .collect()
-}
-
-/// Whether Ipopt's fit converged: `Solve_Succeeded`; or, with a warning, its acceptable
-/// level, or a search direction too small to make progress (the misfit of noisy data
-/// stalls there short of the tight default `tol`) with the constraints held to 1e-8 or
-/// the scene's `tol` (the solve at the fitted values then solves them to `tol`).
-fn converged(solution: &ipopt::Solution, tol: f64, warnings: &mut Vec<String>) -> bool {
-    match solution.status {
-        ipopt::Status::SolveSucceeded => true,
-        ipopt::Status::SolvedToAcceptableLevel => {
-            warnings.push("Ipopt stopped at its acceptable level (Solved_To_Acceptable_Level), not at the requested tolerance".into());
-            true
-        }
-        ipopt::Status::SearchDirectionBecomesTooSmall if solution.max_constraint_violation <= tol.max(1e-8) => {
-            warnings.push(format!(
-                "Ipopt stopped because its search direction became too small (Search_Direction_Becomes_Too_Small) with the \
-                 equations of motion held to {:.1e}: the misfit cannot decrease further at this precision",
-                solution.max_constraint_violation
-            ));
-            true
-        }
-        _ => false,
-    }
-}
-
-/// The checks of the settings against the scene; the notes on what the fit does not
-/// use of the scene.
-fn check_settings(scene: &Scene, overrides: &Overrides, settings: &FitSettings) -> Result<Vec<String>, FitError> {
-    let mut notes = Vec::new();
-    if settings.free.is_empty() {
-        return Err(FitError::Settings("no free parameter: name the parameters to fit (--free, or free = [...] in [fit])".into()));
-    }
-    let known = || scene.parameters.keys().map(String::as_str).collect::<Vec<_>>().join(", ");
-    for (j, p) in settings.free.iter().enumerate() {
-        let Some(&value) = scene.parameters.get(&p.name) else {
-            return Err(FitError::Settings(format!(
-                "free parameter `{}` is not a parameter of the scene (its parameters: {}); to fit an initial position or \
-                 velocity, write it as a parameter in the scene (velocity = \"v0\")",
-                p.name,
-                known()
-            )));
-        };
-        if settings.free[..j].iter().any(|q| q.name == p.name) {
-            return Err(FitError::Settings(format!("free parameter `{}` is named twice", p.name)));
-        }
-        if !p.admits(value) {
-            return Err(FitError::Settings(format!(
-                "the starting value of `{}` ({value}) is outside its bounds {}: start inside them (--set {}=…)",
-                p.name,
-                p.bounds_text(),
-                p.name
-            )));
-        }
-        if moves_the_grid(scene, overrides, &p.name, value) {
-            return Err(FitError::Settings(format!(
-                "`{}` sets the time span or the grid ([time]): a fit keeps the grid fixed, so it cannot be free",
-                p.name
-            )));
-        }
-    }
-    if scene.grid == crate::scene::GridChoice::Adaptive {
-        notes.push(
-            "the adaptive grid's map follows the motion at the values the fit starts from; the fit keeps that grid while the \
-             parameters move the motion"
-                .into(),
-        );
-    }
-    if scene.windows.is_some() {
-        notes.push("the fit optimizes the whole span at once: the scene's [time] window is not used".into());
-    }
-    if scene.formulation == crate::scene::Formulation::Full {
-        notes.push("the fit's constraints are the reduced system: the full formulation is not used".into());
-    }
-    if settings.method == FitMethod::Reduced {
-        if settings.hessian == FitHessian::LimitedMemory {
-            return Err(FitError::Settings(
-                "the reduced fit gives Ipopt the exact Hessian of the misfit in the parameters: the limited-memory Hessian is \
-                 for the all-at-once fit"
-                    .into(),
-            ));
-        }
-        if settings.start == FitStart::Data {
-            return Err(FitError::Settings(
-                "the reduced fit starts from the solve at the starting values (its trajectory solves the equations of motion \
-                 at every point): starting from the data is for the all-at-once fit"
-                    .into(),
-            ));
-        }
-    }
-    if settings.tol.is_nan() || settings.tol <= 0.0 || settings.max_iter == 0 {
-        return Err(FitError::Settings(format!("the fit's tol ({}) and max_iter ({}) must be positive", settings.tol, settings.max_iter)));
-    }
-    Ok(notes)
-}
-
-/// Whether changing parameter `name` from `value` changes the scene's time span or grid.
-fn moves_the_grid(scene: &Scene, overrides: &Overrides, name: &str, value: f64) -> bool {
-    let other = if value == 0.0 { 1e-3 } else { value * (1.0 + 1e-3) };
-    let mut ov = overrides.clone();
-    ov.set.retain(|(n, _)| n != name);
-    ov.set.push((name.to_string(), format!("{other:?}")));
-    match scene.file.clone().resolve(&ov) {
-        Ok(s) => (s.t_start, s.t_end, s.nodes) != (scene.t_start, scene.t_end, scene.nodes),
-        Err(_) => false,
-    }
 }
 
 /// The coordinates and multipliers at the nodes of the unknown vector `z` (the pinned

@@ -1,6 +1,7 @@
 //! How a fit is run: its free parameters, how it is handed to Ipopt, the Hessian, where the
 //! trajectory starts, and Ipopt's tolerance and limits ([`FitSettings`]), with their
-//! defaults and their names on the command line and in Python.
+//! defaults and their names on the command line and in Python; and their checks against
+//! the scene ([`check_settings`]).
 
 use std::fmt;
 use std::str::FromStr;
@@ -8,6 +9,8 @@ use std::str::FromStr;
 use serde::Serialize;
 
 use super::free::FreeParameter;
+use super::FitError;
+use crate::scene::{Overrides, Scene};
 
 /// The Hessian of the Lagrangian given to Ipopt.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
@@ -203,5 +206,87 @@ impl FitSettings {
     /// The names of the free parameters.
     pub fn names(&self) -> Vec<String> {
         self.free.iter().map(|p| p.name.clone()).collect()
+    }
+}
+
+/// The checks of the settings against the scene; the notes on what the fit does not
+/// use of the scene.
+pub(super) fn check_settings(scene: &Scene, overrides: &Overrides, settings: &FitSettings) -> Result<Vec<String>, FitError> {
+    let mut notes = Vec::new();
+    if settings.free.is_empty() {
+        return Err(FitError::Settings("no free parameter: name the parameters to fit (--free, or free = [...] in [fit])".into()));
+    }
+    let known = || scene.parameters.keys().map(String::as_str).collect::<Vec<_>>().join(", ");
+    for (j, p) in settings.free.iter().enumerate() {
+        let Some(&value) = scene.parameters.get(&p.name) else {
+            return Err(FitError::Settings(format!(
+                "free parameter `{}` is not a parameter of the scene (its parameters: {}); to fit an initial position or \
+                 velocity, write it as a parameter in the scene (velocity = \"v0\")",
+                p.name,
+                known()
+            )));
+        };
+        if settings.free[..j].iter().any(|q| q.name == p.name) {
+            return Err(FitError::Settings(format!("free parameter `{}` is named twice", p.name)));
+        }
+        if !p.admits(value) {
+            return Err(FitError::Settings(format!(
+                "the starting value of `{}` ({value}) is outside its bounds {}: start inside them (--set {}=…)",
+                p.name,
+                p.bounds_text(),
+                p.name
+            )));
+        }
+        if moves_the_grid(scene, overrides, &p.name, value) {
+            return Err(FitError::Settings(format!(
+                "`{}` sets the time span or the grid ([time]): a fit keeps the grid fixed, so it cannot be free",
+                p.name
+            )));
+        }
+    }
+    if scene.grid == crate::scene::GridChoice::Adaptive {
+        notes.push(
+            "the adaptive grid's map follows the motion at the values the fit starts from; the fit keeps that grid while the \
+             parameters move the motion"
+                .into(),
+        );
+    }
+    if scene.windows.is_some() {
+        notes.push("the fit optimizes the whole span at once: the scene's [time] window is not used".into());
+    }
+    if scene.formulation == crate::scene::Formulation::Full {
+        notes.push("the fit's constraints are the reduced system: the full formulation is not used".into());
+    }
+    if settings.method == FitMethod::Reduced {
+        if settings.hessian == FitHessian::LimitedMemory {
+            return Err(FitError::Settings(
+                "the reduced fit gives Ipopt the exact Hessian of the misfit in the parameters: the limited-memory Hessian is \
+                 for the all-at-once fit"
+                    .into(),
+            ));
+        }
+        if settings.start == FitStart::Data {
+            return Err(FitError::Settings(
+                "the reduced fit starts from the solve at the starting values (its trajectory solves the equations of motion \
+                 at every point): starting from the data is for the all-at-once fit"
+                    .into(),
+            ));
+        }
+    }
+    if settings.tol.is_nan() || settings.tol <= 0.0 || settings.max_iter == 0 {
+        return Err(FitError::Settings(format!("the fit's tol ({}) and max_iter ({}) must be positive", settings.tol, settings.max_iter)));
+    }
+    Ok(notes)
+}
+
+/// Whether changing parameter `name` from `value` changes the scene's time span or grid.
+fn moves_the_grid(scene: &Scene, overrides: &Overrides, name: &str, value: f64) -> bool {
+    let other = if value == 0.0 { 1e-3 } else { value * (1.0 + 1e-3) };
+    let mut ov = overrides.clone();
+    ov.set.retain(|(n, _)| n != name);
+    ov.set.push((name.to_string(), format!("{other:?}")));
+    match scene.file.clone().resolve(&ov) {
+        Ok(s) => (s.t_start, s.t_end, s.nodes) != (scene.t_start, scene.t_end, scene.nodes),
+        Err(_) => false,
     }
 }
