@@ -661,6 +661,38 @@ fn a_fit_on_an_adaptive_grid_recovers_the_closed_form() {
     assert!(f.report.warnings.iter().any(|w| w.contains("the adaptive grid's map follows the motion")), "{:?}", f.report.warnings);
 }
 
+/// An all-at-once fit that Ipopt ends at its acceptable level is taken on to the fit's
+/// tolerance by the reduced fit. The damping of an overdamped spring, c = 1e6, from
+/// 3e5 (x over 1e4 s, noise-free, 64 nodes, so that the fit's minimum carries the
+/// discretization's error, 7.6e-6 relative): Ipopt's acceptable level, which bounds the
+/// gradient absolutely, had stopped it at c = 999992.3255, 6e-8 relative from the
+/// minimum the reduced fit finds (999992.3856), with a standard error 2000 times the
+/// minimum's.
+#[test]
+fn an_all_at_once_fit_stopped_at_the_acceptable_level_is_taken_on_to_the_minimum() {
+    let text = "[scene]\nname = \"overdamped\"\nlagrangian = \"1/2*x_dot^2 - 1/2*x^2\"\n[parameters]\nc = 3e5\n\
+                [[coordinates]]\nname = \"x\"\ninitial = 1\nvelocity = 0\n[forces]\nx = \"-c*x_dot\"\n\
+                [time]\nstart = 0\nend = 1e4\nnodes = 64\n";
+    let ov = Overrides::default();
+    let scene = scene_of(text, &ov);
+    let c = 1e6_f64;
+    let d = (c * c - 4.0).sqrt();
+    let (r1, r2) = ((-c + d) / 2.0, (-c - d) / 2.0);
+    let exact = |t: f64| (r2 * (r1 * t).exp() - r1 * (r2 * t).exp()) / (r2 - r1);
+    let times: Vec<f64> = (1..=40).map(|i| 250.0 * i as f64).collect();
+    let data = csv(&times, &[("x", &exact)]);
+    let all_at_once = run(&scene, &ov, &data, &free(&["c>=0"])).unwrap();
+    let mut settings = free(&["c>=0"]);
+    settings.method = FitMethod::Reduced;
+    let reduced = run(&scene, &ov, &data, &settings).unwrap();
+    for f in [&all_at_once, &reduced] {
+        assert!(f.trusted(), "{}: {}", f.report.status, f.outcome.verification.reason);
+        assert_recovered(f, &[("c", c)], 2e-5);
+    }
+    let (a, b) = (all_at_once.report.parameters["c"].value, reduced.report.parameters["c"].value);
+    assert!((a - b).abs() <= 1e-8 * c, "all at once c = {a}, reduced c = {b}");
+}
+
 /// A fit takes the discretization a solve takes: on the stiff overdamped spring
 /// (c = 1e4, 64 nodes, no condition named) the natural initial-velocity condition, since
 /// the motion starts with a fast layer; with the strong one the fitted motion failed its
@@ -682,4 +714,14 @@ fn a_fit_imposes_the_initial_velocity_as_a_solve_does_over_an_initial_layer() {
     assert_eq!(f.outcome.settings.initial_velocity, skg_core::scene::InitialVelocity::Natural);
     assert!(f.report.warnings.iter().any(|w| w.contains("natural condition")), "{:?}", f.report.warnings);
     assert!(f.fitted_toml.contains("--initial-velocity natural --nodes 64"));
+    // The reduced fit reaches the same damping: c = 1e4, with the misfit's curvature in
+    // it about 1e-11, passed Ipopt's absolute tests far from the minimum (its acceptable
+    // level at c = 9955, then its `tol` at c = 9999.4, each 6 of the reported standard
+    // errors off) before the reduced fit stopped by its own, relative, test alone.
+    let mut reduced = free(&["c>=0"]);
+    reduced.method = FitMethod::Reduced;
+    let r = run(&scene, &ov, &data, &reduced).unwrap();
+    assert!(r.trusted(), "{}", r.outcome.verification.reason);
+    assert_recovered(&r, &[("c", c)], 1e-6);
+    assert!(!r.report.warnings.iter().any(|w| w.contains("acceptable level")), "{:?}", r.report.warnings);
 }

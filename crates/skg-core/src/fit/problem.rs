@@ -125,11 +125,13 @@ pub(super) struct FitProblem<'a> {
 }
 
 /// How the callback stopped Ipopt at a KKT point: the constraints within the scene's
-/// `tol`, or at their round-off level above it.
+/// `tol`, or at their round-off level above it; or, in the reduced fit, at the
+/// acceptable level of its own displacement test (`reduced.rs`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum KktStop {
     Tolerance,
     RoundOff,
+    Acceptable,
 }
 
 impl KktStop {
@@ -139,6 +141,7 @@ impl KktStop {
         match self {
             KktStop::Tolerance => "Solve_Succeeded",
             KktStop::RoundOff => "Ipopt_Converged_To_Round_Off",
+            KktStop::Acceptable => "Solved_To_Acceptable_Level",
         }
     }
 
@@ -147,6 +150,7 @@ impl KktStop {
         match self {
             KktStop::Tolerance => "converged to the requested tolerances",
             KktStop::RoundOff => "converged, with the equations of motion at their round-off level above the scene's tol",
+            KktStop::Acceptable => "converged to the acceptable level",
         }
     }
 }
