@@ -96,6 +96,25 @@ def test_values_where_the_fit_cannot_be_evaluated_raise_not_converged():
         skg.fit(skg.Scene.from_toml(text), data, ["k", "c<=0.3"], method="reduced")
 
 
+def test_a_fit_ending_at_a_degenerate_point_that_misses_the_data_raises_not_converged():
+    """x'' = -k x - c x' + A cos(w t) fitted from values 15 to 70 % off: the fit ends at
+    the undamped resonance (c = 0, w = sqrt(k)), where the curvature is singular and the
+    misfit thousands of times what the standard deviations explain."""
+    text = OSCILLATOR.replace('x = "-c*x_dot"', 'x = "-c*x_dot + A*cos(w*t)"').replace("v0 = 0", "v0 = 0\nA = 0.8\nw = 1.3")
+    text = text.replace("k = 3.0", "k = 2.0").replace("c = 0.2", "c = 0.1").replace("x0 = 1", "x0 = 0.5")
+    text = text.replace("end = 6", "end = 30").replace("nodes = 512", "nodes = 1200")
+    k, c, a, w = 2.5, 0.3, 1.0, 1.5
+    d = (k - w * w) ** 2 + (c * w) ** 2
+    xs, ys = a * (k - w * w) / d, a * c * w / d
+    g, wd = c / 2, np.sqrt(k - c * c / 4)
+    t = np.linspace(0.5, 30, 80)
+    x = np.exp(-g * t) * ((0.5 - xs) * np.cos(wd * t) + (g * (0.5 - xs) - ys * w) / wd * np.sin(wd * t))
+    x += xs * np.cos(w * t) + ys * np.sin(w * t)
+    data = {"t": t, "x": x, "sigma_x": np.full_like(t, 0.01)}
+    with pytest.raises(skg.FitError, match=r"the fit did not converge: the fit ended at k = .*a local minimum or a saddle point"):
+        skg.fit(skg.Scene.from_toml(text), data, ["k>=0", "c>=0", "A", "w>=0"])
+
+
 def test_bounds_a_csv_file_and_files_written(tmp_path):
     scene = skg.Scene.from_toml(OSCILLATOR)
     path = tmp_path / "data.csv"

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 
-use skg_core::fit::{self, Data, Fit, FitHessian, FitIntoError, FitMethod, FitSettings, FitStart, FitWritten, FreeParameter};
+use skg_core::fit::{self, Data, Fit, FitError, FitHessian, FitIntoError, FitMethod, FitSettings, FitStart, FitWritten, FreeParameter};
 use skg_core::scene::Scene;
 use skg_core::stepping::verify::VerifyStatus;
 
@@ -106,7 +106,11 @@ pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
         Ok(done) => done,
         Err(FitIntoError::Fit(e)) if e.not_converged().is_some() => {
             note!("error: {}: the fit did not converge: {}", scene.name, e.not_converged().unwrap_or_default());
-            note!("  remedy: {}", not_evaluated_remedy(settings.method));
+            let remedy = match e {
+                FitError::NotAMinimum(_) => stationary_point_remedy(settings.method),
+                _ => not_evaluated_remedy(settings.method),
+            };
+            note!("  remedy: {remedy}");
             return Ok(ExitCode::from(EXIT_NOT_CONVERGED));
         }
         Err(e) => return Err(e.into()),
@@ -121,6 +125,20 @@ pub fn run(args: FitArgs, quiet: bool) -> Result<ExitCode> {
         print_report(&fitted, &written);
     }
     Ok(report_untrusted(&fitted, &written).unwrap_or(ExitCode::SUCCESS))
+}
+
+/// What to do when the fit ended at a stationary point that is not the misfit's minimum.
+fn stationary_point_remedy(method: FitMethod) -> &'static str {
+    match method {
+        FitMethod::Reduced => {
+            "fit all at once (--fit-method all-at-once: it starts from the data where they observe every coordinate), or start \
+             nearer the values the data suggest (--set NAME=VALUE)"
+        }
+        FitMethod::AllAtOnce => {
+            "start nearer the values the data suggest (--set NAME=VALUE; --start data starts the trajectory from the data \
+             where they observe it)"
+        }
+    }
 }
 
 /// What to do when Ipopt tried a point where the fit could not be evaluated.

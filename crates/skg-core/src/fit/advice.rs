@@ -51,15 +51,26 @@ pub(super) fn with_remedy(mut fit: Fit) -> Fit {
 /// ([`MisfitReport::beyond_the_noise`]): a local minimum, or a model or standard
 /// deviations that do not describe the data.
 pub(super) fn beyond_the_noise(misfit: &MisfitReport, method: FitMethod) -> Option<String> {
+    let clause = noise_clause(misfit)?;
+    Some(format!("{clause}: {}, or the model or the standard deviations do not describe the data", local_minimum(method)))
+}
+
+/// The weighted misfit against what the standard deviations explain, in words, when
+/// they do not explain it.
+fn noise_clause(misfit: &MisfitReport) -> Option<String> {
     let (x, spread) = misfit.beyond_the_noise()?;
     let times = if x >= 10.0 { format!("{x:.0}") } else { format!("{x:.1}") };
-    let minimum = local_minimum(method);
     Some(format!(
         "the weighted misfit is {times} times what the data's standard deviations explain (the reduced chi-square over {} degrees \
-         of freedom, 1 ± {spread:.2} for data the model and the standard deviations describe): {minimum}, or the model or the \
-         standard deviations do not describe the data",
+         of freedom, 1 ± {spread:.2} for data the model and the standard deviations describe)",
         misfit.dof
     ))
+}
+
+/// How the fitted motion fails to describe the data, in words, when it does (the
+/// clause of [`beyond_the_noise`] or of [`explains_little`]); `None` when it does not.
+pub(super) fn misdescription(misfit: &MisfitReport, data: &Data) -> Option<String> {
+    noise_clause(misfit).or_else(|| share_clause(misfit, data))
 }
 
 /// Where a fit whose misfit is too large may have stopped, and what to try.
@@ -77,6 +88,13 @@ pub(super) fn local_minimum(method: FitMethod) -> &'static str {
 /// Σ (d − d̄)²` (the coefficient of determination): the misfit cannot be weighed against
 /// a noise, but residuals as large as the data's own spread are not a fit.
 pub(super) fn explains_little(misfit: &MisfitReport, data: &Data, method: FitMethod) -> Option<String> {
+    let clause = share_clause(misfit, data)?;
+    Some(format!("{clause}: {}, or the model does not describe the data", local_minimum(method)))
+}
+
+/// The share of the data's variation the fitted motion explains, in words, when it is
+/// below [`EXPLAINED_AT_LEAST`] and the data give no standard deviations.
+fn share_clause(misfit: &MisfitReport, data: &Data) -> Option<String> {
     if data.sigma_given || misfit.weighted {
         return None;
     }
@@ -89,10 +107,8 @@ pub(super) fn explains_little(misfit: &MisfitReport, data: &Data, method: FitMet
     let share = 1.0 - misfit.sum_of_squares / total;
     (total > 0.0 && share < EXPLAINED_AT_LEAST).then(|| {
         format!(
-            "the fitted motion explains {:.0} % of the data's variation about their means (1 − Σ r²/Σ (d − d̄)² = {share:.2}): {}, or \
-             the model does not describe the data",
-            100.0 * share.max(0.0),
-            local_minimum(method)
+            "the fitted motion explains {:.0} % of the data's variation about their means (1 − Σ r²/Σ (d − d̄)² = {share:.2})",
+            100.0 * share.max(0.0)
         )
     })
 }

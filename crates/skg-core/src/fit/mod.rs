@@ -121,16 +121,22 @@ pub enum FitError {
     /// The data do not determine the free parameters: which combination, in words.
     #[error("{0}")]
     NotIdentifiable(String),
+    /// The fit converged to a stationary point of the misfit whose motion does not
+    /// describe the data and whose curvature is singular there (a fit not converged).
+    #[error("{0}")]
+    NotAMinimum(String),
 }
 
 impl FitError {
     /// Why the fit did not converge, when Ipopt ended because the fit could not be
     /// evaluated at a point it tried (the equations of motion not solvable there, a
-    /// derivative not finite): a fit not converged (exit 3), where the other errors are
-    /// the input's (exit 1).
+    /// derivative not finite), or at a stationary point that is not the misfit's
+    /// minimum: a fit not converged (exit 3), where the other errors are the input's
+    /// (exit 1).
     pub fn not_converged(&self) -> Option<String> {
         match self {
             FitError::Ipopt(ipopt::SolveError::Eval(e)) => Some(format!("Ipopt tried a point where the fit cannot be evaluated: {e}")),
+            FitError::NotAMinimum(why) => Some(why.clone()),
             _ => None,
         }
     }
@@ -459,7 +465,8 @@ impl Problem<'_> {
 
     /// The fitted parameters, the misfit, its curvature and the covariance at Ipopt's
     /// `solution`; a converged fit whose curvature leaves a combination of parameters
-    /// undetermined is refused naming it.
+    /// undetermined is refused naming it, and, where its motion does not describe the
+    /// data, as a stationary point of the misfit that is not its minimum.
     fn statistics_at(
         &self,
         action: &mut Action,
@@ -476,12 +483,22 @@ impl Problem<'_> {
         z[..n_p].copy_from_slice(&solution.x[..n_p]);
         let residuals = self.observations.residuals(&solution.x);
         let curvature = statistics::curvature(action, self.plans, self.observations, &z, &mut ws);
+        let misfit = report::misfit(self.observations, &residuals, self.names.len(), data.sigma_given);
         if converged {
-            if let Some(message) = curvature.as_ref().and_then(|f| undetermined(f, self.names, &theta)) {
-                return Err(FitError::NotIdentifiable(message));
+            if let Some(message) = curvature.as_ref().and_then(|f| statistics::undetermined_where(f, self.names, &theta, "")) {
+                let at: Vec<String> = self.names.iter().zip(&theta).map(|(n, v)| format!("{n} = {v}")).collect();
+                let at = at.join(", ");
+                // Where the fitted motion does not describe the data either, the
+                // singular curvature is the point's, not the data's.
+                return Err(match advice::misdescription(&misfit, data) {
+                    Some(why) => FitError::NotAMinimum(format!(
+                        "the fit ended at {at}, where {why} and {message}: a local minimum or a saddle point of the misfit, or \
+                         a model that does not describe the data"
+                    )),
+                    None => FitError::NotIdentifiable(format!("at the fitted values {at}, {message}")),
+                });
             }
         }
-        let misfit = report::misfit(self.observations, &residuals, self.names.len(), data.sigma_given);
         let covariance =
             curvature.as_ref().and_then(|f| if misfit.defines_covariance() { covariance(f, misfit.residual_variance) } else { None });
         if !misfit.defines_covariance() {

@@ -134,10 +134,16 @@ fn weighted_sensitivities(observations: &Observations, s: &DMatrix<f64>) -> DMat
 /// curvature `f` (`F = AᵀA`) is singular (module documentation); `None` otherwise.
 /// `values` are the parameters' values (to state the direction in relative changes).
 pub fn undetermined(f: &DMatrix<f64>, names: &[String], values: &[f64]) -> Option<String> {
+    undetermined_where(f, names, values, " from the data")
+}
+
+/// [`undetermined`], saying `whence` they cannot be determined (" from the data", or
+/// "" at the fitted values, which the message then names).
+pub(super) fn undetermined_where(f: &DMatrix<f64>, names: &[String], values: &[f64], whence: &str) -> Option<String> {
     let n = f.nrows();
     if let Some(j) = (0..n).find(|&j| !(f[(j, j)] > 0.0 && f[(j, j)].is_finite())) {
         return Some(format!(
-            "`{}` cannot be determined from the data: the model's values at the data times do not depend on it \
+            "`{}` cannot be determined{whence}: the model's values at the data times do not depend on it \
              (check that the data observe a coordinate it moves)",
             names[j]
         ));
@@ -167,8 +173,8 @@ pub fn undetermined(f: &DMatrix<f64>, names: &[String], values: &[f64]) -> Optio
     };
     let involved: Vec<String> = parts.iter().map(|&(j, _)| format!("`{}`", names[j])).collect();
     let who = match involved.len() {
-        1 => format!("{} cannot be determined from the data", involved[0]),
-        _ => format!("{} cannot all be determined from the data", involved.join(", ")),
+        1 => format!("{} cannot be determined{whence}", involved[0]),
+        _ => format!("{} cannot all be determined{whence}", involved.join(", ")),
     };
     Some(format!(
         "{who}: changing the parameters along {} leaves the model's values at the data times unchanged to first order \

@@ -153,8 +153,9 @@ def fit(
     :class:`FitError` for free parameters the scene or the data cannot support (an
     undetermined combination is named), :class:`SceneError`, :class:`SolveError`. A fit
     that did not converge or verify is returned: check ``trusted``; one whose Ipopt
-    tried values where the fit cannot be evaluated raises :class:`FitError` (the
-    command line's exit 3), saying so.
+    tried values where the fit cannot be evaluated, or that ended where the curvature
+    is singular and the fitted motion misses the data, raises :class:`FitError` (the
+    command line's exit 3), saying so and where.
     """
     if free is None and bounds:
         raise ValueError("bounds: give free as well (the bounds of the scene's [fit] free are written in it)")
