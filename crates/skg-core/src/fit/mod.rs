@@ -74,7 +74,7 @@ use skg_ipopt as ipopt;
 
 use crate::discrete::action::Block;
 use crate::discrete::trajectory::NodeSeries;
-use crate::discrete::{Action, Discretization};
+use crate::discrete::{Action, Discretization, ParameterPlan};
 use crate::model::Model;
 use crate::scene::{Overrides, Scene, SceneError};
 use crate::solve::backend::mumps_options;
@@ -354,10 +354,17 @@ impl Problem<'_> {
         let (scene, plans) = (self.scene, self.plans);
         let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
         let y0 = multipliers::starting_multipliers(action, plans, self.observations, &settings.free, x0, largest);
+        let rows = action.layout.n_p;
         let mut problem = FitProblem::new(action, plans, self.observations, &settings.free, stop);
         let nonlinear = plans.hessian.as_ref().is_some_and(|h| !h.structure.is_empty());
         let pivtol = if nonlinear { MUMPS_PIVTOL } else { MUMPS_PIVTOL_LINEAR };
-        let solution = ipopt::solve_warm(&mut problem, x0, &y0, &ipopt_options(scene, settings, pivtol))?;
+        let mut options = ipopt_options(scene, settings, pivtol);
+        if dense_parameter_columns(&plans.parameters, rows) >= DENSE_COLUMNS_FOR_PORD
+            && !scene.solver.ipopt.contains_key("mumps_pivot_order")
+        {
+            options.extra.push(("mumps_pivot_order".into(), ipopt::OptionValue::Int(MUMPS_PORD)));
+        }
+        let solution = ipopt::solve_warm(&mut problem, x0, &y0, &options)?;
         Ok((solution, problem.stopped_at_kkt_point(), None, problem.clock.ran_out))
     }
 
@@ -694,6 +701,32 @@ fn ipopt_options(scene: &Scene, settings: &FitSettings, pivtol: f64) -> ipopt::O
 /// `c = 9999.4`, 6 of its standard errors from the minimum.
 const REDUCED_IPOPT_TOL: f64 = 1e-30;
 
+/// The parameters whose column of `∂R/∂θ` is dense: entries in more than a tenth of the
+/// equations (a stiffness or a damping, which every node's equations hold; an initial
+/// value's column has a few).
+fn dense_parameter_columns(plan: &ParameterPlan, rows: usize) -> usize {
+    let mut count = std::collections::HashMap::<u32, usize>::new();
+    plan.jacobian.iter().for_each(|&(_, j)| *count.entry(j).or_default() += 1);
+    count.values().filter(|&&n| 10 * n > rows).count()
+}
+
+/// From this many dense parameter columns on, the all-at-once fit's MUMPS orders the KKT
+/// matrix by PORD ([`MUMPS_PORD`]) instead of the scene's ordering (AMF without
+/// position constraints), unless the scene's `[solver.ipopt]` names one. Each dense
+/// column couples every node, and AMF's factor grew with them: a chain of five masses
+/// with a stiffness, a second stiffness and a damping free (SBP363, 600 nodes) held 17 M
+/// doubles against 0.45 M for the solve's KKT matrix (1.5 M with PORD), and the fit took
+/// 73 CPU s and 43 iterations to a spurious discrete solution (2.6 s and 29 iterations to
+/// the true values with PORD); three masses 1.9 M doubles (0.77 M), 1.44 → 0.38 s. With
+/// one dense column (the rolling disk's incline) or none (the double pendulum's release
+/// angles) AMF was the faster (0.19 against 0.23 s, 0.56 against 0.81 s), with two and
+/// initial values (the damped oscillator's `k, c, x0, v0`; two masses' `k, c, v2`) the
+/// two took the same time (docs/benchmarks.md#fitting).
+const DENSE_COLUMNS_FOR_PORD: usize = 2;
+
+/// MUMPS's `ICNTL(7)` for PORD (Ipopt's `mumps_pivot_order`).
+const MUMPS_PORD: i32 = 4;
+
 /// A numeric `[solver.ipopt]` value.
 fn ipopt_number(value: &crate::scene::IpoptValue) -> Option<f64> {
     match value {
@@ -706,4 +739,31 @@ fn ipopt_number(value: &crate::scene::IpoptValue) -> Option<f64> {
 /// The curvature's matrix of a fit as rows (for the report).
 fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
     (0..m.nrows()).map(|i| m.row(i).iter().copied().collect()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::SceneFile;
+
+    /// A stiffness and a damping are in every node's equations, an initial position and
+    /// velocity in the first node's: two dense columns of four.
+    #[test]
+    fn the_parameters_in_every_equation_are_the_dense_columns() {
+        let text = "[scene]\nname = \"o\"\nlagrangian = \"x_dot^2/2 - k*x^2/2\"\n[parameters]\nk = 4\nc = 0.3\nx0 = 1\nv0 = 0\n\
+                    [[coordinates]]\nname = \"x\"\ninitial = \"x0\"\nvelocity = \"v0\"\n[forces]\nx = \"-c*x_dot\"\n\
+                    [time]\nstart = 0\nend = 3\nnodes = 64\n";
+        let scene = SceneFile::parse(text, "o.toml").unwrap().resolve(&Overrides::default()).unwrap();
+        let count = |names: &[&str]| {
+            let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+            let model = Arc::new(Model::with_free_parameters(&scene, &names).unwrap());
+            let disc = Discretization::of(&scene);
+            let times = disc.times(&scene);
+            let action = action_on(&model, &scene, &disc, &times).unwrap();
+            dense_parameter_columns(&action.parameter_plan(), action.layout.n_p)
+        };
+        assert_eq!(count(&["k", "c", "x0", "v0"]), 2);
+        assert_eq!(count(&["x0", "v0"]), 0);
+        assert_eq!(count(&["k"]), 1);
+    }
 }
