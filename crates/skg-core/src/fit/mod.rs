@@ -716,12 +716,12 @@ fn dense_parameter_columns(plan: &ParameterPlan, rows: usize) -> usize {
 /// column couples every node, and AMF's factor grew with them: a chain of five masses
 /// with a stiffness, a second stiffness and a damping free (SBP363, 600 nodes) held 17 M
 /// doubles against 0.45 M for the solve's KKT matrix (1.5 M with PORD), and the fit took
-/// 73 CPU s and 43 iterations to a spurious discrete solution (2.6 s and 29 iterations to
-/// the true values with PORD); three masses 1.9 M doubles (0.77 M), 1.44 → 0.38 s. With
+/// 73 CPU s and 43 iterations to a spurious discrete solution (2.7 s and 29 iterations to
+/// the true values with PORD); three masses 1.95 M doubles (0.77 M), 1.44 → 0.43 s. With
 /// one dense column (the rolling disk's incline) or none (the double pendulum's release
-/// angles) AMF was the faster (0.19 against 0.23 s, 0.56 against 0.81 s), with two and
-/// initial values (the damped oscillator's `k, c, x0, v0`; two masses' `k, c, v2`) the
-/// two took the same time (docs/benchmarks.md#fitting).
+/// angles) AMF was the faster (0.19 against 0.23 s, 0.56 against 0.81 s); with two and
+/// initial values the damped oscillator's `k, c, x0, v0` took the same time, two masses'
+/// `k, c, v2` 0.33 s against 0.27 (docs/benchmarks.md#fitting).
 const DENSE_COLUMNS_FOR_PORD: usize = 2;
 
 /// MUMPS's `ICNTL(7)` for PORD (Ipopt's `mumps_pivot_order`).
