@@ -374,7 +374,8 @@ impl Problem<'_> {
     /// overdamped spring's damping) had passed it 6 of its standard errors from the
     /// minimum; the reduced fit's test is relative to each parameter's size (`reduced.rs`).
     /// Where the reduced fit cannot go on (its solve fails there, or it does not stop at a
-    /// KKT point), the all-at-once fit's result stands, with its warning.
+    /// KKT point), and with the limited-memory Hessian (the reduced fit needs the exact
+    /// one), the all-at-once fit's result stands, with its warning.
     fn polished(
         &self,
         action: &mut Action,
@@ -384,10 +385,16 @@ impl Problem<'_> {
         warnings: &mut Vec<String>,
     ) -> Optimized {
         let (solution, stopped, _, ran_out) = &optimized;
-        if stopped.is_some() || *ran_out || solution.status != ipopt::Status::SolvedToAcceptableLevel {
+        let exact = self.plans.hessian.is_some();
+        if !exact || stopped.is_some() || *ran_out || solution.status != ipopt::Status::SolvedToAcceptableLevel {
             return optimized;
         }
-        let reduced = FitSettings { method: FitMethod::Reduced, ..settings.clone() };
+        // Within the fit's iteration limit, the all-at-once fit's iterations counted.
+        let left = settings.max_iter.saturating_sub(solution.iterations as u32);
+        if left == 0 {
+            return optimized;
+        }
+        let reduced = FitSettings { method: FitMethod::Reduced, max_iter: left, ..settings.clone() };
         match self.optimize_reduced(action, &reduced, &solution.x, stop) {
             Ok((mut polished, Some(kkt), _, ran_out)) => {
                 warnings.push(format!(
