@@ -128,7 +128,7 @@ pub(super) fn bound_warnings(parameters: &IndexMap<String, report::ParameterRepo
         .collect()
 }
 
-/// The warning of a fit stopped at Ipopt's acceptable level (or the reduced fit's own).
+/// The warning of a fit stopped at Ipopt's acceptable level.
 pub(super) const ACCEPTABLE_LEVEL: &str =
     "Ipopt stopped at its acceptable level (Solved_To_Acceptable_Level), not at the requested tolerance";
 

@@ -79,7 +79,7 @@ use crate::model::Model;
 use crate::scene::{Overrides, Scene, SceneError};
 use crate::solve::backend::mumps_options;
 use crate::solve::{action_on, outcome, point_from_states, solve_global, Deadline, Guess, Outcome, SolveError};
-use advice::{beyond_the_noise, bound_warnings, converged, explains_little, with_remedy, ACCEPTABLE_LEVEL};
+use advice::{beyond_the_noise, bound_warnings, converged, explains_little, with_remedy};
 use observe::Observations;
 use problem::{FitProblem, Plans, StopTest};
 use reduced::ReducedFit;
@@ -274,7 +274,7 @@ fn fit_on(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSetti
     let optimization_s = t_opt.elapsed().as_secs_f64();
     let timed_out = ran_out && at_kkt_point.is_none();
     if at_kkt_point == Some(problem::KktStop::Acceptable) {
-        warnings.push(ACCEPTABLE_LEVEL.into());
+        warnings.push(reduced::acceptable_warning());
     }
     let converged = !timed_out && (at_kkt_point.is_some() || converged(&solution, scene.solver.tol, &mut warnings));
 

@@ -64,6 +64,15 @@ use crate::solve::linalg::{max_abs, NewtonOptions, NewtonStatus, SparseFactoriza
 /// relative to the parameters' size as the test's `tol` (module documentation).
 const ACCEPTABLE_TOL: f64 = 1e-6;
 
+/// The warning of a reduced fit stopped at its acceptable level.
+pub(super) fn acceptable_warning() -> String {
+    format!(
+        "the reduced fit stopped at its acceptable level (Solved_To_Acceptable_Level): Newton's step on the misfit moved each \
+         parameter by at most {ACCEPTABLE_TOL:e} of its size for {ACCEPTABLE_ITER} iterations, where the misfit's rounding kept \
+         Ipopt's line search from the requested tolerance (--tol)"
+    )
+}
+
 /// The iteration limit of each solve of the equations of motion.
 const NEWTON_MAX_ITER: u32 = 20;
 
