@@ -762,6 +762,35 @@ fn a_fit_with_several_parameters_in_every_equation_reaches_the_truth() {
     }
 }
 
+/// A discretization whose error is large against the data's standard deviations biases
+/// the estimates beyond their standard errors, though its verification passes a loose
+/// tolerance: the oscillator on 60 nodes of SBP242 under `[verify] tol = 0.05`, data
+/// from the closed form (k = 4, c = 0.3) with σ = 1e-4 stated. The fit warns, with the
+/// remedy; on the scene's 512 nodes of SBP484 it does not, and recovers the closed form's
+/// values within their standard errors.
+#[test]
+fn a_discretization_error_large_against_the_data_s_deviations_is_warned() {
+    let mut data = String::from("t,x,sigma_x\n");
+    for t in oscillator_times() {
+        data += &format!("{t:?},{:?},1e-4\n", oscillator(t, 1.0, 4.0, 0.3, 1.0, 0.0));
+    }
+    let settings = free(&["k", "c"]);
+    let coarse = Overrides { nodes: Some(60), operator: Some("SBP242".parse().unwrap()), verify_tol: Some(0.05), ..Default::default() };
+    let f = run(&scene_of(OSCILLATOR, &coarse), &coarse, &data, &settings).unwrap();
+    assert!(f.trusted(), "{}: {}", f.report.status, f.outcome.verification.reason);
+    let warned = |f: &Fit| f.report.warnings.iter().any(|w| w.contains("discretization error in x") && w.contains("--verify-tol"));
+    assert!(warned(&f), "{:?}", f.report.warnings);
+    let k = &f.report.parameters["k"];
+    assert!((k.value - 4.0).abs() > 3.0 * k.std_error.unwrap(), "k = {} ± {:?}: not biased, the test shows nothing", k.value, k.std_error);
+    let ov = Overrides::default();
+    let f = run(&scene_of(OSCILLATOR, &ov), &ov, &data, &settings).unwrap();
+    assert!(f.trusted() && !warned(&f), "{:?}", f.report.warnings);
+    for (name, truth) in [("k", 4.0), ("c", 0.3)] {
+        let p = &f.report.parameters[name];
+        assert!((p.value - truth).abs() <= p.std_error.unwrap().max(1e-9 * truth), "{name} = {} ± {:?}", p.value, p.std_error);
+    }
+}
+
 /// An all-at-once fit that Ipopt ends at its acceptable level is taken on to the fit's
 /// tolerance by the reduced fit. The damping of an overdamped spring, c = 1e6, from
 /// 3e5 (x over 1e4 s, noise-free, 64 nodes, so that the fit's minimum carries the

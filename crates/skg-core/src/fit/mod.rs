@@ -287,6 +287,7 @@ fn fit_on(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSetti
     let t_verify = Instant::now();
     let (fitted, fitted_overrides) = fitted_scene(scene, overrides, &names, &at.theta)?;
     let mut outcome = solved_from_the_fit(&fitted, &action, &disc, &at.z, round.deadline)?;
+    warnings.extend(advice::discretization_bias(&outcome.verification, data, &scene.coordinates));
     outcome.warnings.extend(warnings.iter().cloned());
     let verification_s = t_verify.elapsed().as_secs_f64();
 
