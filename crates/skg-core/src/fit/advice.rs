@@ -162,10 +162,6 @@ pub(super) fn bound_warnings(parameters: &IndexMap<String, report::ParameterRepo
         .collect()
 }
 
-/// The warning of a fit stopped at Ipopt's acceptable level.
-pub(super) const ACCEPTABLE_LEVEL: &str =
-    "Ipopt stopped at its acceptable level (Solved_To_Acceptable_Level), not at the requested tolerance";
-
 /// Whether Ipopt's fit converged: `Solve_Succeeded`; or, with a warning, its acceptable
 /// level, or a search direction too small to make progress (the misfit of noisy data
 /// stalls there short of the tight default `tol`) with the constraints held to 1e-8 or
@@ -174,7 +170,7 @@ pub(super) fn converged(solution: &ipopt::Solution, tol: f64, warnings: &mut Vec
     match solution.status {
         ipopt::Status::SolveSucceeded => true,
         ipopt::Status::SolvedToAcceptableLevel => {
-            warnings.push(ACCEPTABLE_LEVEL.into());
+            warnings.push("Ipopt stopped at its acceptable level (Solved_To_Acceptable_Level), not at the requested tolerance".into());
             true
         }
         ipopt::Status::SearchDirectionBecomesTooSmall if solution.max_constraint_violation <= tol.max(1e-8) => {

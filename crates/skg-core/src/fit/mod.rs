@@ -56,6 +56,7 @@ mod files;
 mod free;
 mod multipliers;
 mod observe;
+mod options;
 mod problem;
 mod reduced;
 mod report;
@@ -74,10 +75,9 @@ use skg_ipopt as ipopt;
 
 use crate::discrete::action::Block;
 use crate::discrete::trajectory::NodeSeries;
-use crate::discrete::{Action, Discretization, ParameterPlan};
+use crate::discrete::{Action, Discretization};
 use crate::model::Model;
 use crate::scene::{Overrides, Scene, SceneError};
-use crate::solve::backend::mumps_options;
 use crate::solve::{action_on, outcome, point_from_states, solve_global, Deadline, Guess, Outcome, SolveError};
 use advice::{beyond_the_noise, bound_warnings, converged, explains_little, with_remedy};
 use observe::Observations;
@@ -261,7 +261,8 @@ fn fit_on(scene: &Scene, overrides: &Overrides, data: &Data, settings: &FitSetti
     let start_s = started.elapsed().as_secs_f64();
 
     let t_opt = Instant::now();
-    let bound_relax_factor = scene.solver.ipopt.get("bound_relax_factor").and_then(ipopt_number).unwrap_or(barrier::BOUND_RELAX_FACTOR);
+    let bound_relax_factor =
+        scene.solver.ipopt.get("bound_relax_factor").and_then(options::ipopt_number).unwrap_or(barrier::BOUND_RELAX_FACTOR);
     let stop =
         StopTest { tol: settings.tol, constraints: scene.solver.tol.min(settings.tol), bound_relax_factor, deadline: round.deadline };
     let (solution, at_kkt_point, inner, ran_out) = match settings.method {
@@ -353,18 +354,11 @@ impl Problem<'_> {
     /// starting multipliers (`multipliers.rs`).
     fn optimize_all_at_once(&self, action: &mut Action, settings: &FitSettings, x0: &[f64], stop: StopTest) -> Result<Optimized, FitError> {
         let (scene, plans) = (self.scene, self.plans);
-        let largest = scene.solver.ipopt.get("constr_mult_init_max").and_then(ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
+        let largest =
+            scene.solver.ipopt.get("constr_mult_init_max").and_then(options::ipopt_number).unwrap_or(multipliers::CONSTR_MULT_INIT_MAX);
         let y0 = multipliers::starting_multipliers(action, plans, self.observations, &settings.free, x0, largest);
-        let rows = action.layout.n_p;
+        let options = options::all_at_once(scene, settings, plans, action.layout.n_p);
         let mut problem = FitProblem::new(action, plans, self.observations, &settings.free, stop);
-        let nonlinear = plans.hessian.as_ref().is_some_and(|h| !h.structure.is_empty());
-        let pivtol = if nonlinear { MUMPS_PIVTOL } else { MUMPS_PIVTOL_LINEAR };
-        let mut options = ipopt_options(scene, settings, pivtol);
-        if dense_parameter_columns(&plans.parameters, rows) >= DENSE_COLUMNS_FOR_PORD
-            && !scene.solver.ipopt.contains_key("mumps_pivot_order")
-        {
-            options.extra.push(("mumps_pivot_order".into(), ipopt::OptionValue::Int(MUMPS_PORD)));
-        }
         let solution = ipopt::solve_warm(&mut problem, x0, &y0, &options)?;
         Ok((solution, problem.stopped_at_kkt_point(), None, problem.clock.ran_out))
     }
@@ -418,7 +412,7 @@ impl Problem<'_> {
         let theta0 = x0[action.layout.n_p..].to_vec();
         let mut reduced = ReducedFit::new(action, self.plans, self.observations, &settings.free, x0, stop)
             .map_err(|e| FitError::Settings(format!("the reduced fit cannot start: {e}")))?;
-        let mut solution = ipopt::solve(&mut reduced, &theta0, &ipopt_options(self.scene, settings, MUMPS_PIVTOL))?;
+        let mut solution = ipopt::solve(&mut reduced, &theta0, &options::reduced(self.scene, settings))?;
         let (x, residual) = reduced.point(&solution.x).map_err(|e| FitError::Settings(format!("the reduced fit's last point: {e}")))?;
         solution.x = x;
         solution.max_constraint_violation = residual;
@@ -649,129 +643,7 @@ fn fitted_scene(scene: &Scene, overrides: &Overrides, names: &[String], theta: &
     Ok((fitted, ov))
 }
 
-/// Ipopt's options for a fit of `scene`: the scene's linear solver, print level and
-/// MUMPS settings as for a solve, the fit's tolerance and iteration limit, the
-/// constraints held to the scene's `[solver] tol`, [`ACCEPTABLE_ITER`], MUMPS's pivot
-/// tolerance `pivtol` ([`MUMPS_PIVTOL`] or [`MUMPS_PIVTOL_LINEAR`]), the Hessian, then the
-/// scene's `[solver.ipopt]` options.
-fn ipopt_options(scene: &Scene, settings: &FitSettings, pivtol: f64) -> ipopt::Options {
-    let solver = &scene.solver;
-    let mut extra: Vec<(String, ipopt::OptionValue)> =
-        mumps_options(scene).into_iter().map(|(k, v)| (k.to_string(), ipopt::OptionValue::Int(v))).collect();
-    // The constraints of a long or stiff scene stall at a round-off floor above the
-    // fit's tol: stop after a few iterations at Ipopt's acceptable level (with a warning)
-    // instead of line-searching at that floor up to the iteration limit.
-    // The reduced fit has no constraints, and its own acceptable level (`reduced.rs`):
-    // Ipopt's, absolute in the gradient, stopped a large parameter far from its minimum
-    // (as does Ipopt's `tol` test: [`REDUCED_IPOPT_TOL`]).
-    let acceptable_iter = if settings.method == FitMethod::Reduced { 0 } else { ACCEPTABLE_ITER };
-    extra.push(("acceptable_iter".into(), ipopt::OptionValue::Int(acceptable_iter)));
-    // MUMPS's default pivot tolerance (1e-6) left its solves of the fit's KKT matrix
-    // inaccurate (Ipopt's iterative refinement failed, then it raised the tolerance and
-    // factored again, 2 to 3 factorizations per iteration on the disk); at 1e-3 none
-    // failed on the disk, but with MUMPS's analysis made on the first KKT matrix (the
-    // warm start) the disk's last iterations stalled in the line search with some BLAS
-    // kernels (9 iterations instead of 6); at 0.1 (Ipopt's `mumps_pivtolmax`) none did
-    // (docs/benchmarks.md#fitting). Where the trajectory block holds the misfit's
-    // curvature alone, 1e-4 ([`MUMPS_PIVTOL_LINEAR`]).
-    extra.push(("mumps_pivtol".into(), ipopt::OptionValue::Num(pivtol)));
-    // The fit starts from its own least-squares multipliers (`multipliers.rs`) with
-    // Ipopt's warm start, pushing the point into its bounds as Ipopt's cold start does.
-    extra.push(("warm_start_bound_push".into(), ipopt::OptionValue::Num(1e-2)));
-    extra.push(("warm_start_bound_frac".into(), ipopt::OptionValue::Num(1e-2)));
-    if settings.hessian == FitHessian::LimitedMemory {
-        extra.push(("hessian_approximation".into(), ipopt::OptionValue::Str("limited-memory".into())));
-    }
-    extra.extend(solver.ipopt.iter().map(|(k, v)| {
-        let v = match v {
-            crate::scene::IpoptValue::Int(i) => ipopt::OptionValue::Int(*i),
-            crate::scene::IpoptValue::Num(x) => ipopt::OptionValue::Num(*x),
-            crate::scene::IpoptValue::Str(s) => ipopt::OptionValue::Str(s.clone()),
-        };
-        (k.clone(), v)
-    }));
-    ipopt::Options {
-        tol: if settings.method == FitMethod::Reduced { REDUCED_IPOPT_TOL } else { settings.tol },
-        constr_viol_tol: solver.tol,
-        max_iter: settings.max_iter,
-        print_level: solver.print_level,
-        linear_solver: solver.linear_solver.clone(),
-        output_file: solver.ipopt_log.clone(),
-        extra,
-        ..ipopt::Options::default()
-    }
-}
-
-/// Ipopt's `tol` in the reduced fit, out of reach: the fit's `tol` applies to its own
-/// displacement test (`reduced.rs`), which is relative to each parameter's size, where
-/// Ipopt's test bounds the gradient absolutely. A damping of 1e4 fitted to noise-free
-/// data (the misfit's curvature in it about 1e-11) passed Ipopt's `tol = 1e-10` at
-/// `c = 9999.4`, 6 of its standard errors from the minimum.
-const REDUCED_IPOPT_TOL: f64 = 1e-30;
-
-/// The parameters whose column of `∂R/∂θ` is dense: entries in more than a tenth of the
-/// equations (a stiffness or a damping, which every node's equations hold; an initial
-/// value's column has a few).
-fn dense_parameter_columns(plan: &ParameterPlan, rows: usize) -> usize {
-    let mut count = std::collections::HashMap::<u32, usize>::new();
-    plan.jacobian.iter().for_each(|&(_, j)| *count.entry(j).or_default() += 1);
-    count.values().filter(|&&n| 10 * n > rows).count()
-}
-
-/// From this many dense parameter columns on, the all-at-once fit's MUMPS orders the KKT
-/// matrix by PORD ([`MUMPS_PORD`]) instead of the scene's ordering (AMF without
-/// position constraints), unless the scene's `[solver.ipopt]` names one. Each dense
-/// column couples every node, and AMF's factor grew with them: a chain of five masses
-/// with a stiffness, a second stiffness and a damping free (SBP363, 600 nodes) held 17 M
-/// doubles against 0.45 M for the solve's KKT matrix (1.5 M with PORD), and the fit took
-/// 73 CPU s and 43 iterations to a spurious discrete solution (2.7 s and 29 iterations to
-/// the true values with PORD); three masses 1.95 M doubles (0.77 M), 1.44 → 0.43 s. With
-/// one dense column (the rolling disk's incline) or none (the double pendulum's release
-/// angles) AMF was the faster (0.19 against 0.23 s, 0.56 against 0.81 s); with two and
-/// initial values the damped oscillator's `k, c, x0, v0` took the same time, two masses'
-/// `k, c, v2` 0.33 s against 0.27 (docs/benchmarks.md#fitting).
-const DENSE_COLUMNS_FOR_PORD: usize = 2;
-
-/// MUMPS's `ICNTL(7)` for PORD (Ipopt's `mumps_pivot_order`).
-const MUMPS_PORD: i32 = 4;
-
-/// A numeric `[solver.ipopt]` value.
-fn ipopt_number(value: &crate::scene::IpoptValue) -> Option<f64> {
-    match value {
-        crate::scene::IpoptValue::Int(i) => Some(f64::from(*i)),
-        crate::scene::IpoptValue::Num(x) => Some(*x),
-        crate::scene::IpoptValue::Str(_) => None,
-    }
-}
-
 /// The curvature's matrix of a fit as rows (for the report).
 fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
     (0..m.nrows()).map(|i| m.row(i).iter().copied().collect()).collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scene::SceneFile;
-
-    /// A stiffness and a damping are in every node's equations, an initial position and
-    /// velocity in the first node's: two dense columns of four.
-    #[test]
-    fn the_parameters_in_every_equation_are_the_dense_columns() {
-        let text = "[scene]\nname = \"o\"\nlagrangian = \"x_dot^2/2 - k*x^2/2\"\n[parameters]\nk = 4\nc = 0.3\nx0 = 1\nv0 = 0\n\
-                    [[coordinates]]\nname = \"x\"\ninitial = \"x0\"\nvelocity = \"v0\"\n[forces]\nx = \"-c*x_dot\"\n\
-                    [time]\nstart = 0\nend = 3\nnodes = 64\n";
-        let scene = SceneFile::parse(text, "o.toml").unwrap().resolve(&Overrides::default()).unwrap();
-        let count = |names: &[&str]| {
-            let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
-            let model = Arc::new(Model::with_free_parameters(&scene, &names).unwrap());
-            let disc = Discretization::of(&scene);
-            let times = disc.times(&scene);
-            let action = action_on(&model, &scene, &disc, &times).unwrap();
-            dense_parameter_columns(&action.parameter_plan(), action.layout.n_p)
-        };
-        assert_eq!(count(&["k", "c", "x0", "v0"]), 2);
-        assert_eq!(count(&["x0", "v0"]), 0);
-        assert_eq!(count(&["k"]), 1);
-    }
 }
